@@ -1,0 +1,1 @@
+//! GNC (to be written).

@@ -1,0 +1,1 @@
+//! Device models (to be written).

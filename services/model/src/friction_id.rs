@@ -1,0 +1,1 @@
+//! Friction identification (to be written).

@@ -1,0 +1,1 @@
+//! Platform physics (to be written).
