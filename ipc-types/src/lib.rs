@@ -1,1 +1,96 @@
-//! stub
+//! Fixed-layout sample types and topic names of the test bed pipeline.
+//!
+//! Every process of the test bed exchanges the types of this crate over iceoryx2
+//! publish/subscribe (shared memory, zero copy). Each type is `#[repr(C)]`, derives
+//! [`ZeroCopySend`](iceoryx2::prelude::ZeroCopySend) with a stable, versioned type name
+//! (`"testbed::<Type>.v<N>"`), holds no pointers, no heap data and no `bool`, and has explicit
+//! padding fields so that no implicit padding exists anywhere. The layout of every type is
+//! pinned by the tests of this crate: changing a layout must come with a new type-name version.
+//!
+//! Every sample starts with a [`SampleHeader`] carrying the time the sample describes (device or
+//! simulation time, ns on the run's clock), a sequence number and validity flags.
+//!
+//! # Units and frames
+//!
+//! SI units throughout (rad, rad/s, T, Nm, Nms, J, ns). Vectors are given in body-frame
+//! components unless a field's documentation says otherwise.
+//!
+//! - Level frame L: x north, y west, z up.
+//! - Body frame B: fixed to the platform; reaction wheel `i` spins about body axis `i`
+//!   (x, y, z); CMGs are numbered 1–4 (array index 0–3) around the pyramid.
+//!
+//! # Quaternion convention
+//!
+//! Attitude quaternion q = [x, y, z, w] (scalar last, Hamilton product as in nalgebra, whose
+//! `Quaternion::coords` storage has the same order). q is the rotation from the level frame L
+//! (x north, y west, z up) to the body frame B: v_B = q ⊗ v_L ⊗ q*, i.e. A(q) = nalgebra
+//! `UnitQuaternion::to_rotation_matrix()` maps L components to B components. Kinematics:
+//! q' = ½ (0, −ω_B) ⊗ q (left multiplication in Hamilton product).
+//!
+//! # Services
+//!
+//! Each topic is one iceoryx2 publish/subscribe service named by a constant of [`topic`], paired
+//! with an event service of the same name plus [`topic::EVENT_SUFFIX`] that publishers notify
+//! after sending. The [`Topic`] trait ties each sample type to its service names.
+
+mod actuators;
+mod gnc;
+mod header;
+mod sensors;
+mod sim;
+mod system;
+pub mod topic;
+
+#[cfg(test)]
+mod tests;
+
+pub use actuators::{CmgCommand, CmgTelemetry, WheelCommand, WheelTelemetry};
+pub use gnc::{AttitudeEstimate, ControllerMode, ControllerStatus};
+pub use header::SampleHeader;
+pub use sensors::{GyroSample, InclinometerSample, MagnetometerSample};
+pub use sim::{SimClockTick, SimTruth};
+pub use system::{Heartbeat, ProcessState};
+
+/// The identity attitude quaternion `[x, y, z, w] = [0, 0, 0, 1]` (B coincides with L).
+pub const IDENTITY_QUATERNION: [f64; 4] = [0.0, 0.0, 0.0, 1.0];
+
+/// A sample type published on exactly one topic.
+pub trait Topic:
+    iceoryx2::prelude::ZeroCopySend + Copy + Default + core::fmt::Debug + 'static
+{
+    /// Name of the publish/subscribe service (one of the [`topic`] constants).
+    const NAME: &'static str;
+    /// Name of the paired event service ([`NAME`](Self::NAME) + [`topic::EVENT_SUFFIX`]).
+    const EVENT_NAME: &'static str;
+
+    /// The sample's common header.
+    fn header(&self) -> &SampleHeader;
+    /// The sample's common header, mutably.
+    fn header_mut(&mut self) -> &mut SampleHeader;
+}
+
+macro_rules! impl_topic {
+    ($($ty:ty => $name:ident / $event:ident),* $(,)?) => {$(
+        impl Topic for $ty {
+            const NAME: &'static str = topic::$name;
+            const EVENT_NAME: &'static str = topic::$event;
+            fn header(&self) -> &SampleHeader { &self.header }
+            fn header_mut(&mut self) -> &mut SampleHeader { &mut self.header }
+        }
+    )*};
+}
+
+impl_topic! {
+    GyroSample => GYRO / GYRO_EVENT,
+    InclinometerSample => INCLINOMETER / INCLINOMETER_EVENT,
+    MagnetometerSample => MAGNETOMETER / MAGNETOMETER_EVENT,
+    WheelTelemetry => WHEEL_TELEMETRY / WHEEL_TELEMETRY_EVENT,
+    WheelCommand => WHEEL_COMMAND / WHEEL_COMMAND_EVENT,
+    CmgTelemetry => CMG_TELEMETRY / CMG_TELEMETRY_EVENT,
+    CmgCommand => CMG_COMMAND / CMG_COMMAND_EVENT,
+    AttitudeEstimate => ATTITUDE_ESTIMATE / ATTITUDE_ESTIMATE_EVENT,
+    ControllerStatus => CONTROLLER_STATUS / CONTROLLER_STATUS_EVENT,
+    SimTruth => SIM_TRUTH / SIM_TRUTH_EVENT,
+    SimClockTick => SIM_CLOCK / SIM_CLOCK_EVENT,
+    Heartbeat => HEARTBEAT / HEARTBEAT_EVENT,
+}

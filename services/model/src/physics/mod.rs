@@ -1,1 +1,5 @@
-//! Platform physics (to be written).
+//! Platform physics (rigid body on the air bearing, wheels, CMGs, effects).
+
+pub mod cmg_pyramid;
+
+pub use cmg_pyramid::CmgPyramid;

@@ -1,0 +1,130 @@
+//! Geometry of the four-CMG pyramid: momentum and its Jacobian as functions of the gimbal angles.
+//!
+//! Gimbal axis `i` (i = 0..3) lies in the vertical plane at azimuth `i·90°` about body Z and is
+//! tilted by the skew angle β from body Z towards the outside of the pyramid (Wie, *Space Vehicle
+//! Dynamics and Control*, §7.3). With rotor momentum `h0`, at gimbal angle `δ_i` the rotor
+//! momentum of CMG i is `h0 (cos δ_i · s_i + sin δ_i · t_i)`, where `s_i` (the spin direction at
+//! `δ = 0`) is horizontal and tangent to the pyramid, and `t_i = g_i × s_i`. In body axes:
+//!
+//! ```text
+//! h = h0 [ −cβ sδ1 − cδ2 + cβ sδ3 + cδ4,
+//!           cδ1 − cβ sδ2 − cδ3 + cβ sδ4,
+//!           sβ (sδ1 + sδ2 + sδ3 + sδ4) ]
+//! ```
+
+use nalgebra::{Matrix3x4, Vector3, Vector4};
+
+/// Pyramid cluster of four single-gimbal CMGs with equal rotor momentum.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CmgPyramid {
+    /// Rotor momentum of each CMG, Nms.
+    pub rotor_momentum_nms: f64,
+    /// Skew angle β between each gimbal axis and body Z, rad.
+    pub skew_rad: f64,
+}
+
+impl CmgPyramid {
+    pub fn from_config(config: &crate::config::CmgConfig) -> Self {
+        Self {
+            rotor_momentum_nms: config.rotor_momentum_nms,
+            skew_rad: config.skew_deg * crate::config::DEG,
+        }
+    }
+
+    /// Unit gimbal axis of CMG `i` (0..3) in body axes.
+    pub fn gimbal_axis(&self, i: usize) -> Vector3<f64> {
+        let (sb, cb) = self.skew_rad.sin_cos();
+        let az = i as f64 * std::f64::consts::FRAC_PI_2;
+        Vector3::new(sb * az.cos(), sb * az.sin(), cb)
+    }
+
+    /// Unit rotor momentum direction of CMG `i` at gimbal angle `delta` (rad), body axes.
+    pub fn rotor_direction(&self, i: usize, delta: f64) -> Vector3<f64> {
+        let (s, t) = self.spin_and_torque_axes(i);
+        s * delta.cos() + t * delta.sin()
+    }
+
+    /// Total cluster momentum in body axes, Nms.
+    pub fn momentum(&self, gimbal_rad: &Vector4<f64>) -> Vector3<f64> {
+        (0..4).map(|i| self.rotor_direction(i, gimbal_rad[i])).sum::<Vector3<f64>>()
+            * self.rotor_momentum_nms
+    }
+
+    /// Jacobian `∂h/∂δ` (Nms/rad), so that `h' = J(δ) δ'`. Column i is `h0 · g_i × ĥ_i`.
+    pub fn jacobian(&self, gimbal_rad: &Vector4<f64>) -> Matrix3x4<f64> {
+        Matrix3x4::from_fn(|row, i| {
+            let (s, t) = self.spin_and_torque_axes(i);
+            let d = gimbal_rad[i];
+            (t * d.cos() - s * d.sin())[row] * self.rotor_momentum_nms
+        })
+    }
+
+    /// Maximum momentum the cluster can store along body X or Y (the envelope's extent), Nms:
+    /// `h0 (2 + 2 cos β)`.
+    pub fn envelope_xy_nms(&self) -> f64 {
+        self.rotor_momentum_nms * (2.0 + 2.0 * self.skew_rad.cos())
+    }
+
+    /// Maximum momentum along body Z, Nms: `4 h0 sin β`.
+    pub fn envelope_z_nms(&self) -> f64 {
+        4.0 * self.rotor_momentum_nms * self.skew_rad.sin()
+    }
+
+    /// `(s_i, t_i)`: rotor direction at δ = 0 and at δ = 90°, both ⟂ the gimbal axis.
+    fn spin_and_torque_axes(&self, i: usize) -> (Vector3<f64>, Vector3<f64>) {
+        let az = i as f64 * std::f64::consts::FRAC_PI_2;
+        // Horizontal tangent at azimuth az, then t = g × s.
+        let s = Vector3::new(-az.sin(), az.cos(), 0.0);
+        let t = self.gimbal_axis(i).cross(&s);
+        (s, t)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn pyramid() -> CmgPyramid {
+        CmgPyramid { rotor_momentum_nms: 1.0, skew_rad: 54.74_f64.to_radians() }
+    }
+
+    #[test]
+    fn matches_the_closed_form_of_wie() {
+        let p = pyramid();
+        let (sb, cb) = p.skew_rad.sin_cos();
+        let d = Vector4::new(0.3, -1.1, 2.0, 0.7);
+        let (s, c) = (d.map(f64::sin), d.map(f64::cos));
+        let expected = Vector3::new(
+            -cb * s[0] - c[1] + cb * s[2] + c[3],
+            c[0] - cb * s[1] - c[2] + cb * s[3],
+            sb * (s[0] + s[1] + s[2] + s[3]),
+        );
+        assert!((p.momentum(&d) - expected).norm() < 1e-12);
+    }
+
+    #[test]
+    fn jacobian_is_the_derivative_of_momentum() {
+        let p = pyramid();
+        let d = Vector4::new(0.4, 0.1, -0.9, 1.3);
+        let jac = p.jacobian(&d);
+        for i in 0..4 {
+            let mut dp = d;
+            let mut dm = d;
+            dp[i] += 1e-6;
+            dm[i] -= 1e-6;
+            let numeric = (p.momentum(&dp) - p.momentum(&dm)) / 2e-6;
+            assert!((jac.column(i) - numeric).norm() < 1e-8);
+        }
+    }
+
+    #[test]
+    fn rotor_stays_perpendicular_to_its_gimbal() {
+        let p = pyramid();
+        for i in 0..4 {
+            for k in 0..16 {
+                let d = k as f64 * 0.4;
+                assert!(p.gimbal_axis(i).dot(&p.rotor_direction(i, d)).abs() < 1e-12);
+            }
+        }
+    }
+}
