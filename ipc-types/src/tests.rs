@@ -171,7 +171,7 @@ fn heartbeat_name_round_trips_and_truncates() {
 fn helpers() {
     let mut e = AttitudeEstimate::default();
     e.covariance[6 * 4 + 4] = 2.0;
-    e.covariance[6 * 1 + 2] = 3.0;
+    e.covariance[6 + 2] = 3.0; // P[1][2]
     assert_eq!(e.covariance_at(1, 2), 3.0);
     assert_eq!(e.covariance_diagonal(), [0.0, 0.0, 0.0, 0.0, 2.0, 0.0]);
     e.innovation_mask = AttitudeEstimate::INNOVATION_MAGNETIC;
