@@ -1,0 +1,109 @@
+//! The two-axis inclinometer (LE-30): `theta_meas = theta + eta_theta`,
+//! `phi_meas = phi + eta_phi`, angles as defined by [`crate::attitude::tilt_angles`].
+
+use super::{DeviceId, device_rng, saturate};
+use crate::attitude::{Attitude, tilt_angles};
+use crate::config::{DEG, ModelConfig};
+use rand::Rng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::StandardNormal;
+
+/// One inclinometer reading.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct InclinometerReading {
+    /// Measured tilt `[θ, φ]` of body X and body Y against the level plane, rad; an axis outside
+    /// the range reads the range limit.
+    pub tilt_rad: [f64; 2],
+    /// Per axis: the tilt lay outside the measurement range (or was not a number).
+    pub saturated: [bool; 2],
+}
+
+impl InclinometerReading {
+    /// Both angles are inside the range, so the reading may be used as a measurement.
+    pub fn valid(&self) -> bool {
+        !self.saturated[0] && !self.saturated[1]
+    }
+}
+
+/// Inclinometer model: white noise on each angle, then the range clamp. Range is judged on the
+/// noisy angle, as the instrument itself sees it.
+#[derive(Debug, Clone)]
+pub struct Inclinometer {
+    period_s: f64,
+    noise_rad: [f64; 2],
+    range_rad: f64,
+    rng: ChaCha8Rng,
+}
+
+impl Inclinometer {
+    /// The inclinometer of `config`, noise on the [`DeviceId::Inclinometer`] stream of `seed`.
+    pub fn new(config: &ModelConfig, seed: u64) -> Self {
+        let c = &config.inclinometer;
+        Self {
+            period_s: 1.0 / c.rate_hz,
+            noise_rad: c.noise_rad(),
+            range_rad: c.range_deg * DEG,
+            rng: device_rng(seed, DeviceId::Inclinometer),
+        }
+    }
+
+    /// Sample interval, s (1 / `inclinometer.rate_hz`). The noise is white per sample, so it does
+    /// not depend on the interval.
+    pub fn period_s(&self) -> f64 {
+        self.period_s
+    }
+
+    /// Read the inclinometer at true attitude `q` (L to B).
+    pub fn sample(&mut self, q: &Attitude) -> InclinometerReading {
+        let truth = tilt_angles(q);
+        let mut tilt_rad = [0.0; 2];
+        let mut saturated = [false; 2];
+        for i in 0..2 {
+            let eta: f64 = self.rng.sample(StandardNormal);
+            (tilt_rad[i], saturated[i]) =
+                saturate(truth[i] + self.noise_rad[i] * eta, self.range_rad);
+        }
+        InclinometerReading {
+            tilt_rad,
+            saturated,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::attitude::from_heading_pitch_roll;
+    use crate::devices::stats::assert_white;
+
+    #[test]
+    fn noise_matches_configured_sigma_about_true_tilt() {
+        let config = ModelConfig::default();
+        let mut inc = Inclinometer::new(&config, 3);
+        let q = from_heading_pitch_roll(1.2, 0.05, -0.08);
+        let truth = tilt_angles(&q);
+        let n = 20_000;
+        let readings: Vec<_> = (0..n).map(|_| inc.sample(&q)).collect();
+        assert!(readings.iter().all(InclinometerReading::valid));
+        for (axis, &true_tilt) in truth.iter().enumerate() {
+            let xs: Vec<f64> = readings.iter().map(|r| r.tilt_rad[axis]).collect();
+            let sigma = config.inclinometer.noise_deg[axis] * DEG;
+            assert_white(&format!("inclinometer axis {axis}"), &xs, true_tilt, sigma);
+        }
+    }
+
+    #[test]
+    fn tilt_beyond_range_is_flagged_and_clamped() {
+        let mut config = ModelConfig::default();
+        config.inclinometer.noise_deg = [0.0; 2];
+        let mut inc = Inclinometer::new(&config, 0);
+        // Pitch tips body X: θ = 28° is past the ±25° range; φ stays inside.
+        let r = inc.sample(&from_heading_pitch_roll(0.3, 28.0 * DEG, 0.0));
+        assert_eq!(r.saturated, [true, false]);
+        assert!(!r.valid());
+        assert!((r.tilt_rad[0] - 25.0 * DEG).abs() < 1e-15);
+        let r = inc.sample(&from_heading_pitch_roll(0.3, 24.0 * DEG, 0.0));
+        assert!(r.valid());
+        assert!((r.tilt_rad[0] - 24.0 * DEG).abs() < 1e-12);
+    }
+}
