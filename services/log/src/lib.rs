@@ -1,0 +1,195 @@
+//! The run log: one [MCAP](https://mcap.dev) file per run holding every topic of the pipeline,
+//! the schemas of their messages and the run's full configuration.
+//!
+//! - [`RunLogWriter`] writes a log; [`RunLog`] reads one back into `ipc-types` samples
+//!   ([`LogRecord`]) for replay and identification.
+//! - [`TickSorter`] (or [`RecordOrder::Sorted`]) makes the record order of a lockstep run
+//!   independent of how its processes interleave, so two runs with the same seed give
+//!   byte-identical files.
+//!
+//! # Encoding
+//!
+//! Standard MCAP, readable by the `mcap` CLI, Foxglove and the Python/C++/Go readers:
+//!
+//! - One channel per topic of [`ipc_types::topic::ALL`] (topic = the iceoryx2 service name),
+//!   message encoding `json`, schema encoding `jsonschema` (Foxglove's JSON convention).
+//! - One schema per sample type, named after its versioned iceoryx2 type name
+//!   (`testbed::GyroSample.v1`, …); field names are the Rust field names (padding fields left
+//!   out), descriptions give units and frames.
+//! - Messages are compact JSON with fields in declaration order; `f64` values in the shortest
+//!   form that reads back to the same bits, non-finite values as `"NaN"`, `"Infinity"`,
+//!   `"-Infinity"`; [`Heartbeat::name`](ipc_types::Heartbeat::name) as a string (or as its 32
+//!   raw bytes if they are not NUL-padded UTF-8). Decoding gives back the exact sample, except
+//!   that NaN payloads are not kept.
+//! - `log_time = publish_time = header.time_ns` (run clock, never the wall clock).
+//! - The configuration text is the attachment [`CONFIG_ATTACHMENT`] (`application/toml`);
+//!   profile, seed and mode are the string map of the metadata record [`RUN_METADATA`].
+//!
+//! # Crash safety
+//!
+//! See [`RunLogWriter`]: records are unchunked, so a file cut at any byte keeps every complete
+//! record, and [`RunLog`] reports where the file was cut.
+
+mod json;
+mod reader;
+mod record;
+mod sorter;
+mod writer;
+
+pub use json::DecodeError;
+pub use reader::{LogEnd, Records, RunLog, Samples};
+pub use record::{LogEncode, LogRecord};
+pub use sorter::{EncodedRecord, TickSorter};
+pub use writer::{LogStats, RecordOrder, RunLogWriter, WriterOptions};
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// Name of the attachment holding the run's configuration.
+pub const CONFIG_ATTACHMENT: &str = "config.toml";
+/// Media type of the configuration attachment.
+pub const CONFIG_MEDIA_TYPE: &str = "application/toml";
+/// Name of the metadata record holding [`RunInfo`]'s fields (keys in [`keys`]).
+pub const RUN_METADATA: &str = "testbed.run";
+/// Message encoding of every channel.
+pub const MESSAGE_ENCODING: &str = "json";
+/// Schema encoding of every schema.
+pub const SCHEMA_ENCODING: &str = "jsonschema";
+/// Value of the [`keys::FORMAT`] metadata entry: this crate's log format and its version.
+pub const FORMAT: &str = "testbed-log/1";
+
+/// Keys of the [`RUN_METADATA`] record written from [`RunInfo`].
+pub mod keys {
+    /// Log format, [`FORMAT`](crate::FORMAT).
+    pub const FORMAT: &str = "format";
+    /// [`RunInfo::profile`](crate::RunInfo::profile).
+    pub const PROFILE: &str = "profile";
+    /// [`RunInfo::seed`](crate::RunInfo::seed), decimal.
+    pub const SEED: &str = "seed";
+    /// [`RunInfo::mode`](crate::RunInfo::mode).
+    pub const MODE: &str = "mode";
+}
+
+const RESERVED_KEYS: &[&str] = &[keys::FORMAT, keys::PROFILE, keys::SEED, keys::MODE];
+
+/// What the log records about the run besides its samples.
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub struct RunInfo {
+    /// Launch profile the run was started from (e.g. `"simulation"`).
+    pub profile: String,
+    /// Seed of the run's random number generators.
+    pub seed: u64,
+    /// Run mode (e.g. `"lockstep"`, `"paced"`, `"hardware"`).
+    pub mode: String,
+    /// The run's full configuration, as TOML text (stored verbatim).
+    pub config_toml: String,
+    /// Further metadata entries (keys must not be one of [`keys`]).
+    pub extra: BTreeMap<String, String>,
+}
+
+/// Errors of writing and reading run logs.
+#[derive(Debug, thiserror::Error)]
+pub enum LogError {
+    /// An I/O error on a file.
+    #[error("{path}: {source}")]
+    File {
+        /// The file.
+        path: PathBuf,
+        /// The error.
+        source: std::io::Error,
+    },
+    /// An I/O error.
+    #[error("I/O error: {0}")]
+    Io(#[from] std::io::Error),
+    /// The MCAP library failed (writing).
+    #[error("MCAP: {0}")]
+    Mcap(#[from] mcap::McapError),
+    /// The writer was already finished.
+    #[error("the log writer is finished")]
+    Finished,
+    /// [`RunInfo::extra`] uses a key the log writes itself.
+    #[error("metadata key {0:?} is reserved")]
+    ReservedKey(String),
+    /// In sorted order, a record arrived for a time already completed (not logged).
+    #[error(
+        "late record on {topic} at {time_ns} ns: times up to {completed_until_ns} ns are already written"
+    )]
+    LateRecord {
+        /// Topic of the record.
+        topic: &'static str,
+        /// The record's `header.time_ns`.
+        time_ns: u64,
+        /// Latest completed time.
+        completed_until_ns: u64,
+    },
+    /// The file does not start with the MCAP magic.
+    #[error("not an MCAP file (bad magic)")]
+    NotMcap,
+    /// A record could not be parsed.
+    #[error("corrupt record at byte {offset}: {source}")]
+    Corrupt {
+        /// Byte offset of the record.
+        offset: u64,
+        /// The parse error.
+        source: mcap::McapError,
+    },
+    /// The file uses an MCAP feature this reader does not read.
+    #[error("record at byte {offset}: {what} is not supported (testbed-log writes unchunked logs)")]
+    Unsupported {
+        /// Byte offset of the record.
+        offset: u64,
+        /// What is not supported.
+        what: &'static str,
+    },
+    /// The log lacks the run information (configuration attachment or run metadata).
+    #[error("no {missing} in the log ({end})")]
+    MissingRunInfo {
+        /// What is missing.
+        missing: &'static str,
+        /// Whether and where the file was cut.
+        end: LogEnd,
+    },
+    /// The run metadata has an invalid entry.
+    #[error("run metadata entry {key:?}: {problem}")]
+    BadRunInfo {
+        /// The key.
+        key: &'static str,
+        /// What is wrong.
+        problem: String,
+    },
+    /// A message is on a channel the log does not define.
+    #[error("message at byte {offset} is on undefined channel {channel}")]
+    UnknownChannel {
+        /// Byte offset of the message record.
+        offset: u64,
+        /// The channel id.
+        channel: u16,
+    },
+    /// A message is on a channel this reader cannot decode (unknown topic, other schema
+    /// version or encoding).
+    #[error("message at byte {offset} on {topic:?}: {problem}")]
+    Undecodable {
+        /// Byte offset of the message record.
+        offset: u64,
+        /// The channel's topic.
+        topic: String,
+        /// Why the channel cannot be decoded.
+        problem: String,
+    },
+    /// A message could not be decoded.
+    #[error("message at byte {offset} on {topic}: {source}")]
+    Decode {
+        /// Byte offset of the message record.
+        offset: u64,
+        /// The topic.
+        topic: &'static str,
+        /// The decoding error.
+        source: DecodeError,
+    },
+}
+
+impl LogError {
+    pub(crate) fn io(path: &Path, source: std::io::Error) -> Self {
+        Self::File { path: path.to_owned(), source }
+    }
+}

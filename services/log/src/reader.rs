@@ -1,0 +1,458 @@
+//! [`RunLog`]: reads a run log back, tolerating a file cut at any byte.
+
+use crate::record::{LogEncode, LogRecord, TopicKind};
+use crate::{
+    CONFIG_ATTACHMENT, LogError, MESSAGE_ENCODING, RUN_METADATA, RunInfo, SCHEMA_ENCODING, keys,
+};
+use mcap::records::{Record, op};
+use std::collections::BTreeMap;
+use std::fs::File;
+use std::io::{BufReader, Read, Seek, SeekFrom};
+use std::marker::PhantomData;
+use std::path::{Path, PathBuf};
+
+/// How a log file ends.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LogEnd {
+    /// The file ends with the footer and magic: the writer finished it.
+    Complete,
+    /// The file was cut (writer killed or not finished): every record before `offset` is
+    /// complete, the bytes from `offset` on (to `file_len`) are an incomplete record or missing
+    /// the rest of the file.
+    Truncated {
+        /// End of the last complete record (= start of the incomplete one).
+        offset: u64,
+        /// Length of the file.
+        file_len: u64,
+    },
+}
+
+impl std::fmt::Display for LogEnd {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::Complete => write!(f, "file complete"),
+            Self::Truncated { offset, file_len } => {
+                write!(f, "file cut: complete records end at byte {offset} of {file_len}")
+            }
+        }
+    }
+}
+
+/// What a channel of the file decodes to.
+#[derive(Debug, Clone)]
+struct ChannelEntry {
+    topic: String,
+    kind: Result<TopicKind, String>,
+}
+
+/// An opened run log: its run information, how it ends, and iterators over its records.
+///
+/// [`open`](Self::open) scans the file's record structure once (message bodies are skipped),
+/// so it knows the channels, the run information and whether and where the file was cut;
+/// the iterators then decode messages in file order, up to the end of the data section or the
+/// cut.
+#[derive(Debug, Clone)]
+pub struct RunLog {
+    path: PathBuf,
+    info: RunInfo,
+    library: String,
+    channels: BTreeMap<u16, ChannelEntry>,
+    /// Messages are read from the start up to this offset (data end or cut).
+    data_end: u64,
+    end: LogEnd,
+    message_count: u64,
+}
+
+/// Outcome of reading the next record's framing.
+enum Next {
+    /// A complete record: opcode, offset of its opcode byte, body length.
+    Record { opcode: u8, offset: u64, len: u64 },
+    /// The bytes from `offset` on do not hold a complete record.
+    Cut { offset: u64 },
+}
+
+/// Reads MCAP record framing (opcode, length) from a file of known length.
+struct Framing {
+    reader: BufReader<File>,
+    pos: u64,
+    file_len: u64,
+}
+
+impl Framing {
+    /// Opens `path` and checks the leading magic. `Err(file_len)`: the file is shorter than
+    /// the magic but a prefix of it.
+    fn open(path: &Path) -> Result<Result<Self, u64>, LogError> {
+        let file = File::open(path).map_err(|e| LogError::io(path, e))?;
+        let file_len = file.metadata().map_err(|e| LogError::io(path, e))?.len();
+        let mut reader = BufReader::with_capacity(64 * 1024, file);
+        let magic_len = mcap::MAGIC.len() as u64;
+        let head_len = file_len.min(magic_len) as usize;
+        let mut head = [0u8; 8];
+        let head = head.get_mut(..head_len).ok_or(LogError::NotMcap)?;
+        reader.read_exact(head).map_err(|e| LogError::io(path, e))?;
+        if !mcap::MAGIC.starts_with(head) {
+            return Err(LogError::NotMcap);
+        }
+        if file_len < magic_len {
+            return Ok(Err(file_len));
+        }
+        Ok(Ok(Self { reader, pos: magic_len, file_len }))
+    }
+
+    fn next(&mut self) -> Result<Next, LogError> {
+        let offset = self.pos;
+        if self.file_len - offset < 9 {
+            return Ok(Next::Cut { offset });
+        }
+        let mut frame = [0u8; 9];
+        self.reader.read_exact(&mut frame)?;
+        let [opcode, len @ ..] = frame;
+        let len = u64::from_le_bytes(len);
+        if len > self.file_len - offset - 9 {
+            // Put the reader back at the record start (callers stop here anyway).
+            self.reader.seek(SeekFrom::Start(offset))?;
+            return Ok(Next::Cut { offset });
+        }
+        self.pos = offset + 9 + len;
+        Ok(Next::Record { opcode, offset, len })
+    }
+
+    fn body(&mut self, len: u64, buf: &mut Vec<u8>) -> Result<(), LogError> {
+        buf.clear();
+        // `len` fits the file (checked in `next`), so it fits memory as a file read would.
+        buf.resize(usize::try_from(len).map_err(|_| std::io::Error::other("record too large"))?, 0);
+        self.reader.read_exact(buf)?;
+        Ok(())
+    }
+
+    fn skip(&mut self, len: u64) -> Result<(), LogError> {
+        match i64::try_from(len) {
+            Ok(len) => self.reader.seek_relative(len)?,
+            Err(_) => {
+                self.reader.seek(SeekFrom::Start(self.pos))?;
+            }
+        }
+        Ok(())
+    }
+}
+
+fn parse(opcode: u8, offset: u64, body: &[u8]) -> Result<Record<'_>, LogError> {
+    mcap::parse_record(opcode, body).map_err(|source| LogError::Corrupt { offset, source })
+}
+
+impl RunLog {
+    /// Opens the log at `path`: reads its run information and channels and finds where it
+    /// ends. A file cut at any byte after the run information opens fine (see
+    /// [`end`](Self::end)).
+    pub fn open(path: impl AsRef<Path>) -> Result<Self, LogError> {
+        let path = path.as_ref();
+        let mut framing = match Framing::open(path)? {
+            Ok(framing) => framing,
+            Err(file_len) => {
+                return Err(LogError::MissingRunInfo {
+                    missing: "header",
+                    end: LogEnd::Truncated { offset: 0, file_len },
+                });
+            }
+        };
+        let file_len = framing.file_len;
+        let mut schemas: BTreeMap<u16, (String, String)> = BTreeMap::new();
+        let mut channels = BTreeMap::new();
+        let mut library = String::new();
+        let mut config = None;
+        let mut metadata = None;
+        let mut message_count = 0;
+        let mut data_end = None;
+        let mut end = None;
+        let mut body = Vec::new();
+
+        while end.is_none() {
+            let (opcode, offset, len) = match framing.next()? {
+                Next::Record { opcode, offset, len } => (opcode, offset, len),
+                Next::Cut { offset } => {
+                    end = Some(LogEnd::Truncated { offset, file_len });
+                    break;
+                }
+            };
+            let in_data = data_end.is_none();
+            match opcode {
+                op::MESSAGE if in_data => {
+                    message_count += 1;
+                    framing.skip(len)?;
+                }
+                op::CHUNK => {
+                    return Err(LogError::Unsupported { offset, what: "a chunked MCAP file" });
+                }
+                op::HEADER | op::SCHEMA | op::CHANNEL | op::ATTACHMENT | op::METADATA
+                    if in_data =>
+                {
+                    framing.body(len, &mut body)?;
+                    match parse(opcode, offset, &body)? {
+                        Record::Header(h) => library = h.library,
+                        Record::Schema { header, .. } => {
+                            schemas.insert(header.id, (header.name, header.encoding));
+                        }
+                        Record::Channel(c) => {
+                            let kind = channel_kind(&c, &schemas);
+                            channels.insert(c.id, ChannelEntry { topic: c.topic, kind });
+                        }
+                        Record::Attachment { header, data, .. }
+                            if header.name == CONFIG_ATTACHMENT =>
+                        {
+                            let text = String::from_utf8(data.into_owned()).map_err(|_| {
+                                LogError::BadRunInfo {
+                                    key: "config.toml",
+                                    problem: "not UTF-8".to_owned(),
+                                }
+                            })?;
+                            config = Some(text);
+                        }
+                        Record::Metadata(m) if m.name == RUN_METADATA => {
+                            metadata = Some(m.metadata);
+                        }
+                        _ => {}
+                    }
+                }
+                op::DATA_END if in_data => {
+                    data_end = Some(offset);
+                    framing.skip(len)?;
+                }
+                op::FOOTER => {
+                    framing.skip(len)?;
+                    let rest = file_len - framing.pos;
+                    let mut magic = [0u8; 8];
+                    let n = rest.min(8) as usize;
+                    let tail = magic.get_mut(..n).ok_or(LogError::NotMcap)?;
+                    framing.reader.read_exact(tail)?;
+                    end = Some(if n == 8 && *tail == *mcap::MAGIC {
+                        LogEnd::Complete
+                    } else {
+                        LogEnd::Truncated { offset: framing.pos, file_len }
+                    });
+                }
+                _ => framing.skip(len)?,
+            }
+        }
+        let end = end.unwrap_or(LogEnd::Truncated { offset: framing.pos, file_len });
+        let data_end = match (data_end, end) {
+            (Some(d), _) => d,
+            (None, LogEnd::Truncated { offset, .. }) => offset,
+            (None, LogEnd::Complete) => framing.pos,
+        };
+
+        let config_toml = config.ok_or(LogError::MissingRunInfo {
+            missing: "configuration attachment (config.toml)",
+            end,
+        })?;
+        let metadata = metadata.ok_or(LogError::MissingRunInfo {
+            missing: "run metadata record (testbed.run)",
+            end,
+        })?;
+        let info = run_info(metadata, config_toml)?;
+        Ok(Self { path: path.to_owned(), info, library, channels, data_end, end, message_count })
+    }
+
+    /// The run information: profile, seed, mode, configuration text, further entries.
+    pub fn info(&self) -> &RunInfo {
+        &self.info
+    }
+
+    /// The configuration text (the `config.toml` attachment).
+    pub fn config_toml(&self) -> &str {
+        &self.info.config_toml
+    }
+
+    /// The library that wrote the file (MCAP header).
+    pub fn library(&self) -> &str {
+        &self.library
+    }
+
+    /// Whether the file is complete, or where it was cut.
+    pub fn end(&self) -> LogEnd {
+        self.end
+    }
+
+    /// Whether the writer finished the file.
+    pub fn is_complete(&self) -> bool {
+        self.end == LogEnd::Complete
+    }
+
+    /// Number of complete message records in the data section.
+    pub fn message_count(&self) -> u64 {
+        self.message_count
+    }
+
+    /// The topics of the file's channels, in channel-id order.
+    pub fn topics(&self) -> Vec<&str> {
+        self.channels.values().map(|c| c.topic.as_str()).collect()
+    }
+
+    /// Every record in file order.
+    pub fn records(&self) -> Result<Records<'_>, LogError> {
+        self.records_filtered(None)
+    }
+
+    /// The records on the given topics (`ipc_types::topic` names), in file order. Names of
+    /// topics the log does not have are ignored.
+    pub fn records_on(&self, topics: &[&str]) -> Result<Records<'_>, LogError> {
+        let kinds = topics.iter().filter_map(|t| TopicKind::from_topic(t)).collect();
+        self.records_filtered(Some(kinds))
+    }
+
+    /// The samples of type `T` (its topic), in file order.
+    pub fn samples<T: LogEncode>(&self) -> Result<Samples<'_, T>, LogError> {
+        Ok(Samples { records: self.records_on(&[T::NAME])?, _type: PhantomData })
+    }
+
+    fn records_filtered(&self, filter: Option<Vec<TopicKind>>) -> Result<Records<'_>, LogError> {
+        let framing = Framing::open(&self.path)?.map_err(|_| LogError::NotMcap)?;
+        Ok(Records { log: self, framing, filter, body: Vec::new(), stopped: false })
+    }
+}
+
+/// The topic kind a channel decodes to, or why it cannot be decoded.
+fn channel_kind(
+    channel: &mcap::records::Channel,
+    schemas: &BTreeMap<u16, (String, String)>,
+) -> Result<TopicKind, String> {
+    let kind =
+        TopicKind::from_topic(&channel.topic).ok_or_else(|| "not an ipc-types topic".to_owned())?;
+    if channel.message_encoding != MESSAGE_ENCODING {
+        return Err(format!("message encoding {:?}, expected json", channel.message_encoding));
+    }
+    match schemas.get(&channel.schema_id) {
+        Some((name, encoding)) if name == kind.schema_name() && encoding == SCHEMA_ENCODING => {
+            Ok(kind)
+        }
+        Some((name, encoding)) => Err(format!(
+            "schema {name:?} ({encoding}), this reader reads {:?} ({SCHEMA_ENCODING})",
+            kind.schema_name()
+        )),
+        None => Err(format!("schema {} is not defined", channel.schema_id)),
+    }
+}
+
+fn run_info(
+    mut metadata: BTreeMap<String, String>,
+    config_toml: String,
+) -> Result<RunInfo, LogError> {
+    let mut take = |key: &'static str| {
+        metadata.remove(key).ok_or(LogError::BadRunInfo { key, problem: "missing".to_owned() })
+    };
+    let _format = take(keys::FORMAT)?;
+    let profile = take(keys::PROFILE)?;
+    let mode = take(keys::MODE)?;
+    let seed_text = take(keys::SEED)?;
+    let seed = seed_text.parse().map_err(|e| LogError::BadRunInfo {
+        key: keys::SEED,
+        problem: format!("{seed_text:?} is not a u64: {e}"),
+    })?;
+    Ok(RunInfo { profile, seed, mode, config_toml, extra: metadata })
+}
+
+/// Iterator over a log's records, in file order (see [`RunLog::records`]).
+///
+/// Yields every complete message up to the end of the data section or the cut
+/// ([`RunLog::end`]). A message that cannot be decoded yields an error and iteration goes on
+/// with the next record; an I/O error ends the iteration.
+pub struct Records<'a> {
+    log: &'a RunLog,
+    framing: Framing,
+    filter: Option<Vec<TopicKind>>,
+    body: Vec<u8>,
+    stopped: bool,
+}
+
+impl Records<'_> {
+    fn step(&mut self) -> Result<Option<LogRecord>, LogError> {
+        loop {
+            if self.framing.pos >= self.log.data_end {
+                return Ok(None);
+            }
+            let (opcode, offset, len) = match self.framing.next()? {
+                Next::Record { opcode, offset, len } => (opcode, offset, len),
+                Next::Cut { .. } => return Ok(None),
+            };
+            if opcode != op::MESSAGE {
+                self.framing.skip(len)?;
+                continue;
+            }
+            self.framing.body(len, &mut self.body)?;
+            let Record::Message { header, data } = parse(opcode, offset, &self.body)? else {
+                continue;
+            };
+            let channel = self
+                .log
+                .channels
+                .get(&header.channel_id)
+                .ok_or(LogError::UnknownChannel { offset, channel: header.channel_id })?;
+            let kind = match &channel.kind {
+                Ok(kind) => *kind,
+                Err(problem) => {
+                    if self.filter.is_some() {
+                        continue; // not one of the wanted ipc-types topics
+                    }
+                    return Err(LogError::Undecodable {
+                        offset,
+                        topic: channel.topic.clone(),
+                        problem: problem.clone(),
+                    });
+                }
+            };
+            if self.filter.as_ref().is_some_and(|f| !f.contains(&kind)) {
+                continue;
+            }
+            return kind.decode(&data).map(Some).map_err(|source| LogError::Decode {
+                offset,
+                topic: kind.name(),
+                source,
+            });
+        }
+    }
+}
+
+impl Iterator for Records<'_> {
+    type Item = Result<LogRecord, LogError>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        if self.stopped {
+            return None;
+        }
+        match self.step() {
+            Ok(Some(record)) => Some(Ok(record)),
+            Ok(None) => {
+                self.stopped = true;
+                None
+            }
+            Err(e) => {
+                // Framing/I-O errors leave the position unknown; message-level errors do not.
+                if matches!(e, LogError::Io(_) | LogError::File { .. }) {
+                    self.stopped = true;
+                }
+                Some(Err(e))
+            }
+        }
+    }
+}
+
+/// Iterator over the samples of one type (see [`RunLog::samples`]).
+pub struct Samples<'a, T> {
+    records: Records<'a>,
+    _type: PhantomData<fn() -> T>,
+}
+
+impl<T: LogEncode> Iterator for Samples<'_, T> {
+    type Item = Result<T, LogError>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        loop {
+            match self.records.next()? {
+                Ok(record) => match T::from_record(&record) {
+                    Some(sample) => return Some(Ok(sample)),
+                    None => continue,
+                },
+                Err(e) => return Some(Err(e)),
+            }
+        }
+    }
+}

@@ -1,0 +1,483 @@
+//! The logged sample types: [`LogRecord`], [`LogEncode`], their JSON encoding and JSON Schemas.
+
+use crate::json::{DecodeError, Field, as_object, check_no_extra, member, object_schema};
+use ipc_types::{
+    AttitudeEstimate, CmgCommand, CmgTelemetry, ControllerStatus, GyroSample, Heartbeat,
+    InclinometerSample, MagnetometerSample, SampleHeader, SimClockTick, SimTruth, Topic,
+    WheelCommand, WheelTelemetry,
+};
+use serde_json::Value;
+
+mod sealed {
+    pub trait Sealed {}
+}
+
+/// A sample type the run log can hold: every [`Topic`] type of `ipc-types`.
+///
+/// Implemented for exactly the types of [`LogRecord`]'s variants (sealed).
+pub trait LogEncode: Topic + sealed::Sealed {
+    /// Name of the type's schema in the log: the iceoryx2 type name (`"testbed::<Type>.v<N>"`),
+    /// so a layout change (new version) is a new schema.
+    const SCHEMA_NAME: &'static str;
+
+    /// The JSON Schema (draft 2020-12) of the type's messages, with units in the descriptions.
+    fn json_schema() -> String;
+
+    /// Appends the message's JSON (deterministic: fields in declaration order, no whitespace,
+    /// padding fields left out) to `out`.
+    fn encode_json(&self, out: &mut Vec<u8>);
+
+    /// Decodes a JSON message written by [`encode_json`](Self::encode_json).
+    fn decode_json(data: &[u8]) -> Result<Self, DecodeError>;
+
+    /// The sample as a [`LogRecord`].
+    fn into_record(self) -> LogRecord;
+
+    /// The sample, if `record` holds this type.
+    fn from_record(record: &LogRecord) -> Option<Self>;
+}
+
+/// Describes one field of a logged type: name, and description with unit.
+macro_rules! log_types {
+    ($(
+        $(#[$vdoc:meta])*
+        $variant:ident($ty:ident) = $schema:literal, $desc:literal {
+            header: $hdesc:literal,
+            $($field:ident: $fdesc:literal,)*
+        } pad [$($pad:ident),*];
+    )*) => {
+        /// One sample of any topic, as held in the run log.
+        ///
+        /// Variants are in the order of [`ipc_types::topic::ALL`], which is also the topic order
+        /// used to sort records of equal time (see [`TickSorter`](crate::TickSorter)).
+        // Samples are plain fixed-size values (480 bytes at most); boxing would cost an
+        // allocation per record and the `Copy`.
+        #[allow(clippy::large_enum_variant)]
+        #[derive(Debug, Clone, Copy, PartialEq)]
+        pub enum LogRecord {
+            $($(#[$vdoc])* $variant($ty),)*
+        }
+
+        /// Topic of a record, in [`ipc_types::topic::ALL`] order.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+        pub(crate) enum TopicKind {
+            $($variant,)*
+        }
+
+        impl TopicKind {
+            /// Every topic, in order.
+            pub(crate) const ALL: &[TopicKind] = &[$(TopicKind::$variant),*];
+
+            /// The topic (service) name.
+            pub(crate) const fn name(self) -> &'static str {
+                match self {
+                    $(Self::$variant => <$ty as Topic>::NAME,)*
+                }
+            }
+
+            /// The schema name.
+            pub(crate) const fn schema_name(self) -> &'static str {
+                match self {
+                    $(Self::$variant => $schema,)*
+                }
+            }
+
+            /// The JSON Schema text.
+            pub(crate) fn json_schema(self) -> String {
+                match self {
+                    $(Self::$variant => <$ty as LogEncode>::json_schema(),)*
+                }
+            }
+
+            /// The kind whose topic name is `topic`.
+            pub(crate) fn from_topic(topic: &str) -> Option<Self> {
+                Self::ALL.iter().copied().find(|k| k.name() == topic)
+            }
+
+            /// Decodes a JSON message of this topic.
+            pub(crate) fn decode(self, data: &[u8]) -> Result<LogRecord, DecodeError> {
+                Ok(match self {
+                    $(Self::$variant => LogRecord::$variant(<$ty as LogEncode>::decode_json(data)?),)*
+                })
+            }
+        }
+
+        impl LogRecord {
+            /// Every topic name, in the order of the variants (= [`ipc_types::topic::ALL`]).
+            pub const TOPICS: &[&str] = &[$(<$ty as Topic>::NAME),*];
+
+            pub(crate) const fn kind(&self) -> TopicKind {
+                match self {
+                    $(Self::$variant(_) => TopicKind::$variant,)*
+                }
+            }
+
+            /// The topic (service) name of the record.
+            pub const fn topic(&self) -> &'static str {
+                self.kind().name()
+            }
+
+            /// The schema name of the record's type (see [`LogEncode::SCHEMA_NAME`]).
+            pub const fn schema_name(&self) -> &'static str {
+                self.kind().schema_name()
+            }
+
+            /// The record's sample header.
+            pub fn header(&self) -> &SampleHeader {
+                match self {
+                    $(Self::$variant(s) => s.header(),)*
+                }
+            }
+
+            /// The record's sample header, mutably (e.g. to set
+            /// [`REPLAYED`](SampleHeader::REPLAYED) when replaying).
+            pub fn header_mut(&mut self) -> &mut SampleHeader {
+                match self {
+                    $(Self::$variant(s) => s.header_mut(),)*
+                }
+            }
+
+            /// Appends the record's JSON message to `out` (see [`LogEncode::encode_json`]).
+            pub fn encode_json(&self, out: &mut Vec<u8>) {
+                match self {
+                    $(Self::$variant(s) => s.encode_json(out),)*
+                }
+            }
+
+            /// Decodes a JSON message published on `topic`; `None` if `topic` is not an
+            /// `ipc-types` topic.
+            pub fn decode_json(topic: &str, data: &[u8]) -> Option<Result<Self, DecodeError>> {
+                TopicKind::from_topic(topic).map(|kind| kind.decode(data))
+            }
+        }
+
+        $(
+            impl sealed::Sealed for $ty {}
+
+            impl From<$ty> for LogRecord {
+                fn from(sample: $ty) -> Self {
+                    Self::$variant(sample)
+                }
+            }
+
+            impl LogEncode for $ty {
+                const SCHEMA_NAME: &'static str = $schema;
+
+                fn json_schema() -> String {
+                    let mut schema = object_schema(
+                        $schema,
+                        $desc,
+                        &[
+                            ("header", <SampleHeader as Field>::schema($hdesc)),
+                            $((
+                                stringify!($field),
+                                field_schema(&|s: &$ty| &s.$field, $fdesc),
+                            ),)*
+                        ],
+                    );
+                    if let Value::Object(map) = &mut schema {
+                        map.insert(
+                            "$schema".to_owned(),
+                            Value::from("https://json-schema.org/draft/2020-12/schema"),
+                        );
+                    }
+                    schema.to_string()
+                }
+
+                fn encode_json(&self, out: &mut Vec<u8>) {
+                    // Exhaustive: a field added to the type without being logged fails to build.
+                    let $ty { header, $($field,)* $($pad: _,)* } = self;
+                    out.extend_from_slice(b"{\"header\":");
+                    header.write(out);
+                    $(
+                        out.extend_from_slice(concat!(",\"", stringify!($field), "\":").as_bytes());
+                        $field.write(out);
+                    )*
+                    out.push(b'}');
+                }
+
+                fn decode_json(data: &[u8]) -> Result<Self, DecodeError> {
+                    let value: Value = serde_json::from_slice(data)?;
+                    let obj = as_object(&value, "")?;
+                    let sample = $ty {
+                        header: member(obj, "", "header")?,
+                        $($field: member(obj, "", stringify!($field))?,)*
+                        $($pad: 0,)*
+                    };
+                    check_no_extra(obj, "", &["header", $(stringify!($field)),*])?;
+                    Ok(sample)
+                }
+
+                fn into_record(self) -> LogRecord {
+                    LogRecord::$variant(self)
+                }
+
+                fn from_record(record: &LogRecord) -> Option<Self> {
+                    match record {
+                        LogRecord::$variant(s) => Some(*s),
+                        #[allow(unreachable_patterns)]
+                        _ => None,
+                    }
+                }
+            }
+        )*
+    };
+}
+
+/// The schema of the field `get` returns (type inference helper for the macro).
+fn field_schema<S, F: Field>(_get: &dyn Fn(&S) -> &F, description: &str) -> Value {
+    F::schema(description)
+}
+
+log_types! {
+    /// [`GyroSample`] on [`topic::GYRO`](ipc_types::topic::GYRO).
+    Gyro(GyroSample) = "testbed::GyroSample.v1",
+    "One sample of the three fibre-optic gyros (10 Hz)." {
+        header: "Common header; time_ns is the device's sampling instant.",
+        rate: "Measured angular rate of B against inertial space, body axes x, y, z, rad/s \
+               (as the gyros sense it: including bias, noise and the Earth's rotation).",
+    } pad [];
+
+    /// [`InclinometerSample`] on [`topic::INCLINOMETER`](ipc_types::topic::INCLINOMETER).
+    Inclinometer(InclinometerSample) = "testbed::InclinometerSample.v1",
+    "One sample of the two-axis inclinometer (2.5 Hz)." {
+        header: "Common header; time_ns is the device's sampling instant.",
+        tilt: "Measured tilt angles [theta, phi] of body x and body y against the level plane, \
+               rad, defined by the body components of gravity \
+               G_B = [sin theta, sin phi, -sqrt(1 - sin^2 theta - sin^2 phi)].",
+    } pad [];
+
+    /// [`MagnetometerSample`] on [`topic::MAGNETOMETER`](ipc_types::topic::MAGNETOMETER).
+    Magnetometer(MagnetometerSample) = "testbed::MagnetometerSample.v1",
+    "One sample of the three-axis magnetometer (2.5 Hz)." {
+        header: "Common header; time_ns is the device's sampling instant.",
+        field: "Measured magnetic flux density, body axes x, y, z, T (tesla; 1 gauss = 1e-4 T).",
+    } pad [];
+
+    /// [`WheelTelemetry`] on [`topic::WHEEL_TELEMETRY`](ipc_types::topic::WHEEL_TELEMETRY).
+    WheelTelemetry(WheelTelemetry) = "testbed::WheelTelemetry.v1",
+    "Telemetry of the three reaction wheels (wheel i spins about body axis i)." {
+        header: "Common header; time_ns is the device's sampling instant.",
+        speed: "Wheel speeds relative to the platform, about each wheel's own axis, rad/s.",
+        torque: "Measured (motor-current-derived) motor torque on each wheel, about its axis, \
+                 N m. The platform feels the opposite torque.",
+    } pad [];
+
+    /// [`WheelCommand`] on [`topic::WHEEL_COMMAND`](ipc_types::topic::WHEEL_COMMAND).
+    WheelCommand(WheelCommand) = "testbed::WheelCommand.v1",
+    "Motor torque command to the three reaction wheels." {
+        header: "Common header; time_ns is the time of the input the command was computed \
+                 from. SATURATED flags mark channels clipped to the torque limit.",
+        torque: "Commanded motor torque on each wheel, about its axis, N m. The platform feels \
+                 the opposite torque.",
+    } pad [];
+
+    /// [`CmgTelemetry`] on [`topic::CMG_TELEMETRY`](ipc_types::topic::CMG_TELEMETRY).
+    CmgTelemetry(CmgTelemetry) = "testbed::CmgTelemetry.v1",
+    "Telemetry of the four control moment gyros (pyramid, CMG 1-4 at index 0-3)." {
+        header: "Common header; time_ns is the device's sampling instant.",
+        gimbal_angle: "Gimbal angles from the encoders, rad.",
+        gimbal_rate: "Gimbal rates, rad/s.",
+    } pad [];
+
+    /// [`CmgCommand`] on [`topic::CMG_COMMAND`](ipc_types::topic::CMG_COMMAND).
+    CmgCommand(CmgCommand) = "testbed::CmgCommand.v1",
+    "Gimbal rate command to the four control moment gyros." {
+        header: "Common header; time_ns is the time of the input the command was computed \
+                 from. SATURATED flags mark gimbals clipped to the rate limit.",
+        gimbal_rate: "Commanded gimbal rates, rad/s.",
+    } pad [];
+
+    /// [`AttitudeEstimate`] on
+    /// [`topic::ATTITUDE_ESTIMATE`](ipc_types::topic::ATTITUDE_ESTIMATE).
+    AttitudeEstimate(AttitudeEstimate) = "testbed::AttitudeEstimate.v1",
+    "Output of the attitude estimator (MEKF). Error-state order: [dtheta_x, dtheta_y, dtheta_z, \
+     db_x, db_y, db_z], dtheta the small-angle attitude error in body axes (rad), db the gyro \
+     bias error (rad/s)." {
+        header: "Common header; time_ns is the time the estimate refers to (the latest gyro \
+                 sample).",
+        quaternion: "Estimated attitude quaternion [x, y, z, w] (scalar last, Hamilton), \
+                     rotation from the level frame L (x north, y west, z up) to the body frame \
+                     B; dimensionless.",
+        rate: "Estimated angular rate of B relative to L, body axes, rad/s (gyro rate minus \
+               estimated bias).",
+        gyro_bias: "Estimated gyro bias, body axes, rad/s (absorbs the Earth's rotation as the \
+                    gyro senses it).",
+        covariance: "6x6 error-state covariance, row-major (P[i][j] at 6*i + j); units rad^2, \
+                     rad^2/s, rad^2/s^2 by block.",
+        innovation: "Normalised innovations of the latest vector update, dimensionless, order \
+                     [G_x, G_y, G_z, M_x, M_y, M_z] (gravity direction, magnetic field; body \
+                     axes). Components whose innovation_mask bit is clear are undefined.",
+        innovation_time_ns: "Time of the latest vector update the innovations belong to, ns on \
+                             the run's clock.",
+        innovation_mask: "Bit i set: innovation[i] was computed in the latest update (bits 0-2 \
+                          gravity, 3-5 magnetic field).",
+        updates_applied: "Vector-measurement updates applied since start (count).",
+        updates_skipped: "Updates skipped since start (invalid, stale or unusable measurement; \
+                          count).",
+        updates_rejected: "Updates rejected by innovation gating since start (count).",
+    } pad [_pad0];
+
+    /// [`ControllerStatus`] on
+    /// [`topic::CONTROLLER_STATUS`](ipc_types::topic::CONTROLLER_STATUS).
+    ControllerStatus(ControllerStatus) = "testbed::ControllerStatus.v1",
+    "Status of the attitude controller, published once per control cycle." {
+        header: "Common header; time_ns is the time of the estimate the cycle used.",
+        mode: "Controller mode: 0 Idle, 1 RateDamping, 2 WheelPointing, 3 CmgSlew, 4 Fault.",
+        attitude_error: "Attitude error 2*q_e,v (vector part of q_e = q * q_ref^-1), body axes, \
+                         rad.",
+        torque_command: "Commanded control torque on the platform, body axes, N m (before \
+                         allocation, including friction compensation).",
+        deadline_misses: "Control cycles that missed their deadline since start (count).",
+        loop_period_ns: "Time since the previous control cycle, ns on the run's clock.",
+        compute_time_ns: "Compute time of this cycle, ns of wall-clock time; diagnostic only, 0 \
+                          in lockstep simulation.",
+    } pad [_pad0];
+
+    /// [`SimTruth`] on [`topic::SIM_TRUTH`](ipc_types::topic::SIM_TRUTH).
+    SimTruth(SimTruth) = "testbed::SimTruth.v1",
+    "True state of the simulated platform (simulation only), published every tick." {
+        header: "Common header; time_ns is the simulation time of the state.",
+        quaternion: "True attitude quaternion [x, y, z, w] (scalar last, Hamilton), rotation \
+                     from the level frame L (x north, y west, z up) to the body frame B; \
+                     dimensionless.",
+        rate: "True angular rate of B relative to L, body axes, rad/s.",
+        wheel_speed: "True reaction wheel speeds relative to the platform, about each wheel's \
+                      axis, rad/s.",
+        gimbal_angle: "True CMG gimbal angles, rad.",
+        gyro_bias: "True bias of the simulated gyros, body axes, rad/s.",
+        angular_momentum: "Total angular momentum (platform, wheels, CMGs), level-frame L \
+                           components, N m s.",
+        kinetic_energy: "Total rotational kinetic energy (platform, wheels, CMGs), J.",
+        tilt_stop: "Bit 0: at the air bearing's tilt stop about body x; bit 1: about body y.",
+    } pad [_pad0];
+
+    /// [`SimClockTick`] on [`topic::SIM_CLOCK`](ipc_types::topic::SIM_CLOCK).
+    SimClock(SimClockTick) = "testbed::SimClockTick.v1",
+    "One tick of the simulation clock (simulation only)." {
+        header: "Common header; time_ns equals sim_time_ns, sequence equals tick.",
+        tick: "Tick index, 0 at the start of the run.",
+        sim_time_ns: "Simulation time of this tick, ns since the start of the run.",
+        step_ns: "Length of the step from this tick to the next, ns.",
+    } pad [];
+
+    /// [`Heartbeat`] on [`topic::HEARTBEAT`](ipc_types::topic::HEARTBEAT).
+    Heartbeat(Heartbeat) = "testbed::Heartbeat.v1",
+    "Periodic liveness and counter report of one process (all processes share the topic; pid \
+     differs between runs)." {
+        header: "Common header; time_ns is the run's clock when the report was made.",
+        name: "Process name (UTF-8, at most 32 bytes).",
+        pid: "OS process id.",
+        state: "Process state: 0 Starting, 1 Running, 2 Degraded, 3 Stopping, 4 Faulted.",
+        samples_in: "Samples received since start (count).",
+        samples_out: "Samples published since start (count).",
+        errors: "Errors since start (count).",
+        frames_ok: "Device frames decoded successfully since start (gateways; 0 elsewhere).",
+        frames_bad: "Device frames rejected since start (gateways; 0 elsewhere).",
+    } pad [];
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use ipc_types::topic;
+
+    #[test]
+    fn topic_order_is_the_ipc_types_order() {
+        assert_eq!(LogRecord::TOPICS, topic::ALL);
+        let names: Vec<_> = TopicKind::ALL.iter().map(|k| k.name()).collect();
+        assert_eq!(names, topic::ALL);
+    }
+
+    #[test]
+    fn schema_names_are_the_iceoryx2_type_names() {
+        fn check<T: LogEncode>() {
+            // SAFETY: `type_name` only returns the string given to `#[type_name]`.
+            let type_name = unsafe { <T as iceoryx2::prelude::ZeroCopySend>::type_name() };
+            assert_eq!(T::SCHEMA_NAME, type_name);
+        }
+        check::<GyroSample>();
+        check::<InclinometerSample>();
+        check::<MagnetometerSample>();
+        check::<WheelTelemetry>();
+        check::<WheelCommand>();
+        check::<CmgTelemetry>();
+        check::<CmgCommand>();
+        check::<AttitudeEstimate>();
+        check::<ControllerStatus>();
+        check::<SimTruth>();
+        check::<SimClockTick>();
+        check::<Heartbeat>();
+    }
+
+    #[test]
+    fn schemas_are_json_objects_listing_every_encoded_field() {
+        for &kind in TopicKind::ALL {
+            let schema: Value = serde_json::from_str(&kind.json_schema()).expect("valid JSON");
+            let props = schema["properties"].as_object().expect("properties");
+            let sample = kind.decode(&default_json(kind)).expect("default decodes");
+            let mut encoded = Vec::new();
+            sample.encode_json(&mut encoded);
+            let value: Value = serde_json::from_slice(&encoded).expect("valid JSON");
+            let keys: Vec<_> = value.as_object().expect("object").keys().collect();
+            let schema_keys: Vec<_> = props.keys().collect();
+            assert_eq!(keys, schema_keys, "{}", kind.name());
+            for (name, prop) in props {
+                assert!(
+                    prop["description"].is_string(),
+                    "{}.{name} has no description",
+                    kind.name()
+                );
+            }
+        }
+    }
+
+    fn default_json(kind: TopicKind) -> Vec<u8> {
+        let record = match kind {
+            TopicKind::Gyro => LogRecord::Gyro(Default::default()),
+            TopicKind::Inclinometer => LogRecord::Inclinometer(Default::default()),
+            TopicKind::Magnetometer => LogRecord::Magnetometer(Default::default()),
+            TopicKind::WheelTelemetry => LogRecord::WheelTelemetry(Default::default()),
+            TopicKind::WheelCommand => LogRecord::WheelCommand(Default::default()),
+            TopicKind::CmgTelemetry => LogRecord::CmgTelemetry(Default::default()),
+            TopicKind::CmgCommand => LogRecord::CmgCommand(Default::default()),
+            TopicKind::AttitudeEstimate => LogRecord::AttitudeEstimate(Default::default()),
+            TopicKind::ControllerStatus => LogRecord::ControllerStatus(Default::default()),
+            TopicKind::SimTruth => LogRecord::SimTruth(Default::default()),
+            TopicKind::SimClock => LogRecord::SimClock(Default::default()),
+            TopicKind::Heartbeat => LogRecord::Heartbeat(Default::default()),
+        };
+        let mut out = Vec::new();
+        record.encode_json(&mut out);
+        out
+    }
+
+    #[test]
+    fn encoding_is_compact_and_in_declaration_order() {
+        let gyro = GyroSample::new(SampleHeader::new(5, 6, 1).with_source(2), [0.5, -1.0, 1e-9]);
+        let mut out = Vec::new();
+        gyro.encode_json(&mut out);
+        assert_eq!(
+            std::str::from_utf8(&out).expect("utf8"),
+            r#"{"header":{"time_ns":5,"sequence":6,"flags":1,"source_id":2},"rate":[0.5,-1.0,1e-9]}"#
+        );
+    }
+
+    #[test]
+    fn decoding_rejects_missing_and_unknown_fields() {
+        assert!(matches!(
+            GyroSample::decode_json(
+                br#"{"header":{"time_ns":5,"sequence":6,"flags":1,"source_id":2}}"#
+            ),
+            Err(DecodeError::Missing { .. })
+        ));
+        assert!(matches!(
+            GyroSample::decode_json(
+                br#"{"header":{"time_ns":5,"sequence":6,"flags":1,"source_id":2},"rate":[0,0,0],"x":1}"#
+            ),
+            Err(DecodeError::Unknown { .. })
+        ));
+        assert!(matches!(GyroSample::decode_json(b"[1]"), Err(DecodeError::Type { .. })));
+        assert!(matches!(GyroSample::decode_json(b"{"), Err(DecodeError::Json(_))));
+    }
+}

@@ -1,0 +1,311 @@
+//! [`RunLogWriter`]: writes one run's MCAP log.
+
+use crate::record::{LogEncode, LogRecord, TopicKind};
+use crate::sorter::{EncodedRecord, TickSorter};
+use crate::{
+    CONFIG_ATTACHMENT, CONFIG_MEDIA_TYPE, FORMAT, LogError, MESSAGE_ENCODING, RESERVED_KEYS,
+    RUN_METADATA, RunInfo, SCHEMA_ENCODING, keys,
+};
+use mcap::records::{MessageHeader, Metadata};
+use std::borrow::Cow;
+use std::collections::BTreeMap;
+use std::fs::File;
+use std::io::{BufWriter, Seek, Write};
+use std::path::Path;
+
+/// Order in which [`RunLogWriter`] writes records.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum RecordOrder {
+    /// In the order of the `write` calls, immediately (paced runs and hardware).
+    #[default]
+    Arrival,
+    /// Buffered in a [`TickSorter`] and written sorted by `(time_ns, topic order, sequence, …)`
+    /// when [`RunLogWriter::complete_until`] declares their time complete (lockstep runs:
+    /// the file's bytes do not depend on how the processes interleaved).
+    Sorted,
+}
+
+/// Options of [`RunLogWriter`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct WriterOptions {
+    /// Record order.
+    pub order: RecordOrder,
+    /// Capacity of the write buffer of [`RunLogWriter::create`], bytes. Records in the buffer
+    /// are lost if the process dies before the next flush; 0 hands every record to the OS as it
+    /// is written (one or more `write` system calls per record).
+    pub buffer_bytes: usize,
+}
+
+impl Default for WriterOptions {
+    /// Arrival order, 64 KiB buffer.
+    fn default() -> Self {
+        Self { order: RecordOrder::Arrival, buffer_bytes: 64 * 1024 }
+    }
+}
+
+impl WriterOptions {
+    /// Options for a lockstep run: [`RecordOrder::Sorted`], default buffer.
+    pub fn lockstep() -> Self {
+        Self { order: RecordOrder::Sorted, ..Self::default() }
+    }
+}
+
+/// Message counts of a finished log.
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub struct LogStats {
+    /// Messages written.
+    pub messages: u64,
+    /// Messages written per topic, in [`LogRecord::TOPICS`] order (every topic listed).
+    pub per_topic: Vec<(&'static str, u64)>,
+}
+
+/// Writes one run's log: an MCAP file with every topic, the run's configuration and metadata.
+///
+/// # File layout
+///
+/// Header, then one JSON Schema (`jsonschema`) and one channel (`json` messages) per topic of
+/// [`LogRecord::TOPICS`], in that order (channel ids 1 to 12), the configuration as attachment
+/// [`CONFIG_ATTACHMENT`], the run metadata record [`RUN_METADATA`], then the messages, and on
+/// [`finish`](Self::finish) the summary section (schemas, channels, statistics, attachment and
+/// metadata indexes) and footer. Every message's `log_time` and `publish_time` is the sample's
+/// `header.time_ns`, its MCAP `sequence` the low 32 bits of `header.sequence`. Nothing in the
+/// file comes from the wall clock (the attachment's times are 0), so the same records in the
+/// same order give the same bytes.
+///
+/// # Crash safety
+///
+/// Records are written unchunked, straight into the data section, so a file cut at any byte
+/// (a killed logger, a full disk) still holds every record before the cut intact and readable
+/// by a streaming reader ([`RunLog`](crate::RunLog), Python `mcap`'s `StreamReader`,
+/// `mcap recover`). A record is safe once it has reached the OS: on
+/// [`flush`](Self::flush), [`complete_until`](Self::complete_until), when the write buffer
+/// fills, or per record with [`WriterOptions::buffer_bytes`] = 0; [`sync`](Self::sync)
+/// also survives power loss. The price: no compression and no chunk/message indexes, so
+/// viewers read the file linearly (fine at test-bed data rates, a few MB per minute);
+/// `mcap recover` or `mcap convert` makes an indexed, compressed copy if needed.
+pub struct RunLogWriter<W: Write + Seek = BufWriter<File>> {
+    mcap: Option<mcap::Writer<W>>,
+    channel_ids: Vec<u16>,
+    counts: Vec<u64>,
+    sorter: Option<TickSorter>,
+    sync_file: Option<File>,
+    scratch: Vec<u8>,
+}
+
+impl RunLogWriter<BufWriter<File>> {
+    /// Creates (or truncates) the log file at `path` with [`WriterOptions::default`] (arrival
+    /// order) and writes the header, schemas, channels, configuration and run metadata.
+    pub fn create(path: impl AsRef<Path>, info: &RunInfo) -> Result<Self, LogError> {
+        Self::create_with(path, info, WriterOptions::default())
+    }
+
+    /// As [`create`](Self::create), with `options`.
+    pub fn create_with(
+        path: impl AsRef<Path>,
+        info: &RunInfo,
+        options: WriterOptions,
+    ) -> Result<Self, LogError> {
+        let path = path.as_ref();
+        let file = File::create(path).map_err(|e| LogError::io(path, e))?;
+        let sync_file = file.try_clone().map_err(|e| LogError::io(path, e))?;
+        let mut writer =
+            Self::new(BufWriter::with_capacity(options.buffer_bytes, file), info, options)?;
+        writer.sync_file = Some(sync_file);
+        Ok(writer)
+    }
+}
+
+impl<W: Write + Seek> RunLogWriter<W> {
+    /// Starts a log on `writer` and writes the header, schemas, channels, configuration and
+    /// run metadata ([`WriterOptions::buffer_bytes`] is not used: buffer `writer` yourself).
+    pub fn new(writer: W, info: &RunInfo, options: WriterOptions) -> Result<Self, LogError> {
+        if let Some(key) = info.extra.keys().find(|k| RESERVED_KEYS.contains(&k.as_str())) {
+            return Err(LogError::ReservedKey(key.clone()));
+        }
+        let mcap_options = mcap::WriteOptions::new()
+            .use_chunks(false)
+            .compression(None)
+            .profile("")
+            .library(format!("testbed-log/{}", env!("CARGO_PKG_VERSION")));
+        let mut mcap = mcap_options.create(writer)?;
+
+        let mut channel_ids = Vec::with_capacity(TopicKind::ALL.len());
+        for &kind in TopicKind::ALL {
+            let schema = kind.json_schema();
+            let schema_id =
+                mcap.add_schema(kind.schema_name(), SCHEMA_ENCODING, schema.as_bytes())?;
+            let channel_id =
+                mcap.add_channel(schema_id, kind.name(), MESSAGE_ENCODING, &BTreeMap::new())?;
+            channel_ids.push(channel_id);
+        }
+
+        mcap.attach(&mcap::Attachment {
+            log_time: 0,
+            create_time: 0,
+            name: CONFIG_ATTACHMENT.to_owned(),
+            media_type: CONFIG_MEDIA_TYPE.to_owned(),
+            data: Cow::Borrowed(info.config_toml.as_bytes()),
+        })?;
+
+        let mut metadata = info.extra.clone();
+        metadata.insert(keys::FORMAT.to_owned(), FORMAT.to_owned());
+        metadata.insert(keys::PROFILE.to_owned(), info.profile.clone());
+        metadata.insert(keys::SEED.to_owned(), info.seed.to_string());
+        metadata.insert(keys::MODE.to_owned(), info.mode.clone());
+        mcap.write_metadata(&Metadata { name: RUN_METADATA.to_owned(), metadata })?;
+        mcap.flush()?;
+
+        Ok(Self {
+            mcap: Some(mcap),
+            counts: vec![0; channel_ids.len()],
+            channel_ids,
+            sorter: (options.order == RecordOrder::Sorted).then(TickSorter::new),
+            sync_file: None,
+            scratch: Vec::with_capacity(1024),
+        })
+    }
+
+    /// Logs `sample` (immediately, or buffered until its time is complete in
+    /// [`RecordOrder::Sorted`]).
+    pub fn write<T: LogEncode>(&mut self, sample: &T) -> Result<(), LogError> {
+        self.write_record(&sample.into_record())
+    }
+
+    /// Logs `record` (see [`write`](Self::write)).
+    ///
+    /// In [`RecordOrder::Sorted`], a record whose time was already completed is refused with
+    /// [`LogError::LateRecord`] and not logged.
+    pub fn write_record(&mut self, record: &LogRecord) -> Result<(), LogError> {
+        if let Some(sorter) = &mut self.sorter {
+            return sorter.push(EncodedRecord::new(record));
+        }
+        let mut data = std::mem::take(&mut self.scratch);
+        data.clear();
+        record.encode_json(&mut data);
+        let header = record.header();
+        let result = self.put(record.kind(), header.time_ns, header.sequence, &data);
+        self.scratch = data;
+        result
+    }
+
+    /// Logs an already encoded record, e.g. one released by an external [`TickSorter`]
+    /// (bypasses this writer's sorter).
+    pub fn write_encoded(&mut self, record: &EncodedRecord) -> Result<(), LogError> {
+        self.put(record.kind(), record.time_ns(), record.sequence(), record.data())
+    }
+
+    fn put(
+        &mut self,
+        kind: TopicKind,
+        time_ns: u64,
+        sequence: u64,
+        data: &[u8],
+    ) -> Result<(), LogError> {
+        let index = kind as usize;
+        let (Some(mcap), Some(&channel_id)) = (&mut self.mcap, self.channel_ids.get(index)) else {
+            return Err(LogError::Finished);
+        };
+        let header = MessageHeader {
+            channel_id,
+            // MCAP's sequence is 32 bits; the full sequence is in the JSON header.
+            sequence: sequence as u32,
+            log_time: time_ns,
+            publish_time: time_ns,
+        };
+        mcap.write_to_known_channel(&header, data)?;
+        if let Some(count) = self.counts.get_mut(index) {
+            *count += 1;
+        }
+        Ok(())
+    }
+
+    /// Declares every time `<= time_ns` complete: in [`RecordOrder::Sorted`] writes the
+    /// buffered records of those times in sorted order. Then flushes (see
+    /// [`flush`](Self::flush)). Call once per tick (lockstep: when tick `n + 1` is seen, all
+    /// records up to tick `n`'s time are in).
+    pub fn complete_until(&mut self, time_ns: u64) -> Result<(), LogError> {
+        if let Some(sorter) = &mut self.sorter {
+            for record in sorter.complete_until(time_ns) {
+                self.write_encoded(&record)?;
+            }
+        }
+        self.flush()
+    }
+
+    /// Hands every written record to the OS: from then on it survives the logger being
+    /// killed. Records buffered in the sorter are not written (see
+    /// [`complete_until`](Self::complete_until)).
+    pub fn flush(&mut self) -> Result<(), LogError> {
+        match &mut self.mcap {
+            Some(mcap) => Ok(mcap.flush()?),
+            None => Err(LogError::Finished),
+        }
+    }
+
+    /// [`flush`](Self::flush), then, for a file made by [`create`](RunLogWriter::create),
+    /// `fsync`s it (survives power loss; slow, so not per tick).
+    pub fn sync(&mut self) -> Result<(), LogError> {
+        self.flush()?;
+        if let Some(file) = &self.sync_file {
+            file.sync_data().map_err(LogError::Io)?;
+        }
+        Ok(())
+    }
+
+    /// Number of records waiting in the sorter ([`RecordOrder::Sorted`]).
+    pub fn pending(&self) -> usize {
+        self.sorter.as_ref().map_or(0, TickSorter::len)
+    }
+
+    /// Writes the records still in the sorter (sorted), the summary section and the footer,
+    /// flushes and (for a file made by [`create`](RunLogWriter::create)) `fsync`s.
+    pub fn finish(self) -> Result<LogStats, LogError> {
+        self.finish_into_inner().map(|(stats, _)| stats)
+    }
+
+    /// As [`finish`](Self::finish), returning the underlying writer too.
+    pub fn finish_into_inner(mut self) -> Result<(LogStats, W), LogError> {
+        self.drain_sorter()?;
+        let Some(mut mcap) = self.mcap.take() else {
+            return Err(LogError::Finished);
+        };
+        mcap.finish()?;
+        let mut inner = mcap.into_inner();
+        inner.flush().map_err(LogError::Io)?;
+        if let Some(file) = &self.sync_file {
+            file.sync_all().map_err(LogError::Io)?;
+        }
+        let per_topic: Vec<_> =
+            TopicKind::ALL.iter().map(|k| k.name()).zip(self.counts.iter().copied()).collect();
+        Ok((LogStats { messages: per_topic.iter().map(|(_, n)| n).sum(), per_topic }, inner))
+    }
+
+    fn drain_sorter(&mut self) -> Result<(), LogError> {
+        if let Some(sorter) = &mut self.sorter {
+            for record in sorter.drain() {
+                self.write_encoded(&record)?;
+            }
+        }
+        Ok(())
+    }
+}
+
+impl<W: Write + Seek> Drop for RunLogWriter<W> {
+    /// Without [`finish`](RunLogWriter::finish): writes the sorter's records; the MCAP writer
+    /// then writes the summary and footer on its own drop (errors ignored).
+    fn drop(&mut self) {
+        if self.mcap.is_some() {
+            let _ = self.drain_sorter();
+        }
+    }
+}
+
+impl<W: Write + Seek> std::fmt::Debug for RunLogWriter<W> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("RunLogWriter")
+            .field("finished", &self.mcap.is_none())
+            .field("counts", &self.counts)
+            .field("pending", &self.pending())
+            .finish_non_exhaustive()
+    }
+}

@@ -1,0 +1,207 @@
+//! Shared helpers of the integration tests: synthetic runs, temp paths, MCAP framing.
+
+#![allow(dead_code)] // each test binary uses a subset
+
+use ipc_types::{
+    AttitudeEstimate, CmgCommand, CmgTelemetry, ControllerMode, ControllerStatus, GyroSample,
+    Heartbeat, InclinometerSample, MagnetometerSample, ProcessState, SampleHeader, SimClockTick,
+    SimTruth, WheelCommand, WheelTelemetry,
+};
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+use testbed_log::{LogRecord, RunInfo};
+
+/// Step of the synthetic runs, ns (100 Hz).
+pub const STEP_NS: u64 = 10_000_000;
+
+/// Small deterministic generator (xorshift64*).
+pub struct Rng(u64);
+
+impl Rng {
+    pub fn new(seed: u64) -> Self {
+        Self(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1)
+    }
+
+    pub fn next_u64(&mut self) -> u64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
+    }
+
+    /// A float spanning many magnitudes and both signs (finite).
+    pub fn f64(&mut self) -> f64 {
+        let mantissa = (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64;
+        let exponent = (self.next_u64() % 40) as i32 - 30;
+        let sign = if self.next_u64() & 1 == 0 { 1.0 } else { -1.0 };
+        sign * mantissa * 10f64.powi(exponent)
+    }
+
+    pub fn array<const N: usize>(&mut self) -> [f64; N] {
+        core::array::from_fn(|_| self.f64())
+    }
+
+    /// Index in `0..n`.
+    pub fn below(&mut self, n: usize) -> usize {
+        (self.next_u64() % n as u64) as usize
+    }
+}
+
+fn header(t: u64, seq: u64, rng: &mut Rng) -> SampleHeader {
+    let flags = SampleHeader::VALID
+        | SampleHeader::SIMULATED
+        | if matches!(rng.next_u64() % 7, 0) { SampleHeader::SATURATED_Y } else { 0 };
+    SampleHeader::new(t, seq, flags)
+}
+
+/// The records of tick `k` of a synthetic lockstep run: every topic at 100 Hz, the
+/// inclinometer and magnetometer at 25 Hz, heartbeats of two processes every 10 ticks (same
+/// time, sequence and source: only their content orders them).
+pub fn tick_records(k: u64, rng: &mut Rng) -> Vec<LogRecord> {
+    let t = k * STEP_NS;
+    let mut out: Vec<LogRecord> = Vec::new();
+    out.push(SimClockTick::new(k, t, STEP_NS).into());
+    out.push(
+        SimTruth {
+            header: header(t, k, rng),
+            quaternion: rng.array(),
+            rate: rng.array(),
+            wheel_speed: rng.array(),
+            gimbal_angle: rng.array(),
+            gyro_bias: rng.array(),
+            angular_momentum: rng.array(),
+            kinetic_energy: rng.f64().abs(),
+            tilt_stop: (k % 4) as u32,
+            _pad0: 0,
+        }
+        .into(),
+    );
+    out.push(GyroSample::new(header(t, k, rng), rng.array()).into());
+    if matches!(k % 4, 0) {
+        out.push(InclinometerSample::new(header(t, k / 4, rng), rng.array()).into());
+        out.push(MagnetometerSample::new(header(t, k / 4, rng), rng.array()).into());
+    }
+    out.push(WheelTelemetry::new(header(t, k, rng), rng.array(), rng.array()).into());
+    out.push(CmgTelemetry::new(header(t, k, rng), rng.array(), rng.array()).into());
+    out.push(
+        AttitudeEstimate {
+            header: header(t, k, rng),
+            quaternion: rng.array(),
+            rate: rng.array(),
+            gyro_bias: rng.array(),
+            covariance: rng.array(),
+            innovation: rng.array(),
+            innovation_time_ns: t - t % (4 * STEP_NS),
+            innovation_mask: (k % 64) as u32,
+            _pad0: 0,
+            updates_applied: k / 4,
+            updates_skipped: k / 40,
+            updates_rejected: k / 400,
+        }
+        .into(),
+    );
+    let mut status = ControllerStatus {
+        header: header(t, k, rng),
+        attitude_error: rng.array(),
+        torque_command: rng.array(),
+        deadline_misses: k / 100,
+        loop_period_ns: STEP_NS,
+        compute_time_ns: 0,
+        ..ControllerStatus::default()
+    };
+    status.set_mode(ControllerMode::WheelPointing);
+    out.push(status.into());
+    out.push(WheelCommand::new(header(t, k, rng), rng.array()).into());
+    out.push(CmgCommand::new(header(t, k, rng), rng.array()).into());
+    if matches!(k % 10, 0) {
+        for name in ["estimator", "controller"] {
+            let mut hb = Heartbeat::new(name, 0);
+            hb.header = SampleHeader::new(t, k / 10, SampleHeader::VALID);
+            hb.set_state(ProcessState::Running);
+            hb.samples_in = k * 3;
+            hb.samples_out = k;
+            out.push(hb.into());
+        }
+    }
+    out
+}
+
+/// `ticks` ticks of a synthetic run, per tick.
+pub fn run_records(ticks: u64, seed: u64) -> Vec<Vec<LogRecord>> {
+    let mut rng = Rng::new(seed);
+    (0..ticks).map(|k| tick_records(k, &mut rng)).collect()
+}
+
+/// Run information of the synthetic runs.
+pub fn run_info() -> RunInfo {
+    RunInfo {
+        profile: "simulation".into(),
+        seed: 0xDEAD_BEEF_0123_4567,
+        mode: "lockstep".into(),
+        config_toml: "# test configuration\n[plant]\ninertia = [1.2, 1.3, 0.9] # kg m²\n\n\
+                      [estimator]\ngyro_noise = 1e-6\n"
+            .into(),
+        extra: BTreeMap::from([("git".to_owned(), "abc123".to_owned())]),
+    }
+}
+
+/// A fresh path in the test's temporary directory.
+pub fn temp_path(name: &str) -> PathBuf {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("testbed-log");
+    std::fs::create_dir_all(&dir).expect("create temp dir");
+    let path = dir.join(name);
+    let _ = std::fs::remove_file(&path);
+    path
+}
+
+/// One record of an MCAP file's framing.
+#[derive(Debug, Clone, Copy)]
+pub struct Framed {
+    pub opcode: u8,
+    pub start: u64,
+    pub end: u64,
+}
+
+/// The records of a complete MCAP file (independent of the crate's reader).
+pub fn framing(bytes: &[u8]) -> Vec<Framed> {
+    assert_eq!(&bytes[..8], b"\x89MCAP0\r\n", "magic");
+    let mut out = Vec::new();
+    let mut pos = 8usize;
+    loop {
+        let opcode = bytes[pos];
+        let len = u64::from_le_bytes(bytes[pos + 1..pos + 9].try_into().expect("8 bytes"));
+        let end = pos + 9 + len as usize;
+        out.push(Framed { opcode, start: pos as u64, end: end as u64 });
+        pos = end;
+        if opcode == 0x02 {
+            assert_eq!(&bytes[pos..], b"\x89MCAP0\r\n", "trailing magic");
+            return out;
+        }
+    }
+}
+
+/// Runs the Python script `tests/read_log.py` with `args`, returning its JSON output.
+/// Fails with instructions if `python3` or its `mcap` package is missing.
+pub fn python_read_log(args: &[&str]) -> serde_json::Value {
+    let check = std::process::Command::new("python3").args(["-c", "import mcap"]).output();
+    match check {
+        Err(e) => panic!("python3 is needed to check logs with a standard MCAP reader: {e}"),
+        Ok(out) if !out.status.success() => panic!(
+            "Python's `mcap` package is missing (needed to check logs with a standard MCAP \
+             reader); install it with: python3 -m pip install 'mcap>=1.1,<2'\n{}",
+            String::from_utf8_lossy(&out.stderr)
+        ),
+        Ok(_) => {}
+    }
+    let script = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/read_log.py");
+    let out =
+        std::process::Command::new("python3").arg(script).args(args).output().expect("run python3");
+    assert!(
+        out.status.success(),
+        "read_log.py {args:?} failed:\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).unwrap_or_else(|e| {
+        panic!("read_log.py printed no JSON ({e}):\n{}", String::from_utf8_lossy(&out.stdout))
+    })
+}

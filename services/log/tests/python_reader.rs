@@ -1,0 +1,82 @@
+//! A log written by `RunLogWriter` is read by a standard MCAP tool: Python's `mcap` package.
+
+mod common;
+
+use common::{python_read_log, run_info, run_records, temp_path};
+use ipc_types::topic;
+use serde_json::{Value, json};
+use std::collections::BTreeMap;
+use testbed_log::{LogRecord, RunLogWriter, WriterOptions};
+
+#[test]
+fn python_mcap_reads_topics_schemas_messages_and_configuration() {
+    let path = temp_path("python_summary.mcap");
+    let records: Vec<LogRecord> = run_records(25, 6).into_iter().flatten().collect();
+    let mut writer =
+        RunLogWriter::create_with(&path, &run_info(), WriterOptions::lockstep()).expect("create");
+    for record in &records {
+        writer.write_record(record).expect("write");
+    }
+    let stats = writer.finish().expect("finish");
+
+    let report = python_read_log(&["summary", path.to_str().expect("utf-8 path")]);
+
+    assert!(report["library"].as_str().is_some_and(|l| l.starts_with("testbed-log/")));
+    // Channels: one per topic, JSON messages, each with its JSON Schema.
+    let channels = report["channels"].as_object().expect("channels");
+    let topics: Vec<&str> = (1..=topic::ALL.len())
+        .map(|id| channels[&id.to_string()]["topic"].as_str().expect("topic"))
+        .collect();
+    assert_eq!(topics, topic::ALL);
+    let schemas = report["schemas"].as_object().expect("schemas");
+    for channel in channels.values() {
+        assert_eq!(channel["message_encoding"], "json");
+        let schema = &schemas[&channel["schema_id"].to_string()];
+        assert_eq!(schema["encoding"], "jsonschema");
+        let name = schema["name"].as_str().expect("name");
+        assert!(name.starts_with("testbed::") && name.ends_with(".v1"), "{name}");
+        assert_eq!(schema["data"]["type"], "object");
+        assert!(schema["data"]["properties"]["header"]["properties"]["time_ns"].is_object());
+    }
+    let gyro_schema =
+        schemas.values().find(|s| s["name"] == "testbed::GyroSample.v1").expect("gyro schema");
+    let rate = gyro_schema["data"]["properties"]["rate"]["description"].as_str().expect("desc");
+    assert!(rate.contains("rad/s"), "units in the description: {rate}");
+
+    // Messages: every one decoded as JSON by the script; counts match.
+    let mut expected: BTreeMap<String, u64> = BTreeMap::new();
+    for r in &records {
+        *expected.entry(r.topic().to_owned()).or_default() += 1;
+    }
+    let counted: BTreeMap<String, u64> = report["messages"]
+        .as_object()
+        .expect("messages")
+        .iter()
+        .map(|(t, n)| (t.clone(), n.as_u64().expect("count")))
+        .collect();
+    assert_eq!(counted, expected);
+    assert_eq!(report["statistics"]["message_count"], json!(records.len()));
+    assert_eq!(stats.messages, records.len() as u64);
+    assert_eq!(report["statistics"]["attachment_count"], 1);
+    assert_eq!(report["statistics"]["metadata_count"], 1);
+
+    // Configuration and run metadata.
+    let info = run_info();
+    assert_eq!(
+        report["attachments"],
+        json!([{
+            "name": "config.toml",
+            "media_type": "application/toml",
+            "data": info.config_toml,
+            "log_time": 0,
+            "create_time": 0,
+        }])
+    );
+    let metadata: &Value = &report["metadata"][0];
+    assert_eq!(metadata["name"], "testbed.run");
+    assert_eq!(metadata["metadata"]["profile"], "simulation");
+    assert_eq!(metadata["metadata"]["mode"], "lockstep");
+    assert_eq!(metadata["metadata"]["seed"], info.seed.to_string());
+    assert_eq!(metadata["metadata"]["git"], "abc123");
+    assert_eq!(metadata["metadata"]["format"], "testbed-log/1");
+}

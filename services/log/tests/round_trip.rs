@@ -1,0 +1,155 @@
+//! Every sample type written by `RunLogWriter` reads back identical through `RunLog`.
+
+mod common;
+
+use common::{run_info, run_records, temp_path};
+use ipc_types::{
+    AttitudeEstimate, GyroSample, Heartbeat, MagnetometerSample, SampleHeader, SimClockTick, topic,
+};
+use std::collections::BTreeSet;
+use testbed_log::{
+    CONFIG_ATTACHMENT, LogEnd, LogError, LogRecord, RunLog, RunLogWriter, WriterOptions,
+};
+
+#[test]
+fn every_sample_type_round_trips() {
+    let path = temp_path("round_trip.mcap");
+    let records: Vec<LogRecord> = run_records(40, 1).into_iter().flatten().collect();
+    let topics: BTreeSet<_> = records.iter().map(LogRecord::topic).collect();
+    assert_eq!(topics.len(), topic::ALL.len(), "the synthetic run covers every topic");
+
+    let mut writer = RunLogWriter::create(&path, &run_info()).expect("create");
+    for record in &records {
+        writer.write_record(record).expect("write");
+    }
+    let stats = writer.finish().expect("finish");
+    assert_eq!(stats.messages, records.len() as u64);
+    assert_eq!(stats.per_topic.len(), topic::ALL.len());
+
+    let log = RunLog::open(&path).expect("open");
+    assert_eq!(log.info(), &run_info());
+    assert_eq!(log.config_toml(), run_info().config_toml);
+    assert_eq!(log.end(), LogEnd::Complete);
+    assert!(log.is_complete());
+    assert_eq!(log.message_count(), records.len() as u64);
+    assert_eq!(log.topics(), topic::ALL);
+    assert!(log.library().starts_with("testbed-log/"));
+
+    let read: Vec<LogRecord> =
+        log.records().expect("records").map(|r| r.expect("decodes")).collect();
+    assert_eq!(read, records);
+
+    // Filters.
+    let gyros: Vec<GyroSample> =
+        log.samples::<GyroSample>().expect("samples").map(|r| r.expect("decodes")).collect();
+    let expected: Vec<GyroSample> = records
+        .iter()
+        .filter_map(|r| match r {
+            LogRecord::Gyro(g) => Some(*g),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(gyros, expected);
+    assert_eq!(gyros.len(), 40);
+
+    let on: Vec<LogRecord> = log
+        .records_on(&[topic::MAGNETOMETER, topic::SIM_CLOCK, "no/such/topic"])
+        .expect("records")
+        .map(|r| r.expect("decodes"))
+        .collect();
+    let expected: Vec<LogRecord> = records
+        .iter()
+        .filter(|r| [topic::MAGNETOMETER, topic::SIM_CLOCK].contains(&r.topic()))
+        .copied()
+        .collect();
+    assert_eq!(on, expected);
+}
+
+#[test]
+fn edge_values_round_trip() {
+    let path = temp_path("edge_values.mcap");
+    let mut estimate = AttitudeEstimate {
+        header: SampleHeader::new(u64::MAX, u64::MAX, u32::MAX).with_source(u32::MAX),
+        innovation: [f64::NAN, f64::INFINITY, f64::NEG_INFINITY, -0.0, 5e-324, f64::MAX],
+        ..AttitudeEstimate::default()
+    };
+    estimate.covariance[35] = f64::MIN_POSITIVE;
+    let mut garbage_name = Heartbeat::new("gateway", 42);
+    garbage_name.name[20] = 0xFF; // bytes after the NUL, not UTF-8: stored raw
+    let full_name = Heartbeat::new(&"x".repeat(32), 7);
+    let unicode = Heartbeat::new("magnétomètre", 9);
+    let tick = SimClockTick::new(u64::MAX, u64::MAX, 1);
+
+    let mut writer = RunLogWriter::create(&path, &run_info()).expect("create");
+    writer.write(&estimate).expect("write");
+    writer.write(&garbage_name).expect("write");
+    writer.write(&full_name).expect("write");
+    writer.write(&unicode).expect("write");
+    writer.write(&tick).expect("write");
+    writer.finish().expect("finish");
+
+    let log = RunLog::open(&path).expect("open");
+    let read: Vec<LogRecord> =
+        log.records().expect("records").map(|r| r.expect("decodes")).collect();
+    let LogRecord::AttitudeEstimate(e) = read[0] else { panic!("estimate first: {read:?}") };
+    assert_eq!(e.header, estimate.header);
+    assert!(e.innovation[0].is_nan());
+    for i in 1..6 {
+        assert_eq!(e.innovation[i].to_bits(), estimate.innovation[i].to_bits(), "innovation[{i}]");
+    }
+    assert_eq!(e.covariance, estimate.covariance);
+    assert_eq!(read[1], LogRecord::Heartbeat(garbage_name));
+    assert_eq!(read[2], LogRecord::Heartbeat(full_name));
+    assert_eq!(read[3], LogRecord::Heartbeat(unicode));
+    assert_eq!(read[4], LogRecord::SimClock(tick));
+    assert_eq!(unicode.name(), "magnétomètre");
+}
+
+#[test]
+fn writer_checks_its_inputs() {
+    let mut info = run_info();
+    info.extra.insert("seed".into(), "1".into());
+    assert!(matches!(
+        RunLogWriter::create(temp_path("reserved.mcap"), &info),
+        Err(LogError::ReservedKey(k)) if k == "seed"
+    ));
+
+    let path = temp_path("late.mcap");
+    let mut writer =
+        RunLogWriter::create_with(&path, &run_info(), WriterOptions::lockstep()).expect("create");
+    let gyro = |t| GyroSample::new(SampleHeader::new(t, 0, 1), [0.0; 3]);
+    writer.write(&gyro(20)).expect("buffered");
+    writer.write(&gyro(10)).expect("buffered");
+    assert_eq!(writer.pending(), 2);
+    writer.complete_until(15).expect("complete");
+    assert_eq!(writer.pending(), 1);
+    assert!(matches!(
+        writer.write(&gyro(15)),
+        Err(LogError::LateRecord { time_ns: 15, completed_until_ns: 15, .. })
+    ));
+    writer.write(&MagnetometerSample::default()).expect_err("time 0 is late too");
+    writer.finish().expect("finish writes the pending record");
+    let log = RunLog::open(&path).expect("open");
+    let times: Vec<u64> =
+        log.records().expect("records").map(|r| r.expect("decodes").header().time_ns).collect();
+    assert_eq!(times, [10, 20]);
+
+    assert!(matches!(RunLog::open(temp_path("missing.mcap")), Err(LogError::File { .. })));
+    let not_mcap = temp_path("not.mcap");
+    std::fs::write(&not_mcap, b"hello, world").expect("write");
+    assert!(matches!(RunLog::open(&not_mcap), Err(LogError::NotMcap)));
+}
+
+#[test]
+fn dropping_an_unfinished_writer_still_completes_the_file() {
+    let path = temp_path("dropped.mcap");
+    {
+        let mut writer = RunLogWriter::create_with(&path, &run_info(), WriterOptions::lockstep())
+            .expect("create");
+        writer.write(&GyroSample::new(SampleHeader::new(5, 0, 1), [1.0; 3])).expect("write");
+    }
+    let log = RunLog::open(&path).expect("open");
+    assert!(log.is_complete());
+    assert_eq!(log.message_count(), 1);
+    assert_eq!(CONFIG_ATTACHMENT, "config.toml");
+}
