@@ -59,7 +59,7 @@
 
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
-use testbed_model::attitude::{self, Attitude};
+use testbed_model::attitude::Attitude;
 use testbed_model::config::WheelConfig;
 
 /// Why a controller refused its configuration or an input.
@@ -330,6 +330,7 @@ mod tests {
     use super::*;
     use nalgebra::{Matrix3, UnitQuaternion};
     use testbed_model::config::DEG;
+    use testbed_model::attitude;
 
     fn controller(compensation: bool) -> WheelController {
         let config = WheelControlConfig { friction_compensation: compensation, ..WheelControlConfig::default() };
