@@ -8,10 +8,12 @@
 //!   pipeline's processes.
 //! * [`closed_loop`]: plant + devices + estimator + controller in one deterministic call.
 //! * [`metrics`]: settling time, steady error, estimation accuracy and consistency.
+//! * [`paper`]: the paper's results reproduced side by side with its numbers.
 
 pub mod closed_loop;
 pub mod cmg_steering;
 pub mod control;
 pub mod mekf;
+pub mod paper;
 pub mod metrics;
 pub mod tasks;
