@@ -1,0 +1,871 @@
+#![doc = include_str!("../PROTOCOL.md")]
+
+use testbed_model::config::{DEG, GAUSS, ModelConfig, RPM};
+
+/// Number of identifiers one device occupies (`base + SLOT_STRIDE · slot + message`).
+pub const SLOT_STRIDE: u16 = 0x10;
+/// Default identifier base.
+pub const DEFAULT_BASE: u16 = 0x100;
+/// Largest base: the last device block must end at or below 0x7FF.
+pub const MAX_BASE: u16 = 0x800 - SLOT_STRIDE * Device::ALL.len() as u16;
+/// Most frames one message (sample) is split into.
+pub const MAX_PARTS: usize = 5;
+/// Most value channels one message carries.
+pub const MAX_CHANNELS: usize = 8;
+
+/// A device (or the node itself) behind the smart CAN node: one block of 16 identifiers.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Device {
+    /// The three reaction wheels (slot 0, highest bus priority).
+    Wheels,
+    /// The four control moment gyros (slot 1).
+    Cmg,
+    /// The three fibre-optic gyros (slot 2).
+    Gyro,
+    /// The two-axis inclinometer (slot 3).
+    Inclinometer,
+    /// The three-axis magnetometer (slot 4).
+    Magnetometer,
+    /// The smart CAN node itself: heartbeat (slot 5, lowest priority).
+    Node,
+}
+
+impl Device {
+    /// Every device, in slot order.
+    pub const ALL: [Device; 6] = [
+        Device::Wheels,
+        Device::Cmg,
+        Device::Gyro,
+        Device::Inclinometer,
+        Device::Magnetometer,
+        Device::Node,
+    ];
+
+    /// Slot number: identifiers `base + 0x10 · slot + 0..=0xF`.
+    pub const fn slot(self) -> u16 {
+        self as u16
+    }
+
+    /// Bit of this device in a [`DeviceSet`] and in the heartbeat's link mask.
+    pub const fn bit(self) -> u8 {
+        1 << (self as u8)
+    }
+
+    /// Lower-case name.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Device::Wheels => "wheels",
+            Device::Cmg => "cmg",
+            Device::Gyro => "gyro",
+            Device::Inclinometer => "inclinometer",
+            Device::Magnetometer => "magnetometer",
+            Device::Node => "node",
+        }
+    }
+}
+
+/// A set of devices (bit `Device::bit`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub struct DeviceSet(pub u8);
+
+impl DeviceSet {
+    /// Every device.
+    pub const ALL: DeviceSet = DeviceSet(0b11_1111);
+
+    /// The set of the listed devices.
+    pub fn of(devices: &[Device]) -> Self {
+        DeviceSet(devices.iter().fold(0, |m, d| m | d.bit()))
+    }
+
+    /// Whether `device` is in the set.
+    pub const fn contains(self, device: Device) -> bool {
+        self.0 & device.bit() != 0
+    }
+}
+
+/// Who sends a message.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Direction {
+    /// Node to computer (measurements, telemetry, heartbeat).
+    FromNode,
+    /// Computer to node (actuator commands).
+    ToNode,
+}
+
+/// One message of the protocol: a sample or command, carried by one or more frames.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum MessageKind {
+    /// Reaction wheel motor torques (computer → node), 1 frame.
+    WheelCommand,
+    /// Reaction wheel speeds and torques (node → computer), 3 frames.
+    WheelTelemetry,
+    /// CMG gimbal rate command (computer → node), 2 frames.
+    CmgCommand,
+    /// CMG gimbal angles and rates (node → computer), 5 frames.
+    CmgTelemetry,
+    /// Gyro rates (node → computer), 2 frames.
+    Gyro,
+    /// Inclinometer tilt angles (node → computer), 2 frames.
+    Inclinometer,
+    /// Magnetometer field (node → computer), 2 frames.
+    Magnetometer,
+    /// Node heartbeat and link status (node → computer), 1 frame.
+    NodeHeartbeat,
+}
+
+impl MessageKind {
+    /// Every message, in identifier order.
+    pub const ALL: [MessageKind; 8] = [
+        MessageKind::WheelCommand,
+        MessageKind::WheelTelemetry,
+        MessageKind::CmgCommand,
+        MessageKind::CmgTelemetry,
+        MessageKind::Gyro,
+        MessageKind::Inclinometer,
+        MessageKind::Magnetometer,
+        MessageKind::NodeHeartbeat,
+    ];
+
+    /// Index into [`MessageKind::ALL`].
+    pub const fn index(self) -> usize {
+        self as usize
+    }
+
+    /// The message's wire layout.
+    pub(crate) const fn layout(self) -> &'static MessageLayout {
+        &LAYOUTS[self as usize]
+    }
+
+    /// The device block the message's identifiers are in.
+    pub const fn device(self) -> Device {
+        self.layout().device
+    }
+
+    /// Who sends it.
+    pub const fn direction(self) -> Direction {
+        self.layout().direction
+    }
+
+    /// Number of frames per sample.
+    pub const fn parts(self) -> usize {
+        self.layout().parts.len()
+    }
+
+    /// Message number of the first frame inside the device block (frames follow consecutively).
+    pub const fn first_message(self) -> u16 {
+        self.layout().first
+    }
+
+    /// Data length code of frame `part` (None if out of range).
+    pub fn dlc(self, part: usize) -> Option<u8> {
+        self.layout().parts.get(part).map(|p| p.dlc)
+    }
+
+    /// Lower-case name.
+    pub const fn name(self) -> &'static str {
+        match self {
+            MessageKind::WheelCommand => "wheel command",
+            MessageKind::WheelTelemetry => "wheel telemetry",
+            MessageKind::CmgCommand => "cmg command",
+            MessageKind::CmgTelemetry => "cmg telemetry",
+            MessageKind::Gyro => "gyro",
+            MessageKind::Inclinometer => "inclinometer",
+            MessageKind::Magnetometer => "magnetometer",
+            MessageKind::NodeHeartbeat => "node heartbeat",
+        }
+    }
+}
+
+/// A fixed-point physical quantity on the wire.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Quantity {
+    /// Gyro angular rate: signed 24 bit, LSB 1e-5 °/s.
+    GyroRate,
+    /// Inclinometer tilt angle: signed 24 bit, LSB 1e-5 °.
+    Tilt,
+    /// Magnetic flux density: signed 24 bit, LSB 1e-6 G (1e-10 T).
+    Field,
+    /// Reaction wheel speed: signed 24 bit, LSB 0.001 rpm.
+    WheelSpeed,
+    /// Reaction wheel motor torque: signed 16 bit, LSB 1e-5 Nm.
+    WheelTorque,
+    /// CMG gimbal angle: signed 24 bit over one turn, LSB 360°/2²⁴; wraps to [−180°, 180°).
+    GimbalAngle,
+    /// CMG gimbal rate: signed 24 bit, LSB 1e-4 °/s.
+    GimbalRate,
+}
+
+impl Quantity {
+    /// Every quantity.
+    pub const ALL: [Quantity; 7] = [
+        Quantity::GyroRate,
+        Quantity::Tilt,
+        Quantity::Field,
+        Quantity::WheelSpeed,
+        Quantity::WheelTorque,
+        Quantity::GimbalAngle,
+        Quantity::GimbalRate,
+    ];
+
+    /// Width on the wire, bits (two's complement, little-endian).
+    pub const fn bits(self) -> u32 {
+        match self {
+            Quantity::WheelTorque => 16,
+            _ => 24,
+        }
+    }
+
+    /// Width on the wire, bytes.
+    pub const fn bytes(self) -> usize {
+        (self.bits() / 8) as usize
+    }
+
+    /// Largest raw magnitude the field holds: 2^(bits−1) − 1.
+    pub const fn raw_max(self) -> i32 {
+        (1 << (self.bits() - 1)) - 1
+    }
+
+    /// Value of one LSB in the wire unit ([`Quantity::unit`]).
+    pub fn lsb_unit(self) -> f64 {
+        match self {
+            Quantity::GyroRate => 1e-5,
+            Quantity::Tilt => 1e-5,
+            Quantity::Field => 1e-6,
+            Quantity::WheelSpeed => 1e-3,
+            Quantity::WheelTorque => 1e-5,
+            Quantity::GimbalAngle => 360.0 / (1u32 << 24) as f64,
+            Quantity::GimbalRate => 1e-4,
+        }
+    }
+
+    /// The wire unit's name.
+    pub const fn unit(self) -> &'static str {
+        match self {
+            Quantity::GyroRate | Quantity::GimbalRate => "°/s",
+            Quantity::Tilt | Quantity::GimbalAngle => "°",
+            Quantity::Field => "G",
+            Quantity::WheelSpeed => "rpm",
+            Quantity::WheelTorque => "Nm",
+        }
+    }
+
+    /// One wire unit in SI (rad/s, rad, T, rad/s, Nm).
+    pub fn unit_si(self) -> f64 {
+        match self {
+            Quantity::GyroRate | Quantity::GimbalRate | Quantity::Tilt | Quantity::GimbalAngle => {
+                DEG
+            }
+            Quantity::Field => GAUSS,
+            Quantity::WheelSpeed => RPM,
+            Quantity::WheelTorque => 1.0,
+        }
+    }
+
+    /// Value of one LSB in SI units.
+    pub fn lsb_si(self) -> f64 {
+        self.lsb_unit() * self.unit_si()
+    }
+
+    /// Whether the quantity wraps (an angle over one turn) instead of having a range.
+    pub const fn wraps(self) -> bool {
+        matches!(self, Quantity::GimbalAngle)
+    }
+
+    /// Name used in errors and documentation.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Quantity::GyroRate => "gyro rate",
+            Quantity::Tilt => "tilt",
+            Quantity::Field => "magnetic field",
+            Quantity::WheelSpeed => "wheel speed",
+            Quantity::WheelTorque => "wheel torque",
+            Quantity::GimbalAngle => "gimbal angle",
+            Quantity::GimbalRate => "gimbal rate",
+        }
+    }
+}
+
+/// What a byte range of a frame holds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum FieldKind {
+    /// Device status bits ([`crate::DeviceStatus`]), 1 byte.
+    Status,
+    /// The node's µs time stamp, u32 little-endian.
+    Time,
+    /// A value channel of the message.
+    Value(u8),
+    /// Heartbeat: node state, 1 byte.
+    State,
+    /// Heartbeat: link bits, 1 byte.
+    Links,
+    /// Heartbeat: serial error count, 1 byte.
+    Errors,
+}
+
+impl FieldKind {
+    pub(crate) const fn width(self, channels: &[Channel]) -> usize {
+        match self {
+            FieldKind::Status | FieldKind::State | FieldKind::Links | FieldKind::Errors => 1,
+            FieldKind::Time => 4,
+            FieldKind::Value(ch) => channels[ch as usize].quantity.bytes(),
+        }
+    }
+}
+
+/// A field at byte `offset` (byte 0 of every frame is the rolling counter).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Field {
+    pub offset: u8,
+    pub kind: FieldKind,
+}
+
+/// One frame of a message.
+#[derive(Debug)]
+pub(crate) struct PartLayout {
+    pub dlc: u8,
+    pub fields: &'static [Field],
+}
+
+/// A value channel: its quantity and the axis (saturation bit) it belongs to.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Channel {
+    pub quantity: Quantity,
+    pub axis: u8,
+}
+
+/// The layout of one message.
+#[derive(Debug)]
+pub(crate) struct MessageLayout {
+    #[allow(dead_code)] // read by the layout consistency test
+    pub kind: MessageKind,
+    pub device: Device,
+    pub direction: Direction,
+    /// Message number (inside the device block) of part 0.
+    pub first: u16,
+    pub parts: &'static [PartLayout],
+    pub channels: &'static [Channel],
+}
+
+const fn f(offset: u8, kind: FieldKind) -> Field {
+    Field { offset, kind }
+}
+const fn c(quantity: Quantity, axis: u8) -> Channel {
+    Channel { quantity, axis }
+}
+use FieldKind::{Errors, Links, State, Status, Time, Value};
+
+/// Two frames: `[ctr][status][ch0 i24][ch1 i24]`, `[ctr][ch2 i24][t_us u32]`.
+const THREE_AXIS_PARTS: &[PartLayout] = &[
+    PartLayout { dlc: 8, fields: &[f(1, Status), f(2, Value(0)), f(5, Value(1))] },
+    PartLayout { dlc: 8, fields: &[f(1, Value(2)), f(4, Time)] },
+];
+
+pub(crate) const LAYOUTS: [MessageLayout; 8] = [
+    MessageLayout {
+        kind: MessageKind::WheelCommand,
+        device: Device::Wheels,
+        direction: Direction::ToNode,
+        first: 0x0,
+        parts: &[PartLayout { dlc: 7, fields: &[f(1, Value(0)), f(3, Value(1)), f(5, Value(2))] }],
+        channels: &[
+            c(Quantity::WheelTorque, 0),
+            c(Quantity::WheelTorque, 1),
+            c(Quantity::WheelTorque, 2),
+        ],
+    },
+    MessageLayout {
+        kind: MessageKind::WheelTelemetry,
+        device: Device::Wheels,
+        direction: Direction::FromNode,
+        first: 0x1,
+        parts: &[
+            PartLayout { dlc: 8, fields: &[f(1, Status), f(2, Value(0)), f(5, Value(1))] },
+            PartLayout { dlc: 8, fields: &[f(1, Value(2)), f(4, Value(3)), f(6, Value(4))] },
+            PartLayout { dlc: 7, fields: &[f(1, Value(5)), f(3, Time)] },
+        ],
+        channels: &[
+            c(Quantity::WheelSpeed, 0),
+            c(Quantity::WheelSpeed, 1),
+            c(Quantity::WheelSpeed, 2),
+            c(Quantity::WheelTorque, 0),
+            c(Quantity::WheelTorque, 1),
+            c(Quantity::WheelTorque, 2),
+        ],
+    },
+    MessageLayout {
+        kind: MessageKind::CmgCommand,
+        device: Device::Cmg,
+        direction: Direction::ToNode,
+        first: 0x0,
+        parts: &[
+            PartLayout { dlc: 7, fields: &[f(1, Value(0)), f(4, Value(1))] },
+            PartLayout { dlc: 7, fields: &[f(1, Value(2)), f(4, Value(3))] },
+        ],
+        channels: &[
+            c(Quantity::GimbalRate, 0),
+            c(Quantity::GimbalRate, 1),
+            c(Quantity::GimbalRate, 2),
+            c(Quantity::GimbalRate, 3),
+        ],
+    },
+    MessageLayout {
+        kind: MessageKind::CmgTelemetry,
+        device: Device::Cmg,
+        direction: Direction::FromNode,
+        first: 0x2,
+        parts: &[
+            PartLayout { dlc: 7, fields: &[f(1, Value(0)), f(4, Value(4))] },
+            PartLayout { dlc: 7, fields: &[f(1, Value(1)), f(4, Value(5))] },
+            PartLayout { dlc: 7, fields: &[f(1, Value(2)), f(4, Value(6))] },
+            PartLayout { dlc: 7, fields: &[f(1, Value(3)), f(4, Value(7))] },
+            PartLayout { dlc: 6, fields: &[f(1, Status), f(2, Time)] },
+        ],
+        channels: &[
+            c(Quantity::GimbalAngle, 0),
+            c(Quantity::GimbalAngle, 1),
+            c(Quantity::GimbalAngle, 2),
+            c(Quantity::GimbalAngle, 3),
+            c(Quantity::GimbalRate, 0),
+            c(Quantity::GimbalRate, 1),
+            c(Quantity::GimbalRate, 2),
+            c(Quantity::GimbalRate, 3),
+        ],
+    },
+    MessageLayout {
+        kind: MessageKind::Gyro,
+        device: Device::Gyro,
+        direction: Direction::FromNode,
+        first: 0x0,
+        parts: THREE_AXIS_PARTS,
+        channels: &[c(Quantity::GyroRate, 0), c(Quantity::GyroRate, 1), c(Quantity::GyroRate, 2)],
+    },
+    MessageLayout {
+        kind: MessageKind::Inclinometer,
+        device: Device::Inclinometer,
+        direction: Direction::FromNode,
+        first: 0x0,
+        parts: &[
+            PartLayout { dlc: 8, fields: &[f(1, Status), f(2, Value(0)), f(5, Value(1))] },
+            PartLayout { dlc: 5, fields: &[f(1, Time)] },
+        ],
+        channels: &[c(Quantity::Tilt, 0), c(Quantity::Tilt, 1)],
+    },
+    MessageLayout {
+        kind: MessageKind::Magnetometer,
+        device: Device::Magnetometer,
+        direction: Direction::FromNode,
+        first: 0x0,
+        parts: THREE_AXIS_PARTS,
+        channels: &[c(Quantity::Field, 0), c(Quantity::Field, 1), c(Quantity::Field, 2)],
+    },
+    MessageLayout {
+        kind: MessageKind::NodeHeartbeat,
+        device: Device::Node,
+        direction: Direction::FromNode,
+        first: 0x0,
+        parts: &[PartLayout {
+            dlc: 8,
+            fields: &[f(1, State), f(2, Links), f(3, Errors), f(4, Time)],
+        }],
+        channels: &[],
+    },
+];
+
+/// Why a protocol configuration was refused.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ProtocolError {
+    /// The identifier base is not a multiple of 0x10 or leaves no room for every device block.
+    #[error("CAN identifier base {base:#05x} must be a multiple of 0x10 and at most {max:#05x}")]
+    BadBase { base: u16, max: u16 },
+    /// A device range or command limit is not a finite positive number.
+    #[error("{name} limit {value} must be a finite number > 0")]
+    BadLimit { name: &'static str, value: f64 },
+    /// A device range or command limit does not fit the wire field.
+    #[error("{name} limit {value} exceeds what the {bits}-bit wire field holds ({span})")]
+    LimitTooWide { name: &'static str, value: f64, bits: u32, span: f64 },
+}
+
+/// The 11-bit identifier map: `id = base + 0x10 · device slot + message number`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct IdMap {
+    base: u16,
+}
+
+impl Default for IdMap {
+    fn default() -> Self {
+        Self { base: DEFAULT_BASE }
+    }
+}
+
+impl IdMap {
+    /// A map with identifier base `base` (a multiple of 0x10, at most [`MAX_BASE`]).
+    pub fn new(base: u16) -> Result<Self, ProtocolError> {
+        if base % SLOT_STRIDE != 0 || base > MAX_BASE {
+            return Err(ProtocolError::BadBase { base, max: MAX_BASE });
+        }
+        Ok(Self { base })
+    }
+
+    /// The identifier base.
+    pub const fn base(&self) -> u16 {
+        self.base
+    }
+
+    /// First identifier of a device's block.
+    pub const fn device_base(&self, device: Device) -> u16 {
+        self.base + SLOT_STRIDE * device.slot()
+    }
+
+    /// Identifier of frame `part` of `kind` (None if `part` is out of range).
+    pub fn id(&self, kind: MessageKind, part: usize) -> Option<u16> {
+        (part < kind.parts())
+            .then(|| self.device_base(kind.device()) + kind.first_message() + part as u16)
+    }
+
+    /// Which message and frame an identifier carries (None outside the map).
+    pub fn lookup(&self, id: u16) -> Option<(MessageKind, usize)> {
+        let offset = id.checked_sub(self.base)?;
+        let slot = usize::from(offset / SLOT_STRIDE);
+        let message = offset % SLOT_STRIDE;
+        let device = *Device::ALL.get(slot)?;
+        MessageKind::ALL.iter().find_map(|&kind| {
+            let l = kind.layout();
+            (l.device == device
+                && message >= l.first
+                && usize::from(message - l.first) < l.parts.len())
+            .then(|| (kind, usize::from(message - l.first)))
+        })
+    }
+
+    /// Kernel receive filter `(id, mask)` accepting exactly the block of `device` (16 identifiers,
+    /// standard frames only when used with SocketCAN's `CAN_EFF_FLAG` in the mask).
+    pub const fn device_filter(&self, device: Device) -> (u16, u16) {
+        (self.device_base(device), 0x7FF & !(SLOT_STRIDE - 1))
+    }
+}
+
+/// Device ranges and command limits in SI units.
+///
+/// Decoding clips measurements beyond these ranges (and flags the channel saturated); encoding
+/// refuses values beyond them. Build them from the model configuration ([`Limits::from_model`]);
+/// the [`Default`] is the default model configuration's.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Limits {
+    /// Gyro measurement range ±, rad/s (`gyro.range_deg_s`, 80 °/s).
+    pub gyro_range_rad_s: f64,
+    /// Inclinometer measurement range ±, rad (`inclinometer.range_deg`, 25°).
+    pub tilt_range_rad: f64,
+    /// Magnetometer measurement range ±, T (`magnetometer.range_gauss`, 1 G).
+    pub field_range_t: f64,
+    /// Reaction wheel speed limit ±, rad/s (`wheels.max_speed_rpm`, 6000 rpm).
+    pub wheel_speed_rad_s: f64,
+    /// Reaction wheel motor torque limit ±, Nm (`wheels.max_torque_nm`, 0.1 Nm), for telemetry and commands.
+    pub wheel_torque_nm: f64,
+    /// CMG gimbal rate limit ±, rad/s (`cmg.max_gimbal_rate_deg_s`, 90 °/s), for telemetry and commands.
+    pub gimbal_rate_rad_s: f64,
+}
+
+impl Default for Limits {
+    fn default() -> Self {
+        Self::from_model(&ModelConfig::default())
+    }
+}
+
+impl Limits {
+    /// The ranges and limits of a model configuration.
+    pub fn from_model(config: &ModelConfig) -> Self {
+        Self {
+            gyro_range_rad_s: config.gyro.range_deg_s * DEG,
+            tilt_range_rad: config.inclinometer.range_deg * DEG,
+            field_range_t: config.magnetometer.range_gauss * GAUSS,
+            wheel_speed_rad_s: config.wheels.max_speed_rad_s(),
+            wheel_torque_nm: config.wheels.max_torque_nm,
+            gimbal_rate_rad_s: config.cmg.max_gimbal_rate_rad_s(),
+        }
+    }
+
+    /// The range of a quantity, SI (None for the wrapping gimbal angle).
+    pub fn range(&self, quantity: Quantity) -> Option<f64> {
+        match quantity {
+            Quantity::GyroRate => Some(self.gyro_range_rad_s),
+            Quantity::Tilt => Some(self.tilt_range_rad),
+            Quantity::Field => Some(self.field_range_t),
+            Quantity::WheelSpeed => Some(self.wheel_speed_rad_s),
+            Quantity::WheelTorque => Some(self.wheel_torque_nm),
+            Quantity::GimbalAngle => None,
+            Quantity::GimbalRate => Some(self.gimbal_rate_rad_s),
+        }
+    }
+
+    /// Refuses non-finite or non-positive limits and limits the wire fields cannot hold.
+    pub fn validate(&self) -> Result<(), ProtocolError> {
+        for q in Quantity::ALL {
+            let Some(value) = self.range(q) else { continue };
+            if !(value.is_finite() && value > 0.0) {
+                return Err(ProtocolError::BadLimit { name: q.name(), value });
+            }
+            let span = f64::from(q.raw_max()) * q.lsb_si();
+            if value > span {
+                return Err(ProtocolError::LimitTooWide {
+                    name: q.name(),
+                    value,
+                    bits: q.bits(),
+                    span,
+                });
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A validated protocol configuration: identifier map and limits, with the limits in raw counts.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Protocol {
+    ids: IdMap,
+    limits: Limits,
+    /// Per quantity (index in `Quantity::ALL`): largest raw magnitude inside the range.
+    raw_limit: [i32; 7],
+}
+
+impl Default for Protocol {
+    fn default() -> Self {
+        // The defaults are checked by a test; fall back to the wire spans if they ever break.
+        Self::new(IdMap::default(), Limits::default()).unwrap_or_else(|_| Self {
+            ids: IdMap::default(),
+            limits: Limits::default(),
+            raw_limit: Quantity::ALL.map(Quantity::raw_max),
+        })
+    }
+}
+
+impl Protocol {
+    /// A protocol with identifier map `ids` and device limits `limits` (validated).
+    pub fn new(ids: IdMap, limits: Limits) -> Result<Self, ProtocolError> {
+        limits.validate()?;
+        let raw_limit = Quantity::ALL.map(|q| match limits.range(q) {
+            // round(): any value within the range quantises to at most this magnitude.
+            Some(r) => ((r / q.lsb_si()).round() as i32).clamp(0, q.raw_max()),
+            None => q.raw_max(),
+        });
+        Ok(Self { ids, limits, raw_limit })
+    }
+
+    /// The protocol of a model configuration with identifier base `base`.
+    pub fn from_model(base: u16, config: &ModelConfig) -> Result<Self, ProtocolError> {
+        Self::new(IdMap::new(base)?, Limits::from_model(config))
+    }
+
+    /// The identifier map.
+    pub const fn ids(&self) -> &IdMap {
+        &self.ids
+    }
+
+    /// The limits.
+    pub const fn limits(&self) -> &Limits {
+        &self.limits
+    }
+
+    /// Largest raw magnitude of `quantity` inside its range.
+    pub(crate) fn raw_limit(&self, quantity: Quantity) -> i32 {
+        self.raw_limit[quantity_index(quantity)]
+    }
+}
+
+pub(crate) const fn quantity_index(q: Quantity) -> usize {
+    match q {
+        Quantity::GyroRate => 0,
+        Quantity::Tilt => 1,
+        Quantity::Field => 2,
+        Quantity::WheelSpeed => 3,
+        Quantity::WheelTorque => 4,
+        Quantity::GimbalAngle => 5,
+        Quantity::GimbalRate => 6,
+    }
+}
+
+/// Renders the identifier table of PROTOCOL.md from the layout tables (kept in sync by a test).
+pub fn id_table(ids: &IdMap) -> String {
+    let mut out =
+        String::from("| ID (base 0x100) | offset | device | message | frame | DLC | direction |\n");
+    out.push_str("|---|---|---|---|---|---|---|\n");
+    for kind in MessageKind::ALL {
+        for part in 0..kind.parts() {
+            let Some(id) = ids.id(kind, part) else { continue };
+            let dir = match kind.direction() {
+                Direction::FromNode => "node → computer",
+                Direction::ToNode => "computer → node",
+            };
+            out.push_str(&format!(
+                "| 0x{id:03X} | +0x{:02X} | {} | {} | {}/{} | {} | {dir} |\n",
+                id - ids.base(),
+                kind.device().name(),
+                kind.name(),
+                part + 1,
+                kind.parts(),
+                kind.dlc(part).unwrap_or(0),
+            ));
+        }
+    }
+    out
+}
+
+/// Renders the scaling table of PROTOCOL.md (kept in sync by a test).
+pub fn scaling_table(limits: &Limits) -> String {
+    let mut out = String::from(
+        "| quantity | bits | LSB | wire span ± | default range ± | worst-case quantisation |\n",
+    );
+    out.push_str("|---|---|---|---|---|---|\n");
+    for q in Quantity::ALL {
+        let span = f64::from(q.raw_max()) * q.lsb_unit();
+        let range = match limits.range(q) {
+            Some(r) => format!("{} {}", fmt_num(r / q.unit_si()), q.unit()),
+            None => "one turn (wraps)".to_string(),
+        };
+        let span = if q.wraps() {
+            "180 °".to_string()
+        } else {
+            format!("{} {}", fmt_num(span), q.unit())
+        };
+        out.push_str(&format!(
+            "| {} | {} | {} {} | {span} | {range} | {} {} |\n",
+            q.name(),
+            q.bits(),
+            fmt_num(q.lsb_unit()),
+            q.unit(),
+            fmt_num(q.lsb_unit() / 2.0),
+            q.unit(),
+        ));
+    }
+    out
+}
+
+fn fmt_num(x: f64) -> String {
+    // Plain notation for "round" numbers, otherwise scientific with up to 7 significant digits.
+    let plain = format!("{}", (x * 1e9).round() / 1e9);
+    let t = format!("{x:.6e}");
+    let (m, e) = t.split_once('e').unwrap_or((&t, "0"));
+    let m = m.trim_end_matches('0').trim_end_matches('.');
+    if x != 0.0 && (x.abs() < 1e-3 || plain.len() > 12) { format!("{m}e{e}") } else { plain }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_are_valid() {
+        Limits::default().validate().unwrap();
+        Protocol::new(IdMap::default(), Limits::default()).unwrap();
+    }
+
+    #[test]
+    fn base_is_checked() {
+        assert!(IdMap::new(0).is_ok());
+        assert!(IdMap::new(MAX_BASE).is_ok());
+        assert!(IdMap::new(MAX_BASE + 0x10).is_err());
+        assert!(IdMap::new(0x101).is_err());
+        let top = IdMap::new(MAX_BASE).unwrap();
+        let last = MessageKind::NodeHeartbeat;
+        assert!(top.id(last, 0).unwrap() <= 0x7FF);
+    }
+
+    #[test]
+    fn every_id_maps_back() {
+        for base in [0, 0x100, 0x230, MAX_BASE] {
+            let map = IdMap::new(base).unwrap();
+            let mut seen = std::collections::HashSet::new();
+            for kind in MessageKind::ALL {
+                for part in 0..kind.parts() {
+                    let id = map.id(kind, part).unwrap();
+                    assert!(seen.insert(id), "duplicate id {id:#x}");
+                    assert_eq!(map.lookup(id), Some((kind, part)));
+                    let (fid, mask) = map.device_filter(kind.device());
+                    assert_eq!(id & mask, fid & mask);
+                }
+            }
+            let mapped = (0..=0x7FF).filter(|&id| map.lookup(id).is_some()).count();
+            assert_eq!(mapped, seen.len());
+        }
+    }
+
+    #[test]
+    fn layouts_are_consistent() {
+        for (i, l) in LAYOUTS.iter().enumerate() {
+            assert_eq!(l.kind.index(), i);
+            assert!(l.parts.len() <= MAX_PARTS && l.channels.len() <= MAX_CHANNELS);
+            assert!(usize::from(l.first) + l.parts.len() <= usize::from(SLOT_STRIDE));
+            let mut channel_seen = vec![0; l.channels.len()];
+            let mut status = 0;
+            let mut time = 0;
+            for p in l.parts {
+                assert!(p.dlc <= 8);
+                // Fields cover bytes 1..dlc exactly once, byte 0 is the counter.
+                let mut used = [false; 8];
+                used[0] = true;
+                for fld in p.fields {
+                    let w = fld.kind.width(l.channels);
+                    let start = usize::from(fld.offset);
+                    assert!(start + w <= usize::from(p.dlc), "{:?}: field past DLC", l.kind);
+                    for u in &mut used[start..start + w] {
+                        assert!(!*u, "{:?}: overlapping fields", l.kind);
+                        *u = true;
+                    }
+                    match fld.kind {
+                        FieldKind::Value(ch) => channel_seen[usize::from(ch)] += 1,
+                        FieldKind::Status => status += 1,
+                        FieldKind::Time => time += 1,
+                        _ => {}
+                    }
+                }
+                assert!(
+                    used[..usize::from(p.dlc)].iter().all(|&u| u),
+                    "{:?}: gap in frame",
+                    l.kind
+                );
+            }
+            assert!(
+                channel_seen.iter().all(|&n| n == 1),
+                "{:?}: channels {channel_seen:?}",
+                l.kind
+            );
+            let from_node = l.direction == Direction::FromNode;
+            assert_eq!(time, usize::from(from_node), "{:?}: time stamp", l.kind);
+            let status_expected = usize::from(from_node && l.kind != MessageKind::NodeHeartbeat);
+            assert_eq!(status, status_expected, "{:?}: status", l.kind);
+        }
+    }
+
+    #[test]
+    fn limits_from_model_and_refusals() {
+        let l = Limits::default();
+        assert!((l.gyro_range_rad_s - 80.0 * DEG).abs() < 1e-15);
+        assert!((l.wheel_speed_rad_s - 6000.0 * RPM).abs() < 1e-12);
+        let mut bad = l;
+        bad.gyro_range_rad_s = 90.0 * DEG; // beyond the 24-bit field at 1e-5 °/s
+        assert!(matches!(bad.validate(), Err(ProtocolError::LimitTooWide { .. })));
+        bad = l;
+        bad.wheel_torque_nm = f64::NAN;
+        assert!(matches!(bad.validate(), Err(ProtocolError::BadLimit { .. })));
+    }
+
+    /// `cargo test -p testbed-can --lib print_tables -- --ignored --nocapture` prints the tables
+    /// for PROTOCOL.md.
+    #[test]
+    #[ignore]
+    fn print_tables() {
+        println!("{}", id_table(&IdMap::default()));
+        println!("{}", scaling_table(&Limits::default()));
+    }
+
+    #[test]
+    fn protocol_md_tables_match_the_code() {
+        let doc = include_str!("../PROTOCOL.md");
+        let ids = id_table(&IdMap::default());
+        assert!(doc.contains(&ids), "PROTOCOL.md ID table is out of date; expected:\n{ids}");
+        let scales = scaling_table(&Limits::default());
+        assert!(
+            doc.contains(&scales),
+            "PROTOCOL.md scaling table is out of date; expected:\n{scales}"
+        );
+    }
+}

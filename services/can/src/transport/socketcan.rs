@@ -1,0 +1,251 @@
+//! Linux SocketCAN through the `socketcan` crate.
+
+use super::{CanTransport, TransportError};
+use crate::frame::{CanFrame, CanId, TimeSource, TimestampedFrame, host_time_ns};
+use crate::protocol::{Device, IdMap};
+use socketcan::{EmbeddedFrame, ExtendedId, Id, Socket, SocketOptions, StandardId};
+use std::os::fd::AsRawFd;
+use std::time::{Duration, UNIX_EPOCH};
+
+/// What [`probe_socketcan`] found.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum SocketCanSupport {
+    /// The kernel has SocketCAN and the interface exists.
+    Available,
+    /// The kernel has no SocketCAN (`socket(AF_CAN, SOCK_RAW, CAN_RAW)` failed); the text says why.
+    NoKernelSupport(String),
+    /// SocketCAN exists but the interface does not.
+    NoInterface(String),
+}
+
+impl std::fmt::Display for SocketCanSupport {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            SocketCanSupport::Available => f.write_str("SocketCAN available"),
+            SocketCanSupport::NoKernelSupport(why) => {
+                write!(f, "kernel has no SocketCAN support: {why}")
+            }
+            SocketCanSupport::NoInterface(name) => {
+                write!(f, "SocketCAN present but no interface {name}")
+            }
+        }
+    }
+}
+
+/// Whether SocketCAN works here and `iface` exists (no side effect beyond a short-lived socket).
+pub fn probe_socketcan(iface: &str) -> SocketCanSupport {
+    // SAFETY: plain socket(2) call; the descriptor is closed right away.
+    let fd =
+        unsafe { libc::socket(libc::AF_CAN, libc::SOCK_RAW | libc::SOCK_CLOEXEC, libc::CAN_RAW) };
+    if fd < 0 {
+        return SocketCanSupport::NoKernelSupport(std::io::Error::last_os_error().to_string());
+    }
+    // SAFETY: fd is a descriptor we own.
+    unsafe { libc::close(fd) };
+    let Ok(name) = std::ffi::CString::new(iface) else {
+        return SocketCanSupport::NoInterface(iface.to_string());
+    };
+    // SAFETY: name is a valid NUL-terminated string.
+    if unsafe { libc::if_nametoindex(name.as_ptr()) } == 0 {
+        return SocketCanSupport::NoInterface(iface.to_string());
+    }
+    SocketCanSupport::Available
+}
+
+/// A raw CAN socket bound to one interface, with kernel receive time stamps.
+///
+/// Receives every frame by default; narrow with [`set_device_filters`](Self::set_device_filters)
+/// or [`set_filters`](Self::set_filters). Error frames are not requested from the kernel; if
+/// any arrive they are dropped and counted ([`error_frames`](Self::error_frames)).
+#[derive(Debug)]
+pub struct SocketCanTransport {
+    socket: socketcan::CanSocket,
+    iface: String,
+    error_frames: u64,
+}
+
+fn open_error(iface: &str, e: std::io::Error) -> TransportError {
+    match e.raw_os_error() {
+        Some(libc::EAFNOSUPPORT) | Some(libc::EPROTONOSUPPORT) => TransportError::Unsupported(
+            format!("kernel has no SocketCAN support (opening {iface}: {e})"),
+        ),
+        Some(libc::ENODEV) | Some(libc::ENXIO) => {
+            TransportError::NotFound(format!("CAN interface {iface}"))
+        }
+        _ => TransportError::io(format!("opening CAN interface {iface}"), e),
+    }
+}
+
+impl SocketCanTransport {
+    /// Open interface `iface` (e.g. `can0`, `vcan0`).
+    ///
+    /// [`TransportError::Unsupported`] if the kernel has no SocketCAN,
+    /// [`TransportError::NotFound`] if the interface does not exist.
+    pub fn open(iface: &str) -> Result<Self, TransportError> {
+        match probe_socketcan(iface) {
+            SocketCanSupport::Available => {}
+            SocketCanSupport::NoKernelSupport(why) => {
+                return Err(TransportError::Unsupported(format!(
+                    "kernel has no SocketCAN support: {why}"
+                )));
+            }
+            SocketCanSupport::NoInterface(name) => {
+                return Err(TransportError::NotFound(format!("CAN interface {name}")));
+            }
+        }
+        let socket = socketcan::CanSocket::open(iface).map_err(|e| open_error(iface, e))?;
+        socket
+            .set_recv_timestamp(true)
+            .map_err(|e| TransportError::io(format!("enabling time stamps on {iface}"), e))?;
+        Ok(Self { socket, iface: iface.to_string(), error_frames: 0 })
+    }
+
+    /// The interface name.
+    pub fn iface(&self) -> &str {
+        &self.iface
+    }
+
+    /// Error frames received and dropped.
+    pub fn error_frames(&self) -> u64 {
+        self.error_frames
+    }
+
+    /// Receive only standard-ID frames matching one of `(id, mask)` (`received & mask == id & mask`).
+    pub fn set_filters(&mut self, filters: &[(u16, u16)]) -> Result<(), TransportError> {
+        let filters: Vec<socketcan::CanFilter> = filters
+            .iter()
+            // CAN_EFF_FLAG | CAN_RTR_FLAG in the mask: extended and remote frames never match.
+            .map(|&(id, mask)| {
+                socketcan::CanFilter::new(
+                    u32::from(id & 0x7FF),
+                    u32::from(mask & 0x7FF)
+                        | crate::frame::EXTENDED_FLAG
+                        | crate::frame::REMOTE_FLAG,
+                )
+            })
+            .collect();
+        self.socket
+            .set_filters(&filters)
+            .map_err(|e| TransportError::io(format!("setting filters on {}", self.iface), e))
+    }
+
+    /// Receive only the identifier blocks of `devices` (one kernel filter per device).
+    pub fn set_device_filters(
+        &mut self,
+        ids: &IdMap,
+        devices: &[Device],
+    ) -> Result<(), TransportError> {
+        let filters: Vec<(u16, u16)> = devices.iter().map(|&d| ids.device_filter(d)).collect();
+        self.set_filters(&filters)
+    }
+
+    /// Receive every frame again.
+    pub fn accept_all(&mut self) -> Result<(), TransportError> {
+        self.socket
+            .set_filter_accept_all()
+            .map_err(|e| TransportError::io(format!("clearing filters on {}", self.iface), e))
+    }
+}
+
+/// The crate's frame as a `socketcan` frame.
+pub(crate) fn to_socketcan(frame: &CanFrame) -> Option<socketcan::CanFrame> {
+    let id: Id = match frame.id() {
+        CanId::Standard(id) => Id::Standard(StandardId::new(id)?),
+        CanId::Extended(id) => Id::Extended(ExtendedId::new(id)?),
+    };
+    if frame.is_remote() {
+        socketcan::CanFrame::new_remote(id, usize::from(frame.dlc()))
+    } else {
+        socketcan::CanFrame::new(id, frame.data())
+    }
+}
+
+/// A `socketcan` frame as the crate's frame (None for error frames).
+pub(crate) fn from_socketcan(frame: &socketcan::CanFrame) -> Option<CanFrame> {
+    let id = match frame.id() {
+        Id::Standard(id) => CanId::Standard(id.as_raw()),
+        Id::Extended(id) => CanId::Extended(id.as_raw()),
+    };
+    match frame {
+        socketcan::CanFrame::Data(_) => CanFrame::new(id, frame.data()).ok(),
+        socketcan::CanFrame::Remote(_) => {
+            CanFrame::remote(id, u8::try_from(frame.dlc()).ok()?).ok()
+        }
+        socketcan::CanFrame::Error(_) => None,
+    }
+}
+
+/// Wait up to `timeout` for `fd` to be readable; Ok(false) on time-out.
+fn poll_readable(fd: i32, timeout: Duration) -> std::io::Result<bool> {
+    let ms = timeout.as_nanos().div_ceil(1_000_000).min(i32::MAX as u128) as i32;
+    let mut pfd = libc::pollfd { fd, events: libc::POLLIN, revents: 0 };
+    loop {
+        // SAFETY: one valid pollfd.
+        let n = unsafe { libc::poll(&mut pfd, 1, ms) };
+        if n >= 0 {
+            return Ok(n > 0);
+        }
+        let e = std::io::Error::last_os_error();
+        if e.kind() != std::io::ErrorKind::Interrupted {
+            return Err(e);
+        }
+    }
+}
+
+impl CanTransport for SocketCanTransport {
+    fn send(&mut self, frame: &CanFrame) -> Result<(), TransportError> {
+        let sc = to_socketcan(frame).ok_or(TransportError::FrameNotSupported {
+            frame: *frame,
+            reason: "not representable as a SocketCAN frame",
+        })?;
+        self.socket
+            .write_frame(&sc)
+            .map_err(|e| TransportError::io(format!("sending on {}", self.iface), e))
+    }
+
+    fn recv(&mut self, timeout: Duration) -> Result<Option<TimestampedFrame>, TransportError> {
+        let deadline = super::deadline_after(timeout);
+        loop {
+            let left = super::time_left(deadline);
+            let readable = poll_readable(self.socket.as_raw_fd(), left)
+                .map_err(|e| TransportError::io(format!("waiting on {}", self.iface), e))?;
+            if !readable {
+                return Ok(None);
+            }
+            let (frame, stamps) = self
+                .socket
+                .read_frame_with_timestamps()
+                .map_err(|e| TransportError::io(format!("receiving on {}", self.iface), e))?;
+            let Some(frame) = from_socketcan(&frame) else {
+                self.error_frames += 1;
+                continue;
+            };
+            let (time_ns, source) = match stamps
+                .socket
+                .and_then(|t| t.duration_since(UNIX_EPOCH).ok())
+            {
+                Some(d) => (u64::try_from(d.as_nanos()).unwrap_or(u64::MAX), TimeSource::Kernel),
+                None => (host_time_ns(), TimeSource::Host),
+            };
+            return Ok(Some(TimestampedFrame { frame, time_ns, source }));
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn frames_convert_both_ways() {
+        for f in [
+            CanFrame::standard(0x123, &[1, 2, 3]).unwrap(),
+            CanFrame::standard(0, &[]).unwrap(),
+            CanFrame::new(CanId::Extended(0x1FFF_FFFF), &[0xFF; 8]).unwrap(),
+            CanFrame::remote(CanId::Standard(0x7FF), 8).unwrap(),
+        ] {
+            let sc = to_socketcan(&f).unwrap();
+            assert_eq!(from_socketcan(&sc), Some(f));
+        }
+    }
+}
