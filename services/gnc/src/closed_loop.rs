@@ -116,6 +116,51 @@ pub struct Scenario {
     pub duration_s: f64,
     /// Seed of every device's noise.
     pub seed: u64,
+    /// Target changes during the run (excitation for identification), in time order; empty
+    /// keeps the manoeuvre's target throughout. Each takes effect from the first tick at or
+    /// after its time.
+    pub schedule: Vec<TargetChange>,
+}
+
+/// A new controller target from time `t_s` on, at the edge in degrees (the angles of
+/// [`attitude::from_heading_pitch_roll`], like the manoeuvre's target).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TargetChange {
+    /// Time the target takes effect, s (run time, 0 at the start).
+    pub t_s: f64,
+    /// Target heading, degrees (from north towards west).
+    pub heading_deg: f64,
+    /// Target tilt about body Y (pitch), degrees.
+    pub pitch_deg: f64,
+    /// Target tilt about body X (roll), degrees.
+    pub roll_deg: f64,
+}
+
+impl TargetChange {
+    /// The target attitude, L to B.
+    pub fn attitude(&self) -> Attitude {
+        attitude::from_heading_pitch_roll(self.heading_deg * DEG, self.pitch_deg * DEG, self.roll_deg * DEG)
+    }
+}
+
+/// What the devices reported at one control tick: the measured data of a run, as a test bed
+/// would record it (the commands are in [`TickRecord::command`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct MeasurementRecord {
+    /// Tick time, s.
+    pub t_s: f64,
+    /// Gyro reading, body axes, rad/s (bias, noise and sensor effects included).
+    pub gyro_rad_s: Vector3<f64>,
+    /// Inclinometer reading `[θ, φ]`, rad, on ticks where it samples (saturated readings
+    /// included, at the range limit).
+    pub tilt_rad: Option<[f64; 2]>,
+    /// Magnetometer reading, body axes, tesla, on ticks where it samples.
+    pub field_t: Option<Vector3<f64>>,
+    /// Tachometer readings: wheel speeds relative to the platform, rad/s.
+    pub wheel_speed_rad_s: Vector3<f64>,
+    /// CMG gimbal encoder readings, rad.
+    pub gimbal_rad: Vector4<f64>,
 }
 
 impl Scenario {
@@ -129,6 +174,7 @@ impl Scenario {
             manoeuvre: Manoeuvre::default(),
             duration_s: 200.0,
             seed,
+            schedule: Vec::new(),
         }
     }
 }
@@ -174,39 +220,70 @@ pub struct Trace {
 
 /// Run a scenario to its end.
 pub fn run(scenario: &Scenario) -> Result<Trace, LoopError> {
+    run_recorded(scenario).map(|(trace, _)| trace)
+}
+
+/// Run a scenario to its end and also return what the devices reported at every tick (the
+/// measured data of the run, for identification and export).
+pub fn run_recorded(scenario: &Scenario) -> Result<(Trace, Vec<MeasurementRecord>), LoopError> {
     scenario.model.validate()?;
     if !(scenario.duration_s.is_finite() && scenario.duration_s > 0.0) {
         return Err(LoopError::Scenario(format!("duration_s = {} must be > 0", scenario.duration_s)));
     }
     let model = &scenario.model;
-    let period_ns = period_ns(model.gyro.rate_hz);
-    let vector_every = ticks_per_sample(model.gyro.rate_hz, model.inclinometer.rate_hz, "inclinometer.rate_hz")?;
-    let field_every = ticks_per_sample(model.gyro.rate_hz, model.magnetometer.rate_hz, "magnetometer.rate_hz")?;
-    let tick_count = (scenario.duration_s * 1e9 / period_ns as f64).round() as u64;
-    let dt_s = period_ns as f64 * 1e-9;
+    let schedule = Schedule::from_model(model)?;
+    let tick_count = schedule.tick_count(scenario.duration_s);
+    let dt_s = schedule.period_s();
+
+    if let Some(bad) = scenario.schedule.iter().find(|c| {
+        !(c.t_s.is_finite() && c.heading_deg.is_finite() && c.pitch_deg.is_finite() && c.roll_deg.is_finite())
+    }) {
+        return Err(LoopError::Scenario(format!("schedule entry {bad:?} is not finite")));
+    }
+    if scenario.schedule.windows(2).any(|w| w[1].t_s < w[0].t_s) {
+        return Err(LoopError::Scenario("schedule times must be in order".into()));
+    }
 
     let mut plant = Plant::new(model, scenario.manoeuvre.initial_state())?;
     let mut devices = DeviceSet::new(model, scenario.seed);
     let mut estimator = EstimatorTask::new(scenario.estimator.clone());
-    let target = scenario.manoeuvre.target();
-    let controller = ControllerTask::new(&scenario.controller, model, target)?;
+    let mut target = scenario.manoeuvre.target();
+    let mut controller = ControllerTask::new(&scenario.controller, model, target)?;
+    let mut next_change = 0;
+    let mut measurements = Vec::with_capacity(tick_count as usize + 1);
 
     let mut trace = Trace { ticks: Vec::with_capacity(tick_count as usize + 1), tilt_stops: Vec::new(), gate_rejections: 0 };
     for k in 0..=tick_count {
-        let t_ns = k * period_ns;
+        let t_ns = schedule.time_ns(k);
         let t_s = t_ns as f64 * 1e-9;
         let truth = plant.state().clone();
+        // Schedule entries due by this tick (within rounding of the tick clock).
+        while let Some(change) = scenario.schedule.get(next_change).filter(|c| c.t_s <= t_s + 1e-9) {
+            target = change.attitude();
+            controller.set_target(target);
+            next_change += 1;
+        }
 
         let gyro = devices.gyro.sample(&truth.q, &truth.rate_b);
         estimator.on_gyro(t_ns, &gyro.rate_rad_s)?;
         let mut vectors = VectorMeasurements::default();
-        if k % vector_every == 0 {
+        let mut record = MeasurementRecord {
+            t_s,
+            gyro_rad_s: gyro.rate_rad_s,
+            tilt_rad: None,
+            field_t: None,
+            wheel_speed_rad_s: Vector3::zeros(),
+            gimbal_rad: Vector4::zeros(),
+        };
+        if schedule.tilt_due(k) {
             let reading = devices.inclinometer.sample(&truth.q);
             vectors.tilt_rad = reading.valid().then_some(reading.tilt_rad);
+            record.tilt_rad = Some(reading.tilt_rad);
         }
-        if k % field_every == 0 {
+        if schedule.field_due(k) {
             let reading = devices.magnetometer.sample(&truth.q);
             vectors.field_b_t = reading.valid().then_some(reading.field_t);
+            record.field_t = Some(reading.field_t);
         }
         if vectors.tilt_rad.is_some() || vectors.field_b_t.is_some() {
             estimator.on_vectors(t_ns, &vectors)?;
@@ -215,6 +292,9 @@ pub fn run(scenario: &Scenario) -> Result<Trace, LoopError> {
             wheel_speed_rad_s: devices.tachometer.sample(&truth.wheel_speed),
             gimbal_rad: devices.cmg_encoder.sample(&truth.gimbal),
         };
+        record.wheel_speed_rad_s = telemetry.wheel_speed_rad_s;
+        record.gimbal_rad = telemetry.gimbal_rad;
+        measurements.push(record);
 
         let estimate = estimator.estimate();
         let bias_true = devices.gyro.bias_rad_s();
@@ -247,7 +327,7 @@ pub fn run(scenario: &Scenario) -> Result<Trace, LoopError> {
         trace.tilt_stops.extend(report.tilt_stop);
     }
     trace.gate_rejections = estimator.filter().map_or(0, |f| f.counters().updates_rejected);
-    Ok(trace)
+    Ok((trace, measurements))
 }
 
 fn estimate_record(
@@ -280,9 +360,49 @@ pub fn nees(error: &Vector6<f64>, covariance: &Matrix6<f64>) -> f64 {
     covariance.cholesky().map_or(f64::INFINITY, |c| error.dot(&c.solve(error)))
 }
 
-/// Gyro period in ns (the loop's tick).
-fn period_ns(rate_hz: f64) -> u64 {
-    (1e9 / rate_hz).round() as u64
+/// When each device samples, in control ticks. The loop ticks at the gyro rate; the inclinometer
+/// and magnetometer rates must divide it, so every sample falls on a tick. The pipeline's
+/// processes use the same schedule, so a tick means the same samples everywhere.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Schedule {
+    /// Tick period (the gyro's), ns.
+    pub period_ns: u64,
+    /// Ticks between inclinometer samples.
+    pub tilt_every: u64,
+    /// Ticks between magnetometer samples.
+    pub field_every: u64,
+}
+
+impl Schedule {
+    pub fn from_model(model: &ModelConfig) -> Result<Self, LoopError> {
+        let gyro = model.gyro.rate_hz;
+        Ok(Self {
+            period_ns: (1e9 / gyro).round() as u64,
+            tilt_every: ticks_per_sample(gyro, model.inclinometer.rate_hz, "inclinometer.rate_hz")?,
+            field_every: ticks_per_sample(gyro, model.magnetometer.rate_hz, "magnetometer.rate_hz")?,
+        })
+    }
+    /// Time of tick `k`, ns.
+    pub fn time_ns(&self, k: u64) -> u64 {
+        k * self.period_ns
+    }
+    /// The tick at `t_ns`, if `t_ns` falls on one.
+    pub fn tick_at(&self, t_ns: u64) -> Option<u64> {
+        (t_ns % self.period_ns == 0).then_some(t_ns / self.period_ns)
+    }
+    pub fn period_s(&self) -> f64 {
+        self.period_ns as f64 * 1e-9
+    }
+    /// Index of the last tick of a run of `duration_s` seconds (ticks run `0..=tick_count`).
+    pub fn tick_count(&self, duration_s: f64) -> u64 {
+        (duration_s * 1e9 / self.period_ns as f64).round() as u64
+    }
+    pub fn tilt_due(&self, k: u64) -> bool {
+        k % self.tilt_every == 0
+    }
+    pub fn field_due(&self, k: u64) -> bool {
+        k % self.field_every == 0
+    }
 }
 
 /// How many ticks between samples of a device at `rate_hz`; it must divide the gyro rate.
@@ -336,6 +456,30 @@ mod tests {
         // Coulomb friction 1.5 mNm against P/2 ≈ 0.22 Nm/rad leaves a dead band of tenths of a
         // degree without compensation; with it the error is at the sensor level.
         assert!(without[0].max(without[1]) > 5.0 * with[0].max(with[1]), "with {with:?}, without {without:?}");
+    }
+
+    #[test]
+    fn schedule_moves_the_target_and_the_recording_matches_the_trace() {
+        let mut scenario = Scenario::paper_stabilisation(ModelConfig::default(), 3);
+        scenario.manoeuvre = Manoeuvre { initial_heading_deg: 0.0, initial_pitch_deg: 0.0, initial_roll_deg: 0.0, ..Manoeuvre::default() };
+        scenario.duration_s = 150.0;
+        scenario.schedule = vec![TargetChange { t_s: 10.0, heading_deg: 0.0, pitch_deg: 3.0, roll_deg: 0.0 }];
+        let (trace, measured) = run_recorded(&scenario).unwrap();
+        assert_eq!(trace, run(&scenario).unwrap());
+        assert_eq!(measured.len(), trace.ticks.len());
+        assert!(measured.iter().zip(&trace.ticks).all(|(m, t)| m.t_s == t.t_s));
+        // The inclinometer and magnetometer sample at 2.5 Hz: every fourth tick.
+        assert_eq!(measured.iter().filter(|m| m.tilt_rad.is_some()).count(), trace.ticks.len().div_ceil(4));
+        // Before the change the platform holds level; after it, it settles on the 3° pitch.
+        let last = trace.ticks.last().unwrap();
+        let [theta, _] = attitude::tilt_angles(&last.truth.q);
+        assert!((theta / DEG - 3.0).abs() < 0.1, "final tilt {} deg", theta / DEG);
+        assert!(last.pointing_error_rad.norm() < 0.1 * DEG, "{:?}", last.pointing_error_rad);
+        let before = &trace.ticks[90];
+        assert!(attitude::tilt_angles(&before.truth.q)[0].abs() < 0.01 * DEG);
+        // Out-of-order schedules are refused.
+        scenario.schedule.push(TargetChange { t_s: 5.0, heading_deg: 0.0, pitch_deg: 0.0, roll_deg: 0.0 });
+        assert!(run(&scenario).unwrap_err().to_string().contains("in order"));
     }
 
     #[test]
