@@ -24,6 +24,7 @@ pub mod convert;
 pub mod estimator_node;
 pub mod in_memory;
 pub mod plant_node;
+pub mod process;
 pub mod run_config;
 pub mod sim_devices;
 

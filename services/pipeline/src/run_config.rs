@@ -28,6 +28,8 @@ pub enum ClockMode {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct RunSection {
+    /// Launch profile the run came from (recorded in the log).
+    pub profile: String,
     pub mode: ClockMode,
     /// Simulated duration, s.
     pub duration_s: f64,
@@ -44,6 +46,7 @@ pub struct RunSection {
 impl Default for RunSection {
     fn default() -> Self {
         Self {
+            profile: "simulation".into(),
             mode: ClockMode::Lockstep,
             duration_s: 150.0,
             seed: 1,
