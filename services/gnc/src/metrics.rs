@@ -4,30 +4,42 @@ use crate::closed_loop::Trace;
 use crate::mekf::chi_square_quantile;
 use testbed_model::config::DEG;
 
-/// First time after which every axis of the true pointing error stays within `band_rad` to the
-/// end of the run; `None` if it never does (or ends outside the band).
-pub fn settling_time_s(trace: &Trace, band_rad: f64) -> Option<f64> {
-    let last_outside = trace
-        .ticks
-        .iter()
-        .rposition(|t| t.pointing_error_rad.iter().any(|e| e.abs() > band_rad));
+/// First time after which every component of `error` stays within `band` to the end of the
+/// series (`None` if it never does or ends outside). `samples` are `(t, error)` in time order,
+/// in any consistent unit.
+pub fn settling_time(samples: &[(f64, [f64; 3])], band: f64) -> Option<f64> {
+    let last_outside = samples.iter().rposition(|(_, e)| e.iter().any(|x| x.abs() > band));
     match last_outside {
-        None => trace.ticks.first().map(|t| t.t_s),
-        Some(i) if i + 1 < trace.ticks.len() => Some(trace.ticks[i + 1].t_s),
-        Some(_) => None,
+        None => samples.first().map(|(t, _)| *t),
+        Some(i) => samples.get(i + 1).map(|(t, _)| *t),
     }
+}
+
+/// Largest absolute value per component over the final `window_s` seconds of `samples`.
+pub fn steady_max(samples: &[(f64, [f64; 3])], window_s: f64) -> [f64; 3] {
+    let end = samples.last().map_or(0.0, |(t, _)| *t);
+    let mut worst = [0.0_f64; 3];
+    for (_, e) in samples.iter().filter(|(t, _)| *t >= end - window_s) {
+        for (w, x) in worst.iter_mut().zip(e) {
+            *w = w.max(x.abs());
+        }
+    }
+    worst
+}
+
+/// True pointing error of a run in degrees, `(t, [x, y, z])`.
+pub fn pointing_error_deg(trace: &Trace) -> Vec<(f64, [f64; 3])> {
+    trace.ticks.iter().map(|t| (t.t_s, (t.pointing_error_rad / DEG).into())).collect()
+}
+
+/// Settling time of a run's true pointing error into `band_rad` per axis.
+pub fn settling_time_s(trace: &Trace, band_rad: f64) -> Option<f64> {
+    settling_time(&pointing_error_deg(trace), band_rad / DEG)
 }
 
 /// Largest absolute true pointing error per body axis over the final `window_s` seconds, degrees.
 pub fn steady_error_deg(trace: &Trace, window_s: f64) -> [f64; 3] {
-    let end = trace.ticks.last().map_or(0.0, |t| t.t_s);
-    let mut worst = [0.0_f64; 3];
-    for tick in trace.ticks.iter().filter(|t| t.t_s >= end - window_s) {
-        for (w, e) in worst.iter_mut().zip(tick.pointing_error_rad.iter()) {
-            *w = w.max(e.abs() / DEG);
-        }
-    }
-    worst
+    steady_max(&pointing_error_deg(trace), window_s)
 }
 
 /// Estimation accuracy pooled over Monte Carlo runs.

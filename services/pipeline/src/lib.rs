@@ -27,5 +27,6 @@ pub mod plant_node;
 pub mod process;
 pub mod run_config;
 pub mod sim_devices;
+pub mod summary;
 
 pub use run_config::{ClockMode, RunConfig, ENV_RUN_CONFIG};

@@ -1,0 +1,12 @@
+//! The launcher of the test bed's process pipeline: reads a launch profile, starts the
+//! processes in dependency order, supervises them and stops them all.
+//!
+//! See `launch/README.md` for the profile format, the environment children get, the stop
+//! sequence and the exit status.
+
+pub mod profile;
+pub mod supervisor;
+pub mod sys;
+
+pub use profile::{Profile, ProfileError};
+pub use supervisor::{Outcome, Plan, Supervisor};

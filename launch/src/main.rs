@@ -1,0 +1,188 @@
+//! `testbed-launch`: starts, supervises and stops the pipeline processes of one launch profile.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use anyhow::{Context as _, bail};
+use clap::Parser;
+use testbed_bus::BusConfig;
+use testbed_launch::profile::{Mode, Profile};
+use testbed_launch::sys::{self, SignalSet};
+use testbed_launch::{Plan, ProfileError, Supervisor};
+
+/// Exit status for an unusable profile or command line.
+const EXIT_CONFIG: u8 = 2;
+
+#[derive(Debug, Parser)]
+#[command(
+    version,
+    about = "Start, supervise and stop the test bed pipeline of a launch profile"
+)]
+struct Args {
+    /// Launch profile (TOML), e.g. launch/profiles/simulation.toml.
+    profile: PathBuf,
+    /// Override [run] mode.
+    #[arg(long, value_parser = ["lockstep", "paced"])]
+    mode: Option<String>,
+    /// Override [run] duration_s.
+    #[arg(long)]
+    duration_s: Option<f64>,
+    /// Override [run] seed.
+    #[arg(long)]
+    seed: Option<u64>,
+    /// Override [run] log.
+    #[arg(long)]
+    log: Option<PathBuf>,
+    /// Override [run] config (relative to the working directory).
+    #[arg(long)]
+    config: Option<PathBuf>,
+    /// Override [run] max_wall_s.
+    #[arg(long)]
+    max_wall_s: Option<f64>,
+    /// Override [supervision] stop_timeout_s (SIGINT → SIGTERM).
+    #[arg(long)]
+    stop_timeout_s: Option<f64>,
+    /// Override [supervision] term_timeout_s (SIGTERM → SIGKILL).
+    #[arg(long)]
+    term_timeout_s: Option<f64>,
+    /// iceoryx2 prefix of the run [default: $TESTBED_BUS_PREFIX or testbed_].
+    #[arg(long)]
+    bus_prefix: Option<String>,
+    /// iceoryx2 root directory of the run [default: $TESTBED_BUS_ROOT or /tmp/iceoryx2/].
+    #[arg(long)]
+    bus_root: Option<PathBuf>,
+    /// Directory of the pipeline binaries [default: $TESTBED_BIN_DIR or the launcher's own].
+    #[arg(long)]
+    bin_dir: Option<PathBuf>,
+    /// Validate the profile, print the start order and exit.
+    #[arg(long)]
+    check: bool,
+}
+
+fn plan(args: &Args) -> anyhow::Result<Result<Plan, ProfileError>> {
+    let profile = match Profile::load(&args.profile) {
+        Ok(p) => p,
+        Err(e) => return Ok(Err(e)),
+    };
+    let mut run = profile.run.clone();
+    if let Some(mode) = &args.mode {
+        run.mode = if mode == "lockstep" {
+            Mode::Lockstep
+        } else {
+            Mode::Paced
+        };
+    }
+    let mut supervision = profile.supervision;
+    let overrides = [
+        ("--duration-s", args.duration_s, false),
+        ("--max-wall-s", args.max_wall_s, false),
+        ("--stop-timeout-s", args.stop_timeout_s, true),
+        ("--term-timeout-s", args.term_timeout_s, true),
+    ];
+    for (key, value, allow_zero) in overrides {
+        if let Some(v) = value
+            && let Err(e) = profile.check_seconds(key, v, allow_zero)
+        {
+            return Ok(Err(e));
+        }
+    }
+    run.duration_s = args.duration_s.or(run.duration_s);
+    run.max_wall_s = args.max_wall_s.or(run.max_wall_s);
+    run.seed = args.seed.unwrap_or(run.seed);
+    run.log = args.log.clone().or(run.log);
+    if let Some(config) = &args.config {
+        // Absolute, so that it is not taken relative to the profile.
+        let cwd = std::env::current_dir().context("reading the working directory")?;
+        run.config = Some(cwd.join(config));
+    }
+    supervision.stop_timeout_s = args.stop_timeout_s.unwrap_or(supervision.stop_timeout_s);
+    supervision.term_timeout_s = args.term_timeout_s.unwrap_or(supervision.term_timeout_s);
+
+    let mut bus = BusConfig::from_env().context("reading TESTBED_BUS_* from the environment")?;
+    if let Some(prefix) = &args.bus_prefix {
+        bus.prefix.clone_from(prefix);
+    }
+    if let Some(root) = &args.bus_root {
+        bus.root.clone_from(root);
+    }
+    bus.delivery = Plan::delivery_for(run.mode);
+    bus.validate().context("bus configuration")?;
+
+    let bin_dir = match (&args.bin_dir, std::env::var_os("TESTBED_BIN_DIR")) {
+        (Some(dir), _) => dir.clone(),
+        (None, Some(dir)) if !dir.is_empty() => PathBuf::from(dir),
+        _ => std::env::current_exe()
+            .context("locating the launcher's executable")?
+            .parent()
+            .context("the launcher's executable has no directory")?
+            .to_path_buf(),
+    };
+    let plan = Plan {
+        profile,
+        run,
+        supervision,
+        bus,
+        bin_dir,
+    };
+    if plan.run.mode == Mode::Lockstep && plan.has_real_devices() {
+        bail!("--mode lockstep: the profile has real devices, which cannot run in lockstep");
+    }
+    Ok(Ok(plan))
+}
+
+fn main() -> ExitCode {
+    // Before anything else (and before any thread exists): the launcher takes its signals
+    // synchronously; children get a clean mask.
+    let signals = match SignalSet::block(&sys::WAITED) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("testbed-launch: cannot block signals: {e}");
+            return ExitCode::from(1);
+        }
+    };
+    testbed_bus::init_logging();
+    let args = Args::parse();
+    let plan = match plan(&args) {
+        Ok(Ok(plan)) => plan,
+        Ok(Err(e)) => {
+            tracing::error!("invalid profile: {e}");
+            return ExitCode::from(EXIT_CONFIG);
+        }
+        Err(e) => {
+            tracing::error!("{e:#}");
+            return ExitCode::from(EXIT_CONFIG);
+        }
+    };
+    let missing = plan.missing_programs();
+    if args.check {
+        for (i, spec) in plan.profile.ordered().enumerate() {
+            println!(
+                "{:>2}. {:<24} {} {}",
+                i + 1,
+                spec.name,
+                plan.program(spec).display(),
+                spec.args.join(" ")
+            );
+        }
+    }
+    if !missing.is_empty() {
+        for (name, path) in &missing {
+            tracing::error!("process {name:?}: no executable at {}", path.display());
+        }
+        return ExitCode::from(EXIT_CONFIG);
+    }
+    if args.check {
+        return ExitCode::SUCCESS;
+    }
+    tracing::info!(
+        "profile {}: mode {}, bus prefix {:?} root {:?} ({} delivery), {} processes",
+        plan.profile.file.display(),
+        plan.run.mode,
+        plan.bus.prefix,
+        plan.bus.root_string(),
+        plan.bus.delivery,
+        plan.profile.processes.len()
+    );
+    let outcome = Supervisor::new(&plan, &signals).run();
+    ExitCode::from(u8::try_from(outcome.exit_code).unwrap_or(1))
+}

@@ -1,0 +1,608 @@
+//! Launch profiles: which processes a run starts, in which order, and how they are supervised.
+//!
+//! ```toml
+//! [run]                      # defaults for the run; the command line may override them
+//! mode = "lockstep"          # "lockstep" | "paced"
+//! duration_s = 600.0         # optional: simulated duration (the plant ends the run)
+//! seed = 1                   # default 0
+//! log = "runs/sim.mcap"      # optional: run log path (relative: to the working directory)
+//! config = "sim-run.toml"    # optional: run configuration file (relative: to this profile)
+//! max_wall_s = 3600.0        # optional: the launcher stops everything after this wall time
+//!
+//! [devices]                  # optional; each listed device must be served by one process
+//! gyro = "simulated"         # "real" | "simulated"; also inclinometer, magnetometer, wheels, cmg
+//!
+//! [supervision]              # optional
+//! stop_timeout_s = 2.0       # after SIGINT, wait this long before SIGTERM
+//! term_timeout_s = 2.0       # after SIGTERM, wait this long before SIGKILL
+//! restart_delay_s = 0.5      # delay before restarting a process (on_exit = "restart")
+//!
+//! [[process]]
+//! name = "sim-gyro"          # unique; [A-Za-z0-9_-], at most 31 bytes
+//! command = "sim-gyro"       # binary next to the launcher, or an absolute path
+//! args = []                  # default []
+//! env = { }                  # extra environment; TESTBED_BUS_* and TESTBED_RUN_* are refused
+//! required = true            # default true: its failure fails the run
+//! on_exit = "stop_all"       # "stop_all" (default) | "restart" | "ignore"
+//! max_restarts = 0           # with on_exit = "restart" only (then at least 1)
+//! depends_on = ["plant"]     # started after these
+//! ends_run = false           # its successful exit ends the run
+//! device = "gyro"            # optional, with `source`: the device this process serves
+//! source = "simulated"
+//! ```
+//!
+//! Unknown keys are refused. Every error names the file, the key and the value.
+
+use std::collections::{BTreeMap, HashMap};
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+use serde::Deserialize;
+
+/// Environment variables the launcher sets for every child; a profile may not set them.
+pub const RESERVED_ENV_PREFIXES: &[&str] = &["TESTBED_BUS_", "TESTBED_RUN_", "TESTBED_DEVICE_"];
+/// Longest process name (fits `ipc_types::Heartbeat::name` and an iceoryx2 node name).
+pub const MAX_NAME_LEN: usize = 31;
+
+/// A profile that cannot be used.
+#[derive(Debug, thiserror::Error)]
+pub enum ProfileError {
+    /// The file cannot be read.
+    #[error("{file}: cannot read the profile: {source}")]
+    Read {
+        /// The profile file.
+        file: String,
+        /// The I/O error.
+        source: std::io::Error,
+    },
+    /// TOML syntax error, wrong type, unknown key or unknown value (the message shows the line).
+    #[error("{file}: {message}")]
+    Parse {
+        /// The profile file.
+        file: String,
+        /// The TOML parser's message, with line, column and the offending text.
+        message: String,
+    },
+    /// A value that parses but does not make sense.
+    #[error("{file}: {key} = {value}: {reason}")]
+    Invalid {
+        /// The profile file.
+        file: String,
+        /// The key, e.g. `process.estimator.depends_on`.
+        key: String,
+        /// The offending value, as written in TOML.
+        value: String,
+        /// What is wrong.
+        reason: String,
+    },
+}
+
+/// How the simulation clock advances.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Mode {
+    /// The plant advances only when the pipeline has answered the current tick.
+    Lockstep,
+    /// 1× wall time.
+    Paced,
+}
+
+impl Mode {
+    /// The name used in profiles and in `TESTBED_RUN_MODE`.
+    pub const fn as_str(self) -> &'static str {
+        match self {
+            Self::Lockstep => "lockstep",
+            Self::Paced => "paced",
+        }
+    }
+}
+
+impl fmt::Display for Mode {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+/// Whether a device is the real one (gateway) or simulated.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Source {
+    /// A gateway to the real device.
+    Real,
+    /// A simulated gateway fed by the plant.
+    Simulated,
+}
+
+impl Source {
+    /// The name used in profiles and in `TESTBED_DEVICE_*`.
+    pub const fn as_str(self) -> &'static str {
+        match self {
+            Self::Real => "real",
+            Self::Simulated => "simulated",
+        }
+    }
+}
+
+/// The platform's devices.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Device {
+    /// Three-axis rate gyro.
+    Gyro,
+    /// Two-axis inclinometer.
+    Inclinometer,
+    /// Three-axis magnetometer.
+    Magnetometer,
+    /// The three reaction wheels.
+    Wheels,
+    /// The four control moment gyros.
+    Cmg,
+}
+
+impl Device {
+    /// Every device.
+    pub const ALL: [Self; 5] = [
+        Self::Gyro,
+        Self::Inclinometer,
+        Self::Magnetometer,
+        Self::Wheels,
+        Self::Cmg,
+    ];
+
+    /// The name used in profiles.
+    pub const fn as_str(self) -> &'static str {
+        match self {
+            Self::Gyro => "gyro",
+            Self::Inclinometer => "inclinometer",
+            Self::Magnetometer => "magnetometer",
+            Self::Wheels => "wheels",
+            Self::Cmg => "cmg",
+        }
+    }
+}
+
+/// What the launcher does when a process exits while the run goes on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum OnExit {
+    /// Stop every process and end the run.
+    #[default]
+    StopAll,
+    /// Start it again, up to `max_restarts` times; then behave like `stop_all` if it is
+    /// required, or leave it stopped if not.
+    Restart,
+    /// Log it and carry on (only for processes that are not required).
+    Ignore,
+}
+
+impl OnExit {
+    fn as_str(self) -> &'static str {
+        match self {
+            Self::StopAll => "stop_all",
+            Self::Restart => "restart",
+            Self::Ignore => "ignore",
+        }
+    }
+}
+
+/// `[run]`.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RunSettings {
+    /// Clock mode.
+    pub mode: Mode,
+    /// Simulated duration, s.
+    pub duration_s: Option<f64>,
+    /// Random seed.
+    #[serde(default)]
+    pub seed: u64,
+    /// Run log path.
+    pub log: Option<PathBuf>,
+    /// Run configuration file the processes read (`TESTBED_RUN_CONFIG`); relative paths are
+    /// relative to the profile's directory.
+    pub config: Option<PathBuf>,
+    /// Wall-time limit of the whole run, s.
+    pub max_wall_s: Option<f64>,
+}
+
+/// `[supervision]`.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Supervision {
+    /// Wait after SIGINT before SIGTERM, s.
+    pub stop_timeout_s: f64,
+    /// Wait after SIGTERM before SIGKILL, s.
+    pub term_timeout_s: f64,
+    /// Delay before a restart, s.
+    pub restart_delay_s: f64,
+}
+
+impl Default for Supervision {
+    fn default() -> Self {
+        Self {
+            stop_timeout_s: 2.0,
+            term_timeout_s: 2.0,
+            restart_delay_s: 0.5,
+        }
+    }
+}
+
+fn default_true() -> bool {
+    true
+}
+
+/// One `[[process]]`.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ProcessSpec {
+    /// Unique name; also `TESTBED_PROCESS_NAME` of the child.
+    pub name: String,
+    /// Binary name (next to the launcher) or absolute path.
+    pub command: String,
+    /// Arguments.
+    #[serde(default)]
+    pub args: Vec<String>,
+    /// Extra environment.
+    #[serde(default)]
+    pub env: BTreeMap<String, String>,
+    /// Whether its failure fails the run.
+    #[serde(default = "default_true")]
+    pub required: bool,
+    /// Exit policy.
+    #[serde(default)]
+    pub on_exit: OnExit,
+    /// Restart budget (with `on_exit = "restart"`).
+    #[serde(default)]
+    pub max_restarts: u32,
+    /// Processes started before this one.
+    #[serde(default)]
+    pub depends_on: Vec<String>,
+    /// A successful exit ends the run.
+    #[serde(default)]
+    pub ends_run: bool,
+    /// The device this process serves.
+    pub device: Option<Device>,
+    /// Whether that device is real or simulated.
+    pub source: Option<Source>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawProfile {
+    run: RunSettings,
+    #[serde(default)]
+    devices: BTreeMap<Device, Source>,
+    #[serde(default)]
+    supervision: Supervision,
+    #[serde(default, rename = "process")]
+    processes: Vec<ProcessSpec>,
+}
+
+/// A validated profile.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Profile {
+    /// The file it was read from.
+    pub file: PathBuf,
+    /// `[run]`.
+    pub run: RunSettings,
+    /// `[devices]`.
+    pub devices: BTreeMap<Device, Source>,
+    /// `[supervision]`.
+    pub supervision: Supervision,
+    /// The processes in file order.
+    pub processes: Vec<ProcessSpec>,
+    /// Indices into `processes` in start order (dependencies first, otherwise file order).
+    pub start_order: Vec<usize>,
+}
+
+impl Profile {
+    /// Reads and validates the profile at `path`.
+    pub fn load(path: &Path) -> Result<Self, ProfileError> {
+        let text = std::fs::read_to_string(path).map_err(|source| ProfileError::Read {
+            file: path.display().to_string(),
+            source,
+        })?;
+        Self::parse(&text, path)
+    }
+
+    /// Parses and validates `text`, naming `file` in errors.
+    pub fn parse(text: &str, file: &Path) -> Result<Self, ProfileError> {
+        let file_name = file.display().to_string();
+        let raw: RawProfile = toml::from_str(text).map_err(|e| ProfileError::Parse {
+            file: file_name.clone(),
+            message: e.to_string().trim_end().to_owned(),
+        })?;
+        let mut profile = Self {
+            file: file.to_path_buf(),
+            run: raw.run,
+            devices: raw.devices,
+            supervision: raw.supervision,
+            processes: raw.processes,
+            start_order: Vec::new(),
+        };
+        profile.validate()?;
+        profile.start_order = profile.topological_order()?;
+        Ok(profile)
+    }
+
+    fn invalid(
+        &self,
+        key: impl Into<String>,
+        value: impl fmt::Debug,
+        reason: impl Into<String>,
+    ) -> ProfileError {
+        ProfileError::Invalid {
+            file: self.file.display().to_string(),
+            key: key.into(),
+            value: format!("{value:?}"),
+            reason: reason.into(),
+        }
+    }
+
+    /// Checks one setting of `[run]` or `[supervision]` (also used for command-line overrides).
+    pub fn check_seconds(
+        &self,
+        key: &str,
+        value: f64,
+        allow_zero: bool,
+    ) -> Result<(), ProfileError> {
+        let ok = value.is_finite() && (value > 0.0 || (allow_zero && value == 0.0));
+        if ok {
+            Ok(())
+        } else {
+            let what = if allow_zero {
+                "non-negative"
+            } else {
+                "positive"
+            };
+            Err(self.invalid(
+                key,
+                value,
+                format!("must be a finite, {what} number of seconds"),
+            ))
+        }
+    }
+
+    fn validate(&self) -> Result<(), ProfileError> {
+        if let Some(d) = self.run.duration_s {
+            self.check_seconds("run.duration_s", d, false)?;
+        }
+        if let Some(w) = self.run.max_wall_s {
+            self.check_seconds("run.max_wall_s", w, false)?;
+        }
+        for (key, path) in [("run.log", &self.run.log), ("run.config", &self.run.config)] {
+            if path.as_ref().is_some_and(|p| p.as_os_str().is_empty()) {
+                return Err(self.invalid(key, "", "must not be empty"));
+            }
+        }
+        let s = self.supervision;
+        self.check_seconds("supervision.stop_timeout_s", s.stop_timeout_s, true)?;
+        self.check_seconds("supervision.term_timeout_s", s.term_timeout_s, true)?;
+        self.check_seconds("supervision.restart_delay_s", s.restart_delay_s, true)?;
+        if self.run.mode == Mode::Lockstep
+            && let Some((device, _)) = self.devices.iter().find(|(_, s)| **s == Source::Real)
+        {
+            return Err(self.invalid(
+                "run.mode",
+                "lockstep",
+                format!(
+                    "lockstep needs every device simulated, but devices.{} = \"real\" (use \"paced\")",
+                    device.as_str()
+                ),
+            ));
+        }
+        if self.processes.is_empty() {
+            return Err(self.invalid("process", "[]", "a profile needs at least one [[process]]"));
+        }
+        let mut names = HashMap::new();
+        for (i, p) in self.processes.iter().enumerate() {
+            self.validate_process(i, p)?;
+            if let Some(first) = names.insert(p.name.as_str(), i) {
+                return Err(self.invalid(
+                    format!("process[{i}].name"),
+                    &p.name,
+                    format!("duplicate: process[{first}] has the same name"),
+                ));
+            }
+        }
+        self.validate_devices()
+    }
+
+    fn validate_process(&self, index: usize, p: &ProcessSpec) -> Result<(), ProfileError> {
+        let name_ok = !p.name.is_empty()
+            && p.name.len() <= MAX_NAME_LEN
+            && p.name
+                .bytes()
+                .all(|b| b.is_ascii_alphanumeric() || b == b'-' || b == b'_');
+        if !name_ok {
+            return Err(self.invalid(
+                format!("process[{index}].name"),
+                &p.name,
+                format!("expected 1 to {MAX_NAME_LEN} characters from [A-Za-z0-9_-]"),
+            ));
+        }
+        let key = |field: &str| format!("process.{}.{field}", p.name);
+        if p.command.trim().is_empty() || p.command.contains('\0') {
+            return Err(self.invalid(key("command"), &p.command, "must name a binary"));
+        }
+        for (k, v) in &p.env {
+            if k.is_empty() || k.contains('=') || k.contains('\0') || v.contains('\0') {
+                return Err(self.invalid(key("env"), k, "not a valid environment variable"));
+            }
+            if RESERVED_ENV_PREFIXES
+                .iter()
+                .any(|prefix| k.starts_with(prefix))
+            {
+                return Err(self.invalid(
+                    key("env"),
+                    k,
+                    format!("set by the launcher for every process ({RESERVED_ENV_PREFIXES:?})"),
+                ));
+            }
+        }
+        if p.required && p.on_exit == OnExit::Ignore {
+            return Err(self.invalid(
+                key("on_exit"),
+                p.on_exit.as_str(),
+                "a required process cannot be ignored when it exits (set required = false)",
+            ));
+        }
+        match (p.on_exit, p.max_restarts) {
+            (OnExit::Restart, 0) => {
+                return Err(self.invalid(
+                    key("max_restarts"),
+                    0,
+                    "on_exit = \"restart\" needs max_restarts of at least 1",
+                ));
+            }
+            (OnExit::StopAll | OnExit::Ignore, n) if n > 0 => {
+                return Err(self.invalid(
+                    key("max_restarts"),
+                    n,
+                    format!(
+                        "only used with on_exit = \"restart\" (on_exit = {:?})",
+                        p.on_exit.as_str()
+                    ),
+                ));
+            }
+            _ => {}
+        }
+        match (p.device, p.source) {
+            (Some(_), None) => {
+                return Err(self.invalid(key("source"), "(missing)", "`device` needs `source`"));
+            }
+            (None, Some(s)) => {
+                return Err(self.invalid(
+                    key("device"),
+                    "(missing)",
+                    format!("`source = \"{}\"` needs `device`", s.as_str()),
+                ));
+            }
+            _ => {}
+        }
+        Ok(())
+    }
+
+    fn validate_devices(&self) -> Result<(), ProfileError> {
+        let mut served: BTreeMap<Device, &str> = BTreeMap::new();
+        for p in &self.processes {
+            let (Some(device), Some(source)) = (p.device, p.source) else {
+                continue;
+            };
+            let key = format!("process.{}.device", p.name);
+            let Some(chosen) = self.devices.get(&device) else {
+                return Err(self.invalid(
+                    key,
+                    device.as_str(),
+                    format!("[devices] does not list {}", device.as_str()),
+                ));
+            };
+            if *chosen != source {
+                return Err(self.invalid(
+                    format!("process.{}.source", p.name),
+                    source.as_str(),
+                    format!("devices.{} = \"{}\"", device.as_str(), chosen.as_str()),
+                ));
+            }
+            if let Some(other) = served.insert(device, &p.name) {
+                return Err(self.invalid(
+                    key,
+                    device.as_str(),
+                    format!("process {other:?} already serves this device"),
+                ));
+            }
+        }
+        for device in self.devices.keys() {
+            if !served.contains_key(device) {
+                return Err(self.invalid(
+                    format!("devices.{}", device.as_str()),
+                    self.devices[device].as_str(),
+                    "no [[process]] serves this device (set its `device` and `source`)",
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// Dependencies first; among processes that are ready, file order.
+    fn topological_order(&self) -> Result<Vec<usize>, ProfileError> {
+        let index: HashMap<&str, usize> = self
+            .processes
+            .iter()
+            .enumerate()
+            .map(|(i, p)| (p.name.as_str(), i))
+            .collect();
+        let n = self.processes.len();
+        let mut deps: Vec<Vec<usize>> = vec![Vec::new(); n];
+        for (i, p) in self.processes.iter().enumerate() {
+            for dep in &p.depends_on {
+                let Some(&j) = index.get(dep.as_str()) else {
+                    return Err(self.invalid(
+                        format!("process.{}.depends_on", p.name),
+                        dep,
+                        "no process has this name",
+                    ));
+                };
+                if !deps[i].contains(&j) {
+                    deps[i].push(j);
+                }
+            }
+        }
+        let mut order = Vec::with_capacity(n);
+        let mut started = vec![false; n];
+        while order.len() < n {
+            let next = (0..n).find(|&i| !started[i] && deps[i].iter().all(|&j| started[j]));
+            match next {
+                Some(i) => {
+                    started[i] = true;
+                    order.push(i);
+                }
+                None => {
+                    let cycle = find_cycle(&deps, &started);
+                    let names: Vec<&str> = cycle
+                        .iter()
+                        .map(|&i| self.processes[i].name.as_str())
+                        .collect();
+                    let first = names.first().copied().unwrap_or_default();
+                    return Err(self.invalid(
+                        format!("process.{first}.depends_on"),
+                        &self.processes[cycle[0]].depends_on,
+                        format!("dependency cycle: {} -> {first}", names.join(" -> ")),
+                    ));
+                }
+            }
+        }
+        Ok(order)
+    }
+
+    /// The processes in start order.
+    pub fn ordered(&self) -> impl Iterator<Item = &ProcessSpec> {
+        self.start_order.iter().map(|&i| &self.processes[i])
+    }
+
+    /// `path` resolved against the profile's directory (absolute paths unchanged).
+    pub fn relative_to_profile(&self, path: &Path) -> PathBuf {
+        match self.file.parent() {
+            Some(dir) if path.is_relative() => dir.join(path),
+            _ => path.to_path_buf(),
+        }
+    }
+}
+
+/// A cycle among the processes not started yet (each of which waits for another one).
+fn find_cycle(deps: &[Vec<usize>], started: &[bool]) -> Vec<usize> {
+    let Some(mut current) = (0..deps.len()).find(|&i| !started[i]) else {
+        return Vec::new();
+    };
+    let mut path = Vec::new();
+    loop {
+        if let Some(pos) = path.iter().position(|&i| i == current) {
+            return path.split_off(pos);
+        }
+        path.push(current);
+        match deps[current].iter().find(|&&j| !started[j]) {
+            Some(&j) => current = j,
+            None => return path,
+        }
+    }
+}

@@ -1,0 +1,543 @@
+//! Starting, supervising and stopping the processes of a run.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+use std::os::unix::process::CommandExt as _;
+
+use testbed_bus::{BusConfig, cleanup_dead_nodes};
+
+use crate::profile::{
+    Device, Mode, OnExit, ProcessSpec, Profile, RunSettings, Source, Supervision,
+};
+use crate::sys::{self, ExitHow, SignalSet};
+
+/// How long to wait for a process to disappear after SIGKILL before giving up on it.
+const KILL_WAIT: Duration = Duration::from_secs(5);
+
+/// Environment variable with the process's profile name.
+pub const ENV_PROCESS_NAME: &str = "TESTBED_PROCESS_NAME";
+/// Environment variable with the run mode (`lockstep` / `paced`).
+pub const ENV_RUN_MODE: &str = "TESTBED_RUN_MODE";
+/// Environment variable with the run's simulated duration in seconds (absent: unlimited).
+pub const ENV_RUN_DURATION_S: &str = "TESTBED_RUN_DURATION_S";
+/// Environment variable with the run's random seed.
+pub const ENV_RUN_SEED: &str = "TESTBED_RUN_SEED";
+/// Environment variable with the run log path (absent: no log requested).
+pub const ENV_RUN_LOG: &str = "TESTBED_RUN_LOG";
+/// Environment variable with the profile file.
+pub const ENV_RUN_PROFILE: &str = "TESTBED_RUN_PROFILE";
+/// Environment variable with the run configuration file (`[run] config`), when there is one.
+pub const ENV_RUN_CONFIG: &str = "TESTBED_RUN_CONFIG";
+/// Prefix of the per-device variables (`TESTBED_DEVICE_GYRO=real|simulated`).
+pub const ENV_DEVICE_PREFIX: &str = "TESTBED_DEVICE_";
+
+/// Everything a run needs: the profile with command-line overrides applied.
+#[derive(Debug, Clone)]
+pub struct Plan {
+    /// The validated profile.
+    pub profile: Profile,
+    /// `[run]` after overrides.
+    pub run: RunSettings,
+    /// `[supervision]` after overrides.
+    pub supervision: Supervision,
+    /// The run's bus (prefix, root; delivery from the mode).
+    pub bus: BusConfig,
+    /// Where binaries named without a path are found.
+    pub bin_dir: PathBuf,
+}
+
+impl Plan {
+    /// The executable of `spec`: absolute commands as written, others in [`Plan::bin_dir`].
+    pub fn program(&self, spec: &ProcessSpec) -> PathBuf {
+        let command = Path::new(&spec.command);
+        if command.is_absolute() {
+            command.to_path_buf()
+        } else {
+            self.bin_dir.join(command)
+        }
+    }
+
+    /// Processes whose executable does not exist or is not executable, with the path tried.
+    pub fn missing_programs(&self) -> Vec<(String, PathBuf)> {
+        use std::os::unix::fs::PermissionsExt as _;
+        self.profile
+            .ordered()
+            .filter_map(|spec| {
+                let program = self.program(spec);
+                let runnable = std::fs::metadata(&program)
+                    .map(|m| m.is_file() && m.permissions().mode() & 0o111 != 0)
+                    .unwrap_or(false);
+                (!runnable).then(|| (spec.name.clone(), program))
+            })
+            .collect()
+    }
+
+    /// The environment every child gets on top of the launcher's own (which passes `RUST_LOG`
+    /// through), before the process's own `env`.
+    pub fn run_env(&self) -> Vec<(String, String)> {
+        let mut env: Vec<(String, String)> = self
+            .bus
+            .env_vars()
+            .into_iter()
+            .map(|(k, v)| (k.to_owned(), v))
+            .collect();
+        env.push((ENV_RUN_MODE.to_owned(), self.run.mode.as_str().to_owned()));
+        env.push((ENV_RUN_SEED.to_owned(), self.run.seed.to_string()));
+        if let Some(d) = self.run.duration_s {
+            env.push((ENV_RUN_DURATION_S.to_owned(), d.to_string()));
+        }
+        if let Some(log) = &self.run.log {
+            env.push((ENV_RUN_LOG.to_owned(), log.display().to_string()));
+        }
+        if let Some(config) = &self.run.config {
+            let path = self.profile.relative_to_profile(config);
+            env.push((ENV_RUN_CONFIG.to_owned(), path.display().to_string()));
+        }
+        let profile =
+            std::fs::canonicalize(&self.profile.file).unwrap_or_else(|_| self.profile.file.clone());
+        env.push((ENV_RUN_PROFILE.to_owned(), profile.display().to_string()));
+        for device in Device::ALL {
+            if let Some(source) = self.profile.devices.get(&device) {
+                let key = format!("{ENV_DEVICE_PREFIX}{}", device.as_str().to_uppercase());
+                env.push((key, source.as_str().to_owned()));
+            }
+        }
+        env
+    }
+
+    /// Delivery mode for the run: lossless in lockstep, overflow when paced.
+    pub fn delivery_for(mode: Mode) -> testbed_bus::Delivery {
+        match mode {
+            Mode::Lockstep => testbed_bus::Delivery::Lossless,
+            Mode::Paced => testbed_bus::Delivery::Overflow,
+        }
+    }
+
+    /// Whether any device of the run is real.
+    pub fn has_real_devices(&self) -> bool {
+        self.profile.devices.values().any(|s| *s == Source::Real)
+    }
+}
+
+/// How a run ended.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Outcome {
+    /// The launcher's exit status: 0 when the run completed or was stopped on request and every
+    /// process ended cleanly; 1 when a required process failed or a process had to be killed.
+    pub exit_code: i32,
+    /// Why the run ended.
+    pub reason: String,
+}
+
+struct Proc<'p> {
+    spec: &'p ProcessSpec,
+    program: PathBuf,
+    pid: Option<libc::pid_t>,
+    restarts: u32,
+    restart_at: Option<Instant>,
+}
+
+/// Supervises one run.
+pub struct Supervisor<'p> {
+    plan: &'p Plan,
+    signals: &'p SignalSet,
+    procs: Vec<Proc<'p>>,
+    env: Vec<(String, String)>,
+    stop_reason: Option<String>,
+    failed: bool,
+    killed: bool,
+    wall_deadline: Option<Instant>,
+}
+
+fn secs(s: f64) -> Duration {
+    Duration::try_from_secs_f64(s).unwrap_or(Duration::MAX)
+}
+
+impl<'p> Supervisor<'p> {
+    /// A supervisor for `plan`; `signals` must block [`sys::WAITED`].
+    pub fn new(plan: &'p Plan, signals: &'p SignalSet) -> Self {
+        let procs = plan
+            .profile
+            .processes
+            .iter()
+            .map(|spec| Proc {
+                spec,
+                program: plan.program(spec),
+                pid: None,
+                restarts: 0,
+                restart_at: None,
+            })
+            .collect();
+        Self {
+            plan,
+            signals,
+            procs,
+            env: plan.run_env(),
+            stop_reason: None,
+            failed: false,
+            killed: false,
+            wall_deadline: None,
+        }
+    }
+
+    /// Runs the plan to the end: clean stale bus resources, start in dependency order,
+    /// supervise, stop in reverse order, reap everything.
+    pub fn run(mut self) -> Outcome {
+        self.cleanup("before the run");
+        self.wall_deadline = self.plan.run.max_wall_s.map(|s| Instant::now() + secs(s));
+        let order = self.plan.profile.start_order.clone();
+        for &index in &order {
+            self.handle_events(Some(Duration::ZERO));
+            if self.stop_reason.is_some() {
+                break;
+            }
+            self.start(index);
+        }
+        while self.stop_reason.is_none() {
+            let running = self
+                .procs
+                .iter()
+                .any(|p| p.pid.is_some() || p.restart_at.is_some());
+            if !running {
+                self.request_stop("no process left running".to_owned());
+                break;
+            }
+            let timeout = self
+                .next_deadline()
+                .map(|t| t.saturating_duration_since(Instant::now()));
+            self.handle_events(timeout);
+            self.start_due_restarts();
+            if let Some(deadline) = self.wall_deadline
+                && Instant::now() >= deadline
+            {
+                let limit = self.plan.run.max_wall_s.unwrap_or_default();
+                self.request_stop(format!("wall-time limit of {limit} s reached"));
+            }
+        }
+        self.shutdown();
+        self.reap_strays();
+        self.cleanup("after the run");
+        let exit_code = i32::from(self.failed || self.killed);
+        let reason = self.stop_reason.unwrap_or_default();
+        tracing::info!("run ended: {reason}; exit status {exit_code}");
+        Outcome { exit_code, reason }
+    }
+
+    fn cleanup(&self, when: &str) {
+        match cleanup_dead_nodes(&self.plan.bus) {
+            Ok(report) if report.cleaned.is_empty() && report.failed.is_empty() => {}
+            Ok(report) => tracing::info!(
+                "bus cleanup {when}: removed {:?}, could not remove {:?}",
+                report.cleaned,
+                report.failed
+            ),
+            Err(e) => tracing::warn!("bus cleanup {when} failed: {e}"),
+        }
+    }
+
+    fn next_deadline(&self) -> Option<Instant> {
+        self.procs
+            .iter()
+            .filter_map(|p| p.restart_at)
+            .chain(self.wall_deadline)
+            .min()
+    }
+
+    fn request_stop(&mut self, reason: String) {
+        if self.stop_reason.is_none() {
+            tracing::info!("stopping the run: {reason}");
+            self.stop_reason = Some(reason);
+        }
+    }
+
+    fn start(&mut self, index: usize) {
+        let proc = &self.procs[index];
+        let spec = proc.spec;
+        let mut command = Command::new(&proc.program);
+        command
+            .args(&spec.args)
+            .envs(self.env.iter().map(|(k, v)| (k, v)))
+            .env(ENV_PROCESS_NAME, &spec.name)
+            .envs(&spec.env)
+            .stdin(Stdio::null())
+            // Own process group: a Ctrl-C in the terminal reaches only the launcher, which
+            // then stops the children in order; signals to the group reach helpers too.
+            .process_group(0);
+        // SAFETY: getpid is async-signal-safe and called here in the parent.
+        let parent = unsafe { libc::getpid() };
+        // SAFETY: prepare_child only makes async-signal-safe system calls.
+        unsafe {
+            command.pre_exec(move || sys::prepare_child(parent));
+        }
+        match command.spawn() {
+            Ok(child) => {
+                let pid = libc::pid_t::try_from(child.id()).unwrap_or(libc::pid_t::MAX);
+                // Dropping `Child` neither waits nor kills: the supervisor reaps by pid.
+                drop(child);
+                tracing::info!(
+                    "started {:?} (pid {pid}): {} {}",
+                    spec.name,
+                    proc.program.display(),
+                    spec.args.join(" ")
+                );
+                self.procs[index].pid = Some(pid);
+            }
+            Err(e) => {
+                tracing::error!(
+                    "cannot start {:?} ({}): {e}",
+                    spec.name,
+                    proc.program.display()
+                );
+                if spec.required {
+                    self.failed = true;
+                }
+                self.request_stop(format!("{:?} could not be started", spec.name));
+            }
+        }
+    }
+
+    fn start_due_restarts(&mut self) {
+        let now = Instant::now();
+        for index in self.plan.profile.start_order.clone() {
+            if self.stop_reason.is_some() {
+                return;
+            }
+            if self.procs[index].restart_at.is_some_and(|t| t <= now) {
+                self.procs[index].restart_at = None;
+                self.start(index);
+            }
+        }
+    }
+
+    /// Waits for one signal (up to `timeout`), then acts on stop requests and exited children.
+    fn handle_events(&mut self, timeout: Option<Duration>) {
+        match self.signals.wait(timeout) {
+            Ok(Some(signal)) if signal != sys::SIGCHLD => {
+                self.request_stop(format!("received {}", sys::signal_name(signal)));
+            }
+            Ok(_) => {}
+            Err(e) => {
+                tracing::error!("waiting for signals failed: {e}");
+                self.failed = true;
+                self.request_stop("signal handling failed".to_owned());
+            }
+        }
+        for index in 0..self.procs.len() {
+            if let Some((pid, how)) = self.collect(index) {
+                self.on_exit(index, pid, how);
+            }
+        }
+    }
+
+    /// Reaps process `index` if it has ended, after killing whatever it left running in its
+    /// process group (the unreaped leader keeps the group id from being reused).
+    fn collect(&mut self, index: usize) -> Option<(libc::pid_t, ExitHow)> {
+        let pid = self.procs[index].pid?;
+        match sys::has_exited(pid) {
+            Ok(true) => {}
+            Ok(false) => return None,
+            Err(e) => {
+                tracing::error!(
+                    "cannot query {:?} (pid {pid}): {e}",
+                    self.procs[index].spec.name
+                );
+                self.procs[index].pid = None;
+                return None;
+            }
+        }
+        let _ = sys::signal_group(pid, sys::SIGKILL);
+        match sys::reap(pid) {
+            Ok(Some(how)) => {
+                self.procs[index].pid = None;
+                Some((pid, how))
+            }
+            Ok(None) => None,
+            Err(e) => {
+                tracing::error!(
+                    "cannot reap {:?} (pid {pid}): {e}",
+                    self.procs[index].spec.name
+                );
+                self.procs[index].pid = None;
+                None
+            }
+        }
+    }
+
+    /// Applies the exit policy to a process that ended while the run goes on.
+    fn on_exit(&mut self, index: usize, pid: libc::pid_t, how: ExitHow) {
+        let spec = self.procs[index].spec;
+        let name = &spec.name;
+        if self.stop_reason.is_some() {
+            tracing::info!("process {name:?} (pid {pid}) {how} while stopping");
+            return;
+        }
+        if spec.ends_run && how.success() {
+            tracing::info!("process {name:?} (pid {pid}) {how}: it ends the run");
+            self.request_stop(format!("{name:?} completed the run"));
+            return;
+        }
+        match spec.on_exit {
+            OnExit::StopAll => {
+                if spec.required {
+                    tracing::error!("required process {name:?} (pid {pid}) {how}; stopping all");
+                    self.failed = true;
+                } else {
+                    tracing::warn!(
+                        "process {name:?} (pid {pid}) {how}; stopping all (on_exit = stop_all)"
+                    );
+                }
+                self.request_stop(format!("{name:?} {how}"));
+            }
+            OnExit::Restart => {
+                let proc = &mut self.procs[index];
+                if proc.restarts < spec.max_restarts {
+                    proc.restarts += 1;
+                    let delay = secs(self.plan.supervision.restart_delay_s);
+                    proc.restart_at = Some(Instant::now() + delay);
+                    tracing::warn!(
+                        "process {name:?} (pid {pid}) {how}; restarting in {delay:?} (restart {} of {})",
+                        proc.restarts,
+                        spec.max_restarts
+                    );
+                } else if spec.required {
+                    tracing::error!(
+                        "required process {name:?} (pid {pid}) {how} with no restarts left (max_restarts = {}); stopping all",
+                        spec.max_restarts
+                    );
+                    self.failed = true;
+                    self.request_stop(format!("{name:?} {how} with no restarts left"));
+                } else {
+                    tracing::warn!(
+                        "process {name:?} (pid {pid}) {how} with no restarts left (max_restarts = {}); left stopped",
+                        spec.max_restarts
+                    );
+                }
+            }
+            OnExit::Ignore => {
+                tracing::warn!("process {name:?} (pid {pid}) {how}; ignored (on_exit = ignore)");
+            }
+        }
+    }
+
+    /// Stops every running process in reverse start order: SIGINT, wait, SIGTERM, wait,
+    /// SIGKILL. A second stop signal kills what is left without further waiting.
+    fn shutdown(&mut self) {
+        for proc in &mut self.procs {
+            proc.restart_at = None;
+        }
+        let mut forced = false;
+        let order: Vec<usize> = self
+            .plan
+            .profile
+            .start_order
+            .iter()
+            .rev()
+            .copied()
+            .collect();
+        for index in order {
+            self.stop_one(index, &mut forced);
+        }
+    }
+
+    fn stop_one(&mut self, index: usize, forced: &mut bool) {
+        let supervision = self.plan.supervision;
+        let steps = [
+            (sys::SIGINT, secs(supervision.stop_timeout_s)),
+            (sys::SIGTERM, secs(supervision.term_timeout_s)),
+            (sys::SIGKILL, KILL_WAIT),
+        ];
+        let name = self.procs[index].spec.name.clone();
+        let mut previous: Option<(libc::c_int, Duration)> = None;
+        for (signal, wait) in steps {
+            let Some(pid) = self.procs[index].pid else {
+                return;
+            };
+            if *forced && signal != sys::SIGKILL {
+                continue;
+            }
+            let signal_name = sys::signal_name(signal);
+            match previous {
+                _ if *forced => {
+                    tracing::warn!("{name:?} (pid {pid}): sending {signal_name} at once")
+                }
+                None => tracing::info!("stopping {name:?} (pid {pid}): sending {signal_name}"),
+                Some((prev, waited)) => tracing::warn!(
+                    "{name:?} (pid {pid}) did not stop within {waited:?} after {}; sending {signal_name}",
+                    sys::signal_name(prev)
+                ),
+            }
+            previous = Some((signal, wait));
+            if signal == sys::SIGKILL {
+                self.killed = true;
+            }
+            if let Err(e) = sys::signal_group(pid, signal) {
+                tracing::error!("cannot signal {name:?} (pid {pid}): {e}");
+            }
+            let deadline = Instant::now() + wait;
+            loop {
+                if let Some((pid, how)) = self.collect(index) {
+                    tracing::info!("reaped {name:?} (pid {pid}): {how}");
+                    return;
+                }
+                let left = deadline.saturating_duration_since(Instant::now());
+                if left.is_zero() {
+                    break;
+                }
+                match self.signals.wait(Some(left)) {
+                    Ok(Some(s)) if s != sys::SIGCHLD && !*forced => {
+                        tracing::warn!(
+                            "received {} while stopping: killing the remaining processes",
+                            sys::signal_name(s)
+                        );
+                        *forced = true;
+                        break;
+                    }
+                    _ => self.collect_others(index),
+                }
+            }
+        }
+        if let Some(pid) = self.procs[index].pid {
+            tracing::error!("{name:?} (pid {pid}) did not end after SIGKILL; giving up on it");
+        }
+    }
+
+    /// Reaps (and reports) processes other than `stopping` that ended meanwhile.
+    fn collect_others(&mut self, stopping: usize) {
+        for index in 0..self.procs.len() {
+            if index != stopping
+                && let Some((pid, how)) = self.collect(index)
+            {
+                tracing::info!(
+                    "reaped {:?} (pid {pid}): {how}",
+                    self.procs[index].spec.name
+                );
+            }
+        }
+    }
+
+    /// Reaps any child the launcher did not track (none expected) and checks none is left.
+    fn reap_strays(&mut self) {
+        loop {
+            match sys::reap_any() {
+                Ok(Some((pid, how))) => {
+                    tracing::warn!("reaped untracked child pid {pid}: {how:?}");
+                }
+                Ok(None) => {
+                    tracing::error!("children are still running after the shutdown");
+                    self.failed = true;
+                    return;
+                }
+                Err(e) if e.raw_os_error() == Some(libc::ECHILD) => {
+                    tracing::info!("all children reaped");
+                    return;
+                }
+                Err(e) => {
+                    tracing::error!("checking for remaining children failed: {e}");
+                    return;
+                }
+            }
+        }
+    }
+}

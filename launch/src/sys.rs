@@ -1,0 +1,235 @@
+//! The few POSIX calls the supervisor needs, wrapped (Linux).
+//!
+//! The launcher blocks SIGINT, SIGTERM, SIGHUP and SIGCHLD in its only thread and takes them
+//! synchronously with `sigtimedwait`: no signal handler, no self-pipe, no polling. Children
+//! start with an empty signal mask ([`prepare_child`], between `fork` and `exec`: the mask is
+//! inherited across both, and the standard library does not reset it) and default
+//! dispositions ([`SignalSet::block`]).
+
+use std::io;
+use std::time::Duration;
+
+pub use libc::{SIGCHLD, SIGHUP, SIGINT, SIGKILL, SIGTERM};
+
+/// The signals the launcher waits for.
+pub const WAITED: [libc::c_int; 4] = [SIGINT, SIGTERM, SIGHUP, SIGCHLD];
+
+/// A blocked signal set, taken with [`SignalSet::wait`].
+pub struct SignalSet {
+    set: libc::sigset_t,
+}
+
+impl SignalSet {
+    /// Blocks `signals` in the calling thread (call before starting any other thread) and
+    /// resets their dispositions to the default.
+    ///
+    /// The reset matters for children, which inherit ignored dispositions across `exec`: a
+    /// launcher started in the background of a non-interactive shell has SIGINT ignored, and
+    /// its children would otherwise ignore the SIGINT it sends them. (A blocked signal is
+    /// still taken by `sigtimedwait` on Linux even when ignored, but only while blocked.) A
+    /// SIGCHLD left ignored would make the kernel reap children by itself.
+    pub fn block(signals: &[libc::c_int]) -> io::Result<Self> {
+        // SAFETY: sigemptyset/sigaddset initialise and fill the set; pthread_sigmask reads it.
+        unsafe {
+            let mut set: libc::sigset_t = std::mem::zeroed();
+            if libc::sigemptyset(&mut set) != 0 {
+                return Err(io::Error::last_os_error());
+            }
+            for &signal in signals {
+                if libc::sigaddset(&mut set, signal) != 0 {
+                    return Err(io::Error::last_os_error());
+                }
+            }
+            let rc = libc::pthread_sigmask(libc::SIG_BLOCK, &set, std::ptr::null_mut());
+            if rc != 0 {
+                return Err(io::Error::from_raw_os_error(rc));
+            }
+            for &signal in signals {
+                let mut action: libc::sigaction = std::mem::zeroed();
+                action.sa_sigaction = libc::SIG_DFL;
+                if libc::sigaction(signal, &action, std::ptr::null_mut()) != 0 {
+                    return Err(io::Error::last_os_error());
+                }
+            }
+            Ok(Self { set })
+        }
+    }
+
+    /// Waits up to `timeout` (forever if `None`) for one of the signals; `None` on timeout or
+    /// when interrupted by another signal.
+    pub fn wait(&self, timeout: Option<Duration>) -> io::Result<Option<libc::c_int>> {
+        // SAFETY: the set is initialised; info and timespec are valid for the call.
+        let rc = unsafe {
+            let mut info: libc::siginfo_t = std::mem::zeroed();
+            match timeout {
+                None => libc::sigwaitinfo(&self.set, &mut info),
+                Some(t) => {
+                    let ts = libc::timespec {
+                        tv_sec: libc::time_t::try_from(t.as_secs()).unwrap_or(libc::time_t::MAX),
+                        // Below 10^9: fits every c_long.
+                        tv_nsec: t.subsec_nanos() as libc::c_long,
+                    };
+                    libc::sigtimedwait(&self.set, &mut info, &ts)
+                }
+            }
+        };
+        if rc >= 0 {
+            return Ok(Some(rc));
+        }
+        let err = io::Error::last_os_error();
+        match err.raw_os_error() {
+            Some(libc::EAGAIN) | Some(libc::EINTR) => Ok(None),
+            _ => Err(err),
+        }
+    }
+}
+
+/// How a child ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ExitHow {
+    /// `exit(code)`.
+    Code(i32),
+    /// Killed by a signal.
+    Signal(i32),
+}
+
+impl ExitHow {
+    /// Exit code 0.
+    pub fn success(self) -> bool {
+        self == Self::Code(0)
+    }
+}
+
+impl std::fmt::Display for ExitHow {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match *self {
+            Self::Code(code) => write!(f, "exited with code {code}"),
+            Self::Signal(signal) => write!(f, "was killed by signal {}", signal_name(signal)),
+        }
+    }
+}
+
+fn decode(status: libc::c_int) -> Option<ExitHow> {
+    if libc::WIFEXITED(status) {
+        Some(ExitHow::Code(libc::WEXITSTATUS(status)))
+    } else if libc::WIFSIGNALED(status) {
+        Some(ExitHow::Signal(libc::WTERMSIG(status)))
+    } else {
+        None
+    }
+}
+
+/// Whether child `pid` has ended, without reaping it (it stays a zombie, so its pid and process
+/// group id cannot be reused until [`reap`]).
+pub fn has_exited(pid: libc::pid_t) -> io::Result<bool> {
+    // SAFETY: waitid writes the siginfo it is given.
+    unsafe {
+        let mut info: libc::siginfo_t = std::mem::zeroed();
+        let rc = libc::waitid(
+            libc::P_PID,
+            pid as libc::id_t,
+            &mut info,
+            libc::WEXITED | libc::WNOHANG | libc::WNOWAIT,
+        );
+        if rc != 0 {
+            return Err(io::Error::last_os_error());
+        }
+        Ok(info.si_pid() != 0)
+    }
+}
+
+/// Reaps child `pid` if it has ended.
+pub fn reap(pid: libc::pid_t) -> io::Result<Option<ExitHow>> {
+    let mut status = 0;
+    // SAFETY: waitpid writes the status it is given.
+    let rc = unsafe { libc::waitpid(pid, &mut status, libc::WNOHANG) };
+    match rc {
+        0 => Ok(None),
+        r if r == pid => Ok(decode(status)),
+        _ => Err(io::Error::last_os_error()),
+    }
+}
+
+/// Reaps any ended child not reaped otherwise; `Ok(None)` when none has ended, and
+/// `Err(ECHILD)` when there are no children at all.
+pub fn reap_any() -> io::Result<Option<(libc::pid_t, Option<ExitHow>)>> {
+    let mut status = 0;
+    // SAFETY: waitpid writes the status it is given.
+    let rc = unsafe { libc::waitpid(-1, &mut status, libc::WNOHANG) };
+    match rc {
+        0 => Ok(None),
+        pid if pid > 0 => Ok(Some((pid, decode(status)))),
+        _ => Err(io::Error::last_os_error()),
+    }
+}
+
+/// Sends `signal` to the process group `pgid` (ESRCH, an empty group, is not an error).
+pub fn signal_group(pgid: libc::pid_t, signal: libc::c_int) -> io::Result<()> {
+    // SAFETY: plain killpg(2).
+    if unsafe { libc::killpg(pgid, signal) } == 0 {
+        return Ok(());
+    }
+    let err = io::Error::last_os_error();
+    if err.raw_os_error() == Some(libc::ESRCH) {
+        Ok(())
+    } else {
+        Err(err)
+    }
+}
+
+/// Name of a signal number (`SIGTERM`), or `signal N`.
+pub fn signal_name(signal: libc::c_int) -> String {
+    let name = match signal {
+        libc::SIGHUP => "SIGHUP",
+        libc::SIGINT => "SIGINT",
+        libc::SIGQUIT => "SIGQUIT",
+        libc::SIGILL => "SIGILL",
+        libc::SIGTRAP => "SIGTRAP",
+        libc::SIGABRT => "SIGABRT",
+        libc::SIGBUS => "SIGBUS",
+        libc::SIGFPE => "SIGFPE",
+        libc::SIGKILL => "SIGKILL",
+        libc::SIGUSR1 => "SIGUSR1",
+        libc::SIGSEGV => "SIGSEGV",
+        libc::SIGUSR2 => "SIGUSR2",
+        libc::SIGPIPE => "SIGPIPE",
+        libc::SIGALRM => "SIGALRM",
+        libc::SIGTERM => "SIGTERM",
+        libc::SIGCHLD => "SIGCHLD",
+        libc::SIGXCPU => "SIGXCPU",
+        libc::SIGXFSZ => "SIGXFSZ",
+        libc::SIGSYS => "SIGSYS",
+        _ => return format!("signal {signal}"),
+    };
+    name.to_owned()
+}
+
+/// For `pre_exec`: unblocks every signal (the launcher's blocked set would otherwise be
+/// inherited), makes the child get SIGTERM when the launcher dies (even by SIGKILL), and gives
+/// up if the launcher is already gone. Only async-signal-safe calls.
+pub fn prepare_child(parent: libc::pid_t) -> io::Result<()> {
+    // SAFETY: sigemptyset, sigprocmask, prctl and getppid are async-signal-safe.
+    unsafe {
+        let mut empty: libc::sigset_t = std::mem::zeroed();
+        libc::sigemptyset(&mut empty);
+        if libc::sigprocmask(libc::SIG_SETMASK, &empty, std::ptr::null_mut()) != 0 {
+            return Err(io::Error::last_os_error());
+        }
+        if libc::prctl(
+            libc::PR_SET_PDEATHSIG,
+            libc::SIGTERM as libc::c_ulong,
+            0,
+            0,
+            0,
+        ) != 0
+        {
+            return Err(io::Error::last_os_error());
+        }
+        if libc::getppid() != parent {
+            return Err(io::Error::other(
+                "the launcher exited while starting the process",
+            ));
+        }
+    }
+    Ok(())
+}

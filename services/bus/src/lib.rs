@@ -1,0 +1,280 @@
+//! Process-pipeline plumbing of the test bed over iceoryx2.
+//!
+//! Every process of the pipeline is a thin shell: open a [`Bus`], create typed ports for the
+//! [`Topic`]s it reads and writes, and run an [`EventLoop`] that calls back when data arrives,
+//! when an interval elapses or when a deadline is missed, until the process is asked to stop
+//! (SIGINT/SIGTERM):
+//!
+//! ```no_run
+//! use std::time::Duration;
+//! use ipc_types::{GyroSample, AttitudeEstimate, ProcessState};
+//! use testbed_bus::{Bus, BusConfig, EventLoop, Flow, Waiter, Wake};
+//!
+//! # fn main() -> Result<(), testbed_bus::BusError> {
+//! let bus = Bus::open("estimator", &BusConfig::from_env()?)?;
+//! let gyro = bus.subscriber::<GyroSample>()?;
+//! let estimate = bus.publisher::<AttitudeEstimate>()?;
+//! let heartbeat = bus.heartbeat(Duration::from_millis(500))?;
+//!
+//! let waiter = Waiter::new()?;
+//! let mut events = EventLoop::new(&waiter);
+//! let on_gyro = events.on_data_with_deadline(&gyro, Duration::from_millis(150))?;
+//! events.with_heartbeat(&heartbeat)?;
+//! heartbeat.set_state(ProcessState::Running);
+//! let mut misses = 0_u64;
+//! let exit = events.run(|wake| {
+//!     match wake {
+//!         Wake::Data(src) if src == on_gyro => {
+//!             let _ = gyro.drain(|sample| {
+//!                 heartbeat.add_samples_in(1);
+//!                 let _ = estimate.publish(&AttitudeEstimate::default());
+//!                 let _ = sample;
+//!             });
+//!         }
+//!         Wake::DeadlineMissed(_) => misses += 1,
+//!         _ => {}
+//!     }
+//!     Flow::Continue
+//! })?;
+//! # let _ = exit;
+//! # Ok(())
+//! # }
+//! ```
+//!
+//! # Pieces
+//!
+//! - [`BusConfig`]: the iceoryx2 prefix and root path a run uses (from `TESTBED_BUS_PREFIX` /
+//!   `TESTBED_BUS_ROOT`, set by the launcher), the run's [`Delivery`] mode
+//!   (`TESTBED_BUS_DELIVERY`) and the [`ServiceLimits`] all processes share.
+//! - [`Bus`]: one iceoryx2 node per process, named after the process.
+//! - [`TopicPublisher`] / [`TopicSubscriber`]: one data service per topic (`T::NAME`) paired
+//!   with an event service (`T::EVENT_NAME`). `publish` sends then notifies; a subscriber owns a
+//!   listener, so a [`Waiter`] wakes on arrival, and [`TopicSubscriber::drain`] copies out every
+//!   pending sample (they are small `Copy` types) after draining the listener.
+//! - [`EventLoop`]: an iceoryx2 `WaitSet` with the subscribers' listeners, intervals and
+//!   deadlines attached; returns [`LoopExit::TerminationRequested`] on SIGINT/SIGTERM.
+//! - [`HeartbeatPublisher`]: the periodic [`ipc_types::Heartbeat`] of a process.
+//! - [`cleanup_dead_nodes`] (launcher, before a run) and [`remove_all`] (tests, after a run).
+//!
+//! # Threads
+//!
+//! iceoryx2 `ipc::Service` ports are not `Send`: create and use all ports of a process on one
+//! thread (the event loop's).
+//!
+//! # Signals
+//!
+//! iceoryx2 installs a catching handler for SIGINT, SIGTERM and the other non-fatal signals
+//! the first time anything waits; [`Bus::open`] does so at once, so a SIGINT arriving after
+//! `open` always ends up as a termination request instead of killing the process. A signal
+//! landing in the instant between the loop's termination check and its `epoll_wait` is seen at
+//! the next wake-up (a data sample, interval or deadline; the launcher follows up with SIGTERM).
+
+mod cleanup;
+mod config;
+mod event_loop;
+mod heartbeat;
+mod ports;
+
+use std::error::Error as StdError;
+use std::time::Duration;
+
+use iceoryx2::prelude::*;
+use ipc_types::Topic;
+
+pub use cleanup::{CleanupReport, cleanup_dead_nodes, remove_all};
+pub use config::{
+    BusConfig, DEFAULT_PREFIX, DEFAULT_ROOT, Delivery, ENV_DELIVERY, ENV_PREFIX, ENV_ROOT,
+    MAX_PREFIX_LEN, MAX_ROOT_LEN, ServiceLimits,
+};
+pub use event_loop::{EventLoop, Flow, LoopExit, SourceId, Waiter, Wake};
+pub use heartbeat::HeartbeatPublisher;
+pub use ports::{SubscriberOptions, TopicPublisher, TopicSubscriber};
+
+/// Boxed iceoryx2 error.
+pub type Source = Box<dyn StdError + Send + Sync + 'static>;
+
+/// Errors of this crate. Each names what was being done and on which topic or path.
+#[derive(Debug, thiserror::Error)]
+pub enum BusError {
+    /// An invalid configuration value.
+    #[error("invalid bus configuration {key} = {value:?}: {reason}")]
+    Config {
+        /// The environment variable or field.
+        key: &'static str,
+        /// The offending value.
+        value: String,
+        /// What is wrong with it.
+        reason: String,
+    },
+    /// The process's iceoryx2 node could not be created.
+    #[error("cannot create the iceoryx2 node {name:?}: {source}")]
+    Node {
+        /// The node (process) name.
+        name: String,
+        /// iceoryx2's error.
+        source: Source,
+    },
+    /// A data or event service could not be opened or created.
+    #[error("cannot open or create the service {service:?}: {source}")]
+    Service {
+        /// The service name.
+        service: String,
+        /// iceoryx2's error.
+        source: Source,
+    },
+    /// A port could not be created.
+    #[error("cannot create a {port} on {service:?}: {source}")]
+    Port {
+        /// The kind of port.
+        port: &'static str,
+        /// The service name.
+        service: String,
+        /// iceoryx2's error.
+        source: Source,
+    },
+    /// Sending, notifying, receiving or draining failed.
+    #[error("{operation} on {service:?} failed: {source}")]
+    Io {
+        /// What was done.
+        operation: &'static str,
+        /// The service name.
+        service: String,
+        /// iceoryx2's error.
+        source: Source,
+    },
+    /// The WaitSet could not be created, attached to or waited on.
+    #[error("event loop: {operation} failed: {source}")]
+    WaitSet {
+        /// What was done.
+        operation: &'static str,
+        /// iceoryx2's error.
+        source: Source,
+    },
+    /// Listing or cleaning up nodes failed.
+    #[error("cleaning up the bus resources under {root:?} with prefix {prefix:?} failed: {source}")]
+    Cleanup {
+        /// The root path.
+        root: String,
+        /// The prefix.
+        prefix: String,
+        /// The cause.
+        source: Source,
+    },
+}
+
+/// Installs the process's `tracing` subscriber: human-readable lines on stderr, filtered by
+/// `RUST_LOG` (EnvFilter syntax, default `info`), without colours unless stderr is a terminal.
+/// iceoryx2's own messages (routed through `tracing`) get the same maximum level. Does nothing
+/// if a subscriber is already installed.
+pub fn init_logging() {
+    use std::io::IsTerminal;
+    use tracing_subscriber::EnvFilter;
+    use tracing_subscriber::filter::LevelFilter;
+
+    let filter = EnvFilter::try_from_default_env().unwrap_or_else(|_| EnvFilter::new("info"));
+    let iox_level = match filter.max_level_hint() {
+        Some(LevelFilter::TRACE) => LogLevel::Trace,
+        Some(LevelFilter::DEBUG) => LogLevel::Debug,
+        Some(LevelFilter::INFO) | None => LogLevel::Info,
+        Some(LevelFilter::WARN) => LogLevel::Warn,
+        Some(_) => LogLevel::Error,
+    };
+    set_log_level(iox_level);
+    let _ = tracing_subscriber::fmt()
+        .with_env_filter(filter)
+        .with_writer(std::io::stderr)
+        .with_ansi(std::io::stderr().is_terminal())
+        .try_init();
+}
+
+/// One process's connection to the bus: an iceoryx2 node named after the process.
+pub struct Bus {
+    node: Node<ipc::Service>,
+    config: BusConfig,
+    name: String,
+}
+
+impl core::fmt::Debug for Bus {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("Bus")
+            .field("name", &self.name)
+            .field("config", &self.config)
+            .finish_non_exhaustive()
+    }
+}
+
+impl Bus {
+    /// Creates the process's node `name` with `config`, and installs iceoryx2's termination
+    /// signal handler (see the crate documentation on signals).
+    pub fn open(name: &str, config: &BusConfig) -> Result<Self, BusError> {
+        let node_error = |source: Source| BusError::Node {
+            name: name.to_owned(),
+            source,
+        };
+        let iox_config = config.to_iceoryx2()?;
+        let node_name = NodeName::new(name).map_err(|e| node_error(Box::new(e)))?;
+        let node = NodeBuilder::new()
+            .name(&node_name)
+            .config(&iox_config)
+            .create::<ipc::Service>()
+            .map_err(|e| node_error(Box::new(e)))?;
+        // A zero wait registers iceoryx2's signal handler now rather than at the first real
+        // wait. A termination request cannot be pending yet: before the handler existed, SIGINT
+        // or SIGTERM would have ended the process.
+        let _ = node.wait(Duration::ZERO);
+        tracing::debug!(node = name, prefix = %config.prefix, root = %config.root_string(),
+            delivery = %config.delivery, "bus opened");
+        Ok(Self {
+            node,
+            config: config.clone(),
+            name: name.to_owned(),
+        })
+    }
+
+    /// The process (node) name.
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// The configuration the bus was opened with.
+    pub fn config(&self) -> &BusConfig {
+        &self.config
+    }
+
+    /// The underlying iceoryx2 node, for what this crate does not cover.
+    pub fn node(&self) -> &Node<ipc::Service> {
+        &self.node
+    }
+
+    /// A publisher on `T`'s topic. In [`Delivery::Lossless`] runs its `publish` blocks while a
+    /// subscriber's buffer is full.
+    pub fn publisher<T: Topic>(&self) -> Result<TopicPublisher<T>, BusError> {
+        TopicPublisher::create(self)
+    }
+
+    /// A subscriber on `T`'s topic with [`SubscriberOptions::default`].
+    pub fn subscriber<T: Topic>(&self) -> Result<TopicSubscriber<T>, BusError> {
+        TopicSubscriber::create(self, SubscriberOptions::default())
+    }
+
+    /// A subscriber on `T`'s topic with `options`.
+    pub fn subscriber_with<T: Topic>(
+        &self,
+        options: SubscriberOptions,
+    ) -> Result<TopicSubscriber<T>, BusError> {
+        TopicSubscriber::create(self, options)
+    }
+
+    /// A heartbeat publisher for this process (name = node name, pid = this process) with
+    /// `period`; attach it to the event loop with [`EventLoop::with_heartbeat`].
+    pub fn heartbeat(&self, period: Duration) -> Result<HeartbeatPublisher, BusError> {
+        HeartbeatPublisher::new(self, period)
+    }
+
+    pub(crate) fn service_name(name: &str) -> Result<ServiceName, BusError> {
+        ServiceName::new(name).map_err(|e| BusError::Service {
+            service: name.to_owned(),
+            source: Box::new(e),
+        })
+    }
+}

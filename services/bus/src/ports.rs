@@ -1,0 +1,421 @@
+//! Typed publisher and subscriber ports: one data service per topic paired with its event
+//! service.
+
+use std::cell::Cell;
+use std::fmt;
+
+use iceoryx2::port::listener::Listener;
+use iceoryx2::port::notifier::Notifier;
+use iceoryx2::port::publisher::Publisher;
+use iceoryx2::port::subscriber::Subscriber;
+use iceoryx2::prelude::*;
+use iceoryx2::service::port_factory::{event, publish_subscribe};
+use ipc_types::Topic;
+
+use crate::{Bus, BusError, Delivery};
+
+/// Options of a [`TopicSubscriber`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SubscriberOptions {
+    /// Samples the subscriber's buffer holds (1 to [`crate::ServiceLimits::max_buffer_size`]).
+    /// When it is full, the run's [`Delivery`] decides: the oldest is replaced, or the publisher
+    /// waits.
+    pub buffer_size: usize,
+    /// Past samples (per publisher) delivered when the subscriber connects, up to
+    /// [`crate::ServiceLimits::history_size`] and `buffer_size`. 0 by default: a lockstep
+    /// process must not see a sample from before it joined.
+    pub history: usize,
+}
+
+impl Default for SubscriberOptions {
+    fn default() -> Self {
+        Self {
+            buffer_size: 16,
+            history: 0,
+        }
+    }
+}
+
+impl SubscriberOptions {
+    /// Options with `buffer_size` and no history.
+    pub fn buffer(buffer_size: usize) -> Self {
+        Self {
+            buffer_size,
+            ..Self::default()
+        }
+    }
+}
+
+/// The delivery mode of `T`'s topic: the run's, except for heartbeats, which always overflow.
+/// Heartbeats are paced by wall time and never part of a reproducible log, and a process must
+/// never block on a heartbeat nobody reads.
+pub(crate) fn delivery_of<T: Topic>(bus: &Bus) -> Delivery {
+    if T::NAME == ipc_types::topic::HEARTBEAT {
+        Delivery::Overflow
+    } else {
+        bus.config().delivery
+    }
+}
+
+fn open_data_service<T: Topic>(
+    bus: &Bus,
+) -> Result<publish_subscribe::PortFactory<ipc::Service, T, ()>, BusError> {
+    let limits = bus.config().limits;
+    bus.node()
+        .service_builder(&Bus::service_name(T::NAME)?)
+        .publish_subscribe::<T>()
+        .enable_safe_overflow(delivery_of::<T>(bus) == Delivery::Overflow)
+        .subscriber_max_buffer_size(limits.max_buffer_size)
+        .history_size(limits.history_size)
+        .max_publishers(limits.max_publishers)
+        .max_subscribers(limits.max_subscribers)
+        .max_nodes(limits.max_nodes)
+        .open_or_create()
+        .map_err(|e| BusError::Service {
+            service: T::NAME.to_owned(),
+            source: Box::new(e),
+        })
+}
+
+/// Event id of the notifications `publish` sends.
+pub(crate) const SAMPLE_EVENT: EventId = EventId::new(0);
+/// Event id iceoryx2 emits to all listeners when a notifier (that is, a publisher) is created:
+/// it wakes subscribers so that they attach to the new publisher's connection before it sends
+/// much (see [`Delivery::Lossless`](crate::Delivery::Lossless)).
+pub(crate) const PUBLISHER_CREATED_EVENT: EventId = EventId::new(1);
+
+fn open_event_service<T: Topic>(bus: &Bus) -> Result<event::PortFactory<ipc::Service>, BusError> {
+    let limits = bus.config().limits;
+    bus.node()
+        .service_builder(&Bus::service_name(T::EVENT_NAME)?)
+        .event()
+        .notifier_created_event(PUBLISHER_CREATED_EVENT)
+        .max_notifiers(limits.max_publishers)
+        .max_listeners(limits.max_subscribers)
+        .max_nodes(limits.max_nodes)
+        .open_or_create()
+        .map_err(|e| BusError::Service {
+            service: T::EVENT_NAME.to_owned(),
+            source: Box::new(e),
+        })
+}
+
+/// Publishes samples of `T` on `T::NAME` and notifies `T::EVENT_NAME` after each.
+pub struct TopicPublisher<T: Topic> {
+    // Field order is drop order: ports before their services.
+    publisher: Publisher<ipc::Service, T, ()>,
+    notifier: Notifier<ipc::Service>,
+    data: publish_subscribe::PortFactory<ipc::Service, T, ()>,
+    _event: event::PortFactory<ipc::Service>,
+    lossless: bool,
+    sent: Cell<u64>,
+    undelivered: Cell<u64>,
+}
+
+impl<T: Topic> fmt::Debug for TopicPublisher<T> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("TopicPublisher")
+            .field("topic", &T::NAME)
+            .field("sent", &self.sent.get())
+            .finish_non_exhaustive()
+    }
+}
+
+impl<T: Topic> TopicPublisher<T> {
+    pub(crate) fn create(bus: &Bus) -> Result<Self, BusError> {
+        let data = open_data_service::<T>(bus)?;
+        let event = open_event_service::<T>(bus)?;
+        let strategy = match delivery_of::<T>(bus) {
+            Delivery::Lossless => BackpressureStrategy::RetryUntilDelivered,
+            Delivery::Overflow => BackpressureStrategy::DiscardData,
+        };
+        let publisher = data
+            .publisher_builder()
+            .backpressure_strategy(strategy)
+            .create()
+            .map_err(|e| BusError::Port {
+                port: "publisher",
+                service: T::NAME.to_owned(),
+                source: Box::new(e),
+            })?;
+        let notifier = event
+            .notifier_builder()
+            .default_event_id(SAMPLE_EVENT)
+            .create()
+            .map_err(|e| BusError::Port {
+                port: "notifier",
+                service: T::EVENT_NAME.to_owned(),
+                source: Box::new(e),
+            })?;
+        Ok(Self {
+            publisher,
+            notifier,
+            data,
+            _event: event,
+            lossless: delivery_of::<T>(bus) == Delivery::Lossless,
+            sent: Cell::new(0),
+            undelivered: Cell::new(0),
+        })
+    }
+
+    /// Sends a copy of `sample` to every subscriber, then notifies their listeners. Returns the
+    /// number of subscribers the sample was delivered to.
+    ///
+    /// In [`Delivery::Lossless`] runs this blocks while an attached subscriber's buffer is full.
+    /// A subscriber attaches to a publisher's connection the first time it reads after the
+    /// publisher appeared (its event loop is woken for that when the publisher is created);
+    /// until then up to its buffer size of samples are queued for it, and iceoryx2 drops what
+    /// does not fit rather than block on a reader that may never come. Such a drop is logged
+    /// and counted in [`undelivered`](Self::undelivered). Start bursts only after a first
+    /// sample was answered (lockstep does this by construction).
+    pub fn publish(&self, sample: &T) -> Result<usize, BusError> {
+        let subscribers = if self.lossless {
+            self.subscriber_count()
+        } else {
+            0
+        };
+        let delivered = self
+            .publisher
+            .send_copy(*sample)
+            .map_err(|e| BusError::Io {
+                operation: "send",
+                service: T::NAME.to_owned(),
+                source: Box::new(e),
+            })?;
+        self.sent.set(self.sent.get() + 1);
+        if delivered < subscribers {
+            let missed = (subscribers - delivered) as u64;
+            if self.undelivered.get() == 0 {
+                tracing::warn!(
+                    topic = T::NAME,
+                    sequence = sample.header().sequence,
+                    "lossless delivery: sample dropped for {missed} subscriber(s) that have not \
+                     attached yet and whose buffer is full (further drops are only counted)"
+                );
+            }
+            self.undelivered.set(self.undelivered.get() + missed);
+        }
+        self.notifier.notify().map_err(|e| BusError::Io {
+            operation: "notify",
+            service: T::EVENT_NAME.to_owned(),
+            source: Box::new(e),
+        })?;
+        Ok(delivered)
+    }
+
+    /// Samples published so far.
+    pub fn sent(&self) -> u64 {
+        self.sent.get()
+    }
+
+    /// In [`Delivery::Lossless`] runs: deliveries dropped because a subscriber had not attached
+    /// yet (see [`publish`](Self::publish)). Always 0 in overflow runs.
+    pub fn undelivered(&self) -> u64 {
+        self.undelivered.get()
+    }
+
+    /// Subscribers currently registered on the topic (from any process).
+    pub fn subscriber_count(&self) -> usize {
+        self.data.dynamic_config().number_of_subscribers()
+    }
+
+    /// The topic name.
+    pub fn topic(&self) -> &'static str {
+        T::NAME
+    }
+}
+
+/// Receives samples of `T` from `T::NAME`; owns a listener on `T::EVENT_NAME` that an
+/// [`crate::EventLoop`] waits on.
+pub struct TopicSubscriber<T: Topic> {
+    subscriber: Subscriber<ipc::Service, T, ()>,
+    listener: Listener<ipc::Service>,
+    data: publish_subscribe::PortFactory<ipc::Service, T, ()>,
+    _event: event::PortFactory<ipc::Service>,
+    received: Cell<u64>,
+}
+
+impl<T: Topic> fmt::Debug for TopicSubscriber<T> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("TopicSubscriber")
+            .field("topic", &T::NAME)
+            .field("received", &self.received.get())
+            .finish_non_exhaustive()
+    }
+}
+
+impl<T: Topic> TopicSubscriber<T> {
+    pub(crate) fn create(bus: &Bus, options: SubscriberOptions) -> Result<Self, BusError> {
+        let limits = bus.config().limits;
+        let port_error = |port, service: &str, source| BusError::Port {
+            port,
+            service: service.to_owned(),
+            source,
+        };
+        if options.buffer_size == 0
+            || options.buffer_size > limits.max_buffer_size
+            || options.history > options.buffer_size.min(limits.history_size)
+        {
+            return Err(BusError::Config {
+                key: "SubscriberOptions",
+                value: format!("{options:?}"),
+                reason: format!(
+                    "buffer_size must be 1 to {} and history at most min(buffer_size, {})",
+                    limits.max_buffer_size, limits.history_size
+                ),
+            });
+        }
+        let data = open_data_service::<T>(bus)?;
+        let event = open_event_service::<T>(bus)?;
+        let subscriber = data
+            .subscriber_builder()
+            .buffer_size(options.buffer_size)
+            .history_request(options.history)
+            .create()
+            .map_err(|e| port_error("subscriber", T::NAME, Box::new(e)))?;
+        let listener = event
+            .listener_builder()
+            .create()
+            .map_err(|e| port_error("listener", T::EVENT_NAME, Box::new(e)))?;
+        let this = Self {
+            subscriber,
+            listener,
+            data,
+            _event: event,
+            received: Cell::new(0),
+        };
+        this.attach()?;
+        Ok(this)
+    }
+
+    /// Consumes the pending notifications, then calls `visit` with a copy of every pending
+    /// sample, oldest first. Returns the number of samples visited.
+    ///
+    /// Notifications are consumed before the samples are read, so a sample published while
+    /// draining either is visited now or comes with a notification that wakes the loop again:
+    /// no sample is left behind without a wake-up.
+    pub fn drain(&self, mut visit: impl FnMut(T)) -> Result<usize, BusError> {
+        self.drain_events()?;
+        let mut count = 0;
+        while let Some(sample) = self.receive_one()? {
+            count += 1;
+            visit(sample);
+        }
+        Ok(count)
+    }
+
+    /// Like [`drain`](Self::drain), appending the samples to `out`.
+    pub fn drain_into(&self, out: &mut Vec<T>) -> Result<usize, BusError> {
+        self.drain(|sample| out.push(sample))
+    }
+
+    /// Drains everything pending and returns the newest sample, if any.
+    pub fn latest(&self) -> Result<Option<T>, BusError> {
+        let mut last = None;
+        self.drain(|sample| last = Some(sample))?;
+        Ok(last)
+    }
+
+    /// Takes one pending sample without consuming notifications. Inside an
+    /// [`crate::EventLoop`] callback prefer [`drain`](Self::drain): samples left in the buffer
+    /// are only revisited at the next wake-up of this source.
+    pub fn try_receive(&self) -> Result<Option<T>, BusError> {
+        self.receive_one()
+    }
+
+    /// Samples received so far.
+    pub fn received(&self) -> u64 {
+        self.received.get()
+    }
+
+    /// Publishers currently registered on the topic (from any process).
+    pub fn publisher_count(&self) -> usize {
+        self.data.dynamic_config().number_of_publishers()
+    }
+
+    /// The topic name.
+    pub fn topic(&self) -> &'static str {
+        T::NAME
+    }
+
+    /// Consumes all pending notifications of the listener.
+    fn drain_events(&self) -> Result<Pending, BusError> {
+        drain_listener(&self.listener, T::EVENT_NAME)
+    }
+
+    /// Attaches to the connections of all publishers present (iceoryx2 does this on every
+    /// receive; `has_samples` does it without taking a sample).
+    fn attach(&self) -> Result<bool, BusError> {
+        self.subscriber.has_samples().map_err(|e| BusError::Io {
+            operation: "connecting to publishers",
+            service: T::NAME.to_owned(),
+            source: Box::new(e),
+        })
+    }
+
+    fn receive_one(&self) -> Result<Option<T>, BusError> {
+        match self.subscriber.receive() {
+            Ok(Some(sample)) => {
+                let value = *sample.payload();
+                drop(sample);
+                self.received.set(self.received.get() + 1);
+                Ok(Some(value))
+            }
+            Ok(None) => Ok(None),
+            Err(e) => Err(BusError::Io {
+                operation: "receive",
+                service: T::NAME.to_owned(),
+                source: Box::new(e),
+            }),
+        }
+    }
+}
+
+/// What a drained listener had pending.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub(crate) struct Pending {
+    /// A sample notification (or an unknown event id).
+    pub(crate) samples: bool,
+    /// A publisher was created.
+    pub(crate) new_publisher: bool,
+}
+
+pub(crate) fn drain_listener(
+    listener: &Listener<ipc::Service>,
+    service: &str,
+) -> Result<Pending, BusError> {
+    let mut pending = Pending::default();
+    listener
+        .try_wait(|activation| {
+            if activation.id == PUBLISHER_CREATED_EVENT {
+                pending.new_publisher = true;
+            } else {
+                pending.samples = true;
+            }
+        })
+        .map_err(|e| BusError::Io {
+            operation: "draining the listener",
+            service: service.to_owned(),
+            source: Box::new(e),
+        })?;
+    Ok(pending)
+}
+
+/// The type-erased view of a [`TopicSubscriber`] that the event loop needs.
+pub(crate) trait SubscriberPort {
+    fn listener(&self) -> &Listener<ipc::Service>;
+    fn event_name(&self) -> &'static str;
+    fn attach(&self) -> Result<bool, BusError>;
+}
+
+impl<T: Topic> SubscriberPort for TopicSubscriber<T> {
+    fn listener(&self) -> &Listener<ipc::Service> {
+        &self.listener
+    }
+    fn event_name(&self) -> &'static str {
+        T::EVENT_NAME
+    }
+    fn attach(&self) -> Result<bool, BusError> {
+        TopicSubscriber::attach(self)
+    }
+}

@@ -1,0 +1,314 @@
+//! `testbed identify`: what the simulation gets wrong in measured data, the cause, the extended
+//! model and its gain; `testbed experiment`: a simulated identification experiment written as a
+//! measured-data CSV directory.
+
+use crate::figure::{self, Panel, Series};
+use anyhow::{Context, Result, bail};
+use std::path::{Path, PathBuf};
+use testbed_ident::experiment::{self, ExperimentOptions};
+use testbed_ident::identify::{Curve, FigureData, Report};
+use testbed_ident::{Dataset, Options, csv, runlog};
+use testbed_model::ModelConfig;
+use testbed_model::config::{DEG, RPM};
+
+#[derive(Debug, clap::Args)]
+pub struct IdentifyArgs {
+    /// Measured data: a directory of CSV files (the contract of shared/DESIGN.md) or an MCAP run
+    /// log of the pipeline.
+    data: PathBuf,
+    /// The nominal model configuration (TOML) to test against the data.
+    #[arg(long)]
+    model: PathBuf,
+    /// Directory for the extended model, the report and the figures.
+    #[arg(long, default_value = "out/identify")]
+    out: PathBuf,
+    /// Print the report as one JSON object instead of the tables.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Debug, clap::Args)]
+pub struct ExperimentArgs {
+    /// Directory to write the measured-data CSV files to.
+    #[arg(long)]
+    out: PathBuf,
+    /// The simulated test bed's configuration (TOML), hidden effects included; the digest's
+    /// defaults when absent.
+    #[arg(long)]
+    model: Option<PathBuf>,
+    /// Simulated duration, s.
+    #[arg(long, default_value_t = 600.0)]
+    duration: f64,
+    /// Seed of the sensor noise.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+}
+
+/// Read measured data: a CSV directory or an MCAP run log.
+fn load_data(path: &Path) -> Result<Dataset> {
+    if path.is_dir() {
+        csv::read_dir(path).with_context(|| format!("reading the measured-data directory {}", path.display()))
+    } else if path.is_file() {
+        runlog::read_log(path).with_context(|| format!("reading the run log {}", path.display()))
+    } else {
+        bail!("{}: no such directory or file (expected a measured-data CSV directory or an MCAP run log)", path.display())
+    }
+}
+
+pub fn run_identify(args: &IdentifyArgs) -> Result<()> {
+    let model = ModelConfig::load(&args.model).with_context(|| format!("loading the model {}", args.model.display()))?;
+    let data = load_data(&args.data)?;
+    let result = testbed_ident::identify(&data, &model, &Options::default())
+        .with_context(|| format!("identifying {} against {}", args.data.display(), args.model.display()))?;
+    std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
+    let model_path = args.out.join("extended_model.toml");
+    let header = format!(
+        "# Extended model: {} plus the effects identified in {} ({}).\n",
+        args.model.display(),
+        args.data.display(),
+        result.report.verdict
+    );
+    std::fs::write(&model_path, header + &result.extended.to_toml_string())
+        .with_context(|| format!("writing {}", model_path.display()))?;
+    // The file must load as it is.
+    ModelConfig::load(&model_path).with_context(|| format!("re-reading {}", model_path.display()))?;
+    let figures = write_figures(&args.out, &result.figures)?;
+    let mut value = serde_json::to_value(&result.report)?;
+    value["extended_model"] = serde_json::json!(model_path.display().to_string());
+    value["figures"] = serde_json::json!(figures);
+    let report_path = args.out.join("report.json");
+    std::fs::write(&report_path, serde_json::to_string_pretty(&value)?).with_context(|| format!("writing {}", report_path.display()))?;
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&value)?);
+    } else {
+        print_report(&result.report);
+        println!();
+        println!("extended model: {}", model_path.display());
+        println!("report:         {}", report_path.display());
+        for f in &figures {
+            println!("figure:         {f}");
+        }
+    }
+    Ok(())
+}
+
+pub fn run_experiment(args: &ExperimentArgs) -> Result<()> {
+    let model = match &args.model {
+        Some(path) => ModelConfig::load(path).with_context(|| format!("loading the model {}", path.display()))?,
+        None => ModelConfig::default(),
+    };
+    let options = ExperimentOptions { duration_s: args.duration, seed: args.seed, ..ExperimentOptions::default() };
+    let (mut data, trace) = experiment::run(&model, &options).context("running the identification experiment")?;
+    data.source = args.out.clone();
+    let written = csv::write_dir(&args.out, &data).with_context(|| format!("writing {}", args.out.display()))?;
+    let max_tilt = trace
+        .ticks
+        .iter()
+        .map(|t| {
+            let [a, b] = testbed_model::attitude::tilt_angles(&t.truth.q);
+            a.abs().max(b.abs())
+        })
+        .fold(0.0, f64::max);
+    let max_wheel = trace.ticks.iter().map(|t| t.truth.wheel_speed.amax()).fold(0.0, f64::max);
+    let info = serde_json::json!({
+        "model": args.model.as_ref().map(|p| p.display().to_string()),
+        "options": options,
+        "tilt_stop_strikes": trace.tilt_stops.len(),
+        "max_tilt_deg": max_tilt / DEG,
+        "max_wheel_speed_rpm": max_wheel / RPM,
+    });
+    let info_path = args.out.join("experiment.json");
+    std::fs::write(&info_path, serde_json::to_string_pretty(&info)?).with_context(|| format!("writing {}", info_path.display()))?;
+    println!(
+        "experiment: {:.0} s, seed {}; heading ±{}° at {}°/s (slow {}°/s near wheel zero crossings), tilt steps {}° every {} s",
+        options.duration_s,
+        options.seed,
+        options.heading_amplitude_deg,
+        options.heading_rate_deg_s,
+        options.slow_rate_deg_s,
+        options.tilt_deg,
+        options.tilt_dwell_s
+    );
+    println!(
+        "  max tilt {:.2}° (stop at {}°), {} tilt-stop strikes, max wheel speed {:.0} rpm",
+        max_tilt / DEG,
+        model.platform.tilt_limit_deg,
+        trace.tilt_stops.len(),
+        max_wheel / RPM
+    );
+    for f in written.iter().chain(std::iter::once(&info_path)) {
+        println!("wrote {}", f.display());
+    }
+    Ok(())
+}
+
+fn print_report(r: &Report) {
+    println!(
+        "data: {} ({:.0} s, {} gyro rows at {:.3} s; {}); {:.0} % held out of the fits",
+        r.data.source,
+        r.data.duration_s,
+        r.data.gyro_rows,
+        r.data.period_s,
+        r.data.devices.join(", "),
+        100.0 * r.data.held_out_fraction
+    );
+    println!();
+    println!("1. What the nominal model gets wrong (predictions re-initialised every {} s; equation errors)", r.options.horizon_s);
+    print_components(&r.nominal_residuals);
+    println!();
+    println!("2. Candidate causes (forward selection; significant: LR > threshold; chosen: best held-out LR)");
+    for (i, step) in r.steps.iter().enumerate() {
+        println!("  step {}", i + 1);
+        println!("    {:<22} {:>3} {:>12} {:>10} {:>12} {:>12}", "cause", "k", "LR fit", "threshold", "ΔBIC", "LR held-out");
+        for c in step {
+            let mark = if c.chosen { "  <- chosen" } else if c.significant { "  significant" } else { "" };
+            println!(
+                "    {:<22} {:>3} {:>12.1} {:>10.1} {:>12.1} {:>12.1}{mark}{}",
+                c.name,
+                c.k,
+                c.lr_fit,
+                c.threshold,
+                c.delta_bic,
+                c.lr_held_out,
+                if c.note.is_empty() || !c.significant { String::new() } else { format!(" ({})", c.note) }
+            );
+        }
+    }
+    println!();
+    println!("3. Cause: {}", r.verdict);
+    for c in &r.causes {
+        println!("  {} — {}", c.name, c.description);
+        for (key, value) in &c.parameters {
+            let se = c.stderr.get(key).cloned().unwrap_or(serde_json::Value::Null);
+            let unit = c.units.get(key).and_then(|u| u.as_str()).unwrap_or("");
+            println!("    {key} = {value} ± {se}  [{unit}]");
+        }
+        if !c.note.is_empty() {
+            println!("    ({})", c.note);
+        }
+    }
+    println!("  {}", r.remaining.message);
+    for c in &r.remaining.correlations {
+        println!("    {} correlates with {}: r = {:+.2}", c.residual, c.signal, c.r);
+    }
+    println!();
+    println!("4. Gain on held-out data (multi-step prediction error, RMS; normalised by the sensor noise)");
+    println!("    {:<10} {:>14} {:>14} {:>10} {:>10}", "component", "nominal", "extended", "unit", "gain");
+    for (name, a) in &r.baseline_rms.components {
+        if let Some(b) = r.extended_rms.components.get(name) {
+            let unit = testbed_ident::predict::UNITS[testbed_ident::predict::COMPONENTS.iter().position(|c| c == name).unwrap_or(0)];
+            println!("    {:<10} {:>14.4e} {:>14.4e} {:>10} {:>10.3}", name, a.rms, b.rms, unit, a.rms / b.rms);
+        }
+    }
+    for (group, a) in &r.baseline_rms.groups {
+        if let Some(b) = r.extended_rms.groups.get(group) {
+            println!("    {:<14} normalised {:>8.3} -> {:>8.3}  gain {:.3}", group, a, b, a / b);
+        }
+    }
+    println!("    overall (normalised) {:.3} -> {:.3}: gain {:.3}", r.baseline_rms.overall, r.extended_rms.overall, r.gain);
+}
+
+fn print_components(report: &testbed_ident::identify::ResidualReport) {
+    println!(
+        "    {:<20} {:>12} {:>10} {:>12} {:>14} {:>7} {:>9}",
+        "residual", "RMS", "RMS/noise", "bias", "trend per h", "lag-1", "white p"
+    );
+    for c in report.prediction.iter().chain(&report.equation_error) {
+        println!(
+            "    {:<20} {:>12.4e} {:>10.2} {:>12.3e} {:>14.3e} {:>7.2} {:>9.1e}  {}",
+            c.name, c.stats.rms, c.normalised_rms, c.stats.mean, c.stats.trend_per_h, c.stats.lag1, c.stats.white_p, c.unit
+        );
+    }
+    let rms: Vec<String> = report.channel_rms_held_out.iter().map(|(k, v)| format!("{k} {v:.2}")).collect();
+    println!("    equation-error channels, whitened RMS on held-out data (1 = noise as modelled): {}", rms.join(", "));
+}
+
+/// Display scale and unit of a residual component.
+fn display(label: &str) -> (f64, &'static str) {
+    match label {
+        l if l.starts_with("gyro") => (1e6, "µrad/s"),
+        l if l.starts_with("tilt") => (1e6, "µrad"),
+        l if l.starts_with("field") => (1e6, "µT"),
+        l if l.starts_with("wheel_torque") => (1e3, "mNm"),
+        l if l.starts_with("wheel") => (1.0, "rad/s"),
+        l if l.starts_with("momentum") => (1e3, "mNms"),
+        _ => (1.0, "whitened"),
+    }
+}
+
+/// At most `n` points of a curve (every k-th).
+fn thin(points: &[(f64, f64)], n: usize, scale: f64) -> Vec<(f64, f64)> {
+    let step = points.len().div_ceil(n.max(1)).max(1);
+    points.iter().step_by(step).map(|(t, v)| (*t, v * scale)).collect()
+}
+
+fn panel_from<'a>(curves: &'a [Curve], keep: impl Fn(&str) -> bool, title: &'a str) -> Option<Panel<'a>> {
+    let series: Vec<Series<'a>> = curves
+        .iter()
+        .filter(|c| keep(&c.label))
+        .map(|c| {
+            let (scale, _) = display(&c.label);
+            Series { label: c.label.as_str(), points: thin(&c.points, 3000, scale) }
+        })
+        .collect();
+    (!series.is_empty()).then_some(Panel { y_label: title, series, y_range: None })
+}
+
+fn write_figures(out: &Path, f: &FigureData) -> Result<Vec<String>> {
+    let mut written = Vec::new();
+    let prediction: Vec<Panel> = [
+        ("gyro", "rate residual (µrad/s)"),
+        ("tilt", "tilt residual (µrad)"),
+        ("field", "field residual (µT)"),
+        ("wheel", "wheel speed residual (rad/s)"),
+    ]
+    .into_iter()
+    .filter_map(|(p, t)| panel_from(&f.nominal_prediction, |l| l.starts_with(p), t))
+    .collect();
+    if !prediction.is_empty() {
+        let path = out.join("nominal_residuals.svg");
+        figure::write_svg(&path, "Nominal model: measured − predicted (re-initialised every window)", &prediction)?;
+        written.push(path.display().to_string());
+    }
+    let relabel = |curves: &[Curve], which: &str| -> Vec<Curve> {
+        curves.iter().map(|c| Curve { label: format!("{} ({which})", c.label), points: c.points.clone() }).collect()
+    };
+    let both: Vec<Curve> = relabel(&f.nominal_equation, "nominal").into_iter().chain(relabel(&f.extended_equation, "extended")).collect();
+    let mut equation = Vec::new();
+    for which in ["(nominal)", "(extended)"] {
+        for (prefix, title) in [
+            ("momentum", "momentum residual (mNms)"),
+            ("wheel_torque", "wheel torque residual (mNm)"),
+            ("innovation", "filter innovation (whitened)"),
+        ] {
+            if let Some(p) = panel_from(&both, |l| l.starts_with(prefix) && l.ends_with(which), title) {
+                equation.push(p);
+            }
+        }
+    }
+    if !equation.is_empty() {
+        let path = out.join("equation_error.svg");
+        figure::write_svg(&path, "Equation-error residuals: nominal, then extended model", &equation)?;
+        written.push(path.display().to_string());
+    }
+    let groups = ["rates", "tilt", "field", "wheel speeds"];
+    let titles: Vec<String> = groups.iter().map(|g| format!("{g}: RMS / noise")).collect();
+    let mut gain = Vec::new();
+    for (group, title) in groups.iter().zip(&titles) {
+        let nominal = f.held_out_nominal.iter().find(|c| c.label == *group);
+        let extended = f.held_out_extended.iter().find(|c| c.label == *group);
+        if let (Some(a), Some(b)) = (nominal, extended) {
+            gain.push(Panel {
+                y_label: title.as_str(),
+                series: vec![Series { label: "nominal", points: a.points.clone() }, Series { label: "extended", points: b.points.clone() }],
+                y_range: None,
+            });
+        }
+    }
+    if !gain.is_empty() {
+        let path = out.join("gain.svg");
+        figure::write_svg(&path, "Held-out prediction error per window: nominal vs extended model", &gain)?;
+        written.push(path.display().to_string());
+    }
+    Ok(written)
+}
