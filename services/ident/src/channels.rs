@@ -1,0 +1,321 @@
+//! Equation-error channels: how far the data are from satisfying the model's equations of
+//! motion, and how each candidate effect would change that (its regressors).
+//!
+//! **Torque channel** (platform, body axes). Total angular momentum about the bearing centre
+//! `H = I w + J n + h_cmg(δ)`; the wheels' and CMGs' torques are internal, so
+//! `H' + w × H = M` (external torque only: the equation-error torque residual
+//! `I w' + h' + w × (I w + h) − M` is zero). Integrated from the start `s` of a segment (up to
+//! `segment_s` long, inside one fit or held-out block) to each tick k:
+//!
+//! ```text
+//! c_k = H_k − H_s + ∫_s^k (w × H − M_model) dt = e_k − e_s        (Nms, body axes)
+//! ```
+//!
+//! with `e` the measurement noise of `H` (one gyro sample through the inertia, one tachometer
+//! reading): white from tick to tick. The common `−e_s` and any constant error of `H` (the
+//! estimated bias through the inertia) are a free offset per segment, removed by taking out each
+//! segment's mean. This integral form averages the gyro noise over the segment, so slowly varying
+//! torques are resolved far below one sample's noise. Each candidate effect adds `X θ`, its
+//! regressors integrated the same way. The rates in the regressors are instruments, the mean of
+//! the neighbouring samples `(w_{k−1} + w_{k+1})/2`, whose noise is independent of `e_k` (with
+//! the raw sample, an inertia error multiplying `w_k − w_s` would be biased by the noise: errors
+//! in variables).
+//!
+//! **Wheel channel** (per wheel i, motor torque τ on the wheel, friction `T_f` opposing the
+//! relative speed n): `J (n_i' + w_i') = s·clamp(τ(t − d)) − T_f(n)`. Over one tick interval
+//! `y = J Δ(n_i + w_i) − s ∫ clamp(τ(t − d)) dt + ∫ T_f(n) dt` (Nms), on every other interval (white),
+//! leaving out intervals in which the wheel may have stuck (|n| below 8 tachometer σ at an end,
+//! or a sign change) or was near its speed limit.
+
+use crate::data::Aligned;
+use crate::effects::Cause;
+use crate::reconstruct::Reconstruction;
+use nalgebra::{Matrix3, Vector3};
+use testbed_model::ModelConfig;
+use testbed_model::attitude::{self, Attitude};
+use testbed_model::config::RPM;
+use testbed_model::physics::{CmgPyramid, ExternalTorqueModel, WheelFrictionModel, Wheel};
+
+/// Columns of the torque channel's regressor matrix, in this order: `com_offset.r_m` (3),
+/// `constant_torque.torque_nm` (3), `aero_drag.c1` (3), `aero_drag.c2` (3),
+/// `inertia_error.fraction` (3).
+pub const TORQUE_COLUMNS: usize = 15;
+
+/// Column range of a torque-kind cause in the torque regressors.
+pub fn torque_columns(cause: Cause) -> Option<std::ops::Range<usize>> {
+    match cause {
+        Cause::ComOffset => Some(0..3),
+        Cause::ConstantTorque => Some(3..6),
+        Cause::AeroDrag => Some(6..12),
+        Cause::InertiaError => Some(12..15),
+        _ => None,
+    }
+}
+
+/// The torque channel on one reconstruction, under a base configuration.
+#[derive(Debug, Clone)]
+pub struct TorqueChannel {
+    /// Tick of each row.
+    pub ticks: Vec<usize>,
+    /// Rows of each segment, `start..end`.
+    pub segments: Vec<std::ops::Range<usize>>,
+    /// Momentum residual of each row under the base configuration, segment mean removed, Nms,
+    /// body axes.
+    pub y: Vec<Vector3<f64>>,
+    /// Regressors per row, [`TORQUE_COLUMNS`] columns (Nms per unit of the parameter), segment
+    /// mean removed.
+    pub x: Vec<[Vector3<f64>; TORQUE_COLUMNS]>,
+    /// A-priori 1σ of a row per axis, Nms (gyro and tachometer noise).
+    pub sigma: Vector3<f64>,
+}
+
+impl TorqueChannel {
+    /// Build the channel: segments of at most `segment_s` that do not cross a change of
+    /// `held_out` (fit / held-out blocks), on a regular clock, after the filter's start, away
+    /// from the tilt stop; residuals under `config`; regressors.
+    pub fn new(data: &Aligned, recon: &Reconstruction, config: &ModelConfig, segment_s: f64, held_out: &[bool]) -> Self {
+        let n = data.len();
+        let max_len = ((segment_s / data.period_s).round() as usize).max(10);
+        let inertia = config.true_inertia().unwrap_or_else(Matrix3::identity);
+        let nominal = config.platform.inertia().unwrap_or(inertia);
+        let j = if data.has_wheels() { config.wheels.inertia_kgm2 } else { 0.0 };
+        let cmg = CmgPyramid::from_config(&config.cmg);
+        let external = ExternalTorqueModel::from_config(config);
+        let mg = config.platform.mass_kg * config.platform.gravity_mps2;
+        let limit = config.platform.tilt_limit_rad() - 1.0_f64.to_radians();
+        let rotor = |k: usize| data.wheel_speed_at(k) * j + if data.gimbal.is_some() { cmg.momentum(&data.gimbal_at(k)) } else { Vector3::zeros() };
+        let usable = |k: usize| {
+            let regular = (data.t[k + 1] - data.t[k] - data.period_s).abs() < 0.25 * data.period_s
+                && (data.t[k] - data.t[k - 1] - data.period_s).abs() < 0.25 * data.period_s;
+            let [x, y] = attitude::tilt_angles(&recon.q[k]);
+            regular && x.abs() < limit && y.abs() < limit
+        };
+        // Per tick: momentum, integrand of the residual, and the regressors' parts. Within a
+        // segment the bias is held at its estimate at the segment's start (`b0`): the filter's
+        // small bias corrections at each vector update would otherwise step `I w`.
+        let rate = |k: usize, b0: &Vector3<f64>| recon.rate[k] + recon.bias[k] - b0;
+        let momentum = |k: usize, b0: &Vector3<f64>| inertia * rate(k, b0) + rotor(k);
+        let integrand = |k: usize, b0: &Vector3<f64>| {
+            let w = rate(k, b0);
+            w.cross(&momentum(k, b0)) - external.torque(&recon.q[k], &w).total_b()
+        };
+        let parts = |k: usize, b0: &Vector3<f64>| -> ([Vector3<f64>; TORQUE_COLUMNS], [Vector3<f64>; TORQUE_COLUMNS]) {
+            let v = 0.5 * (rate(k - 1, b0) + rate(k + 1, b0));
+            let g = attitude::gravity_b(&recon.q[k]);
+            let mut m = [Vector3::zeros(); TORQUE_COLUMNS];
+            let mut f = [Vector3::zeros(); TORQUE_COLUMNS];
+            for i in 0..3 {
+                let e = Vector3::ith(i, 1.0);
+                f[i] = mg * e.cross(&g);
+                f[3 + i] = e;
+                f[6 + i] = -v[i] * e;
+                f[9 + i] = -v[i] * v[i].abs() * e;
+                f[12 + i] = -nominal[(i, i)] * v.cross(&(e * v[i]));
+                m[12 + i] = -nominal[(i, i)] * v[i] * e;
+            }
+            (m, f)
+        };
+
+        let mut out = Self { ticks: Vec::new(), segments: Vec::new(), y: Vec::new(), x: Vec::new(), sigma: Vector3::zeros() };
+        let mut k = recon.start.max(1) + 1;
+        while k + 1 < n {
+            if !usable(k) {
+                k += 1;
+                continue;
+            }
+            // A segment from k: same block, usable ticks, at most max_len.
+            let first_row = out.ticks.len();
+            let b0 = recon.bias[k];
+            let (m0, _) = parts(k, &b0);
+            let h0 = momentum(k, &b0);
+            let mut c = Vector3::zeros();
+            let mut xc = [Vector3::zeros(); TORQUE_COLUMNS];
+            let mut prev_f = integrand(k, &b0);
+            let mut prev_parts = parts(k, &b0).1;
+            let start = k;
+            loop {
+                let (m, f_parts) = parts(k, &b0);
+                if k > start {
+                    let h = 0.5 * (data.t[k] - data.t[k - 1]);
+                    let fk = integrand(k, &b0);
+                    c += h * (prev_f + fk);
+                    for col in 0..TORQUE_COLUMNS {
+                        xc[col] += h * (prev_parts[col] + f_parts[col]);
+                    }
+                    prev_f = fk;
+                    prev_parts = f_parts;
+                }
+                out.ticks.push(k);
+                out.y.push(momentum(k, &b0) - h0 + c);
+                out.x.push(std::array::from_fn(|col| m[col] - m0[col] + xc[col]));
+                k += 1;
+                if k + 1 >= n || k - start >= max_len || held_out[k] != held_out[start] || !usable(k) {
+                    break;
+                }
+            }
+            let rows = first_row..out.ticks.len();
+            if rows.len() < 10 {
+                out.ticks.truncate(first_row);
+                out.y.truncate(first_row);
+                out.x.truncate(first_row);
+                continue;
+            }
+            // Free offset per segment: remove the means.
+            let len = rows.len() as f64;
+            let ym: Vector3<f64> = out.y[rows.clone()].iter().sum::<Vector3<f64>>() / len;
+            let xm: [Vector3<f64>; TORQUE_COLUMNS] =
+                std::array::from_fn(|col| out.x[rows.clone()].iter().map(|r| r[col]).sum::<Vector3<f64>>() / len);
+            for r in rows.clone() {
+                out.y[r] -= ym;
+                for col in 0..TORQUE_COLUMNS {
+                    out.x[r][col] -= xm[col];
+                }
+            }
+            out.segments.push(rows);
+        }
+
+        // A-priori noise of H: one gyro sample through the inertia, and the tachometer.
+        let gyro_sigma = config.gyro.noise_density_rad_sqrt_s() / data.period_s.sqrt();
+        let tach = config.wheels.speed_noise_rpm * RPM;
+        out.sigma = Vector3::from_fn(|i, _| {
+            let from_gyro: f64 = (0..3).map(|c| (inertia[(i, c)] * gyro_sigma[c]).powi(2)).sum();
+            (from_gyro + (j * tach).powi(2)).sqrt()
+        });
+        out
+    }
+
+    /// Rows.
+    pub fn len(&self) -> usize {
+        self.ticks.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.ticks.is_empty()
+    }
+
+    /// Residual of row `i` with the torque parameters changed by `delta` (per column,
+    /// [`TORQUE_COLUMNS`] long, zero for causes not fitted), whitened per axis.
+    pub fn whitened(&self, i: usize, delta: &[f64]) -> Vector3<f64> {
+        let mut r = self.y[i];
+        for (c, d) in delta.iter().enumerate() {
+            if *d != 0.0 {
+                r -= self.x[i][c] * *d;
+            }
+        }
+        r.component_div(&self.sigma)
+    }
+}
+
+/// One wheel interval.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WheelInterval {
+    /// Start tick (the interval is `[k, k + 1]`).
+    pub k: usize,
+    /// `J Δ(n + w_i)`, Nms.
+    pub ja: f64,
+    /// Wheel speed at the ends, rad/s.
+    pub n0: f64,
+    pub n1: f64,
+    /// Start and end time, s.
+    pub t0: f64,
+    pub t1: f64,
+}
+
+/// The wheel channel: per wheel its usable intervals.
+#[derive(Debug, Clone)]
+pub struct WheelChannel {
+    pub rows: [Vec<WheelInterval>; 3],
+    /// A-priori 1σ of a row, Nms (tachometer noise at both ends).
+    pub sigma: f64,
+    /// Torque limit of the drives, Nm.
+    pub max_torque_nm: f64,
+}
+
+/// Gauss–Legendre nodes and weights on [0, 1] (4 points).
+const GL4: [(f64, f64); 4] = [
+    (0.069_431_844_202_973_71, 0.173_927_422_568_726_9),
+    (0.330_009_478_207_571_9, 0.326_072_577_431_273_1),
+    (0.669_990_521_792_428_1, 0.326_072_577_431_273_1),
+    (0.930_568_155_797_026_3, 0.173_927_422_568_726_9),
+];
+
+impl WheelChannel {
+    pub fn new(data: &Aligned, recon: &Reconstruction, config: &ModelConfig) -> Self {
+        let j = config.wheels.inertia_kgm2;
+        let tach = config.wheels.speed_noise_rpm * RPM;
+        let n_min = (8.0 * tach).max(1e-3);
+        let n_max = 0.97 * config.wheels.max_speed_rad_s();
+        let mut rows: [Vec<WheelInterval>; 3] = Default::default();
+        if let Some(speeds) = &data.wheel_speed {
+            let start = recon.start.max(1);
+            let mut k = start;
+            while k + 1 < data.len() {
+                let regular = (data.t[k + 1] - data.t[k] - data.period_s).abs() < 0.25 * data.period_s;
+                if regular {
+                    for (i, wheel_rows) in rows.iter_mut().enumerate() {
+                        let (n0, n1) = (speeds[k][i], speeds[k + 1][i]);
+                        let usable = n0.abs() >= n_min && n1.abs() >= n_min && n0 * n1 > 0.0 && n0.abs() <= n_max && n1.abs() <= n_max;
+                        if usable {
+                            wheel_rows.push(WheelInterval {
+                                k,
+                                ja: j * ((n1 + recon.rate[k + 1][i]) - (n0 + recon.rate[k][i])),
+                                n0,
+                                n1,
+                                t0: data.t[k],
+                                t1: data.t[k + 1],
+                            });
+                        }
+                    }
+                }
+                k += 2;
+            }
+        }
+        Self { rows, sigma: (2.0f64).sqrt() * j * tach, max_torque_nm: config.wheels.max_torque_nm }
+    }
+
+    /// Rows in all wheels.
+    pub fn len(&self) -> usize {
+        self.rows.iter().map(Vec::len).sum()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
+
+/// `∫ T_f(n(t)) dt` over an interval with n linear from `n0` to `n1` (same sign), Nm s.
+pub fn friction_integral(model: &WheelFrictionModel, row: &WheelInterval) -> f64 {
+    let dt = row.t1 - row.t0;
+    let dir = row.n0.signum();
+    GL4.iter().map(|(s, w)| w * model.sliding_torque(row.n0 + s * (row.n1 - row.n0), dir)).sum::<f64>() * dt
+}
+
+/// Regressors of the friction parameters `[coulomb_pos, coulomb_neg, stribeck, viscous]` for a
+/// Stribeck speed `ns` (rad/s; `None`: no Stribeck term): `∫ T_f dt = Σ θ_j R_j`.
+pub fn friction_regressors(row: &WheelInterval, ns: Option<f64>) -> [f64; 4] {
+    let dt = row.t1 - row.t0;
+    let dir = row.n0.signum();
+    let mut r = [0.0; 4];
+    for (s, w) in GL4 {
+        let n = row.n0 + s * (row.n1 - row.n0);
+        let e = ns.map_or(0.0, |ns| (-(n / ns).powi(2)).exp());
+        if dir > 0.0 {
+            r[0] += w * (1.0 - e);
+        } else {
+            r[1] -= w * (1.0 - e);
+        }
+        r[2] += w * dir * e;
+        r[3] += w * n;
+    }
+    r.map(|x| x * dt)
+}
+
+/// The base friction model of each wheel from a configuration.
+pub fn friction_models(config: &ModelConfig) -> [WheelFrictionModel; 3] {
+    Wheel::ALL.map(|w| WheelFrictionModel::from_config(config, w))
+}
+
+/// Gravity direction in body axes at an attitude (convenience for correlations).
+pub fn gravity(q: &Attitude) -> Vector3<f64> {
+    attitude::gravity_b(q)
+}

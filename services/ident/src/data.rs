@@ -1,0 +1,396 @@
+//! Measured data in memory: one time series per device, SI units, body axes, as the
+//! measured-data CSV contract (`shared/DESIGN.md`) defines them; and the same data aligned on
+//! the gyro's clock for the fits.
+//!
+//! Interpretation of the contract used throughout identification:
+//! * every file's `t_s` is on one common clock (any origin);
+//! * a gyro row is the body rate at `t_s` (the device model's instantaneous reading);
+//! * a `wheels.csv` row's `torque_*` is the motor-torque command issued at `t_s` and held until
+//!   the next row (zero-order hold, as the controller issues it); its `speed_*` is the
+//!   tachometer reading at `t_s`;
+//! * a `cmg.csv` row's `rate_cmd_*` is likewise held until the next row.
+
+use crate::error::DataError;
+use nalgebra::{Vector3, Vector4};
+use std::path::PathBuf;
+
+/// Shortest record identification accepts, s of gyro data.
+pub const MIN_DURATION_S: f64 = 60.0;
+
+/// One gyro row.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GyroRow {
+    pub t_s: f64,
+    /// Measured body rate (bias and noise included), body axes, rad/s.
+    pub rate_rad_s: Vector3<f64>,
+}
+
+/// One inclinometer row.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TiltRow {
+    pub t_s: f64,
+    /// `[θ, φ]`: tilt of body X and body Y against the level plane, rad (paper eq. 2).
+    pub tilt_rad: [f64; 2],
+}
+
+/// One magnetometer row.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FieldRow {
+    pub t_s: f64,
+    /// Measured flux density, body axes, tesla.
+    pub field_t: Vector3<f64>,
+}
+
+/// One reaction-wheel row.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WheelRow {
+    pub t_s: f64,
+    /// Wheel speeds relative to the platform, about body X, Y, Z, rad/s.
+    pub speed_rad_s: Vector3<f64>,
+    /// Motor torque command on each wheel, Nm (the platform feels the opposite).
+    pub torque_nm: Vector3<f64>,
+}
+
+/// One CMG row.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CmgRow {
+    pub t_s: f64,
+    /// Gimbal angles, rad.
+    pub gimbal_rad: Vector4<f64>,
+    /// Commanded gimbal rates, rad/s.
+    pub rate_cmd_rad_s: Vector4<f64>,
+}
+
+/// A measured record. An empty series means the device was absent.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Dataset {
+    /// Where the data came from (for messages).
+    pub source: PathBuf,
+    pub gyro: Vec<GyroRow>,
+    pub inclinometer: Vec<TiltRow>,
+    pub magnetometer: Vec<FieldRow>,
+    pub wheels: Vec<WheelRow>,
+    pub cmg: Vec<CmgRow>,
+}
+
+/// File names of the CSV contract.
+pub mod files {
+    pub const GYRO: &str = "gyro.csv";
+    pub const INCLINOMETER: &str = "inclinometer.csv";
+    pub const MAGNETOMETER: &str = "magnetometer.csv";
+    pub const WHEELS: &str = "wheels.csv";
+    pub const CMG: &str = "cmg.csv";
+}
+
+impl Dataset {
+    /// Duration covered by the gyro, s.
+    pub fn duration_s(&self) -> f64 {
+        match (self.gyro.first(), self.gyro.last()) {
+            (Some(a), Some(b)) => b.t_s - a.t_s,
+            _ => 0.0,
+        }
+    }
+
+    fn file(&self, name: &str) -> PathBuf {
+        self.source.join(name)
+    }
+
+    /// Check what identification needs: finite values, times strictly increasing in every
+    /// series, a gyro record of at least [`MIN_DURATION_S`], and at least one vector sensor.
+    /// Errors name the file and the row (rows counted from 1).
+    pub fn check(&self) -> Result<(), DataError> {
+        check_series(&self.file(files::GYRO), &self.gyro, |r| (r.t_s, r.rate_rad_s.as_slice().to_vec()), &["wx", "wy", "wz"])?;
+        check_series(&self.file(files::INCLINOMETER), &self.inclinometer, |r| (r.t_s, r.tilt_rad.to_vec()), &["tilt_x", "tilt_y"])?;
+        check_series(&self.file(files::MAGNETOMETER), &self.magnetometer, |r| (r.t_s, r.field_t.as_slice().to_vec()), &["bx", "by", "bz"])?;
+        check_series(
+            &self.file(files::WHEELS),
+            &self.wheels,
+            |r| (r.t_s, r.speed_rad_s.iter().chain(r.torque_nm.iter()).copied().collect()),
+            &["speed_x", "speed_y", "speed_z", "torque_x", "torque_y", "torque_z"],
+        )?;
+        check_series(
+            &self.file(files::CMG),
+            &self.cmg,
+            |r| (r.t_s, r.gimbal_rad.iter().chain(r.rate_cmd_rad_s.iter()).copied().collect()),
+            &["gimbal_1", "gimbal_2", "gimbal_3", "gimbal_4", "rate_cmd_1", "rate_cmd_2", "rate_cmd_3", "rate_cmd_4"],
+        )?;
+        if self.gyro.is_empty() {
+            return Err(DataError::Missing {
+                file: self.file(files::GYRO),
+                why: "identification needs the body rates".into(),
+            });
+        }
+        if self.inclinometer.is_empty() && self.magnetometer.is_empty() {
+            return Err(DataError::Missing {
+                file: self.file(files::INCLINOMETER),
+                why: format!(
+                    "and {} is missing too: the attitude needs at least one vector sensor",
+                    files::MAGNETOMETER
+                ),
+            });
+        }
+        let duration = self.duration_s();
+        if duration < MIN_DURATION_S {
+            return Err(DataError::TooShort {
+                file: self.file(files::GYRO),
+                message: format!(
+                    "{} rows cover {duration:.1} s; identification needs at least {MIN_DURATION_S} s \
+                     (fit and held-out segments)",
+                    self.gyro.len()
+                ),
+            });
+        }
+        let period = median_period(self.gyro.iter().map(|r| r.t_s));
+        let t0 = self.gyro[0].t_s;
+        let t1 = t0 + duration;
+        for (name, times) in [
+            (files::INCLINOMETER, self.inclinometer.iter().map(|r| r.t_s).collect::<Vec<_>>()),
+            (files::MAGNETOMETER, self.magnetometer.iter().map(|r| r.t_s).collect()),
+            (files::WHEELS, self.wheels.iter().map(|r| r.t_s).collect()),
+            (files::CMG, self.cmg.iter().map(|r| r.t_s).collect()),
+        ] {
+            if let (Some(a), Some(b)) = (times.first(), times.last()) {
+                let overlap = b.min(t1) - a.max(t0);
+                if overlap < 0.5 * duration {
+                    return Err(DataError::Content {
+                        file: self.file(name),
+                        message: format!(
+                            "covers {a:.3}..{b:.3} s, which overlaps the gyro's {t0:.3}..{t1:.3} s by only \
+                             {:.1} s (the files must share one clock)",
+                            overlap.max(0.0)
+                        ),
+                    });
+                }
+            }
+        }
+        if !(period > 0.0) {
+            return Err(DataError::Content {
+                file: self.file(files::GYRO),
+                message: "cannot determine the sample period".into(),
+            });
+        }
+        Ok(())
+    }
+}
+
+/// Median spacing of a time series, s (0 if fewer than two samples).
+pub fn median_period(times: impl Iterator<Item = f64>) -> f64 {
+    let t: Vec<f64> = times.collect();
+    let mut d: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).collect();
+    if d.is_empty() {
+        return 0.0;
+    }
+    d.sort_by(f64::total_cmp);
+    d[d.len() / 2]
+}
+
+fn check_series<R>(
+    file: &PathBuf,
+    rows: &[R],
+    values: impl Fn(&R) -> (f64, Vec<f64>),
+    columns: &[&str],
+) -> Result<(), DataError> {
+    let mut previous: Option<f64> = None;
+    for (i, row) in rows.iter().enumerate() {
+        let (t, xs) = values(row);
+        let at = |message: String| DataError::Row { file: file.clone(), row: i + 1, line: i + 2, message };
+        if !t.is_finite() {
+            return Err(at(format!("column `t_s`: {t} is not a finite number")));
+        }
+        for (x, name) in xs.iter().zip(columns) {
+            if !x.is_finite() {
+                return Err(at(format!("column `{name}`: {x} is not a finite number")));
+            }
+        }
+        if let Some(p) = previous.filter(|p| t <= *p) {
+            return Err(at(format!("time {t} s is not after the previous row's {p} s (rows must be in time order)")));
+        }
+        previous = Some(t);
+    }
+    Ok(())
+}
+
+/// The data on the gyro's clock: what the fits and predictions work with.
+///
+/// Tick k is gyro row k. Wheel speeds and gimbal angles are interpolated linearly to the tick
+/// times; commands are the zero-order hold of the latest command at or before the tick. Vector
+/// samples keep their own times and are attached to the tick at or after them.
+#[derive(Debug, Clone)]
+pub struct Aligned {
+    /// Tick times, s, from the record's start (`t − t0`).
+    pub t: Vec<f64>,
+    /// Origin of the record on the data's clock, s.
+    pub t0: f64,
+    /// Nominal tick period (median gyro spacing), s.
+    pub period_s: f64,
+    /// Gyro readings, rad/s.
+    pub gyro: Vec<Vector3<f64>>,
+    /// Wheel speeds at the ticks, rad/s (`None` without `wheels.csv`).
+    pub wheel_speed: Option<Vec<Vector3<f64>>>,
+    /// Wheel commands: `(t − t0, command)` in time order, Nm.
+    pub wheel_cmd: Vec<(f64, Vector3<f64>)>,
+    /// Gimbal angles at the ticks, rad (`None` without `cmg.csv`).
+    pub gimbal: Option<Vec<Vector4<f64>>>,
+    /// Gimbal rate commands `(t − t0, rates)` in time order, rad/s.
+    pub gimbal_cmd: Vec<(f64, Vector4<f64>)>,
+    /// Inclinometer samples `(t − t0, [θ, φ])`.
+    pub tilt: Vec<(f64, [f64; 2])>,
+    /// Magnetometer samples `(t − t0, field T)`.
+    pub field: Vec<(f64, Vector3<f64>)>,
+}
+
+impl Aligned {
+    /// Align a checked dataset (see [`Dataset::check`]).
+    pub fn new(data: &Dataset) -> Self {
+        let t0 = data.gyro.first().map_or(0.0, |r| r.t_s);
+        let t: Vec<f64> = data.gyro.iter().map(|r| r.t_s - t0).collect();
+        let wheel_speed = (!data.wheels.is_empty()).then(|| {
+            let times: Vec<f64> = data.wheels.iter().map(|r| r.t_s - t0).collect();
+            let values: Vec<Vector3<f64>> = data.wheels.iter().map(|r| r.speed_rad_s).collect();
+            t.iter().map(|&ti| interpolate(&times, &values, ti)).collect()
+        });
+        let gimbal = (!data.cmg.is_empty()).then(|| {
+            let times: Vec<f64> = data.cmg.iter().map(|r| r.t_s - t0).collect();
+            let values: Vec<Vector4<f64>> = data.cmg.iter().map(|r| r.gimbal_rad).collect();
+            t.iter().map(|&ti| interpolate(&times, &values, ti)).collect()
+        });
+        Self {
+            period_s: median_period(t.iter().copied()),
+            gyro: data.gyro.iter().map(|r| r.rate_rad_s).collect(),
+            wheel_speed,
+            wheel_cmd: data.wheels.iter().map(|r| (r.t_s - t0, r.torque_nm)).collect(),
+            gimbal,
+            gimbal_cmd: data.cmg.iter().map(|r| (r.t_s - t0, r.rate_cmd_rad_s)).collect(),
+            tilt: data.inclinometer.iter().map(|r| (r.t_s - t0, r.tilt_rad)).collect(),
+            field: data.magnetometer.iter().map(|r| (r.t_s - t0, r.field_t)).collect(),
+            t,
+            t0,
+        }
+    }
+
+    /// Number of ticks.
+    pub fn len(&self) -> usize {
+        self.t.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.t.is_empty()
+    }
+
+    /// Whether the record has wheels.
+    pub fn has_wheels(&self) -> bool {
+        self.wheel_speed.is_some()
+    }
+
+    /// Wheel speeds at tick k (zero without wheels), rad/s.
+    pub fn wheel_speed_at(&self, k: usize) -> Vector3<f64> {
+        self.wheel_speed.as_ref().map_or_else(Vector3::zeros, |w| w[k])
+    }
+
+    /// Gimbal angles at tick k (zero without CMGs), rad.
+    pub fn gimbal_at(&self, k: usize) -> Vector4<f64> {
+        self.gimbal.as_ref().map_or_else(Vector4::zeros, |g| g[k])
+    }
+
+    /// The wheel command acting at time `t` (s from the record's start) without delay: the
+    /// latest issued at or before `t` (zero before the first), Nm.
+    pub fn wheel_cmd_at(&self, t: f64) -> Vector3<f64> {
+        held(&self.wheel_cmd, t).unwrap_or_else(Vector3::zeros)
+    }
+
+    /// The gimbal-rate command acting at `t` (zero before the first), rad/s.
+    pub fn gimbal_cmd_at(&self, t: f64) -> Vector4<f64> {
+        held(&self.gimbal_cmd, t).unwrap_or_else(Vector4::zeros)
+    }
+
+    /// `∫ cmd(s − delay) ds` over `[a, b]` for the wheel commands, each component clamped to
+    /// `±limit` (the drive's torque limit), Nm s. Commands are held between their times.
+    pub fn wheel_cmd_integral(&self, a: f64, b: f64, delay_s: f64, limit: f64) -> Vector3<f64> {
+        integrate_held(&self.wheel_cmd, a - delay_s, b - delay_s, |v: &Vector3<f64>| v.map(|x| x.clamp(-limit, limit)))
+    }
+}
+
+/// Index of the last entry with time ≤ t + 1e-9.
+fn held_index<T>(series: &[(f64, T)], t: f64) -> Option<usize> {
+    let n = series.partition_point(|(ti, _)| *ti <= t + 1e-9);
+    n.checked_sub(1)
+}
+
+fn held<T: Copy>(series: &[(f64, T)], t: f64) -> Option<T> {
+    held_index(series, t).map(|i| series[i].1)
+}
+
+/// Integral of a zero-order-held series over `[a, b]` (zero before its first entry).
+fn integrate_held<F: Fn(&Vector3<f64>) -> Vector3<f64>>(
+    series: &[(f64, Vector3<f64>)],
+    a: f64,
+    b: f64,
+    map: F,
+) -> Vector3<f64> {
+    let mut sum = Vector3::zeros();
+    if b <= a {
+        return sum;
+    }
+    let mut i = held_index(series, a);
+    let mut t = a;
+    while t < b {
+        let next = match i {
+            Some(j) => series.get(j + 1).map_or(f64::INFINITY, |(tn, _)| *tn),
+            None => series.first().map_or(f64::INFINITY, |(tn, _)| *tn),
+        };
+        let end = next.min(b);
+        if let Some(j) = i {
+            sum += map(&series[j].1) * (end - t);
+        }
+        t = end;
+        i = Some(i.map_or(0, |j| j + 1));
+        if next == f64::INFINITY {
+            break;
+        }
+    }
+    sum
+}
+
+/// Linear interpolation of a sampled series at `t` (held constant beyond its ends).
+fn interpolate<V>(times: &[f64], values: &[V], t: f64) -> V
+where
+    V: Copy + std::ops::Mul<f64, Output = V> + std::ops::Add<Output = V>,
+{
+    let n = times.partition_point(|&ti| ti <= t);
+    if n == 0 {
+        return values[0];
+    }
+    if n >= times.len() {
+        return values[times.len() - 1];
+    }
+    let (ta, tb) = (times[n - 1], times[n]);
+    let f = if tb > ta { (t - ta) / (tb - ta) } else { 0.0 };
+    values[n - 1] * (1.0 - f) + values[n] * f
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn held_integral_splits_at_command_changes_and_delays() {
+        let series = vec![(0.0, Vector3::new(1.0, 0.0, 0.0)), (1.0, Vector3::new(2.0, 0.0, 0.0))];
+        let i = integrate_held(&series, 0.5, 1.5, |v| *v);
+        assert!((i.x - (0.5 + 1.0)).abs() < 1e-12);
+        // A delay of 0.25 s: over [1.0, 1.5] the command issued at 0 acts until 1.25.
+        let d = integrate_held(&series, 1.0 - 0.25, 1.5 - 0.25, |v| *v);
+        assert!((d.x - (0.25 + 0.5)).abs() < 1e-12);
+        // Before the first command nothing acts.
+        let early = integrate_held(&series, -1.0, 0.5, |v| *v);
+        assert!((early.x - 0.5).abs() < 1e-12);
+    }
+
+    #[test]
+    fn interpolation_is_linear_and_held_at_the_ends() {
+        let times = [0.0, 1.0];
+        let values = [Vector3::new(0.0, 0.0, 0.0), Vector3::new(2.0, 0.0, 0.0)];
+        assert_eq!(interpolate(&times, &values, 0.25).x, 0.5);
+        assert_eq!(interpolate(&times, &values, -1.0).x, 0.0);
+        assert_eq!(interpolate(&times, &values, 3.0).x, 2.0);
+    }
+}

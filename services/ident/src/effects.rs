@@ -1,0 +1,359 @@
+//! The library of candidate causes: the effects of `testbed_model::config::EffectsConfig`, each
+//! with its parameters named by the configuration's keys, their units, and how to read them
+//! from and write them into a [`ModelConfig`].
+//!
+//! Parameters (all in the configuration's own units; vectors are per body axis or per wheel X,
+//! Y, Z):
+//!
+//! | cause | parameters |
+//! |---|---|
+//! | `com_offset` | `r_m` — centre of mass from the bearing centre, m, body axes |
+//! | `earth_rate` | `latitude_deg` — latitude, degrees north |
+//! | `aero_drag` | `c1` — Nm/(rad/s); `c2` — Nm/(rad/s)², per body axis |
+//! | `constant_torque` | `torque_nm` — Nm, body axes |
+//! | `inertia_error` | `fraction` — relative error of each principal moment |
+//! | `gyro_scale` | `ppm` — scale-factor error per gyro, parts per million |
+//! | `gyro_misalignment` | `angles_rad` — small rotation of the gyro triad, rad |
+//! | `wheel_friction` | `coulomb_pos_nm`, `coulomb_neg_nm`, `viscous_nm_per_rad_s`, `stribeck_nm`, `stribeck_speed_rad_s` per wheel |
+//! | `wheel_torque_scale` | `scale` — delivered / commanded motor torque per wheel |
+//! | `actuator_delay` | `delay_s` — s |
+//! | `magnetic_disturbance` | `hard_iron_gauss` — body-fixed field, gauss |
+
+use serde::Serialize;
+use testbed_model::ModelConfig;
+use testbed_model::config::{
+    ActuatorDelay, AeroDrag, ComOffset, ConstantTorque, EarthRate, GyroMisalignment, GyroScale, InertiaError,
+    MagneticDisturbance, WheelFriction, WheelTorqueScale,
+};
+
+/// A candidate cause: one effect table of the model configuration.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Cause {
+    ComOffset,
+    EarthRate,
+    AeroDrag,
+    ConstantTorque,
+    InertiaError,
+    GyroScale,
+    GyroMisalignment,
+    WheelFriction,
+    WheelTorqueScale,
+    ActuatorDelay,
+    MagneticDisturbance,
+}
+
+/// Which residual channel a cause acts on directly.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Kind {
+    /// The sensors (gyro, magnetometer): fitted through the attitude filter's innovations.
+    Sensor,
+    /// An external torque or the inertia: the platform's momentum equation.
+    Torque,
+    /// The wheel drives: the wheels' equation of motion.
+    Wheel,
+}
+
+/// One parameter array of a cause.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ParamSpec {
+    /// Key in the effect's configuration table.
+    pub key: &'static str,
+    /// Number of values (3 per axis or wheel, 1 for a scalar).
+    pub len: usize,
+    /// Unit and frame.
+    pub unit: &'static str,
+    /// Bounds accepted by the configuration.
+    pub lower: f64,
+    pub upper: f64,
+    /// Finite-difference step for fits through the attitude filter (sensor causes).
+    pub step: f64,
+}
+
+const fn spec(key: &'static str, len: usize, unit: &'static str, lower: f64, upper: f64, step: f64) -> ParamSpec {
+    ParamSpec { key, len, unit, lower, upper, step }
+}
+
+const INF: f64 = f64::INFINITY;
+
+const P_COM: &[ParamSpec] = &[spec("r_m", 3, "m, body axes", -1e-3, 1e-3, 1e-7)];
+const P_EARTH: &[ParamSpec] = &[spec("latitude_deg", 1, "degrees north", -90.0, 90.0, 0.5)];
+const P_DRAG: &[ParamSpec] = &[
+                spec("c1", 3, "Nm/(rad/s), per body axis", 0.0, INF, 1e-3),
+                spec("c2", 3, "Nm/(rad/s)², per body axis", 0.0, INF, 1e-2),
+            ];
+const P_CONST: &[ParamSpec] = &[spec("torque_nm", 3, "Nm, body axes", -INF, INF, 1e-4)];
+const P_INERTIA: &[ParamSpec] = &[spec("fraction", 3, "relative error of each principal moment", -0.5, 0.5, 1e-3)];
+const P_SCALE: &[ParamSpec] = &[spec("ppm", 3, "parts per million, per gyro axis", -1e5, 1e5, 100.0)];
+const P_MISALIGN: &[ParamSpec] = &[spec("angles_rad", 3, "rad, about body X, Y, Z", -0.1, 0.1, 1e-4)];
+const P_FRICTION: &[ParamSpec] = &[
+                spec("coulomb_pos_nm", 3, "Nm, per wheel", 0.0, INF, 1e-4),
+                spec("coulomb_neg_nm", 3, "Nm, per wheel", 0.0, INF, 1e-4),
+                spec("viscous_nm_per_rad_s", 3, "Nm/(rad/s), per wheel", 0.0, INF, 1e-7),
+                spec("stribeck_nm", 3, "Nm, per wheel", 0.0, INF, 1e-4),
+                spec("stribeck_speed_rad_s", 3, "rad/s, per wheel", 1e-6, INF, 0.1),
+            ];
+const P_TSCALE: &[ParamSpec] = &[spec("scale", 3, "dimensionless, per wheel", 1e-6, INF, 1e-3)];
+const P_DELAY: &[ParamSpec] = &[spec("delay_s", 1, "s", 0.0, 10.0, 0.01)];
+const P_MAG: &[ParamSpec] = &[spec("hard_iron_gauss", 3, "gauss, body axes", -INF, INF, 0.005)];
+
+impl Cause {
+    /// Every cause, in the library's order.
+    pub const ALL: [Cause; 11] = [
+        Cause::ComOffset,
+        Cause::EarthRate,
+        Cause::AeroDrag,
+        Cause::ConstantTorque,
+        Cause::InertiaError,
+        Cause::GyroScale,
+        Cause::GyroMisalignment,
+        Cause::WheelFriction,
+        Cause::WheelTorqueScale,
+        Cause::ActuatorDelay,
+        Cause::MagneticDisturbance,
+    ];
+
+    /// The configuration table's name (`[effects.<name>]`), which is also the cause's name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Cause::ComOffset => "com_offset",
+            Cause::EarthRate => "earth_rate",
+            Cause::AeroDrag => "aero_drag",
+            Cause::ConstantTorque => "constant_torque",
+            Cause::InertiaError => "inertia_error",
+            Cause::GyroScale => "gyro_scale",
+            Cause::GyroMisalignment => "gyro_misalignment",
+            Cause::WheelFriction => "wheel_friction",
+            Cause::WheelTorqueScale => "wheel_torque_scale",
+            Cause::ActuatorDelay => "actuator_delay",
+            Cause::MagneticDisturbance => "magnetic_disturbance",
+        }
+    }
+
+    /// The cause of a name (as [`Cause::name`] gives it).
+    pub fn from_name(name: &str) -> Option<Cause> {
+        Cause::ALL.into_iter().find(|c| c.name() == name)
+    }
+
+    /// One line on what the effect is.
+    pub fn description(self) -> &'static str {
+        match self {
+            Cause::ComOffset => "centre of mass offset from the bearing centre: gravity torque m g (r × G_B)",
+            Cause::EarthRate => "the Earth's rotation sensed by the gyros, fixed in the level frame",
+            Cause::AeroDrag => "aerodynamic drag torque −(c1 w + c2 w|w|) per body axis",
+            Cause::ConstantTorque => "constant torque in body axes (bearing exhaust, cables)",
+            Cause::InertiaError => "principal moments of inertia differ from the nominal",
+            Cause::GyroScale => "gyro scale-factor error per axis",
+            Cause::GyroMisalignment => "gyro triad misaligned by a small rotation",
+            Cause::WheelFriction => "wheel friction beyond eq. 3: per-wheel levels, direction asymmetry, Stribeck",
+            Cause::WheelTorqueScale => "wheel motors deliver a scaled torque",
+            Cause::ActuatorDelay => "actuator commands act after a delay",
+            Cause::MagneticDisturbance => "body-fixed (hard-iron) field added to the magnetometer reading",
+        }
+    }
+
+    pub fn kind(self) -> Kind {
+        match self {
+            Cause::EarthRate | Cause::GyroScale | Cause::GyroMisalignment | Cause::MagneticDisturbance => Kind::Sensor,
+            Cause::ComOffset | Cause::AeroDrag | Cause::ConstantTorque | Cause::InertiaError => Kind::Torque,
+            Cause::WheelFriction | Cause::WheelTorqueScale | Cause::ActuatorDelay => Kind::Wheel,
+        }
+    }
+
+    /// Parameter arrays, in the order of [`Cause::values`].
+    pub fn params(self) -> &'static [ParamSpec] {
+        match self {
+            Cause::ComOffset => P_COM,
+            Cause::EarthRate => P_EARTH,
+            Cause::AeroDrag => P_DRAG,
+            Cause::ConstantTorque => P_CONST,
+            Cause::InertiaError => P_INERTIA,
+            Cause::GyroScale => P_SCALE,
+            Cause::GyroMisalignment => P_MISALIGN,
+            Cause::WheelFriction => P_FRICTION,
+            Cause::WheelTorqueScale => P_TSCALE,
+            Cause::ActuatorDelay => P_DELAY,
+            Cause::MagneticDisturbance => P_MAG,
+        }
+    }
+
+    /// Total number of values.
+    pub fn len(self) -> usize {
+        self.params().iter().map(|p| p.len).sum()
+    }
+
+    /// Lower and upper bound of value `i`.
+    pub fn bounds(self, i: usize) -> (f64, f64) {
+        let mut k = i;
+        for p in self.params() {
+            if k < p.len {
+                return (p.lower, p.upper);
+            }
+            k -= p.len;
+        }
+        (-INF, INF)
+    }
+
+    /// `key[index]` name of value `i`.
+    pub fn value_name(self, i: usize) -> String {
+        let mut k = i;
+        for p in self.params() {
+            if k < p.len {
+                return if p.len == 1 { format!("{}.{}", self.name(), p.key) } else { format!("{}.{}[{k}]", self.name(), p.key) };
+            }
+            k -= p.len;
+        }
+        format!("{}[{i}]", self.name())
+    }
+
+    /// Whether the configuration has the effect.
+    pub fn present(self, config: &ModelConfig) -> bool {
+        let e = &config.effects;
+        match self {
+            Cause::ComOffset => e.com_offset.is_some(),
+            Cause::EarthRate => e.earth_rate.is_some(),
+            Cause::AeroDrag => e.aero_drag.is_some(),
+            Cause::ConstantTorque => e.constant_torque.is_some(),
+            Cause::InertiaError => e.inertia_error.is_some(),
+            Cause::GyroScale => e.gyro_scale.is_some(),
+            Cause::GyroMisalignment => e.gyro_misalignment.is_some(),
+            Cause::WheelFriction => e.wheel_friction.is_some(),
+            Cause::WheelTorqueScale => e.wheel_torque_scale.is_some(),
+            Cause::ActuatorDelay => e.actuator_delay.is_some(),
+            Cause::MagneticDisturbance => e.magnetic_disturbance.is_some(),
+        }
+    }
+
+    /// The effect's values in `config`, flattened in [`Cause::params`] order; when the effect is
+    /// absent, the values that reproduce the configuration without it (the nominal friction for
+    /// `wheel_friction`, unit scale, zero elsewhere), except `earth_rate`, which has no neutral
+    /// value and starts from `platform.latitude_deg`.
+    pub fn values(self, config: &ModelConfig) -> Vec<f64> {
+        let e = &config.effects;
+        match self {
+            Cause::ComOffset => e.com_offset.as_ref().map_or([0.0; 3], |x| x.r_m).to_vec(),
+            Cause::EarthRate => vec![e.earth_rate.as_ref().map_or(config.platform.latitude_deg, |x| x.latitude_deg)],
+            Cause::AeroDrag => e.aero_drag.as_ref().map_or([0.0; 6], |x| cat(&x.c1, &x.c2)).to_vec(),
+            Cause::ConstantTorque => e.constant_torque.as_ref().map_or([0.0; 3], |x| x.torque_nm).to_vec(),
+            Cause::InertiaError => e.inertia_error.as_ref().map_or([0.0; 3], |x| x.fraction).to_vec(),
+            Cause::GyroScale => e.gyro_scale.as_ref().map_or([0.0; 3], |x| x.ppm).to_vec(),
+            Cause::GyroMisalignment => e.gyro_misalignment.as_ref().map_or([0.0; 3], |x| x.angles_rad).to_vec(),
+            Cause::WheelFriction => {
+                let f = e.wheel_friction.clone().unwrap_or_else(|| nominal_friction(config));
+                [f.coulomb_pos_nm, f.coulomb_neg_nm, f.viscous_nm_per_rad_s, f.stribeck_nm, f.stribeck_speed_rad_s].concat()
+            }
+            Cause::WheelTorqueScale => e.wheel_torque_scale.as_ref().map_or([1.0; 3], |x| x.scale).to_vec(),
+            Cause::ActuatorDelay => vec![e.actuator_delay.as_ref().map_or(0.0, |x| x.delay_s)],
+            Cause::MagneticDisturbance => e.magnetic_disturbance.as_ref().map_or([0.0; 3], |x| x.hard_iron_gauss).to_vec(),
+        }
+    }
+
+    /// Switch the effect on in `config` with `values` (in [`Cause::values`] order, clamped to
+    /// the configuration's bounds).
+    pub fn apply(self, config: &mut ModelConfig, values: &[f64]) {
+        let v: Vec<f64> = values.iter().enumerate().map(|(i, x)| {
+            let (lo, hi) = self.bounds(i);
+            x.clamp(lo, hi)
+        }).collect();
+        let a3 = |i: usize| [v[i], v[i + 1], v[i + 2]];
+        let e = &mut config.effects;
+        match self {
+            Cause::ComOffset => e.com_offset = Some(ComOffset { r_m: a3(0) }),
+            Cause::EarthRate => e.earth_rate = Some(EarthRate { latitude_deg: v[0] }),
+            Cause::AeroDrag => e.aero_drag = Some(AeroDrag { c1: a3(0), c2: a3(3) }),
+            Cause::ConstantTorque => e.constant_torque = Some(ConstantTorque { torque_nm: a3(0) }),
+            Cause::InertiaError => e.inertia_error = Some(InertiaError { fraction: a3(0) }),
+            Cause::GyroScale => e.gyro_scale = Some(GyroScale { ppm: a3(0) }),
+            Cause::GyroMisalignment => e.gyro_misalignment = Some(GyroMisalignment { angles_rad: a3(0) }),
+            Cause::WheelFriction => {
+                e.wheel_friction = Some(WheelFriction {
+                    coulomb_pos_nm: a3(0),
+                    coulomb_neg_nm: a3(3),
+                    viscous_nm_per_rad_s: a3(6),
+                    stribeck_nm: a3(9),
+                    stribeck_speed_rad_s: a3(12),
+                })
+            }
+            Cause::WheelTorqueScale => e.wheel_torque_scale = Some(WheelTorqueScale { scale: a3(0) }),
+            Cause::ActuatorDelay => e.actuator_delay = Some(ActuatorDelay { delay_s: v[0] }),
+            Cause::MagneticDisturbance => e.magnetic_disturbance = Some(MagneticDisturbance { hard_iron_gauss: a3(0) }),
+        }
+    }
+
+    /// Values and standard errors as a JSON object keyed by the configuration's keys (arrays for
+    /// vectors; `null` where a standard error is not defined).
+    pub fn to_json(self, values: &[f64]) -> serde_json::Map<String, serde_json::Value> {
+        let mut map = serde_json::Map::new();
+        let mut i = 0;
+        for p in self.params() {
+            let slice = &values[i..i + p.len];
+            let value = if p.len == 1 { json_number(slice[0]) } else { serde_json::Value::Array(slice.iter().map(|x| json_number(*x)).collect()) };
+            map.insert(p.key.to_string(), value);
+            i += p.len;
+        }
+        map
+    }
+
+    /// Units of each key, as a JSON object.
+    pub fn units_json(self) -> serde_json::Map<String, serde_json::Value> {
+        self.params().iter().map(|p| (p.key.to_string(), serde_json::Value::from(p.unit))).collect()
+    }
+}
+
+fn json_number(x: f64) -> serde_json::Value {
+    serde_json::Number::from_f64(x).map_or(serde_json::Value::Null, serde_json::Value::Number)
+}
+
+fn cat(a: &[f64; 3], b: &[f64; 3]) -> [f64; 6] {
+    [a[0], a[1], a[2], b[0], b[1], b[2]]
+}
+
+/// The `wheel_friction` table that reproduces the nominal friction of eq. 3 (no asymmetry,
+/// breakaway = Coulomb, so the Stribeck term vanishes whatever its speed).
+pub fn nominal_friction(config: &ModelConfig) -> WheelFriction {
+    let w = &config.wheels;
+    WheelFriction {
+        coulomb_pos_nm: w.coulomb_nm,
+        coulomb_neg_nm: w.coulomb_nm,
+        viscous_nm_per_rad_s: w.viscous_nm_per_rad_s,
+        stribeck_nm: w.coulomb_nm,
+        stribeck_speed_rad_s: [1.0; 3],
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn values_round_trip_through_apply_and_the_toml() {
+        for cause in Cause::ALL {
+            let mut config = ModelConfig::default();
+            let values: Vec<f64> = cause.values(&config).iter().enumerate().map(|(i, x)| x + 1e-5 * (i + 1) as f64).collect();
+            cause.apply(&mut config, &values);
+            assert!(cause.present(&config));
+            assert_eq!(cause.values(&config), values, "{}", cause.name());
+            let text = config.to_toml_string();
+            let back = ModelConfig::from_toml_str(&text, "round-trip").unwrap();
+            assert_eq!(back, config, "{}", cause.name());
+            assert_eq!(Cause::from_name(cause.name()), Some(cause));
+            assert_eq!(cause.len(), values.len());
+        }
+    }
+
+    #[test]
+    fn neutral_values_reproduce_the_nominal_model() {
+        use testbed_model::physics::{Wheel, wheel_friction_torque, wheel_breakaway_torque};
+        let nominal = ModelConfig::default();
+        let mut with = nominal.clone();
+        Cause::WheelFriction.apply(&mut with, &Cause::WheelFriction.values(&nominal));
+        for wheel in Wheel::ALL {
+            for n in [-300.0, -0.3, 0.2, 50.0] {
+                let a = wheel_friction_torque(&nominal, wheel, n);
+                let b = wheel_friction_torque(&with, wheel, n);
+                assert!((a - b).abs() < 1e-15);
+            }
+            assert_eq!(wheel_breakaway_torque(&nominal, wheel), wheel_breakaway_torque(&with, wheel));
+        }
+    }
+}

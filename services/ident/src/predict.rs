@@ -1,0 +1,279 @@
+//! Multi-step predictions of the measurements: the model's plant (`testbed_model::physics`)
+//! started from the estimated state at the beginning of each window and driven open-loop by the
+//! recorded actuator commands, its state turned into noise-free readings by the model's sensor
+//! effects. Re-initialising every window keeps the predictions from drifting without bound.
+//!
+//! Start of a window at tick k: attitude and bias from the filter; body rate from the total
+//! angular momentum averaged over ±2 s (`w = I⁻¹ (H̄ − J n_k − h_cmg)`, `H̄` the mean of
+//! `I ŵ + J n + h_cmg`), which is smooth and so averages the gyro noise down without lag; wheel
+//! speeds from the tachometers (within 3σ of zero: stopped); gimbals from the encoders. The
+//! actuator delay of the model is applied here (the plant is built without it), so commands
+//! issued before the window act in it.
+
+use crate::data::Aligned;
+use crate::error::IdentError;
+use crate::reconstruct::{Reconstruction, SensorModel};
+use nalgebra::{Matrix3, Vector3, Vector4};
+use serde::Serialize;
+use testbed_model::ModelConfig;
+use testbed_model::attitude::{self, Attitude};
+use testbed_model::config::{DEG, GAUSS, RPM};
+use testbed_model::physics::{ActuatorCommand, CmgPyramid, Plant, PlatformState};
+
+/// The predicted measurement components, in this order.
+pub const COMPONENTS: [&str; 11] =
+    ["gyro_x", "gyro_y", "gyro_z", "tilt_x", "tilt_y", "field_x", "field_y", "field_z", "wheel_x", "wheel_y", "wheel_z"];
+
+/// Unit of each component.
+pub const UNITS: [&str; 11] = ["rad/s", "rad/s", "rad/s", "rad", "rad", "T", "T", "T", "rad/s", "rad/s", "rad/s"];
+
+/// Channel group of each component (rates, tilt, field, wheel speeds).
+pub fn group(component: usize) -> &'static str {
+    match component {
+        0..3 => "rates",
+        3..5 => "tilt",
+        5..8 => "field",
+        _ => "wheel speeds",
+    }
+}
+
+/// Prediction residuals (measured − predicted).
+#[derive(Debug, Clone, Default)]
+pub struct Predictions {
+    /// Per component: `(t s, residual, window index)`.
+    pub residuals: [Vec<(f64, f64, usize)>; 11],
+    /// The windows predicted `(first tick, last tick)`; skipped windows are left out.
+    pub windows: Vec<(usize, usize)>,
+    /// 1σ measurement noise of each component (the model's), for normalisation.
+    pub sigma: [f64; 11],
+}
+
+/// RMS of the residuals of one component, normalised RMS, count.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct ComponentRms {
+    pub rms: f64,
+    pub normalised: f64,
+    pub n: usize,
+}
+
+impl Predictions {
+    /// RMS per component over the samples `keep` accepts (by window index).
+    pub fn rms(&self, keep: impl Fn(usize) -> bool) -> [Option<ComponentRms>; 11] {
+        std::array::from_fn(|c| {
+            let xs: Vec<f64> = self.residuals[c].iter().filter(|(_, _, w)| keep(*w)).map(|(_, r, _)| *r).collect();
+            (!xs.is_empty()).then(|| {
+                let rms = (xs.iter().map(|x| x * x).sum::<f64>() / xs.len() as f64).sqrt();
+                ComponentRms { rms, normalised: rms / self.sigma[c], n: xs.len() }
+            })
+        })
+    }
+
+    /// Overall prediction error: the root mean square over the components present of their
+    /// normalised RMS (dimensionless; 1 = every component at its sensor's noise).
+    pub fn overall(rms: &[Option<ComponentRms>; 11]) -> f64 {
+        let present: Vec<f64> = rms.iter().flatten().map(|r| r.normalised).collect();
+        if present.is_empty() { f64::NAN } else { (present.iter().map(|x| x * x).sum::<f64>() / present.len() as f64).sqrt() }
+    }
+
+    /// Normalised RMS of every component in each window (for figures): per component
+    /// `(window start time, normalised RMS)`.
+    pub fn per_window(&self, data: &Aligned) -> [Vec<(f64, f64)>; 11] {
+        std::array::from_fn(|c| {
+            let mut out = Vec::new();
+            let mut i = 0;
+            let r = &self.residuals[c];
+            while i < r.len() {
+                let w = r[i].2;
+                let mut sum = 0.0;
+                let mut n = 0;
+                while i < r.len() && r[i].2 == w {
+                    sum += r[i].1 * r[i].1;
+                    n += 1;
+                    i += 1;
+                }
+                let t = self.windows.get(w).map_or(0.0, |(a, _)| data.t[*a]);
+                out.push((t, (sum / n as f64).sqrt() / self.sigma[c]));
+            }
+            out
+        })
+    }
+}
+
+/// Windows of `horizon_s` tiling the ticks `[a, b)` of each given span.
+pub fn windows(data: &Aligned, spans: &[(usize, usize)], horizon_s: f64) -> Vec<(usize, usize)> {
+    let per = ((horizon_s / data.period_s).round() as usize).max(2);
+    let mut out = Vec::new();
+    for &(a, b) in spans {
+        let mut k = a;
+        while k + 1 < b {
+            let end = (k + per).min(b - 1);
+            if end > k + per / 2 {
+                out.push((k, end));
+            }
+            k += per;
+        }
+    }
+    out
+}
+
+/// Predict the measurements over `windows` with `config` (its plant, effects and sensor model),
+/// starting each from the estimated state `recon` (which should be the reconstruction with
+/// `config`'s sensor model).
+pub fn predict(data: &Aligned, recon: &Reconstruction, config: &ModelConfig, windows: &[(usize, usize)]) -> Result<Predictions, IdentError> {
+    config.validate()?;
+    let sensors = SensorModel::from_config(config);
+    let delay = config.effects.actuator_delay.as_ref().map_or(0.0, |d| d.delay_s);
+    let mut plant_config = config.clone();
+    plant_config.effects.actuator_delay = None;
+    let inertia = config.true_inertia().unwrap_or_else(Matrix3::identity);
+    let inertia_inv = inertia.try_inverse().unwrap_or_else(Matrix3::identity);
+    let j = if data.has_wheels() { config.wheels.inertia_kgm2 } else { 0.0 };
+    let cmg = CmgPyramid::from_config(&config.cmg);
+    let rotor = |k: usize| data.wheel_speed_at(k) * j + if data.gimbal.is_some() { cmg.momentum(&data.gimbal_at(k)) } else { Vector3::zeros() };
+    let tach = config.wheels.speed_noise_rpm * RPM;
+    let tilt_range = config.inclinometer.range_deg * DEG - 1e-9;
+    let gyro_sigma = config.gyro.noise_density_rad_sqrt_s() / data.period_s.sqrt();
+    let incl = config.inclinometer.noise_rad();
+    let mag = config.magnetometer.noise_t();
+    let mut out = Predictions {
+        sigma: [
+            gyro_sigma.x,
+            gyro_sigma.y,
+            gyro_sigma.z,
+            incl[0],
+            incl[1],
+            mag.x,
+            mag.y,
+            mag.z,
+            tach.max(1e-12),
+            tach.max(1e-12),
+            tach.max(1e-12),
+        ],
+        ..Predictions::default()
+    };
+    let average = ((2.0 / data.period_s).round() as usize).max(1);
+    for &(k0, k1) in windows {
+        if k0 < recon.start || k1 >= data.len() {
+            continue;
+        }
+        // Initial rate from the averaged total momentum.
+        let half = average.min(k0 - recon.start.min(k0)).min(data.len() - 1 - k0);
+        let mut h_mean = Vector3::zeros();
+        for k in k0 - half..=k0 + half {
+            h_mean += inertia * recon.rate[k] + rotor(k);
+        }
+        h_mean /= (2 * half + 1) as f64;
+        let rate = inertia_inv * (h_mean - rotor(k0));
+        let wheel_speed = data.wheel_speed_at(k0).map(|n| if n.abs() < 3.0 * tach { 0.0 } else { n });
+        let state = PlatformState { q: recon.q[k0], rate_b: rate, wheel_speed, gimbal: data.gimbal_at(k0) };
+        let Ok(mut plant) = Plant::new(&plant_config, state) else { continue };
+        let bias = recon.bias[k0];
+        let window = out.windows.len();
+        let mut attitudes: Vec<Attitude> = Vec::with_capacity(k1 - k0 + 1);
+        let mut failed = false;
+        for k in k0..=k1 {
+            let s = plant.state();
+            attitudes.push(s.q);
+            let gyro = sensors.gyro_reading(&s.rate_b, &s.q, &bias);
+            for c in 0..3 {
+                out.residuals[c].push((data.t[k], data.gyro[k][c] - gyro[c], window));
+            }
+            if let Some(speeds) = &data.wheel_speed {
+                for c in 0..3 {
+                    out.residuals[8 + c].push((data.t[k], speeds[k][c] - s.wheel_speed[c], window));
+                }
+            }
+            if k == k1 {
+                break;
+            }
+            // Step to the next tick, splitting where the (delayed) commands change.
+            for (dt, command) in command_pieces(data, data.t[k], data.t[k + 1], delay) {
+                if plant.step(&command, dt).is_err() {
+                    failed = true;
+                    break;
+                }
+            }
+            if failed {
+                break;
+            }
+        }
+        if failed {
+            for r in out.residuals.iter_mut() {
+                while r.last().is_some_and(|x| x.2 == window) {
+                    r.pop();
+                }
+            }
+            continue;
+        }
+        // Vector samples inside the window, at the nearest tick.
+        let (ta, tb) = (data.t[k0], data.t[k1]);
+        let nearest = |t: f64| -> Option<usize> {
+            let i = data.t.partition_point(|x| *x < t);
+            let cands = [i.checked_sub(1), Some(i)];
+            cands
+                .into_iter()
+                .flatten()
+                .filter(|&k| k >= k0 && k <= k1)
+                .min_by(|a, b| (data.t[*a] - t).abs().total_cmp(&(data.t[*b] - t).abs()))
+                .filter(|&k| (data.t[k] - t).abs() <= 0.5 * data.period_s)
+        };
+        for &(t, tilt) in data.tilt.iter().filter(|(t, _)| *t >= ta - 1e-9 && *t <= tb + 1e-9) {
+            if tilt[0].abs() >= tilt_range || tilt[1].abs() >= tilt_range {
+                continue;
+            }
+            if let Some(k) = nearest(t) {
+                let predicted = attitude::tilt_angles(&attitudes[k - k0]);
+                for c in 0..2 {
+                    out.residuals[3 + c].push((t, tilt[c] - predicted[c], window));
+                }
+            }
+        }
+        let field_range = config.magnetometer.range_gauss * GAUSS;
+        for &(t, field) in data.field.iter().filter(|(t, _)| *t >= ta - 1e-9 && *t <= tb + 1e-9) {
+            if field.iter().any(|x| x.abs() >= field_range) {
+                continue;
+            }
+            if let Some(k) = nearest(t) {
+                let predicted = sensors.field_reading(&attitudes[k - k0]);
+                for c in 0..3 {
+                    out.residuals[5 + c].push((t, field[c] - predicted[c], window));
+                }
+            }
+        }
+        out.windows.push((k0, k1));
+    }
+    // Keep each component's samples in time order (vector samples were added per window).
+    for r in out.residuals.iter_mut() {
+        r.sort_by(|a, b| a.0.total_cmp(&b.0));
+    }
+    Ok(out)
+}
+
+/// Times of a time-ordered series strictly inside `(a, b)`.
+fn times_inside<T>(series: &[(f64, T)], a: f64, b: f64) -> impl Iterator<Item = f64> + '_ {
+    let lo = series.partition_point(|(t, _)| *t <= a + 1e-9);
+    let hi = series.partition_point(|(t, _)| *t < b - 1e-9).max(lo);
+    series[lo..hi].iter().map(|(t, _)| *t)
+}
+
+/// The commands acting over `[a, b]` after a delay, as `(duration, command)` pieces.
+fn command_pieces(data: &Aligned, a: f64, b: f64, delay: f64) -> Vec<(f64, ActuatorCommand)> {
+    let (sa, sb) = (a - delay, b - delay);
+    let mut cuts: Vec<f64> = times_inside(&data.wheel_cmd, sa, sb).chain(times_inside(&data.gimbal_cmd, sa, sb)).collect();
+    cuts.sort_by(f64::total_cmp);
+    cuts.dedup();
+    let mut out = Vec::with_capacity(cuts.len() + 1);
+    let mut start = sa;
+    for end in cuts.into_iter().chain(std::iter::once(sb)) {
+        let mid = start + 1e-9;
+        let command = ActuatorCommand {
+            wheel_torque_nm: data.wheel_cmd_at(mid),
+            gimbal_rate_rad_s: if data.gimbal_cmd.is_empty() { Vector4::zeros() } else { data.gimbal_cmd_at(mid) },
+        };
+        if end - start > 1e-9 {
+            out.push((end - start, command));
+        }
+        start = end;
+    }
+    out
+}

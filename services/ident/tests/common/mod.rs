@@ -1,0 +1,98 @@
+//! Shared helpers of the identification tests: simulated experiments with hidden effects, blind
+//! identification against the nominal model, and parameter checks.
+
+#![allow(dead_code)] // each test binary uses a subset
+
+use testbed_ident::experiment::{self, ExperimentOptions};
+use testbed_ident::{Cause, Dataset, Identification, Options, identify};
+use testbed_model::ModelConfig;
+
+/// The nominal model: the digest's defaults, no effects.
+pub fn nominal() -> ModelConfig {
+    ModelConfig::default()
+}
+
+/// The nominal model with the effects of a TOML fragment (the hidden truth).
+pub fn truth(effects: &str) -> ModelConfig {
+    ModelConfig::from_toml_str(effects, "test truth").expect("test truth parses")
+}
+
+/// Simulated measured data of the identification experiment on `truth`.
+pub fn experiment_data(truth: &ModelConfig, seed: u64, duration_s: f64) -> Dataset {
+    let options = ExperimentOptions { duration_s, seed, ..ExperimentOptions::default() };
+    experiment::run(truth, &options).expect("experiment runs").0
+}
+
+/// Identify blind: the data of `truth` against the nominal model.
+pub fn identify_blind(truth: &ModelConfig, seed: u64, duration_s: f64) -> Identification {
+    let data = experiment_data(truth, seed, duration_s);
+    identify(&data, &nominal(), &Options::default()).expect("identification runs")
+}
+
+/// Standard errors of a named cause, in the cause's value order (NaN where not estimated).
+pub fn stderr(id: &Identification, cause: Cause) -> Vec<f64> {
+    let report = id.report.causes.iter().find(|c| c.name == cause.name()).expect("cause reported");
+    cause
+        .params()
+        .iter()
+        .flat_map(|p| match report.stderr.get(p.key) {
+            Some(serde_json::Value::Array(a)) => a.iter().map(|x| x.as_f64().unwrap_or(f64::NAN)).collect::<Vec<_>>(),
+            Some(x) => vec![x.as_f64().unwrap_or(f64::NAN)],
+            None => vec![f64::NAN; p.len],
+        })
+        .collect()
+}
+
+/// Names of the causes found, strongest first.
+pub fn names(id: &Identification) -> Vec<&'static str> {
+    id.report.causes.iter().map(|c| c.name).collect()
+}
+
+/// The extended model written as TOML and loaded back as `ModelConfig::load` would.
+pub fn extended_round_trip(id: &Identification, tag: &str) -> ModelConfig {
+    let dir = std::env::temp_dir().join(format!("testbed-ident-{}-{tag}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let path = dir.join("extended.toml");
+    std::fs::write(&path, id.extended.to_toml_string()).expect("write");
+    let back = ModelConfig::load(&path).expect("the extended model loads as it is");
+    std::fs::remove_dir_all(&dir).ok();
+    back
+}
+
+/// Check one hidden cause: named alone, every value within `tol(i, truth)` and within 5
+/// standard errors where one is given, no residual left, held-out gain above `min_gain`.
+pub fn check_single(
+    label: &str,
+    truth: &ModelConfig,
+    cause: Cause,
+    id: &Identification,
+    min_gain: f64,
+    tol: impl Fn(usize, f64) -> f64,
+) {
+    let report = &id.report;
+    assert_eq!(names(id), vec![cause.name()], "{label}: causes {:?}", report.steps);
+    let fitted = cause.values(&id.extended);
+    let hidden = cause.values(truth);
+    let se = stderr(id, cause);
+    for i in 0..fitted.len() {
+        let err = fitted[i] - hidden[i];
+        let allowed = tol(i, hidden[i]);
+        println!(
+            "{label}: {} = {:.6e} (true {:.6e}, error {:+.2e}, {:+.1} σ, allowed ±{:.2e})",
+            cause.value_name(i),
+            fitted[i],
+            hidden[i],
+            err,
+            err / se[i],
+            allowed
+        );
+        assert!(err.abs() <= allowed, "{label}: {} = {} vs true {} (allowed ±{allowed})", cause.value_name(i), fitted[i], hidden[i]);
+        if se[i].is_finite() {
+            assert!(err.abs() <= 5.0 * se[i], "{label}: {} error {err} is more than 5 standard errors ({})", cause.value_name(i), se[i]);
+        }
+    }
+    println!("{label}: held-out gain {:.3} (groups {:?})", report.gain, report.gain_by_group);
+    assert!(report.gain > min_gain, "{label}: held-out gain {} ≤ {min_gain}", report.gain);
+    assert!(!report.remaining.residual_remains, "{label}: {}", report.remaining.message);
+    assert_eq!(extended_round_trip(id, label), id.extended);
+}
