@@ -1,50 +1,33 @@
 #!/usr/bin/env bash
-# Build the pipeline binaries and run the launcher with a profile.
+# Build the pipeline and run a launch profile: the main job of the test bed.
 #
-#   launch/launch.sh [--release] PROFILE [testbed-launch options...]
+#   launch/launch.sh [PROFILE] [testbed run options...]
 #
-# PROFILE is a name from launch/profiles (simulation, platform, mixed) or a path to a TOML file.
-# Options after it go to testbed-launch (see `testbed-launch --help`), e.g. --seed 7,
-# --duration-s 60, --mode paced, --check. Set TESTBED_NO_BUILD=1 to skip the build.
-# RUST_LOG (default info) is passed to every process.
+# PROFILE is a name from launch/profiles (simulation, platform, mixed, ...) or a path to a TOML
+# file; default: simulation. Options go to `testbed run` (see `testbed run --help`), e.g.
+# --duration 60, --seed 7, --log out/run.mcap, --paced, --json. Set TESTBED_NO_BUILD=1 to skip
+# the build. `testbed run` writes the run configuration beside the log and starts
+# `testbed-launch`, which starts, supervises and stops the processes; Ctrl-C stops the run and
+# the summary of what was recorded is still printed.
 set -euo pipefail
 
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 root="$(dirname "$here")"
 
-build_profile=debug
-cargo_flags=()
-if [[ "${1:-}" == "--release" ]]; then
-    build_profile=release
-    cargo_flags=(--release)
+profile="simulation"
+if [[ $# -ge 1 && "$1" != -* ]]; then
+    profile="$1"
     shift
-fi
-if [[ $# -lt 1 ]]; then
-    sed -n '2,9p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//' >&2
-    exit 2
-fi
-
-profile="$1"
-shift
-if [[ ! -f "$profile" ]]; then
-    if [[ -f "$here/profiles/$profile.toml" ]]; then
-        profile="$here/profiles/$profile.toml"
-    else
-        echo "launch.sh: no profile '$profile' (neither a file nor launch/profiles/$profile.toml)" >&2
-        exit 2
-    fi
 fi
 
 if [[ "${TESTBED_NO_BUILD:-0}" != "1" ]]; then
-    (cd "$root" && cargo build --quiet --workspace --bins "${cargo_flags[@]}")
+    (cd "$root" && cargo build --quiet --release --workspace --bins)
 fi
 
-target_dir="${CARGO_TARGET_DIR:-$root/target}"
-launcher="$target_dir/$build_profile/testbed-launch"
-if [[ ! -x "$launcher" ]]; then
-    echo "launch.sh: $launcher not found (build failed?)" >&2
+testbed="${CARGO_TARGET_DIR:-$root/target}/release/testbed"
+if [[ ! -x "$testbed" ]]; then
+    echo "launch.sh: $testbed not found (build failed?)" >&2
     exit 2
 fi
-export RUST_LOG="${RUST_LOG:-info}"
-# exec: the launcher becomes this process, so Ctrl-C and kill reach it directly.
-exec "$launcher" "$profile" "$@"
+cd "$root"
+exec "$testbed" run --profile "$profile" "$@"

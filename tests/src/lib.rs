@@ -55,3 +55,25 @@ impl Drop for Scratch {
         let _ = std::fs::remove_dir_all(&self.0);
     }
 }
+
+/// The workspace root (where `launch/profiles` lives).
+pub fn workspace_root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).parent().expect("tests/ sits in the workspace").to_path_buf()
+}
+
+/// Path of a shipped launch profile.
+pub fn profile(name: &str) -> PathBuf {
+    workspace_root().join("launch/profiles").join(format!("{name}.toml"))
+}
+
+/// Run `testbed run --json` with `args` and return its summary.
+pub fn testbed_run(args: &[&str]) -> serde_json::Value {
+    let out = Command::new(binary("testbed")).arg("run").args(args).arg("--json").output().expect("running testbed run");
+    assert!(
+        out.status.success(),
+        "testbed run {args:?} failed ({}):\n{}",
+        out.status,
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).unwrap_or_else(|e| panic!("testbed run --json printed no JSON ({e}): {}", String::from_utf8_lossy(&out.stdout)))
+}

@@ -312,3 +312,41 @@ fn write_figures(out: &Path, f: &FigureData) -> Result<Vec<String>> {
     }
     Ok(written)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn experiment_then_identify_writes_model_report_and_figures() {
+        let dir = std::env::temp_dir().join(format!("testbed-cli-identify-{}", std::process::id()));
+        std::fs::remove_dir_all(&dir).ok();
+        std::fs::create_dir_all(&dir).unwrap();
+        let truth = dir.join("truth.toml");
+        std::fs::write(&truth, "[effects.wheel_torque_scale]\nscale = [0.95, 1.04, 0.97]\n").unwrap();
+        let nominal = dir.join("nominal.toml");
+        std::fs::write(&nominal, "").unwrap();
+        let data = dir.join("data");
+        run_experiment(&ExperimentArgs { out: data.clone(), model: Some(truth), duration: 300.0, seed: 3 }).unwrap();
+        for f in ["gyro.csv", "inclinometer.csv", "magnetometer.csv", "wheels.csv"] {
+            assert!(data.join(f).is_file(), "{f}");
+        }
+        let out = dir.join("out");
+        run_identify(&IdentifyArgs { data: data.clone(), model: nominal.clone(), out: out.clone(), json: true }).unwrap();
+        let extended = ModelConfig::load(&out.join("extended_model.toml")).unwrap();
+        let scale = extended.effects.wheel_torque_scale.expect("identified").scale;
+        assert!((scale[0] - 0.95).abs() < 0.005 && (scale[1] - 1.04).abs() < 0.005, "{scale:?}");
+        let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+        assert_eq!(report["causes"][0]["name"], "wheel_torque_scale");
+        assert!(report["causes"][0]["parameters"]["scale"].is_array() && report["causes"][0]["stderr"]["scale"].is_array());
+        assert!(report["baseline_rms"]["overall"].as_f64().unwrap() > report["extended_rms"]["overall"].as_f64().unwrap());
+        assert!(report["gain"].as_f64().unwrap() > 5.0);
+        for f in ["nominal_residuals.svg", "equation_error.svg", "gain.svg"] {
+            assert!(out.join(f).is_file(), "{f}");
+        }
+        // A missing data path is named.
+        let err = run_identify(&IdentifyArgs { data: dir.join("nothing"), model: nominal, out, json: true }).unwrap_err();
+        assert!(format!("{err:#}").contains("nothing"), "{err:#}");
+        std::fs::remove_dir_all(&dir).ok();
+    }
+}

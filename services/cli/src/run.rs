@@ -8,6 +8,7 @@ use crate::figure::{self, Panel, Series};
 use anyhow::{Context, Result, bail};
 use std::path::{Path, PathBuf};
 use std::process::Command;
+use testbed_bus::BusConfig;
 use testbed_launch::profile::{Mode, Profile};
 use testbed_pipeline::summary::{self, RunSeries, RunSummary};
 use testbed_pipeline::{ClockMode, RunConfig};
@@ -94,6 +95,7 @@ fn launch(profile: &Path, config: &RunConfig, config_path: &Path) -> Result<()> 
     }
     // One bus per run: a unique prefix and a short root (Unix socket paths must stay < 108 bytes).
     let id = std::process::id();
+    let bus = BusConfig::new(format!("tb{id}_"), format!("/tmp/tb{id}/"));
     let mode = match config.run.mode {
         ClockMode::Lockstep => "lockstep",
         ClockMode::Paced => "paced",
@@ -112,15 +114,19 @@ fn launch(profile: &Path, config: &RunConfig, config_path: &Path) -> Result<()> 
         .arg(&config.run.log)
         .arg("--config")
         .arg(config_path)
-        .args(["--bus-prefix", &format!("tb{id}_")])
+        .args(["--bus-prefix", &bus.prefix])
         .arg("--bus-root")
-        .arg(format!("/tmp/tb{id}/"))
+        .arg(&bus.root)
         .arg("--bin-dir")
         .arg(bin_dir);
     // Ctrl-C reaches the whole foreground group: the launcher stops the pipeline and finalises
     // the log; this process waits for it and then summarises what was recorded.
     let _ignore_interrupt = IgnoreInterrupt::new();
     let status = command.status().with_context(|| format!("starting {}", launcher.display()))?;
+    // Every process of the run has been reaped: leave no shared memory, socket or directory.
+    if let Err(e) = testbed_bus::remove_all(&bus) {
+        eprintln!("warning: removing the run's iceoryx2 resources: {e}");
+    }
     if !status.success() {
         bail!("the pipeline failed ({status}); the launcher's messages above say which process and how");
     }
@@ -166,7 +172,7 @@ fn find_profile(name: &str) -> Result<PathBuf> {
 
 fn print_summary(s: &RunSummary, figure: &Path) {
     let settle = s.settle_s.map_or_else(|| "never".to_string(), |t| format!("{t:.1} s"));
-    println!("run: {} simulated s, {} ticks, mode {}, seed {}", s.simulated_s, s.ticks, s.mode, s.seed);
+    println!("run: {:.1} simulated s, {} ticks, mode {}, seed {}", s.simulated_s, s.ticks, s.mode, s.seed);
     println!("  settling time (within {}° per axis)   {settle}", summary::SETTLE_BAND_DEG);
     println!(
         "  steady error, last {} s (deg)         X {:.4}  Y {:.4}  Z {:.4}",
