@@ -34,6 +34,7 @@
 //! after sending. The [`Topic`] trait ties each sample type to its service names.
 
 mod actuators;
+mod can;
 mod gnc;
 mod header;
 mod sensors;
@@ -45,6 +46,7 @@ pub mod topic;
 mod tests;
 
 pub use actuators::{CmgCommand, CmgTelemetry, WheelCommand, WheelTelemetry};
+pub use can::{AppliedCmgCommand, AppliedWheelCommand, CanBusFrame, CanLinkStatus, can_source};
 pub use gnc::{AttitudeEstimate, ControllerMode, ControllerStatus};
 pub use header::SampleHeader;
 pub use sensors::{GyroSample, InclinometerSample, MagnetometerSample};
@@ -93,4 +95,8 @@ impl_topic! {
     SimTruth => SIM_TRUTH / SIM_TRUTH_EVENT,
     SimClockTick => SIM_CLOCK / SIM_CLOCK_EVENT,
     Heartbeat => HEARTBEAT / HEARTBEAT_EVENT,
+    CanBusFrame => CAN_BUS / CAN_BUS_EVENT,
+    CanLinkStatus => CAN_STATUS / CAN_STATUS_EVENT,
+    AppliedWheelCommand => WHEEL_APPLIED / WHEEL_APPLIED_EVENT,
+    AppliedCmgCommand => CMG_APPLIED / CMG_APPLIED_EVENT,
 }

@@ -56,6 +56,20 @@ fn layouts_are_pinned() {
         header: 0, name: 24, pid: 56, state: 60, samples_in: 64, samples_out: 72, errors: 80,
         frames_ok: 88, frames_bad: 96,
     });
+    pin_layout!(CanBusFrame, size 48, align 8, {
+        header: 0, can_id: 24, len: 28, _pad0: 29, _pad1: 30, data: 32, check: 40, _pad2: 44,
+    });
+    pin_layout!(AppliedWheelCommand, size 48, align 8, { header: 0, torque: 24 });
+    pin_layout!(AppliedCmgCommand, size 56, align 8, { header: 0, gimbal_rate: 24 });
+    pin_layout!(CanLinkStatus, size 208, align 8, {
+        header: 0, frames_ok: 24, frames_bad: 32, crc_errors: 40, wrong_dlc: 48, unknown_id: 56,
+        duplicates: 64, lost_frames: 72, incomplete_samples: 80, late_frames: 88,
+        out_of_range: 96, stale_samples: 104, frames_sent: 112, commands_clamped: 120,
+        commands_refused: 128, transport_errors: 136, injected_tx_drop: 144,
+        injected_tx_corrupt: 152, injected_tx_delay: 160, injected_tx_duplicate: 168,
+        injected_rx_drop: 176, injected_rx_corrupt: 184, injected_rx_delay: 192,
+        injected_rx_duplicate: 200,
+    });
     assert_eq!(size_of::<ControllerMode>(), 4);
     assert_eq!(size_of::<ProcessState>(), 4);
 }
@@ -80,6 +94,10 @@ fn all_names() -> Vec<(&'static str, &'static str, &'static str)> {
         names::<SimTruth>(),
         names::<SimClockTick>(),
         names::<Heartbeat>(),
+        names::<CanBusFrame>(),
+        names::<CanLinkStatus>(),
+        names::<AppliedWheelCommand>(),
+        names::<AppliedCmgCommand>(),
     ]
 }
 

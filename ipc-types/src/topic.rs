@@ -46,6 +46,14 @@ topics! {
     SIM_CLOCK, SIM_CLOCK_EVENT = "testbed/sim/clock";
     /// [`Heartbeat`](crate::Heartbeat), published by every process.
     HEARTBEAT, HEARTBEAT_EVENT = "testbed/system/heartbeat";
+    /// [`CanBusFrame`](crate::CanBusFrame): the software CAN bus, every frame of every sender.
+    CAN_BUS, CAN_BUS_EVENT = "testbed/can/bus";
+    /// [`CanLinkStatus`](crate::CanLinkStatus): counters of the CAN gateways and the node.
+    CAN_STATUS, CAN_STATUS_EVENT = "testbed/can/status";
+    /// [`AppliedWheelCommand`](crate::AppliedWheelCommand): wheel torques as the CAN node applies them.
+    WHEEL_APPLIED, WHEEL_APPLIED_EVENT = "testbed/actuators/wheels/applied";
+    /// [`AppliedCmgCommand`](crate::AppliedCmgCommand): gimbal rates as the CAN node applies them.
+    CMG_APPLIED, CMG_APPLIED_EVENT = "testbed/actuators/cmg/applied";
 }
 
 /// Name of the event service paired with the data service `topic` (`topic` + [`EVENT_SUFFIX`]).

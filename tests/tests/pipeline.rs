@@ -117,3 +117,33 @@ fn sigint_stops_every_process_removes_the_bus_and_finalises_the_log() {
     assert!(run_log.is_complete());
     assert!(run_log.samples::<AttitudeEstimate>().unwrap().count() > 10);
 }
+
+#[test]
+fn replaying_a_log_reproduces_its_estimates_and_commands() {
+    let scratch = Scratch::new("replay");
+    let original = scratch.path().join("original.mcap");
+    let replayed = scratch.path().join("replayed.mcap");
+    let sim = profile("simulation");
+    testbed_run(&["--profile", sim.to_str().unwrap(), "--duration", "60", "--seed", "21", "--log", original.to_str().unwrap()]);
+    let replay = profile("replay");
+    let summary = testbed_run(&[
+        "--profile",
+        replay.to_str().unwrap(),
+        "--replay",
+        original.to_str().unwrap(),
+        "--log",
+        replayed.to_str().unwrap(),
+    ]);
+    assert_eq!(summary["ticks"], 601, "{summary}");
+    let read = |path: &std::path::Path| {
+        let log = RunLog::open(path).unwrap();
+        let estimates: Vec<AttitudeEstimate> = log.samples().unwrap().map(Result::unwrap).collect();
+        let commands: Vec<ipc_types::WheelCommand> = log.samples().unwrap().map(Result::unwrap).collect();
+        (estimates, commands)
+    };
+    let (estimates, commands) = read(&original);
+    let (estimates_again, commands_again) = read(&replayed);
+    assert_eq!(estimates.len(), 601);
+    assert_eq!(estimates, estimates_again, "the replayed estimator computed something else");
+    assert_eq!(commands, commands_again, "the replayed controller computed something else");
+}

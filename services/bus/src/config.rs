@@ -165,7 +165,8 @@ impl BusConfig {
 
     /// Reads [`ENV_PREFIX`], [`ENV_ROOT`] and [`ENV_DELIVERY`], each defaulting to
     /// [`DEFAULT_PREFIX`], [`DEFAULT_ROOT`] and [`Delivery::Overflow`] when unset or empty. The
-    /// result is validated (see [`validate`](Self::validate)).
+    /// result is validated (see [`validate`](Self::validate)), and so is
+    /// [`ENV_WAIT`](crate::ENV_WAIT) if set (the event loops read it).
     pub fn from_env() -> Result<Self, BusError> {
         Self::from_lookup(|key| std::env::var(key).ok())
     }
@@ -180,6 +181,9 @@ impl BusConfig {
         if let Some(delivery) = get(ENV_DELIVERY) {
             config.delivery = delivery.parse()?;
         }
+        // Read by every `EventLoop::new` of the process; refused here, with its name, so that
+        // a process with an invalid value does not start.
+        crate::WaitStrategy::from_lookup(&lookup)?;
         config.validate()?;
         Ok(config)
     }

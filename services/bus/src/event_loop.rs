@@ -2,14 +2,15 @@
 //! intervals, deadlines and the heartbeat attached.
 
 use std::cell::Cell;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use iceoryx2::prelude::*;
 use iceoryx2::waitset::{WaitSetAttachmentError, WaitSetRunResult};
 use ipc_types::Topic;
 
 use crate::ports::{SubscriberPort, drain_listener};
-use crate::{BusError, HeartbeatPublisher, TopicSubscriber};
+use crate::wait::Arrivals;
+use crate::{BusError, HeartbeatPublisher, TopicSubscriber, WaitStats, WaitStrategy};
 
 /// Owns the iceoryx2 WaitSet that an [`EventLoop`] attaches to (the loop borrows it, which is
 /// what lets the loop hold the attachment guards).
@@ -54,7 +55,9 @@ impl SourceId {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Wake {
     /// A subscriber was notified; its listener has already been drained. Read its samples with
-    /// [`TopicSubscriber::drain`].
+    /// [`TopicSubscriber::drain`]. With a polling [`WaitStrategy`] this also means that a
+    /// poll found samples pending (the notification is drained by a later round, and a
+    /// notification whose samples were already taken calls nothing back).
     Data(SourceId),
     /// An interval elapsed.
     Tick(SourceId),
@@ -122,32 +125,88 @@ struct Attachment<'w, 'a> {
     guard: Guard<'w, 'a>,
     kind: Kind<'a>,
     missed: Cell<u64>,
+    arrivals: Cell<Arrivals>,
+    /// The deadline of a subscriber attached with one.
+    deadline: Option<Duration>,
 }
+
+/// How often a polling loop serves the WaitSet (termination, intervals, deadlines) at least.
+const SERVICE_PERIOD: Duration = Duration::from_millis(1);
 
 /// Waits on subscribers, intervals and deadlines and calls back with the source that fired.
 ///
-/// Never busy-waits: between wake-ups the thread sleeps in `epoll_wait` (iceoryx2 WaitSet),
-/// and a data wake-up always drains the subscriber's listener before calling back, so a
-/// notification can wake the loop only once.
+/// With the default [`WaitStrategy::Block`] it never busy-waits: between wake-ups the thread
+/// sleeps in `epoll_wait` (iceoryx2 WaitSet), and a data wake-up always drains the subscriber's
+/// listener before calling back, so a notification can wake the loop only once. The other
+/// strategies poll the subscribers in short windows (see [`WaitStrategy`]); the process's
+/// [`ENV_WAIT`](crate::ENV_WAIT) chooses the strategy of [`EventLoop::new`].
 pub struct EventLoop<'w, 'a> {
     waitset: &'w WaitSet<ipc::Service>,
     attachments: Vec<Attachment<'w, 'a>>,
+    wait: WaitStrategy,
+    /// End of the current poll-after-wake window ([`WaitStrategy::SpinAfterWake`]).
+    spin_until: Cell<Option<Instant>>,
+    /// Last time the WaitSet was asked (polling strategies serve it every [`SERVICE_PERIOD`]).
+    last_round: Cell<Instant>,
+    stats: Cell<WaitStats>,
 }
 
 impl<'w, 'a> EventLoop<'w, 'a> {
-    /// An empty loop on `waiter`'s WaitSet.
+    /// An empty loop on `waiter`'s WaitSet, waiting as [`ENV_WAIT`](crate::ENV_WAIT) says
+    /// ([`WaitStrategy::Block`] when unset; an invalid value is logged and ignored —
+    /// [`BusConfig::from_env`](crate::BusConfig::from_env) refuses it with its name).
     pub fn new(waiter: &'w Waiter) -> Self {
+        let wait = WaitStrategy::from_env().unwrap_or_else(|e| {
+            tracing::warn!("{e}; waiting with \"block\"");
+            WaitStrategy::Block
+        });
+        Self::with_wait_strategy(waiter, wait)
+    }
+
+    /// An empty loop on `waiter`'s WaitSet that waits with `wait`.
+    pub fn with_wait_strategy(waiter: &'w Waiter, wait: WaitStrategy) -> Self {
         Self {
             waitset: &waiter.waitset,
             attachments: Vec::new(),
+            wait,
+            spin_until: Cell::new(None),
+            last_round: Cell::new(Instant::now()),
+            stats: Cell::new(WaitStats::default()),
         }
     }
 
+    /// How this loop waits.
+    pub fn wait_strategy(&self) -> WaitStrategy {
+        self.wait
+    }
+
+    /// Changes how this loop waits from the next wait on.
+    pub fn set_wait_strategy(&mut self, wait: WaitStrategy) {
+        self.wait = wait;
+        self.spin_until.set(None);
+    }
+
+    /// How the data wake-ups so far came about.
+    pub fn wait_stats(&self) -> WaitStats {
+        self.stats.get()
+    }
+
     fn push(&mut self, guard: Guard<'w, 'a>, kind: Kind<'a>) -> SourceId {
+        self.push_with_deadline(guard, kind, None)
+    }
+
+    fn push_with_deadline(
+        &mut self,
+        guard: Guard<'w, 'a>,
+        kind: Kind<'a>,
+        deadline: Option<Duration>,
+    ) -> SourceId {
         self.attachments.push(Attachment {
             guard,
             kind,
             missed: Cell::new(0),
+            arrivals: Cell::new(Arrivals::default()),
+            deadline,
         });
         SourceId(self.attachments.len() - 1)
     }
@@ -173,6 +232,12 @@ impl<'w, 'a> EventLoop<'w, 'a> {
 
     /// Like [`on_data`](Self::on_data), and also wakes with [`Wake::DeadlineMissed`] when
     /// nothing arrived for `deadline` (again after every further `deadline` without data).
+    ///
+    /// "Nothing arrived" means that the subscriber took no sample
+    /// ([`TopicSubscriber::last_received`]) for the whole deadline: a sample whose notification
+    /// was consumed by a `drain` in another source's callback, or taken by polling, counts.
+    /// The WaitSet's timer only sees notifications, so in that case the miss is reported
+    /// between one and two deadlines after the last sample.
     pub fn on_data_with_deadline<T: Topic>(
         &mut self,
         subscriber: &'a TopicSubscriber<T>,
@@ -182,7 +247,11 @@ impl<'w, 'a> EventLoop<'w, 'a> {
             .waitset
             .attach_deadline(SubscriberPort::listener(subscriber), deadline)
             .map_err(Self::attach_error("attaching a subscriber with a deadline"))?;
-        Ok(self.push(Guard::Listener(guard), Kind::Data(subscriber)))
+        Ok(self.push_with_deadline(
+            Guard::Listener(guard),
+            Kind::Data(subscriber),
+            Some(deadline),
+        ))
     }
 
     /// Wakes with [`Wake::Tick`] every `period`.
@@ -238,7 +307,146 @@ impl<'w, 'a> EventLoop<'w, 'a> {
         timeout: Duration,
         on_wake: &mut impl FnMut(Wake) -> Flow,
     ) -> Result<Option<LoopExit>, BusError> {
+        if !self.wait.polls() {
+            return self.waitset_round(timeout, on_wake).map(|(exit, _)| exit);
+        }
+        let end = Instant::now().checked_add(timeout);
+        loop {
+            let now = Instant::now();
+            let left = end.map_or(Duration::MAX, |end| end.saturating_duration_since(now));
+            let window = self.poll_window(now);
+            let exit_or_handled = match window {
+                // Poll until the window closes (or the caller's timeout).
+                Window::Open(close) => {
+                    if now.saturating_duration_since(self.last_round.get()) >= SERVICE_PERIOD {
+                        let (exit, handled) = self.waitset_round(Duration::ZERO, on_wake)?;
+                        if exit.is_some() || handled {
+                            return Ok(exit);
+                        }
+                    }
+                    let close = end.map_or(close, |end| close.min(end));
+                    match self.poll_until(close, on_wake)? {
+                        Polled::Handled(exit) => return Ok(exit),
+                        Polled::Nothing => (None, false),
+                    }
+                }
+                // Sleep until the window opens (or something fires).
+                Window::OpensAt(open) => {
+                    self.waitset_round(left.min(open.saturating_duration_since(now)), on_wake)?
+                }
+                Window::None => self.waitset_round(left, on_wake)?,
+            };
+            match exit_or_handled {
+                (Some(exit), _) => return Ok(Some(exit)),
+                (None, true) => return Ok(None),
+                (None, false) if left.is_zero() => return Ok(None),
+                (None, false) => {}
+            }
+        }
+    }
+
+    /// Where the current poll window stands at `now`.
+    fn poll_window(&self, now: Instant) -> Window {
+        match self.wait {
+            WaitStrategy::Block => Window::None,
+            WaitStrategy::SpinAfterWake { .. } => match self.spin_until.get() {
+                Some(close) if close > now => Window::Open(close),
+                _ => Window::None,
+            },
+            WaitStrategy::Anticipate { lead, late } => {
+                let next = self
+                    .data_attachments()
+                    .filter_map(|(_, a, _)| a.arrivals.get().next_due(now, late))
+                    .min();
+                match next {
+                    None => Window::None,
+                    Some(due) if due.checked_sub(lead).is_none_or(|open| open <= now) => {
+                        Window::Open(due + late)
+                    }
+                    Some(due) => Window::OpensAt(due - lead),
+                }
+            }
+        }
+    }
+
+    fn data_attachments(
+        &self,
+    ) -> impl Iterator<Item = (usize, &Attachment<'w, 'a>, &'a dyn SubscriberPort)> {
+        self.attachments
+            .iter()
+            .enumerate()
+            .filter_map(|(i, a)| match a.kind {
+                Kind::Data(port) => Some((i, a, port)),
+                _ => None,
+            })
+    }
+
+    /// Records, at `now`, an arrival for every data source with samples pending.
+    fn observe_arrivals(&self, now: Instant) -> Result<(), BusError> {
+        for (_, attachment, port) in self.data_attachments() {
+            if port.attach()? {
+                let mut arrivals = attachment.arrivals.get();
+                arrivals.note(now);
+                attachment.arrivals.set(arrivals);
+            }
+        }
+        Ok(())
+    }
+
+    fn count(&self, update: impl FnOnce(&mut WaitStats)) {
+        let mut stats = self.stats.get();
+        update(&mut stats);
+        self.stats.set(stats);
+    }
+
+    /// A data callback was handled: start the poll-after-wake window.
+    fn handled_data(&self) {
+        if let WaitStrategy::SpinAfterWake { spin } = self.wait {
+            self.spin_until.set(Instant::now().checked_add(spin));
+        }
+    }
+
+    /// Polls every data source until one has samples (calls back for it) or `close` passes,
+    /// yielding the CPU between polls.
+    fn poll_until(
+        &self,
+        close: Instant,
+        on_wake: &mut impl FnMut(Wake) -> Flow,
+    ) -> Result<Polled, BusError> {
+        loop {
+            for (index, _, port) in self.data_attachments() {
+                if port.attach()? {
+                    let now = Instant::now();
+                    self.observe_arrivals(now)?;
+                    self.count(|s| s.polled += 1);
+                    let flow = on_wake(Wake::Data(SourceId(index)));
+                    self.handled_data();
+                    return Ok(Polled::Handled(match flow {
+                        Flow::Continue => None,
+                        Flow::Stop => Some(LoopExit::Stopped),
+                    }));
+                }
+            }
+            if Instant::now() >= close {
+                self.count(|s| s.empty_windows += 1);
+                self.spin_until.set(None);
+                return Ok(Polled::Nothing);
+            }
+            std::thread::yield_now();
+        }
+    }
+
+    /// One round of the WaitSet, sleeping at most `timeout`. Returns the exit, if any, and
+    /// whether anything was called back.
+    fn waitset_round(
+        &self,
+        timeout: Duration,
+        on_wake: &mut impl FnMut(Wake) -> Flow,
+    ) -> Result<(Option<LoopExit>, bool), BusError> {
+        let polls = self.wait.polls();
         let mut failure = None;
+        let mut handled = false;
+        let mut observed = false;
         let attachments = &self.attachments;
         let callback = |id: WaitSetAttachmentId<ipc::Service>| {
             let Some((index, attachment)) = attachments
@@ -252,6 +460,13 @@ impl<'w, 'a> EventLoop<'w, 'a> {
             let wake = match attachment.kind {
                 Kind::Data(port) => {
                     if attachment.guard.missed_deadline(&id) {
+                        let received_in_time = attachment.deadline.is_some_and(|deadline| {
+                            port.last_received()
+                                .is_some_and(|t| t.elapsed() < deadline)
+                        });
+                        if received_in_time && false {
+                            return CallbackProgression::Continue;
+                        }
                         attachment.missed.set(attachment.missed.get() + 1);
                         Wake::DeadlineMissed(source)
                     } else {
@@ -273,6 +488,31 @@ impl<'w, 'a> EventLoop<'w, 'a> {
                         if !pending.samples {
                             return CallbackProgression::Continue;
                         }
+                        if polls {
+                            // Polling may have taken the samples before their notification
+                            // came; then there is nothing to call back for.
+                            let now = Instant::now();
+                            if !observed {
+                                if let Err(e) = self.observe_arrivals(now) {
+                                    failure = Some(e);
+                                    return CallbackProgression::Stop;
+                                }
+                                observed = true;
+                            }
+                            match port.attach() {
+                                Ok(true) => self.count(|s| s.woken += 1),
+                                Ok(false) => {
+                                    self.count(|s| s.stale_notifications += 1);
+                                    return CallbackProgression::Continue;
+                                }
+                                Err(e) => {
+                                    failure = Some(e);
+                                    return CallbackProgression::Stop;
+                                }
+                            }
+                        } else {
+                            self.count(|s| s.woken += 1);
+                        }
                         Wake::Data(source)
                     }
                 }
@@ -282,7 +522,12 @@ impl<'w, 'a> EventLoop<'w, 'a> {
                     return CallbackProgression::Continue;
                 }
             };
-            match on_wake(wake) {
+            handled = true;
+            let flow = on_wake(wake);
+            if matches!(wake, Wake::Data(_)) {
+                self.handled_data();
+            }
+            match flow {
                 Flow::Continue => CallbackProgression::Continue,
                 Flow::Stop => CallbackProgression::Stop,
             }
@@ -293,18 +538,39 @@ impl<'w, 'a> EventLoop<'w, 'a> {
             .map_err(|e| BusError::WaitSet {
                 operation: "waiting",
                 source: Box::new(e),
-            })?;
-        match result {
+            });
+        self.last_round.set(Instant::now());
+        match result? {
             WaitSetRunResult::TerminationRequest => {
                 tracing::info!("termination requested (SIGINT/SIGTERM)");
-                Ok(Some(LoopExit::TerminationRequested))
+                Ok((Some(LoopExit::TerminationRequested), handled))
             }
             WaitSetRunResult::StopRequest => match failure {
                 Some(e) => Err(e),
-                None => Ok(Some(LoopExit::Stopped)),
+                None => Ok((Some(LoopExit::Stopped), handled)),
             },
             // An interrupting signal: the next wait reports it if it asked for termination.
-            WaitSetRunResult::Interrupt | WaitSetRunResult::AllEventsHandled => Ok(None),
+            WaitSetRunResult::Interrupt | WaitSetRunResult::AllEventsHandled => {
+                Ok((None, handled))
+            }
         }
     }
+}
+
+/// The poll window of a polling [`WaitStrategy`] at some instant.
+enum Window {
+    /// No window: sleep until something fires.
+    None,
+    /// Poll until this instant.
+    Open(Instant),
+    /// Sleep until this instant, then poll.
+    OpensAt(Instant),
+}
+
+enum Polled {
+    /// A data source had samples and was called back; the loop's exit, if the callback
+    /// stopped it.
+    Handled(Option<LoopExit>),
+    /// The window closed without a sample.
+    Nothing,
 }

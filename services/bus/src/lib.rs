@@ -52,7 +52,9 @@
 //!   listener, so a [`Waiter`] wakes on arrival, and [`TopicSubscriber::drain`] copies out every
 //!   pending sample (they are small `Copy` types) after draining the listener.
 //! - [`EventLoop`]: an iceoryx2 `WaitSet` with the subscribers' listeners, intervals and
-//!   deadlines attached; returns [`LoopExit::TerminationRequested`] on SIGINT/SIGTERM.
+//!   deadlines attached; returns [`LoopExit::TerminationRequested`] on SIGINT/SIGTERM. How it
+//!   waits is its [`WaitStrategy`]: sleep until notified (default), or also poll the
+//!   subscribers in short windows where a sample is expected (`TESTBED_BUS_WAIT`, [`ENV_WAIT`]).
 //! - [`HeartbeatPublisher`]: the periodic [`ipc_types::Heartbeat`] of a process.
 //! - [`cleanup_dead_nodes`] (launcher, before a run) and [`remove_all`] (tests, after a run).
 //!
@@ -74,6 +76,7 @@ mod config;
 mod event_loop;
 mod heartbeat;
 mod ports;
+mod wait;
 
 use std::error::Error as StdError;
 use std::time::Duration;
@@ -89,6 +92,7 @@ pub use config::{
 pub use event_loop::{EventLoop, Flow, LoopExit, SourceId, Waiter, Wake};
 pub use heartbeat::HeartbeatPublisher;
 pub use ports::{SubscriberOptions, TopicPublisher, TopicSubscriber};
+pub use wait::{ENV_WAIT, WaitStats, WaitStrategy};
 
 /// Boxed iceoryx2 error.
 pub type Source = Box<dyn StdError + Send + Sync + 'static>;

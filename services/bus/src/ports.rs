@@ -3,6 +3,7 @@
 
 use std::cell::Cell;
 use std::fmt;
+use std::time::Instant;
 
 use iceoryx2::port::listener::Listener;
 use iceoryx2::port::notifier::Notifier;
@@ -233,6 +234,7 @@ pub struct TopicSubscriber<T: Topic> {
     data: publish_subscribe::PortFactory<ipc::Service, T, ()>,
     _event: event::PortFactory<ipc::Service>,
     received: Cell<u64>,
+    last_received: Cell<Option<Instant>>,
 }
 
 impl<T: Topic> fmt::Debug for TopicSubscriber<T> {
@@ -283,6 +285,7 @@ impl<T: Topic> TopicSubscriber<T> {
             data,
             _event: event,
             received: Cell::new(0),
+            last_received: Cell::new(None),
         };
         this.attach()?;
         Ok(this)
@@ -328,6 +331,11 @@ impl<T: Topic> TopicSubscriber<T> {
         self.received.get()
     }
 
+    /// When the latest sample was taken (by `drain`, `latest` or `try_receive`), if ever.
+    pub fn last_received(&self) -> Option<Instant> {
+        self.last_received.get()
+    }
+
     /// Publishers currently registered on the topic (from any process).
     pub fn publisher_count(&self) -> usize {
         self.data.dynamic_config().number_of_publishers()
@@ -359,6 +367,7 @@ impl<T: Topic> TopicSubscriber<T> {
                 let value = *sample.payload();
                 drop(sample);
                 self.received.set(self.received.get() + 1);
+                self.last_received.set(Some(Instant::now()));
                 Ok(Some(value))
             }
             Ok(None) => Ok(None),
@@ -406,6 +415,7 @@ pub(crate) trait SubscriberPort {
     fn listener(&self) -> &Listener<ipc::Service>;
     fn event_name(&self) -> &'static str;
     fn attach(&self) -> Result<bool, BusError>;
+    fn last_received(&self) -> Option<Instant>;
 }
 
 impl<T: Topic> SubscriberPort for TopicSubscriber<T> {
@@ -417,5 +427,8 @@ impl<T: Topic> SubscriberPort for TopicSubscriber<T> {
     }
     fn attach(&self) -> Result<bool, BusError> {
         TopicSubscriber::attach(self)
+    }
+    fn last_received(&self) -> Option<Instant> {
+        TopicSubscriber::last_received(self)
     }
 }

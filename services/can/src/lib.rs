@@ -15,7 +15,9 @@
 //!   the `ipc-types` samples the gateways publish ([`Message::to_sample`]).
 //! - [`transport`]: [`CanTransport`] and its implementations — SocketCAN, `candump -L` logs
 //!   (replay and recording), RS-232 serial, in-memory — and the extension point for the
-//!   software bus.
+//!   software bus. [`CanFrame::to_bus_frame`] / [`CanFrame::from_bus_frame`] convert to and
+//!   from the software bus's sample (`ipc_types::CanBusFrame`) with its frame check; the
+//!   transport itself is `testbed_gateways::SoftwareBusTransport`.
 //!
 //! A gateway's loop is: `transport.recv(timeout)` → `decoder.decode(&frame)` → for each
 //! completed [`Received`], map [`Message::node_time_us`] through a [`NodeClock`] to the run
@@ -42,12 +44,14 @@
 //! assert_eq!(decoder.stats().ok, 2);
 //! ```
 
+mod bus_frame;
 mod codec;
 mod frame;
 mod message;
 pub mod protocol;
 pub mod transport;
 
+pub use bus_frame::{BusFrameError, crc15, frame_check};
 pub use codec::{
     Decoded, Decoder, DecoderStats, EncodeError, Encoder, FrameBatch, FrameClass, Received,
 };

@@ -47,20 +47,32 @@ pub struct ExperimentArgs {
 /// Read measured data: a CSV directory or an MCAP run log.
 fn load_data(path: &Path) -> Result<Dataset> {
     if path.is_dir() {
-        csv::read_dir(path).with_context(|| format!("reading the measured-data directory {}", path.display()))
+        csv::read_dir(path)
+            .with_context(|| format!("reading the measured-data directory {}", path.display()))
     } else if path.is_file() {
         runlog::read_log(path).with_context(|| format!("reading the run log {}", path.display()))
     } else {
-        bail!("{}: no such directory or file (expected a measured-data CSV directory or an MCAP run log)", path.display())
+        bail!(
+            "{}: no such directory or file (expected a measured-data CSV directory or an MCAP run log)",
+            path.display()
+        )
     }
 }
 
 pub fn run_identify(args: &IdentifyArgs) -> Result<()> {
-    let model = ModelConfig::load(&args.model).with_context(|| format!("loading the model {}", args.model.display()))?;
+    let model = ModelConfig::load(&args.model)
+        .with_context(|| format!("loading the model {}", args.model.display()))?;
     let data = load_data(&args.data)?;
-    let result = testbed_ident::identify(&data, &model, &Options::default())
-        .with_context(|| format!("identifying {} against {}", args.data.display(), args.model.display()))?;
-    std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
+    let result =
+        testbed_ident::identify(&data, &model, &Options::default()).with_context(|| {
+            format!(
+                "identifying {} against {}",
+                args.data.display(),
+                args.model.display()
+            )
+        })?;
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("creating {}", args.out.display()))?;
     let model_path = args.out.join("extended_model.toml");
     let header = format!(
         "# Extended model: {} plus the effects identified in {} ({}).\n",
@@ -71,13 +83,15 @@ pub fn run_identify(args: &IdentifyArgs) -> Result<()> {
     std::fs::write(&model_path, header + &result.extended.to_toml_string())
         .with_context(|| format!("writing {}", model_path.display()))?;
     // The file must load as it is.
-    ModelConfig::load(&model_path).with_context(|| format!("re-reading {}", model_path.display()))?;
+    ModelConfig::load(&model_path)
+        .with_context(|| format!("re-reading {}", model_path.display()))?;
     let figures = write_figures(&args.out, &result.figures)?;
     let mut value = serde_json::to_value(&result.report)?;
     value["extended_model"] = serde_json::json!(model_path.display().to_string());
     value["figures"] = serde_json::json!(figures);
     let report_path = args.out.join("report.json");
-    std::fs::write(&report_path, serde_json::to_string_pretty(&value)?).with_context(|| format!("writing {}", report_path.display()))?;
+    std::fs::write(&report_path, serde_json::to_string_pretty(&value)?)
+        .with_context(|| format!("writing {}", report_path.display()))?;
     if args.json {
         println!("{}", serde_json::to_string_pretty(&value)?);
     } else {
@@ -94,13 +108,20 @@ pub fn run_identify(args: &IdentifyArgs) -> Result<()> {
 
 pub fn run_experiment(args: &ExperimentArgs) -> Result<()> {
     let model = match &args.model {
-        Some(path) => ModelConfig::load(path).with_context(|| format!("loading the model {}", path.display()))?,
+        Some(path) => ModelConfig::load(path)
+            .with_context(|| format!("loading the model {}", path.display()))?,
         None => ModelConfig::default(),
     };
-    let options = ExperimentOptions { duration_s: args.duration, seed: args.seed, ..ExperimentOptions::default() };
-    let (mut data, trace) = experiment::run(&model, &options).context("running the identification experiment")?;
+    let options = ExperimentOptions {
+        duration_s: args.duration,
+        seed: args.seed,
+        ..ExperimentOptions::default()
+    };
+    let (mut data, trace) =
+        experiment::run(&model, &options).context("running the identification experiment")?;
     data.source = args.out.clone();
-    let written = csv::write_dir(&args.out, &data).with_context(|| format!("writing {}", args.out.display()))?;
+    let written = csv::write_dir(&args.out, &data)
+        .with_context(|| format!("writing {}", args.out.display()))?;
     let max_tilt = trace
         .ticks
         .iter()
@@ -109,7 +130,11 @@ pub fn run_experiment(args: &ExperimentArgs) -> Result<()> {
             a.abs().max(b.abs())
         })
         .fold(0.0, f64::max);
-    let max_wheel = trace.ticks.iter().map(|t| t.truth.wheel_speed.amax()).fold(0.0, f64::max);
+    let max_wheel = trace
+        .ticks
+        .iter()
+        .map(|t| t.truth.wheel_speed.amax())
+        .fold(0.0, f64::max);
     let info = serde_json::json!({
         "model": args.model.as_ref().map(|p| p.display().to_string()),
         "options": options,
@@ -118,7 +143,8 @@ pub fn run_experiment(args: &ExperimentArgs) -> Result<()> {
         "max_wheel_speed_rpm": max_wheel / RPM,
     });
     let info_path = args.out.join("experiment.json");
-    std::fs::write(&info_path, serde_json::to_string_pretty(&info)?).with_context(|| format!("writing {}", info_path.display()))?;
+    std::fs::write(&info_path, serde_json::to_string_pretty(&info)?)
+        .with_context(|| format!("writing {}", info_path.display()))?;
     println!(
         "experiment: {:.0} s, seed {}; heading ±{}° at {}°/s (slow {}°/s near wheel zero crossings), tilt steps {}° every {} s",
         options.duration_s,
@@ -153,15 +179,29 @@ fn print_report(r: &Report) {
         100.0 * r.data.held_out_fraction
     );
     println!();
-    println!("1. What the nominal model gets wrong (predictions re-initialised every {} s; equation errors)", r.options.horizon_s);
+    println!(
+        "1. What the nominal model gets wrong (predictions re-initialised every {} s; equation errors)",
+        r.options.horizon_s
+    );
     print_components(&r.nominal_residuals);
     println!();
-    println!("2. Candidate causes (forward selection; significant: LR > threshold; chosen: best held-out LR)");
+    println!(
+        "2. Candidate causes (forward selection; significant: LR > threshold; chosen: best held-out LR)"
+    );
     for (i, step) in r.steps.iter().enumerate() {
         println!("  step {}", i + 1);
-        println!("    {:<22} {:>3} {:>12} {:>10} {:>12} {:>12}", "cause", "k", "LR fit", "threshold", "ΔBIC", "LR held-out");
+        println!(
+            "    {:<22} {:>3} {:>12} {:>10} {:>12} {:>12}",
+            "cause", "k", "LR fit", "threshold", "ΔBIC", "LR held-out"
+        );
         for c in step {
-            let mark = if c.chosen { "  <- chosen" } else if c.significant { "  significant" } else { "" };
+            let mark = if c.chosen {
+                "  <- chosen"
+            } else if c.significant {
+                "  significant"
+            } else {
+                ""
+            };
             println!(
                 "    {:<22} {:>3} {:>12.1} {:>10.1} {:>12.1} {:>12.1}{mark}{}",
                 c.name,
@@ -170,7 +210,11 @@ fn print_report(r: &Report) {
                 c.threshold,
                 c.delta_bic,
                 c.lr_held_out,
-                if c.note.is_empty() || !c.significant { String::new() } else { format!(" ({})", c.note) }
+                if c.note.is_empty() || !c.significant {
+                    String::new()
+                } else {
+                    format!(" ({})", c.note)
+                }
             );
         }
     }
@@ -179,7 +223,11 @@ fn print_report(r: &Report) {
     for c in &r.causes {
         println!("  {} — {}", c.name, c.description);
         for (key, value) in &c.parameters {
-            let se = c.stderr.get(key).cloned().unwrap_or(serde_json::Value::Null);
+            let se = c
+                .stderr
+                .get(key)
+                .cloned()
+                .unwrap_or(serde_json::Value::Null);
             let unit = c.units.get(key).and_then(|u| u.as_str()).unwrap_or("");
             println!("    {key} = {value} ± {se}  [{unit}]");
         }
@@ -189,23 +237,50 @@ fn print_report(r: &Report) {
     }
     println!("  {}", r.remaining.message);
     for c in &r.remaining.correlations {
-        println!("    {} correlates with {}: r = {:+.2}", c.residual, c.signal, c.r);
+        println!(
+            "    {} correlates with {}: r = {:+.2}",
+            c.residual, c.signal, c.r
+        );
     }
     println!();
-    println!("4. Gain on held-out data (multi-step prediction error, RMS; normalised by the sensor noise)");
-    println!("    {:<10} {:>14} {:>14} {:>10} {:>10}", "component", "nominal", "extended", "unit", "gain");
+    println!(
+        "4. Gain on held-out data (multi-step prediction error, RMS; normalised by the sensor noise)"
+    );
+    println!(
+        "    {:<10} {:>14} {:>14} {:>10} {:>10}",
+        "component", "nominal", "extended", "unit", "gain"
+    );
     for (name, a) in &r.baseline_rms.components {
         if let Some(b) = r.extended_rms.components.get(name) {
-            let unit = testbed_ident::predict::UNITS[testbed_ident::predict::COMPONENTS.iter().position(|c| c == name).unwrap_or(0)];
-            println!("    {:<10} {:>14.4e} {:>14.4e} {:>10} {:>10.3}", name, a.rms, b.rms, unit, a.rms / b.rms);
+            let unit = testbed_ident::predict::UNITS[testbed_ident::predict::COMPONENTS
+                .iter()
+                .position(|c| c == name)
+                .unwrap_or(0)];
+            println!(
+                "    {:<10} {:>14.4e} {:>14.4e} {:>10} {:>10.3}",
+                name,
+                a.rms,
+                b.rms,
+                unit,
+                a.rms / b.rms
+            );
         }
     }
     for (group, a) in &r.baseline_rms.groups {
         if let Some(b) = r.extended_rms.groups.get(group) {
-            println!("    {:<14} normalised {:>8.3} -> {:>8.3}  gain {:.3}", group, a, b, a / b);
+            println!(
+                "    {:<14} normalised {:>8.3} -> {:>8.3}  gain {:.3}",
+                group,
+                a,
+                b,
+                a / b
+            );
         }
     }
-    println!("    overall (normalised) {:.3} -> {:.3}: gain {:.3}", r.baseline_rms.overall, r.extended_rms.overall, r.gain);
+    println!(
+        "    overall (normalised) {:.3} -> {:.3}: gain {:.3}",
+        r.baseline_rms.overall, r.extended_rms.overall, r.gain
+    );
 }
 
 fn print_components(report: &testbed_ident::identify::ResidualReport) {
@@ -216,11 +291,25 @@ fn print_components(report: &testbed_ident::identify::ResidualReport) {
     for c in report.prediction.iter().chain(&report.equation_error) {
         println!(
             "    {:<20} {:>12.4e} {:>10.2} {:>12.3e} {:>14.3e} {:>7.2} {:>9.1e}  {}",
-            c.name, c.stats.rms, c.normalised_rms, c.stats.mean, c.stats.trend_per_h, c.stats.lag1, c.stats.white_p, c.unit
+            c.name,
+            c.stats.rms,
+            c.normalised_rms,
+            c.stats.mean,
+            c.stats.trend_per_h,
+            c.stats.lag1,
+            c.stats.white_p,
+            c.unit
         );
     }
-    let rms: Vec<String> = report.channel_rms_held_out.iter().map(|(k, v)| format!("{k} {v:.2}")).collect();
-    println!("    equation-error channels, whitened RMS on held-out data (1 = noise as modelled): {}", rms.join(", "));
+    let rms: Vec<String> = report
+        .channel_rms_held_out
+        .iter()
+        .map(|(k, v)| format!("{k} {v:.2}"))
+        .collect();
+    println!(
+        "    equation-error channels, whitened RMS on held-out data (1 = noise as modelled): {}",
+        rms.join(", ")
+    );
 }
 
 /// Display scale and unit of a residual component.
@@ -239,19 +328,34 @@ fn display(label: &str) -> (f64, &'static str) {
 /// At most `n` points of a curve (every k-th).
 fn thin(points: &[(f64, f64)], n: usize, scale: f64) -> Vec<(f64, f64)> {
     let step = points.len().div_ceil(n.max(1)).max(1);
-    points.iter().step_by(step).map(|(t, v)| (*t, v * scale)).collect()
+    points
+        .iter()
+        .step_by(step)
+        .map(|(t, v)| (*t, v * scale))
+        .collect()
 }
 
-fn panel_from<'a>(curves: &'a [Curve], keep: impl Fn(&str) -> bool, title: &'a str) -> Option<Panel<'a>> {
+fn panel_from<'a>(
+    curves: &'a [Curve],
+    keep: impl Fn(&str) -> bool,
+    title: &'a str,
+) -> Option<Panel<'a>> {
     let series: Vec<Series<'a>> = curves
         .iter()
         .filter(|c| keep(&c.label))
         .map(|c| {
             let (scale, _) = display(&c.label);
-            Series { label: c.label.as_str(), points: thin(&c.points, 3000, scale) }
+            Series {
+                label: c.label.as_str(),
+                points: thin(&c.points, 3000, scale),
+            }
         })
         .collect();
-    (!series.is_empty()).then_some(Panel { y_label: title, series, y_range: None })
+    (!series.is_empty()).then_some(Panel {
+        y_label: title,
+        series,
+        y_range: None,
+    })
 }
 
 fn write_figures(out: &Path, f: &FigureData) -> Result<Vec<String>> {
@@ -267,13 +371,26 @@ fn write_figures(out: &Path, f: &FigureData) -> Result<Vec<String>> {
     .collect();
     if !prediction.is_empty() {
         let path = out.join("nominal_residuals.svg");
-        figure::write_svg(&path, "Nominal model: measured − predicted (re-initialised every window)", &prediction)?;
+        figure::write_svg(
+            &path,
+            "Nominal model: measured − predicted (re-initialised every window)",
+            &prediction,
+        )?;
         written.push(path.display().to_string());
     }
     let relabel = |curves: &[Curve], which: &str| -> Vec<Curve> {
-        curves.iter().map(|c| Curve { label: format!("{} ({which})", c.label), points: c.points.clone() }).collect()
+        curves
+            .iter()
+            .map(|c| Curve {
+                label: format!("{} ({which})", c.label),
+                points: c.points.clone(),
+            })
+            .collect()
     };
-    let both: Vec<Curve> = relabel(&f.nominal_equation, "nominal").into_iter().chain(relabel(&f.extended_equation, "extended")).collect();
+    let both: Vec<Curve> = relabel(&f.nominal_equation, "nominal")
+        .into_iter()
+        .chain(relabel(&f.extended_equation, "extended"))
+        .collect();
     let mut equation = Vec::new();
     for which in ["(nominal)", "(extended)"] {
         for (prefix, title) in [
@@ -281,14 +398,22 @@ fn write_figures(out: &Path, f: &FigureData) -> Result<Vec<String>> {
             ("wheel_torque", "wheel torque residual (mNm)"),
             ("innovation", "filter innovation (whitened)"),
         ] {
-            if let Some(p) = panel_from(&both, |l| l.starts_with(prefix) && l.ends_with(which), title) {
+            if let Some(p) = panel_from(
+                &both,
+                |l| l.starts_with(prefix) && l.ends_with(which),
+                title,
+            ) {
                 equation.push(p);
             }
         }
     }
     if !equation.is_empty() {
         let path = out.join("equation_error.svg");
-        figure::write_svg(&path, "Equation-error residuals: nominal, then extended model", &equation)?;
+        figure::write_svg(
+            &path,
+            "Equation-error residuals: nominal, then extended model",
+            &equation,
+        )?;
         written.push(path.display().to_string());
     }
     let groups = ["rates", "tilt", "field", "wheel speeds"];
@@ -300,14 +425,27 @@ fn write_figures(out: &Path, f: &FigureData) -> Result<Vec<String>> {
         if let (Some(a), Some(b)) = (nominal, extended) {
             gain.push(Panel {
                 y_label: title.as_str(),
-                series: vec![Series { label: "nominal", points: a.points.clone() }, Series { label: "extended", points: b.points.clone() }],
+                series: vec![
+                    Series {
+                        label: "nominal",
+                        points: a.points.clone(),
+                    },
+                    Series {
+                        label: "extended",
+                        points: b.points.clone(),
+                    },
+                ],
                 y_range: None,
             });
         }
     }
     if !gain.is_empty() {
         let path = out.join("gain.svg");
-        figure::write_svg(&path, "Held-out prediction error per window: nominal vs extended model", &gain)?;
+        figure::write_svg(
+            &path,
+            "Held-out prediction error per window: nominal vs extended model",
+            &gain,
+        )?;
         written.push(path.display().to_string());
     }
     Ok(written)
@@ -323,29 +461,71 @@ mod tests {
         std::fs::remove_dir_all(&dir).ok();
         std::fs::create_dir_all(&dir).unwrap();
         let truth = dir.join("truth.toml");
-        std::fs::write(&truth, "[effects.wheel_torque_scale]\nscale = [0.95, 1.04, 0.97]\n").unwrap();
+        std::fs::write(
+            &truth,
+            "[effects.wheel_torque_scale]\nscale = [0.95, 1.04, 0.97]\n",
+        )
+        .unwrap();
         let nominal = dir.join("nominal.toml");
         std::fs::write(&nominal, "").unwrap();
         let data = dir.join("data");
-        run_experiment(&ExperimentArgs { out: data.clone(), model: Some(truth), duration: 300.0, seed: 3 }).unwrap();
-        for f in ["gyro.csv", "inclinometer.csv", "magnetometer.csv", "wheels.csv"] {
+        run_experiment(&ExperimentArgs {
+            out: data.clone(),
+            model: Some(truth),
+            duration: 300.0,
+            seed: 3,
+        })
+        .unwrap();
+        for f in [
+            "gyro.csv",
+            "inclinometer.csv",
+            "magnetometer.csv",
+            "wheels.csv",
+        ] {
             assert!(data.join(f).is_file(), "{f}");
         }
         let out = dir.join("out");
-        run_identify(&IdentifyArgs { data: data.clone(), model: nominal.clone(), out: out.clone(), json: true }).unwrap();
+        run_identify(&IdentifyArgs {
+            data: data.clone(),
+            model: nominal.clone(),
+            out: out.clone(),
+            json: true,
+        })
+        .unwrap();
         let extended = ModelConfig::load(&out.join("extended_model.toml")).unwrap();
-        let scale = extended.effects.wheel_torque_scale.expect("identified").scale;
-        assert!((scale[0] - 0.95).abs() < 0.005 && (scale[1] - 1.04).abs() < 0.005, "{scale:?}");
-        let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+        let scale = extended
+            .effects
+            .wheel_torque_scale
+            .expect("identified")
+            .scale;
+        assert!(
+            (scale[0] - 0.95).abs() < 0.005 && (scale[1] - 1.04).abs() < 0.005,
+            "{scale:?}"
+        );
+        let report: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap())
+                .unwrap();
         assert_eq!(report["causes"][0]["name"], "wheel_torque_scale");
-        assert!(report["causes"][0]["parameters"]["scale"].is_array() && report["causes"][0]["stderr"]["scale"].is_array());
-        assert!(report["baseline_rms"]["overall"].as_f64().unwrap() > report["extended_rms"]["overall"].as_f64().unwrap());
+        assert!(
+            report["causes"][0]["parameters"]["scale"].is_array()
+                && report["causes"][0]["stderr"]["scale"].is_array()
+        );
+        assert!(
+            report["baseline_rms"]["overall"].as_f64().unwrap()
+                > report["extended_rms"]["overall"].as_f64().unwrap()
+        );
         assert!(report["gain"].as_f64().unwrap() > 5.0);
         for f in ["nominal_residuals.svg", "equation_error.svg", "gain.svg"] {
             assert!(out.join(f).is_file(), "{f}");
         }
         // A missing data path is named.
-        let err = run_identify(&IdentifyArgs { data: dir.join("nothing"), model: nominal, out, json: true }).unwrap_err();
+        let err = run_identify(&IdentifyArgs {
+            data: dir.join("nothing"),
+            model: nominal,
+            out,
+            json: true,
+        })
+        .unwrap_err();
         assert!(format!("{err:#}").contains("nothing"), "{err:#}");
         std::fs::remove_dir_all(&dir).ok();
     }

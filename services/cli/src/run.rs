@@ -30,32 +30,49 @@ pub struct RunArgs {
     /// Run at 1× wall time instead of lockstep.
     #[arg(long)]
     paced: bool,
+    /// Feed this log's recorded inputs into the estimator and controller instead of simulating
+    /// (with a profile that runs the `replay` process; default profile then: replay). The
+    /// recorded run configuration is used, so the estimator and controller are set up as they were.
+    #[arg(long)]
+    replay: Option<PathBuf>,
     /// Print the summary as one JSON object.
     #[arg(long)]
     json: bool,
 }
 
 pub fn run(args: &RunArgs) -> Result<()> {
-    let profile_path = find_profile(&args.profile)?;
-    let profile = Profile::load(&profile_path)?;
-    let mut config = match &profile.run.config {
-        Some(path) => RunConfig::load(&profile.relative_to_profile(path))?,
-        None => RunConfig::default(),
+    let profile_name = match (&args.replay, args.profile.as_str()) {
+        (Some(_), "simulation") => "replay",
+        (_, name) => name,
     };
+    let profile_path = find_profile(profile_name)?;
+    let profile = Profile::load(&profile_path)?;
+    let mut config = match (&args.replay, &profile.run.config) {
+        (Some(source), _) => recorded_config(source)?,
+        (None, Some(path)) => RunConfig::load(&profile.relative_to_profile(path))?,
+        (None, None) => RunConfig::default(),
+    };
+    if args.replay.is_some() && args.paced {
+        bail!("--replay runs in lockstep (the replay owns the clock); drop --paced");
+    }
     config.run.profile = profile_path.file_stem().map_or_else(|| args.profile.clone(), |s| s.to_string_lossy().into_owned());
     config.run.mode = match (args.paced, profile.run.mode) {
         (true, _) | (false, Mode::Paced) => ClockMode::Paced,
         (false, Mode::Lockstep) => ClockMode::Lockstep,
     };
-    if let Some(d) = args.duration.or(profile.run.duration_s) {
-        config.run.duration_s = d;
+    if args.replay.is_none() {
+        if let Some(d) = args.duration.or(profile.run.duration_s) {
+            config.run.duration_s = d;
+        }
+        config.run.seed = args.seed.unwrap_or(profile.run.seed);
     }
-    config.run.seed = args.seed.unwrap_or(profile.run.seed);
+    config.run.replay = args.replay.clone();
     if let Some(log) = args.log.clone().or_else(|| profile.run.log.clone()) {
         config.run.log = log;
     }
+    // The clock owner (plant or replay: the process that ends the run) waits for all the others.
     config.run.participants =
-        profile.processes.iter().filter(|p| p.name != "plant").map(|p| p.name.clone()).collect();
+        profile.processes.iter().filter(|p| !p.ends_run).map(|p| p.name.clone()).collect();
     config.validate("command line")?;
 
     let log = config.run.log.clone();
@@ -80,6 +97,12 @@ pub fn run(args: &RunArgs) -> Result<()> {
         print_summary(&summary, &figure_path);
     }
     Ok(())
+}
+
+/// The run configuration a log was recorded with.
+fn recorded_config(log: &Path) -> Result<RunConfig> {
+    let recorded = testbed_log::RunLog::open(log).with_context(|| format!("opening the log to replay {}", log.display()))?;
+    Ok(RunConfig::from_toml_str(recorded.config_toml(), &format!("{} (config.toml attachment)", log.display()))?)
 }
 
 /// Start `testbed-launch` (next to this executable) on the profile and wait for it.

@@ -34,7 +34,7 @@ use nalgebra::{Matrix3, Vector3};
 use testbed_model::ModelConfig;
 use testbed_model::attitude::{self, Attitude};
 use testbed_model::config::RPM;
-use testbed_model::physics::{CmgPyramid, ExternalTorqueModel, WheelFrictionModel, Wheel};
+use testbed_model::physics::{CmgPyramid, ExternalTorqueModel, Wheel, WheelFrictionModel};
 
 /// Columns of the torque channel's regressor matrix, in this order: `com_offset.r_m` (3),
 /// `constant_torque.torque_nm` (3), `aero_drag.c1` (3), `aero_drag.c2` (3),
@@ -73,17 +73,34 @@ impl TorqueChannel {
     /// Build the channel: segments of at most `segment_s` that do not cross a change of
     /// `held_out` (fit / held-out blocks), on a regular clock, after the filter's start, away
     /// from the tilt stop; residuals under `config`; regressors.
-    pub fn new(data: &Aligned, recon: &Reconstruction, config: &ModelConfig, segment_s: f64, held_out: &[bool]) -> Self {
+    pub fn new(
+        data: &Aligned,
+        recon: &Reconstruction,
+        config: &ModelConfig,
+        segment_s: f64,
+        held_out: &[bool],
+    ) -> Self {
         let n = data.len();
         let max_len = ((segment_s / data.period_s).round() as usize).max(10);
         let inertia = config.true_inertia().unwrap_or_else(Matrix3::identity);
         let nominal = config.platform.inertia().unwrap_or(inertia);
-        let j = if data.has_wheels() { config.wheels.inertia_kgm2 } else { 0.0 };
+        let j = if data.has_wheels() {
+            config.wheels.inertia_kgm2
+        } else {
+            0.0
+        };
         let cmg = CmgPyramid::from_config(&config.cmg);
         let external = ExternalTorqueModel::from_config(config);
         let mg = config.platform.mass_kg * config.platform.gravity_mps2;
         let limit = config.platform.tilt_limit_rad() - 1.0_f64.to_radians();
-        let rotor = |k: usize| data.wheel_speed_at(k) * j + if data.gimbal.is_some() { cmg.momentum(&data.gimbal_at(k)) } else { Vector3::zeros() };
+        let rotor = |k: usize| {
+            data.wheel_speed_at(k) * j
+                + if data.gimbal.is_some() {
+                    cmg.momentum(&data.gimbal_at(k))
+                } else {
+                    Vector3::zeros()
+                }
+        };
         let usable = |k: usize| {
             let regular = (data.t[k + 1] - data.t[k] - data.period_s).abs() < 0.25 * data.period_s
                 && (data.t[k] - data.t[k - 1] - data.period_s).abs() < 0.25 * data.period_s;
@@ -99,7 +116,12 @@ impl TorqueChannel {
             let w = rate(k, b0);
             w.cross(&momentum(k, b0)) - external.torque(&recon.q[k], &w).total_b()
         };
-        let parts = |k: usize, b0: &Vector3<f64>| -> ([Vector3<f64>; TORQUE_COLUMNS], [Vector3<f64>; TORQUE_COLUMNS]) {
+        let parts = |k: usize,
+                     b0: &Vector3<f64>|
+         -> (
+            [Vector3<f64>; TORQUE_COLUMNS],
+            [Vector3<f64>; TORQUE_COLUMNS],
+        ) {
             let v = 0.5 * (rate(k - 1, b0) + rate(k + 1, b0));
             let g = attitude::gravity_b(&recon.q[k]);
             let mut m = [Vector3::zeros(); TORQUE_COLUMNS];
@@ -116,7 +138,13 @@ impl TorqueChannel {
             (m, f)
         };
 
-        let mut out = Self { ticks: Vec::new(), segments: Vec::new(), y: Vec::new(), x: Vec::new(), sigma: Vector3::zeros() };
+        let mut out = Self {
+            ticks: Vec::new(),
+            segments: Vec::new(),
+            y: Vec::new(),
+            x: Vec::new(),
+            sigma: Vector3::zeros(),
+        };
         let mut k = recon.start.max(1) + 1;
         while k + 1 < n {
             if !usable(k) {
@@ -147,9 +175,14 @@ impl TorqueChannel {
                 }
                 out.ticks.push(k);
                 out.y.push(momentum(k, &b0) - h0 + c);
-                out.x.push(std::array::from_fn(|col| m[col] - m0[col] + xc[col]));
+                out.x
+                    .push(std::array::from_fn(|col| m[col] - m0[col] + xc[col]));
                 k += 1;
-                if k + 1 >= n || k - start >= max_len || held_out[k] != held_out[start] || !usable(k) {
+                if k + 1 >= n
+                    || k - start >= max_len
+                    || held_out[k] != held_out[start]
+                    || !usable(k)
+                {
                     break;
                 }
             }
@@ -163,8 +196,13 @@ impl TorqueChannel {
             // Free offset per segment: remove the means.
             let len = rows.len() as f64;
             let ym: Vector3<f64> = out.y[rows.clone()].iter().sum::<Vector3<f64>>() / len;
-            let xm: [Vector3<f64>; TORQUE_COLUMNS] =
-                std::array::from_fn(|col| out.x[rows.clone()].iter().map(|r| r[col]).sum::<Vector3<f64>>() / len);
+            let xm: [Vector3<f64>; TORQUE_COLUMNS] = std::array::from_fn(|col| {
+                out.x[rows.clone()]
+                    .iter()
+                    .map(|r| r[col])
+                    .sum::<Vector3<f64>>()
+                    / len
+            });
             for r in rows.clone() {
                 out.y[r] -= ym;
                 for col in 0..TORQUE_COLUMNS {
@@ -178,7 +216,9 @@ impl TorqueChannel {
         let gyro_sigma = config.gyro.noise_density_rad_sqrt_s() / data.period_s.sqrt();
         let tach = config.wheels.speed_noise_rpm * RPM;
         out.sigma = Vector3::from_fn(|i, _| {
-            let from_gyro: f64 = (0..3).map(|c| (inertia[(i, c)] * gyro_sigma[c]).powi(2)).sum();
+            let from_gyro: f64 = (0..3)
+                .map(|c| (inertia[(i, c)] * gyro_sigma[c]).powi(2))
+                .sum();
             (from_gyro + (j * tach).powi(2)).sqrt()
         });
         out
@@ -250,11 +290,16 @@ impl WheelChannel {
             let start = recon.start.max(1);
             let mut k = start;
             while k + 1 < data.len() {
-                let regular = (data.t[k + 1] - data.t[k] - data.period_s).abs() < 0.25 * data.period_s;
+                let regular =
+                    (data.t[k + 1] - data.t[k] - data.period_s).abs() < 0.25 * data.period_s;
                 if regular {
                     for (i, wheel_rows) in rows.iter_mut().enumerate() {
                         let (n0, n1) = (speeds[k][i], speeds[k + 1][i]);
-                        let usable = n0.abs() >= n_min && n1.abs() >= n_min && n0 * n1 > 0.0 && n0.abs() <= n_max && n1.abs() <= n_max;
+                        let usable = n0.abs() >= n_min
+                            && n1.abs() >= n_min
+                            && n0 * n1 > 0.0
+                            && n0.abs() <= n_max
+                            && n1.abs() <= n_max;
                         if usable {
                             wheel_rows.push(WheelInterval {
                                 k,
@@ -270,7 +315,11 @@ impl WheelChannel {
                 k += 2;
             }
         }
-        Self { rows, sigma: (2.0f64).sqrt() * j * tach, max_torque_nm: config.wheels.max_torque_nm }
+        Self {
+            rows,
+            sigma: (2.0f64).sqrt() * j * tach,
+            max_torque_nm: config.wheels.max_torque_nm,
+        }
     }
 
     /// Rows in all wheels.
@@ -287,7 +336,10 @@ impl WheelChannel {
 pub fn friction_integral(model: &WheelFrictionModel, row: &WheelInterval) -> f64 {
     let dt = row.t1 - row.t0;
     let dir = row.n0.signum();
-    GL4.iter().map(|(s, w)| w * model.sliding_torque(row.n0 + s * (row.n1 - row.n0), dir)).sum::<f64>() * dt
+    GL4.iter()
+        .map(|(s, w)| w * model.sliding_torque(row.n0 + s * (row.n1 - row.n0), dir))
+        .sum::<f64>()
+        * dt
 }
 
 /// Regressors of the friction parameters `[coulomb_pos, coulomb_neg, stribeck, viscous]` for a

@@ -99,20 +99,64 @@ impl Dataset {
     /// series, a gyro record of at least [`MIN_DURATION_S`], and at least one vector sensor.
     /// Errors name the file and the row (rows counted from 1).
     pub fn check(&self) -> Result<(), DataError> {
-        check_series(&self.file(files::GYRO), &self.gyro, |r| (r.t_s, r.rate_rad_s.as_slice().to_vec()), &["wx", "wy", "wz"])?;
-        check_series(&self.file(files::INCLINOMETER), &self.inclinometer, |r| (r.t_s, r.tilt_rad.to_vec()), &["tilt_x", "tilt_y"])?;
-        check_series(&self.file(files::MAGNETOMETER), &self.magnetometer, |r| (r.t_s, r.field_t.as_slice().to_vec()), &["bx", "by", "bz"])?;
+        check_series(
+            &self.file(files::GYRO),
+            &self.gyro,
+            |r| (r.t_s, r.rate_rad_s.as_slice().to_vec()),
+            &["wx", "wy", "wz"],
+        )?;
+        check_series(
+            &self.file(files::INCLINOMETER),
+            &self.inclinometer,
+            |r| (r.t_s, r.tilt_rad.to_vec()),
+            &["tilt_x", "tilt_y"],
+        )?;
+        check_series(
+            &self.file(files::MAGNETOMETER),
+            &self.magnetometer,
+            |r| (r.t_s, r.field_t.as_slice().to_vec()),
+            &["bx", "by", "bz"],
+        )?;
         check_series(
             &self.file(files::WHEELS),
             &self.wheels,
-            |r| (r.t_s, r.speed_rad_s.iter().chain(r.torque_nm.iter()).copied().collect()),
-            &["speed_x", "speed_y", "speed_z", "torque_x", "torque_y", "torque_z"],
+            |r| {
+                (
+                    r.t_s,
+                    r.speed_rad_s
+                        .iter()
+                        .chain(r.torque_nm.iter())
+                        .copied()
+                        .collect(),
+                )
+            },
+            &[
+                "speed_x", "speed_y", "speed_z", "torque_x", "torque_y", "torque_z",
+            ],
         )?;
         check_series(
             &self.file(files::CMG),
             &self.cmg,
-            |r| (r.t_s, r.gimbal_rad.iter().chain(r.rate_cmd_rad_s.iter()).copied().collect()),
-            &["gimbal_1", "gimbal_2", "gimbal_3", "gimbal_4", "rate_cmd_1", "rate_cmd_2", "rate_cmd_3", "rate_cmd_4"],
+            |r| {
+                (
+                    r.t_s,
+                    r.gimbal_rad
+                        .iter()
+                        .chain(r.rate_cmd_rad_s.iter())
+                        .copied()
+                        .collect(),
+                )
+            },
+            &[
+                "gimbal_1",
+                "gimbal_2",
+                "gimbal_3",
+                "gimbal_4",
+                "rate_cmd_1",
+                "rate_cmd_2",
+                "rate_cmd_3",
+                "rate_cmd_4",
+            ],
         )?;
         if self.gyro.is_empty() {
             return Err(DataError::Missing {
@@ -144,8 +188,14 @@ impl Dataset {
         let t0 = self.gyro[0].t_s;
         let t1 = t0 + duration;
         for (name, times) in [
-            (files::INCLINOMETER, self.inclinometer.iter().map(|r| r.t_s).collect::<Vec<_>>()),
-            (files::MAGNETOMETER, self.magnetometer.iter().map(|r| r.t_s).collect()),
+            (
+                files::INCLINOMETER,
+                self.inclinometer.iter().map(|r| r.t_s).collect::<Vec<_>>(),
+            ),
+            (
+                files::MAGNETOMETER,
+                self.magnetometer.iter().map(|r| r.t_s).collect(),
+            ),
             (files::WHEELS, self.wheels.iter().map(|r| r.t_s).collect()),
             (files::CMG, self.cmg.iter().map(|r| r.t_s).collect()),
         ] {
@@ -163,7 +213,7 @@ impl Dataset {
                 }
             }
         }
-        if !(period > 0.0) {
+        if period.is_nan() || period <= 0.0 {
             return Err(DataError::Content {
                 file: self.file(files::GYRO),
                 message: "cannot determine the sample period".into(),
@@ -185,7 +235,7 @@ pub fn median_period(times: impl Iterator<Item = f64>) -> f64 {
 }
 
 fn check_series<R>(
-    file: &PathBuf,
+    file: &std::path::Path,
     rows: &[R],
     values: impl Fn(&R) -> (f64, Vec<f64>),
     columns: &[&str],
@@ -193,7 +243,12 @@ fn check_series<R>(
     let mut previous: Option<f64> = None;
     for (i, row) in rows.iter().enumerate() {
         let (t, xs) = values(row);
-        let at = |message: String| DataError::Row { file: file.clone(), row: i + 1, line: i + 2, message };
+        let at = |message: String| DataError::Row {
+            file: file.to_path_buf(),
+            row: i + 1,
+            line: i + 2,
+            message,
+        };
         if !t.is_finite() {
             return Err(at(format!("column `t_s`: {t} is not a finite number")));
         }
@@ -203,7 +258,9 @@ fn check_series<R>(
             }
         }
         if let Some(p) = previous.filter(|p| t <= *p) {
-            return Err(at(format!("time {t} s is not after the previous row's {p} s (rows must be in time order)")));
+            return Err(at(format!(
+                "time {t} s is not after the previous row's {p} s (rows must be in time order)"
+            )));
         }
         previous = Some(t);
     }
@@ -247,22 +304,42 @@ impl Aligned {
         let wheel_speed = (!data.wheels.is_empty()).then(|| {
             let times: Vec<f64> = data.wheels.iter().map(|r| r.t_s - t0).collect();
             let values: Vec<Vector3<f64>> = data.wheels.iter().map(|r| r.speed_rad_s).collect();
-            t.iter().map(|&ti| interpolate(&times, &values, ti)).collect()
+            t.iter()
+                .map(|&ti| interpolate(&times, &values, ti))
+                .collect()
         });
         let gimbal = (!data.cmg.is_empty()).then(|| {
             let times: Vec<f64> = data.cmg.iter().map(|r| r.t_s - t0).collect();
             let values: Vec<Vector4<f64>> = data.cmg.iter().map(|r| r.gimbal_rad).collect();
-            t.iter().map(|&ti| interpolate(&times, &values, ti)).collect()
+            t.iter()
+                .map(|&ti| interpolate(&times, &values, ti))
+                .collect()
         });
         Self {
             period_s: median_period(t.iter().copied()),
             gyro: data.gyro.iter().map(|r| r.rate_rad_s).collect(),
             wheel_speed,
-            wheel_cmd: data.wheels.iter().map(|r| (r.t_s - t0, r.torque_nm)).collect(),
+            wheel_cmd: data
+                .wheels
+                .iter()
+                .map(|r| (r.t_s - t0, r.torque_nm))
+                .collect(),
             gimbal,
-            gimbal_cmd: data.cmg.iter().map(|r| (r.t_s - t0, r.rate_cmd_rad_s)).collect(),
-            tilt: data.inclinometer.iter().map(|r| (r.t_s - t0, r.tilt_rad)).collect(),
-            field: data.magnetometer.iter().map(|r| (r.t_s - t0, r.field_t)).collect(),
+            gimbal_cmd: data
+                .cmg
+                .iter()
+                .map(|r| (r.t_s - t0, r.rate_cmd_rad_s))
+                .collect(),
+            tilt: data
+                .inclinometer
+                .iter()
+                .map(|r| (r.t_s - t0, r.tilt_rad))
+                .collect(),
+            field: data
+                .magnetometer
+                .iter()
+                .map(|r| (r.t_s - t0, r.field_t))
+                .collect(),
             t,
             t0,
         }
@@ -284,7 +361,9 @@ impl Aligned {
 
     /// Wheel speeds at tick k (zero without wheels), rad/s.
     pub fn wheel_speed_at(&self, k: usize) -> Vector3<f64> {
-        self.wheel_speed.as_ref().map_or_else(Vector3::zeros, |w| w[k])
+        self.wheel_speed
+            .as_ref()
+            .map_or_else(Vector3::zeros, |w| w[k])
     }
 
     /// Gimbal angles at tick k (zero without CMGs), rad.
@@ -306,7 +385,12 @@ impl Aligned {
     /// `∫ cmd(s − delay) ds` over `[a, b]` for the wheel commands, each component clamped to
     /// `±limit` (the drive's torque limit), Nm s. Commands are held between their times.
     pub fn wheel_cmd_integral(&self, a: f64, b: f64, delay_s: f64, limit: f64) -> Vector3<f64> {
-        integrate_held(&self.wheel_cmd, a - delay_s, b - delay_s, |v: &Vector3<f64>| v.map(|x| x.clamp(-limit, limit)))
+        integrate_held(
+            &self.wheel_cmd,
+            a - delay_s,
+            b - delay_s,
+            |v: &Vector3<f64>| v.map(|x| x.clamp(-limit, limit)),
+        )
     }
 }
 
@@ -374,7 +458,10 @@ mod tests {
 
     #[test]
     fn held_integral_splits_at_command_changes_and_delays() {
-        let series = vec![(0.0, Vector3::new(1.0, 0.0, 0.0)), (1.0, Vector3::new(2.0, 0.0, 0.0))];
+        let series = vec![
+            (0.0, Vector3::new(1.0, 0.0, 0.0)),
+            (1.0, Vector3::new(2.0, 0.0, 0.0)),
+        ];
         let i = integrate_held(&series, 0.5, 1.5, |v| *v);
         assert!((i.x - (0.5 + 1.0)).abs() < 1e-12);
         // A delay of 0.25 s: over [1.0, 1.5] the command issued at 0 acts until 1.25.

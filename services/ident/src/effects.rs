@@ -22,8 +22,8 @@
 use serde::Serialize;
 use testbed_model::ModelConfig;
 use testbed_model::config::{
-    ActuatorDelay, AeroDrag, ComOffset, ConstantTorque, EarthRate, GyroMisalignment, GyroScale, InertiaError,
-    MagneticDisturbance, WheelFriction, WheelTorqueScale,
+    ActuatorDelay, AeroDrag, ComOffset, ConstantTorque, EarthRate, GyroMisalignment, GyroScale,
+    InertiaError, MagneticDisturbance, WheelFriction, WheelTorqueScale,
 };
 
 /// A candidate cause: one effect table of the model configuration.
@@ -70,8 +70,22 @@ pub struct ParamSpec {
     pub step: f64,
 }
 
-const fn spec(key: &'static str, len: usize, unit: &'static str, lower: f64, upper: f64, step: f64) -> ParamSpec {
-    ParamSpec { key, len, unit, lower, upper, step }
+const fn spec(
+    key: &'static str,
+    len: usize,
+    unit: &'static str,
+    lower: f64,
+    upper: f64,
+    step: f64,
+) -> ParamSpec {
+    ParamSpec {
+        key,
+        len,
+        unit,
+        lower,
+        upper,
+        step,
+    }
 }
 
 const INF: f64 = f64::INFINITY;
@@ -79,23 +93,72 @@ const INF: f64 = f64::INFINITY;
 const P_COM: &[ParamSpec] = &[spec("r_m", 3, "m, body axes", -1e-3, 1e-3, 1e-7)];
 const P_EARTH: &[ParamSpec] = &[spec("latitude_deg", 1, "degrees north", -90.0, 90.0, 0.5)];
 const P_DRAG: &[ParamSpec] = &[
-                spec("c1", 3, "Nm/(rad/s), per body axis", 0.0, INF, 1e-3),
-                spec("c2", 3, "Nm/(rad/s)², per body axis", 0.0, INF, 1e-2),
-            ];
+    spec("c1", 3, "Nm/(rad/s), per body axis", 0.0, INF, 1e-3),
+    spec("c2", 3, "Nm/(rad/s)², per body axis", 0.0, INF, 1e-2),
+];
 const P_CONST: &[ParamSpec] = &[spec("torque_nm", 3, "Nm, body axes", -INF, INF, 1e-4)];
-const P_INERTIA: &[ParamSpec] = &[spec("fraction", 3, "relative error of each principal moment", -0.5, 0.5, 1e-3)];
-const P_SCALE: &[ParamSpec] = &[spec("ppm", 3, "parts per million, per gyro axis", -1e5, 1e5, 100.0)];
-const P_MISALIGN: &[ParamSpec] = &[spec("angles_rad", 3, "rad, about body X, Y, Z", -0.1, 0.1, 1e-4)];
+const P_INERTIA: &[ParamSpec] = &[spec(
+    "fraction",
+    3,
+    "relative error of each principal moment",
+    -0.5,
+    0.5,
+    1e-3,
+)];
+const P_SCALE: &[ParamSpec] = &[spec(
+    "ppm",
+    3,
+    "parts per million, per gyro axis",
+    -1e5,
+    1e5,
+    100.0,
+)];
+const P_MISALIGN: &[ParamSpec] = &[spec(
+    "angles_rad",
+    3,
+    "rad, about body X, Y, Z",
+    -0.1,
+    0.1,
+    1e-4,
+)];
 const P_FRICTION: &[ParamSpec] = &[
-                spec("coulomb_pos_nm", 3, "Nm, per wheel", 0.0, INF, 1e-4),
-                spec("coulomb_neg_nm", 3, "Nm, per wheel", 0.0, INF, 1e-4),
-                spec("viscous_nm_per_rad_s", 3, "Nm/(rad/s), per wheel", 0.0, INF, 1e-7),
-                spec("stribeck_nm", 3, "Nm, per wheel", 0.0, INF, 1e-4),
-                spec("stribeck_speed_rad_s", 3, "rad/s, per wheel", 1e-6, INF, 0.1),
-            ];
-const P_TSCALE: &[ParamSpec] = &[spec("scale", 3, "dimensionless, per wheel", 1e-6, INF, 1e-3)];
+    spec("coulomb_pos_nm", 3, "Nm, per wheel", 0.0, INF, 1e-4),
+    spec("coulomb_neg_nm", 3, "Nm, per wheel", 0.0, INF, 1e-4),
+    spec(
+        "viscous_nm_per_rad_s",
+        3,
+        "Nm/(rad/s), per wheel",
+        0.0,
+        INF,
+        1e-7,
+    ),
+    spec("stribeck_nm", 3, "Nm, per wheel", 0.0, INF, 1e-4),
+    spec(
+        "stribeck_speed_rad_s",
+        3,
+        "rad/s, per wheel",
+        1e-6,
+        INF,
+        0.1,
+    ),
+];
+const P_TSCALE: &[ParamSpec] = &[spec(
+    "scale",
+    3,
+    "dimensionless, per wheel",
+    1e-6,
+    INF,
+    1e-3,
+)];
 const P_DELAY: &[ParamSpec] = &[spec("delay_s", 1, "s", 0.0, 10.0, 0.01)];
-const P_MAG: &[ParamSpec] = &[spec("hard_iron_gauss", 3, "gauss, body axes", -INF, INF, 0.005)];
+const P_MAG: &[ParamSpec] = &[spec(
+    "hard_iron_gauss",
+    3,
+    "gauss, body axes",
+    -INF,
+    INF,
+    0.005,
+)];
 
 impl Cause {
     /// Every cause, in the library's order.
@@ -138,24 +201,37 @@ impl Cause {
     /// One line on what the effect is.
     pub fn description(self) -> &'static str {
         match self {
-            Cause::ComOffset => "centre of mass offset from the bearing centre: gravity torque m g (r × G_B)",
-            Cause::EarthRate => "the Earth's rotation sensed by the gyros, fixed in the level frame",
+            Cause::ComOffset => {
+                "centre of mass offset from the bearing centre: gravity torque m g (r × G_B)"
+            }
+            Cause::EarthRate => {
+                "the Earth's rotation sensed by the gyros, fixed in the level frame"
+            }
             Cause::AeroDrag => "aerodynamic drag torque −(c1 w + c2 w|w|) per body axis",
             Cause::ConstantTorque => "constant torque in body axes (bearing exhaust, cables)",
             Cause::InertiaError => "principal moments of inertia differ from the nominal",
             Cause::GyroScale => "gyro scale-factor error per axis",
             Cause::GyroMisalignment => "gyro triad misaligned by a small rotation",
-            Cause::WheelFriction => "wheel friction beyond eq. 3: per-wheel levels, direction asymmetry, Stribeck",
+            Cause::WheelFriction => {
+                "wheel friction beyond eq. 3: per-wheel levels, direction asymmetry, Stribeck"
+            }
             Cause::WheelTorqueScale => "wheel motors deliver a scaled torque",
             Cause::ActuatorDelay => "actuator commands act after a delay",
-            Cause::MagneticDisturbance => "body-fixed (hard-iron) field added to the magnetometer reading",
+            Cause::MagneticDisturbance => {
+                "body-fixed (hard-iron) field added to the magnetometer reading"
+            }
         }
     }
 
     pub fn kind(self) -> Kind {
         match self {
-            Cause::EarthRate | Cause::GyroScale | Cause::GyroMisalignment | Cause::MagneticDisturbance => Kind::Sensor,
-            Cause::ComOffset | Cause::AeroDrag | Cause::ConstantTorque | Cause::InertiaError => Kind::Torque,
+            Cause::EarthRate
+            | Cause::GyroScale
+            | Cause::GyroMisalignment
+            | Cause::MagneticDisturbance => Kind::Sensor,
+            Cause::ComOffset | Cause::AeroDrag | Cause::ConstantTorque | Cause::InertiaError => {
+                Kind::Torque
+            }
             Cause::WheelFriction | Cause::WheelTorqueScale | Cause::ActuatorDelay => Kind::Wheel,
         }
     }
@@ -178,6 +254,7 @@ impl Cause {
     }
 
     /// Total number of values.
+    #[allow(clippy::len_without_is_empty)] // a cause always has values
     pub fn len(self) -> usize {
         self.params().iter().map(|p| p.len).sum()
     }
@@ -199,7 +276,11 @@ impl Cause {
         let mut k = i;
         for p in self.params() {
             if k < p.len {
-                return if p.len == 1 { format!("{}.{}", self.name(), p.key) } else { format!("{}.{}[{k}]", self.name(), p.key) };
+                return if p.len == 1 {
+                    format!("{}.{}", self.name(), p.key)
+                } else {
+                    format!("{}.{}[{k}]", self.name(), p.key)
+                };
             }
             k -= p.len;
         }
@@ -232,39 +313,88 @@ impl Cause {
         let e = &config.effects;
         match self {
             Cause::ComOffset => e.com_offset.as_ref().map_or([0.0; 3], |x| x.r_m).to_vec(),
-            Cause::EarthRate => vec![e.earth_rate.as_ref().map_or(config.platform.latitude_deg, |x| x.latitude_deg)],
-            Cause::AeroDrag => e.aero_drag.as_ref().map_or([0.0; 6], |x| cat(&x.c1, &x.c2)).to_vec(),
-            Cause::ConstantTorque => e.constant_torque.as_ref().map_or([0.0; 3], |x| x.torque_nm).to_vec(),
-            Cause::InertiaError => e.inertia_error.as_ref().map_or([0.0; 3], |x| x.fraction).to_vec(),
+            Cause::EarthRate => vec![
+                e.earth_rate
+                    .as_ref()
+                    .map_or(config.platform.latitude_deg, |x| x.latitude_deg),
+            ],
+            Cause::AeroDrag => e
+                .aero_drag
+                .as_ref()
+                .map_or([0.0; 6], |x| cat(&x.c1, &x.c2))
+                .to_vec(),
+            Cause::ConstantTorque => e
+                .constant_torque
+                .as_ref()
+                .map_or([0.0; 3], |x| x.torque_nm)
+                .to_vec(),
+            Cause::InertiaError => e
+                .inertia_error
+                .as_ref()
+                .map_or([0.0; 3], |x| x.fraction)
+                .to_vec(),
             Cause::GyroScale => e.gyro_scale.as_ref().map_or([0.0; 3], |x| x.ppm).to_vec(),
-            Cause::GyroMisalignment => e.gyro_misalignment.as_ref().map_or([0.0; 3], |x| x.angles_rad).to_vec(),
+            Cause::GyroMisalignment => e
+                .gyro_misalignment
+                .as_ref()
+                .map_or([0.0; 3], |x| x.angles_rad)
+                .to_vec(),
             Cause::WheelFriction => {
-                let f = e.wheel_friction.clone().unwrap_or_else(|| nominal_friction(config));
-                [f.coulomb_pos_nm, f.coulomb_neg_nm, f.viscous_nm_per_rad_s, f.stribeck_nm, f.stribeck_speed_rad_s].concat()
+                let f = e
+                    .wheel_friction
+                    .clone()
+                    .unwrap_or_else(|| nominal_friction(config));
+                [
+                    f.coulomb_pos_nm,
+                    f.coulomb_neg_nm,
+                    f.viscous_nm_per_rad_s,
+                    f.stribeck_nm,
+                    f.stribeck_speed_rad_s,
+                ]
+                .concat()
             }
-            Cause::WheelTorqueScale => e.wheel_torque_scale.as_ref().map_or([1.0; 3], |x| x.scale).to_vec(),
+            Cause::WheelTorqueScale => e
+                .wheel_torque_scale
+                .as_ref()
+                .map_or([1.0; 3], |x| x.scale)
+                .to_vec(),
             Cause::ActuatorDelay => vec![e.actuator_delay.as_ref().map_or(0.0, |x| x.delay_s)],
-            Cause::MagneticDisturbance => e.magnetic_disturbance.as_ref().map_or([0.0; 3], |x| x.hard_iron_gauss).to_vec(),
+            Cause::MagneticDisturbance => e
+                .magnetic_disturbance
+                .as_ref()
+                .map_or([0.0; 3], |x| x.hard_iron_gauss)
+                .to_vec(),
         }
     }
 
     /// Switch the effect on in `config` with `values` (in [`Cause::values`] order, clamped to
     /// the configuration's bounds).
     pub fn apply(self, config: &mut ModelConfig, values: &[f64]) {
-        let v: Vec<f64> = values.iter().enumerate().map(|(i, x)| {
-            let (lo, hi) = self.bounds(i);
-            x.clamp(lo, hi)
-        }).collect();
+        let v: Vec<f64> = values
+            .iter()
+            .enumerate()
+            .map(|(i, x)| {
+                let (lo, hi) = self.bounds(i);
+                x.clamp(lo, hi)
+            })
+            .collect();
         let a3 = |i: usize| [v[i], v[i + 1], v[i + 2]];
         let e = &mut config.effects;
         match self {
             Cause::ComOffset => e.com_offset = Some(ComOffset { r_m: a3(0) }),
             Cause::EarthRate => e.earth_rate = Some(EarthRate { latitude_deg: v[0] }),
-            Cause::AeroDrag => e.aero_drag = Some(AeroDrag { c1: a3(0), c2: a3(3) }),
+            Cause::AeroDrag => {
+                e.aero_drag = Some(AeroDrag {
+                    c1: a3(0),
+                    c2: a3(3),
+                })
+            }
             Cause::ConstantTorque => e.constant_torque = Some(ConstantTorque { torque_nm: a3(0) }),
             Cause::InertiaError => e.inertia_error = Some(InertiaError { fraction: a3(0) }),
             Cause::GyroScale => e.gyro_scale = Some(GyroScale { ppm: a3(0) }),
-            Cause::GyroMisalignment => e.gyro_misalignment = Some(GyroMisalignment { angles_rad: a3(0) }),
+            Cause::GyroMisalignment => {
+                e.gyro_misalignment = Some(GyroMisalignment { angles_rad: a3(0) })
+            }
             Cause::WheelFriction => {
                 e.wheel_friction = Some(WheelFriction {
                     coulomb_pos_nm: a3(0),
@@ -274,9 +404,15 @@ impl Cause {
                     stribeck_speed_rad_s: a3(12),
                 })
             }
-            Cause::WheelTorqueScale => e.wheel_torque_scale = Some(WheelTorqueScale { scale: a3(0) }),
+            Cause::WheelTorqueScale => {
+                e.wheel_torque_scale = Some(WheelTorqueScale { scale: a3(0) })
+            }
             Cause::ActuatorDelay => e.actuator_delay = Some(ActuatorDelay { delay_s: v[0] }),
-            Cause::MagneticDisturbance => e.magnetic_disturbance = Some(MagneticDisturbance { hard_iron_gauss: a3(0) }),
+            Cause::MagneticDisturbance => {
+                e.magnetic_disturbance = Some(MagneticDisturbance {
+                    hard_iron_gauss: a3(0),
+                })
+            }
         }
     }
 
@@ -287,7 +423,11 @@ impl Cause {
         let mut i = 0;
         for p in self.params() {
             let slice = &values[i..i + p.len];
-            let value = if p.len == 1 { json_number(slice[0]) } else { serde_json::Value::Array(slice.iter().map(|x| json_number(*x)).collect()) };
+            let value = if p.len == 1 {
+                json_number(slice[0])
+            } else {
+                serde_json::Value::Array(slice.iter().map(|x| json_number(*x)).collect())
+            };
             map.insert(p.key.to_string(), value);
             i += p.len;
         }
@@ -296,7 +436,10 @@ impl Cause {
 
     /// Units of each key, as a JSON object.
     pub fn units_json(self) -> serde_json::Map<String, serde_json::Value> {
-        self.params().iter().map(|p| (p.key.to_string(), serde_json::Value::from(p.unit))).collect()
+        self.params()
+            .iter()
+            .map(|p| (p.key.to_string(), serde_json::Value::from(p.unit)))
+            .collect()
     }
 }
 
@@ -329,7 +472,12 @@ mod tests {
     fn values_round_trip_through_apply_and_the_toml() {
         for cause in Cause::ALL {
             let mut config = ModelConfig::default();
-            let values: Vec<f64> = cause.values(&config).iter().enumerate().map(|(i, x)| x + 1e-5 * (i + 1) as f64).collect();
+            let values: Vec<f64> = cause
+                .values(&config)
+                .iter()
+                .enumerate()
+                .map(|(i, x)| x + 1e-5 * (i + 1) as f64)
+                .collect();
             cause.apply(&mut config, &values);
             assert!(cause.present(&config));
             assert_eq!(cause.values(&config), values, "{}", cause.name());
@@ -343,7 +491,7 @@ mod tests {
 
     #[test]
     fn neutral_values_reproduce_the_nominal_model() {
-        use testbed_model::physics::{Wheel, wheel_friction_torque, wheel_breakaway_torque};
+        use testbed_model::physics::{Wheel, wheel_breakaway_torque, wheel_friction_torque};
         let nominal = ModelConfig::default();
         let mut with = nominal.clone();
         Cause::WheelFriction.apply(&mut with, &Cause::WheelFriction.values(&nominal));
@@ -353,7 +501,10 @@ mod tests {
                 let b = wheel_friction_torque(&with, wheel, n);
                 assert!((a - b).abs() < 1e-15);
             }
-            assert_eq!(wheel_breakaway_torque(&nominal, wheel), wheel_breakaway_torque(&with, wheel));
+            assert_eq!(
+                wheel_breakaway_torque(&nominal, wheel),
+                wheel_breakaway_torque(&with, wheel)
+            );
         }
     }
 }

@@ -10,23 +10,41 @@ pub enum DataError {
     #[error("{path}: not a directory of measured-data CSV files or an MCAP run log")]
     NotData { path: PathBuf },
     #[error("{file}: cannot read: {source}")]
-    Read { file: PathBuf, source: std::io::Error },
+    Read {
+        file: PathBuf,
+        source: std::io::Error,
+    },
     #[error("{file}: cannot write: {source}")]
-    Write { file: PathBuf, source: std::io::Error },
+    Write {
+        file: PathBuf,
+        source: std::io::Error,
+    },
     #[error("{file}: missing; {why}")]
     Missing { file: PathBuf, why: String },
     #[error("{file}: empty file (expected the header `{expected}`)")]
     Empty { file: PathBuf, expected: String },
     #[error("{file}, line 1 (header): {message}; the contract is `{expected}`")]
-    Header { file: PathBuf, message: String, expected: String },
+    Header {
+        file: PathBuf,
+        message: String,
+        expected: String,
+    },
     #[error("{file}, row {row} (line {line}): {message}")]
-    Row { file: PathBuf, row: usize, line: usize, message: String },
+    Row {
+        file: PathBuf,
+        row: usize,
+        line: usize,
+        message: String,
+    },
     #[error("{file}: {message}")]
     Content { file: PathBuf, message: String },
     #[error("{file}: {message}")]
     TooShort { file: PathBuf, message: String },
     #[error("{file}: run log: {source}")]
-    Log { file: PathBuf, source: testbed_log::LogError },
+    Log {
+        file: PathBuf,
+        source: testbed_log::LogError,
+    },
 }
 
 /// Why `identify` or `experiment` failed.
@@ -43,7 +61,11 @@ pub enum IdentError {
     #[error("closed loop: {0}")]
     Loop(#[from] testbed_gnc::closed_loop::LoopError),
     #[error("identification options: `{key}` = {value}: {reason}")]
-    Options { key: String, value: String, reason: String },
+    Options {
+        key: String,
+        value: String,
+        reason: String,
+    },
     #[error("{0}")]
     Failed(String),
 }

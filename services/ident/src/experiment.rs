@@ -18,7 +18,9 @@ use crate::error::IdentError;
 use nalgebra::Vector4;
 use serde::Serialize;
 use std::path::PathBuf;
-use testbed_gnc::closed_loop::{self, Feedback, Manoeuvre, MeasurementRecord, Scenario, TargetChange, Trace};
+use testbed_gnc::closed_loop::{
+    self, Feedback, Manoeuvre, MeasurementRecord, Scenario, TargetChange, Trace,
+};
 use testbed_gnc::mekf::MekfConfig;
 use testbed_gnc::tasks::ControllerConfig;
 use testbed_model::ModelConfig;
@@ -64,14 +66,27 @@ impl Default for ExperimentOptions {
 }
 
 /// Tilt pattern (pitch, roll) in units of `tilt_deg`.
-const TILT_PATTERN: [(f64, f64); 9] =
-    [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (-1.0, 0.0), (0.0, -1.0), (0.7, 0.7), (-0.7, 0.7), (-0.7, -0.7), (0.7, -0.7)];
+const TILT_PATTERN: [(f64, f64); 9] = [
+    (0.0, 0.0),
+    (1.0, 0.0),
+    (0.0, 1.0),
+    (-1.0, 0.0),
+    (0.0, -1.0),
+    (0.7, 0.7),
+    (-0.7, 0.7),
+    (-0.7, -0.7),
+    (0.7, -0.7),
+];
 
 impl ExperimentOptions {
     /// Refuse options the schedule cannot use, naming the option.
     pub fn validate(&self) -> Result<(), IdentError> {
         let bad = |key: &str, value: f64, reason: &str| {
-            Err(IdentError::Options { key: key.into(), value: value.to_string(), reason: reason.into() })
+            Err(IdentError::Options {
+                key: key.into(),
+                value: value.to_string(),
+                reason: reason.into(),
+            })
         };
         if !(self.duration_s.is_finite() && self.duration_s > 0.0) {
             return bad("duration_s", self.duration_s, "must be > 0");
@@ -83,19 +98,39 @@ impl ExperimentOptions {
             return bad("slow_rate_deg_s", self.slow_rate_deg_s, "must be >= 0");
         }
         if !(self.slow_zone_deg.is_finite() && (0.0..=45.0).contains(&self.slow_zone_deg)) {
-            return bad("slow_zone_deg", self.slow_zone_deg, "must be within [0, 45]");
+            return bad(
+                "slow_zone_deg",
+                self.slow_zone_deg,
+                "must be within [0, 45]",
+            );
         }
         if !(self.heading_amplitude_deg.is_finite() && self.heading_amplitude_deg >= 0.0) {
-            return bad("heading_amplitude_deg", self.heading_amplitude_deg, "must be >= 0");
+            return bad(
+                "heading_amplitude_deg",
+                self.heading_amplitude_deg,
+                "must be >= 0",
+            );
         }
         if !(self.tilt_deg.is_finite() && self.tilt_deg.abs() <= 20.0) {
-            return bad("tilt_deg", self.tilt_deg, "must be within ±20° (the stop is at 30°)");
+            return bad(
+                "tilt_deg",
+                self.tilt_deg,
+                "must be within ±20° (the stop is at 30°)",
+            );
         }
         if !(self.tilt_dwell_s.is_finite() && self.tilt_dwell_s > 0.0) {
             return bad("tilt_dwell_s", self.tilt_dwell_s, "must be > 0");
         }
-        if self.wheel_momentum_nms.iter().any(|h| !(h.is_finite() && h.abs() < 1.0)) {
-            return bad("wheel_momentum_nms", self.wheel_momentum_nms[0], "each must be within ±1 Nms");
+        if self
+            .wheel_momentum_nms
+            .iter()
+            .any(|h| !(h.is_finite() && h.abs() < 1.0))
+        {
+            return bad(
+                "wheel_momentum_nms",
+                self.wheel_momentum_nms[0],
+                "each must be within ±1 Nms",
+            );
         }
         Ok(())
     }
@@ -116,7 +151,11 @@ impl ExperimentOptions {
             d.min(180.0 - d) <= self.slow_zone_deg
         };
         let [x, y] = self.wheel_zero_headings_deg();
-        if self.slow_rate_deg_s > 0.0 && (near(x) || near(y)) { self.slow_rate_deg_s } else { self.heading_rate_deg_s }
+        if self.slow_rate_deg_s > 0.0 && (near(x) || near(y)) {
+            self.slow_rate_deg_s
+        } else {
+            self.heading_rate_deg_s
+        }
     }
 
     /// Target headings at whole seconds from 0: back and forth between ±amplitude, starting at 0
@@ -158,7 +197,12 @@ impl ExperimentOptions {
             .map(|(i, heading_deg)| {
                 let t = i as f64;
                 let (pitch, roll) = self.tilt_deg_at(t);
-                TargetChange { t_s: t, heading_deg, pitch_deg: pitch, roll_deg: roll }
+                TargetChange {
+                    t_s: t,
+                    heading_deg,
+                    pitch_deg: pitch,
+                    roll_deg: roll,
+                }
             })
             .collect()
     }
@@ -193,7 +237,10 @@ pub fn scenario(model: &ModelConfig, options: &ExperimentOptions) -> Result<Scen
 }
 
 /// Run the experiment: the measured data (as a test bed would record them) and the trace.
-pub fn run(model: &ModelConfig, options: &ExperimentOptions) -> Result<(Dataset, Trace), IdentError> {
+pub fn run(
+    model: &ModelConfig,
+    options: &ExperimentOptions,
+) -> Result<(Dataset, Trace), IdentError> {
     let scenario = scenario(model, options)?;
     let (trace, measured) = closed_loop::run_recorded(&scenario)?;
     let data = dataset_from_run(&trace, &measured, PathBuf::from("<experiment>"));
@@ -204,19 +251,42 @@ pub fn run(model: &ModelConfig, options: &ExperimentOptions) -> Result<(Dataset,
 /// magnetometer readings at their sample ticks, wheel speeds with the motor-torque command
 /// issued at that tick, and the CMGs if they were used.
 pub fn dataset_from_run(trace: &Trace, measured: &[MeasurementRecord], source: PathBuf) -> Dataset {
-    let mut data = Dataset { source, ..Dataset::default() };
+    let mut data = Dataset {
+        source,
+        ..Dataset::default()
+    };
     for (m, tick) in measured.iter().zip(&trace.ticks) {
-        data.gyro.push(GyroRow { t_s: m.t_s, rate_rad_s: m.gyro_rad_s });
+        data.gyro.push(GyroRow {
+            t_s: m.t_s,
+            rate_rad_s: m.gyro_rad_s,
+        });
         if let Some(tilt) = m.tilt_rad {
-            data.inclinometer.push(TiltRow { t_s: m.t_s, tilt_rad: tilt });
+            data.inclinometer.push(TiltRow {
+                t_s: m.t_s,
+                tilt_rad: tilt,
+            });
         }
         if let Some(field) = m.field_t {
-            data.magnetometer.push(FieldRow { t_s: m.t_s, field_t: field });
+            data.magnetometer.push(FieldRow {
+                t_s: m.t_s,
+                field_t: field,
+            });
         }
-        data.wheels.push(WheelRow { t_s: m.t_s, speed_rad_s: m.wheel_speed_rad_s, torque_nm: tick.command.wheel_torque_nm });
-        data.cmg.push(CmgRow { t_s: m.t_s, gimbal_rad: m.gimbal_rad, rate_cmd_rad_s: tick.command.gimbal_rate_rad_s });
+        data.wheels.push(WheelRow {
+            t_s: m.t_s,
+            speed_rad_s: m.wheel_speed_rad_s,
+            torque_nm: tick.command.wheel_torque_nm,
+        });
+        data.cmg.push(CmgRow {
+            t_s: m.t_s,
+            gimbal_rad: m.gimbal_rad,
+            rate_cmd_rad_s: tick.command.gimbal_rate_rad_s,
+        });
     }
-    let cmg_used = data.cmg.iter().any(|r| r.gimbal_rad != Vector4::zeros() || r.rate_cmd_rad_s != Vector4::zeros());
+    let cmg_used = data
+        .cmg
+        .iter()
+        .any(|r| r.gimbal_rad != Vector4::zeros() || r.rate_cmd_rad_s != Vector4::zeros());
     if !cmg_used {
         data.cmg.clear();
     }

@@ -15,7 +15,10 @@
 //! fit reports the whitened residual sum of squares of each channel on the fit data and on the
 //! held-out data.
 
-use crate::channels::{TORQUE_COLUMNS, TorqueChannel, WheelChannel, WheelInterval, friction_integral, friction_regressors, torque_columns};
+use crate::channels::{
+    TORQUE_COLUMNS, TorqueChannel, WheelChannel, WheelInterval, friction_integral,
+    friction_regressors, torque_columns,
+};
 use crate::data::Aligned;
 use crate::effects::{Cause, Kind};
 use crate::error::IdentError;
@@ -57,7 +60,11 @@ impl ChannelRss {
     }
     /// Root mean square of the whitened residuals of channel `c` (1 for noise as modelled).
     pub fn normalised_rms(&self, c: usize) -> f64 {
-        if self.n[c] == 0 { f64::NAN } else { (self.rss[c] / self.n[c] as f64).sqrt() }
+        if self.n[c] == 0 {
+            f64::NAN
+        } else {
+            (self.rss[c] / self.n[c] as f64).sqrt()
+        }
     }
 }
 
@@ -124,7 +131,11 @@ pub struct FitOptions {
 
 impl Default for FitOptions {
     fn default() -> Self {
-        Self { torque_segment_s: 15.0, max_delay_s: 1.0, alpha: 1e-6 }
+        Self {
+            torque_segment_s: 15.0,
+            max_delay_s: 1.0,
+            alpha: 1e-6,
+        }
     }
 }
 
@@ -154,7 +165,12 @@ fn sensor_key(config: &ModelConfig) -> String {
 }
 
 impl<'a> Problem<'a> {
-    pub fn new(data: &'a Aligned, base: ModelConfig, held_out: Vec<bool>, options: FitOptions) -> Self {
+    pub fn new(
+        data: &'a Aligned,
+        base: ModelConfig,
+        held_out: Vec<bool>,
+        options: FitOptions,
+    ) -> Self {
         Self {
             data,
             base,
@@ -195,9 +211,19 @@ impl<'a> Problem<'a> {
             return Ok(s.clone());
         }
         let recon = (*self.recon(config)?).clone();
-        let torque = TorqueChannel::new(self.data, &recon, &self.base, self.options.torque_segment_s, &self.held_out);
+        let torque = TorqueChannel::new(
+            self.data,
+            &recon,
+            &self.base,
+            self.options.torque_segment_s,
+            &self.held_out,
+        );
         let wheel = WheelChannel::new(self.data, &recon, &self.base);
-        let state = Rc::new(State { recon, torque, wheel });
+        let state = Rc::new(State {
+            recon,
+            torque,
+            wheel,
+        });
         self.cache.borrow_mut().insert(key, state.clone());
         Ok(state)
     }
@@ -205,8 +231,12 @@ impl<'a> Problem<'a> {
     /// Forget cached states and filter runs (memory) except the base's and those of `keep`.
     pub fn trim_cache(&self, keep: &[&ModelConfig]) {
         let keys: Vec<String> = keep.iter().map(|c| sensor_key(c)).collect();
-        self.cache.borrow_mut().retain(|k, _| k.is_empty() || keys.contains(k));
-        self.recons.borrow_mut().retain(|k, _| k.is_empty() || keys.contains(k));
+        self.cache
+            .borrow_mut()
+            .retain(|k, _| k.is_empty() || keys.contains(k));
+        self.recons
+            .borrow_mut()
+            .retain(|k, _| k.is_empty() || keys.contains(k));
     }
 
     /// Innovation rows on the fit ticks.
@@ -217,7 +247,11 @@ impl<'a> Problem<'a> {
     /// Fit the causes `set` jointly. Sensor causes in `warm` (fitted before) start from those
     /// values; when every sensor cause of the set is in `warm`, they are kept as they are (the
     /// other channels do not inform them).
-    pub fn fit(&self, set: &[Cause], warm: &HashMap<Cause, FittedCause>) -> Result<SetFit, IdentError> {
+    pub fn fit(
+        &self,
+        set: &[Cause],
+        warm: &HashMap<Cause, FittedCause>,
+    ) -> Result<SetFit, IdentError> {
         self.fit_screened(set, warm, None)
     }
 
@@ -225,11 +259,20 @@ impl<'a> Problem<'a> {
     /// predicts an attitude-channel residual (whitened, fit data) above `screen.1` minus half
     /// of `screen.0` (the candidate cannot be significant; saves filter runs). `screen.1` is
     /// the residual of the model the candidate is compared with.
-    pub fn fit_screened(&self, set: &[Cause], warm: &HashMap<Cause, FittedCause>, screen: Option<(f64, f64)>) -> Result<SetFit, IdentError> {
+    pub fn fit_screened(
+        &self,
+        set: &[Cause],
+        warm: &HashMap<Cause, FittedCause>,
+        screen: Option<(f64, f64)>,
+    ) -> Result<SetFit, IdentError> {
         let mut config = self.base.clone();
         let mut fitted: Vec<FittedCause> = Vec::new();
 
-        let sensor: Vec<Cause> = set.iter().copied().filter(|c| c.kind() == Kind::Sensor).collect();
+        let sensor: Vec<Cause> = set
+            .iter()
+            .copied()
+            .filter(|c| c.kind() == Kind::Sensor)
+            .collect();
         if !sensor.is_empty() {
             let (c, f) = self.fit_sensors(&sensor, warm, screen)?;
             config = c;
@@ -237,7 +280,11 @@ impl<'a> Problem<'a> {
         }
         let state = self.state(&config)?;
 
-        let torque: Vec<Cause> = set.iter().copied().filter(|c| c.kind() == Kind::Torque).collect();
+        let torque: Vec<Cause> = set
+            .iter()
+            .copied()
+            .filter(|c| c.kind() == Kind::Torque)
+            .collect();
         let mut torque_delta = [0.0; TORQUE_COLUMNS];
         if !torque.is_empty() {
             let (delta, f) = self.fit_torque(&state, &torque)?;
@@ -248,7 +295,11 @@ impl<'a> Problem<'a> {
             fitted.extend(f);
         }
 
-        let wheel: Vec<Cause> = set.iter().copied().filter(|c| c.kind() == Kind::Wheel).collect();
+        let wheel: Vec<Cause> = set
+            .iter()
+            .copied()
+            .filter(|c| c.kind() == Kind::Wheel)
+            .collect();
         if !wheel.is_empty() {
             let f = self.fit_wheels(&state, &wheel)?;
             for fc in &f {
@@ -260,14 +311,29 @@ impl<'a> Problem<'a> {
         let evaluation = self.evaluate(&state, &config, &torque_delta);
         // Order as the set was given.
         fitted.sort_by_key(|f| set.iter().position(|c| *c == f.cause));
-        Ok(SetFit { config, causes: fitted, evaluation, state, torque_delta })
+        Ok(SetFit {
+            config,
+            causes: fitted,
+            evaluation,
+            state,
+            torque_delta,
+        })
     }
 
     /// Residual sums of every channel for a fitted configuration on `state`.
-    pub fn evaluate(&self, state: &State, config: &ModelConfig, torque_delta: &[f64; TORQUE_COLUMNS]) -> Evaluation {
+    pub fn evaluate(
+        &self,
+        state: &State,
+        config: &ModelConfig,
+        torque_delta: &[f64; TORQUE_COLUMNS],
+    ) -> Evaluation {
         let mut e = Evaluation::default();
         for i in state.recon.innovations.iter() {
-            let target = if self.held_out[i.tick] { &mut e.held_out } else { &mut e.fit };
+            let target = if self.held_out[i.tick] {
+                &mut e.held_out
+            } else {
+                &mut e.fit
+            };
             for c in 0..crate::reconstruct::INNOVATION_LEN {
                 if i.mask & (1 << c) != 0 {
                     target.rss[0] += i.values[c] * i.values[c];
@@ -277,7 +343,11 @@ impl<'a> Problem<'a> {
         }
         for (i, &a) in state.torque.ticks.iter().enumerate() {
             let r = state.torque.whitened(i, torque_delta);
-            let target = if self.held_out[a] { &mut e.held_out } else { &mut e.fit };
+            let target = if self.held_out[a] {
+                &mut e.held_out
+            } else {
+                &mut e.fit
+            };
             target.rss[1] += r.norm_squared();
             target.n[1] += 3;
         }
@@ -285,7 +355,11 @@ impl<'a> Problem<'a> {
         for (w, rows) in state.wheel.rows.iter().enumerate() {
             for row in rows {
                 let r = wheel.residual(self.data, &state.wheel, w, row) / state.wheel.sigma;
-                let target = if self.held_out[row.k] { &mut e.held_out } else { &mut e.fit };
+                let target = if self.held_out[row.k] {
+                    &mut e.held_out
+                } else {
+                    &mut e.fit
+                };
                 target.rss[2] += r * r;
                 target.n[2] += 1;
             }
@@ -297,10 +371,16 @@ impl<'a> Problem<'a> {
     // Sensor causes: Gauss–Newton through the filter.
     // -----------------------------------------------------------------------------------------
 
-    fn fit_sensors(&self, set: &[Cause], warm: &HashMap<Cause, FittedCause>, screen: Option<(f64, f64)>) -> Result<(ModelConfig, Vec<FittedCause>), IdentError> {
+    fn fit_sensors(
+        &self,
+        set: &[Cause],
+        warm: &HashMap<Cause, FittedCause>,
+        screen: Option<(f64, f64)>,
+    ) -> Result<(ModelConfig, Vec<FittedCause>), IdentError> {
         if set.iter().all(|c| warm.contains_key(c)) {
             let mut config = self.base.clone();
-            let fitted: Vec<FittedCause> = set.iter().filter_map(|c| warm.get(c).cloned()).collect();
+            let fitted: Vec<FittedCause> =
+                set.iter().filter_map(|c| warm.get(c).cloned()).collect();
             for f in &fitted {
                 f.cause.apply(&mut config, &f.values);
             }
@@ -337,15 +417,23 @@ impl<'a> Problem<'a> {
         };
         let steps: Vec<f64> = layout
             .iter()
-            .flat_map(|&(cause, _)| cause.params().iter().flat_map(|p| std::iter::repeat_n(p.step, p.len)))
+            .flat_map(|&(cause, _)| {
+                cause
+                    .params()
+                    .iter()
+                    .flat_map(|p| std::iter::repeat_n(p.step, p.len))
+            })
             .collect();
         let p = theta.len();
         let mut r0 = self.fit_innovations(&*self.recon(&build(&theta))?);
         let rss = |r: &[f64]| r.iter().map(|x| x * x).sum::<f64>();
-        let mut last: Option<(LsFit, Vec<bool>)> = None;
+        let mut last: Option<LsFit> = None;
         // Screening with causes already fitted (warm): only the new causes' columns are
         // linearised first; the fitted ones sit at their optimum.
-        let new_params: Vec<bool> = layout.iter().flat_map(|&(cause, len)| std::iter::repeat_n(!warm.contains_key(&cause), len)).collect();
+        let new_params: Vec<bool> = layout
+            .iter()
+            .flat_map(|&(cause, len)| std::iter::repeat_n(!warm.contains_key(&cause), len))
+            .collect();
         if let Some((threshold, reference)) = screen.filter(|_| new_params.iter().any(|n| !n)) {
             let idx: Vec<usize> = (0..p).filter(|&j| new_params[j]).collect();
             let mut ne = NormalEquations::new(idx.len());
@@ -353,11 +441,20 @@ impl<'a> Problem<'a> {
             for &j in &idx {
                 let mut t = theta.clone();
                 let (lo, hi) = bound_of(&layout, j);
-                let h = if theta[j] + steps[j] > hi { -steps[j] } else { steps[j] };
+                let h = if theta[j] + steps[j] > hi {
+                    -steps[j]
+                } else {
+                    steps[j]
+                };
                 t[j] = (theta[j] + h).clamp(lo, hi);
                 let rj = self.fit_innovations(&self.run_filter(&build(&t))?);
                 let hh = t[j] - theta[j];
-                cols.push(rj.iter().zip(&r0).map(|(a, b)| (a - b) / hh).collect::<Vec<f64>>());
+                cols.push(
+                    rj.iter()
+                        .zip(&r0)
+                        .map(|(a, b)| (a - b) / hh)
+                        .collect::<Vec<f64>>(),
+                );
             }
             let mut row = vec![0.0; idx.len()];
             for i in 0..r0.len() {
@@ -366,7 +463,9 @@ impl<'a> Problem<'a> {
                 }
                 ne.add(&row, -r0[i]);
             }
-            let predicted = ne.solve().map_or(0.0, |f| (reference - f.rss) / f.sigma2().max(1e-300));
+            let predicted = ne
+                .solve()
+                .map_or(0.0, |f| (reference - f.rss) / f.sigma2().max(1e-300));
             if predicted < 0.5 * threshold {
                 return Ok(self.unchanged(&layout, &theta, &build(&theta)));
             }
@@ -377,7 +476,11 @@ impl<'a> Problem<'a> {
             for j in 0..p {
                 let mut t = theta.clone();
                 let (lo, hi) = bound_of(&layout, j);
-                let h = if theta[j] + steps[j] > hi { -steps[j] } else { steps[j] };
+                let h = if theta[j] + steps[j] > hi {
+                    -steps[j]
+                } else {
+                    steps[j]
+                };
                 t[j] = (theta[j] + h).clamp(lo, hi);
                 let rj = self.fit_innovations(&self.run_filter(&build(&t))?);
                 let hh = t[j] - theta[j];
@@ -391,7 +494,6 @@ impl<'a> Problem<'a> {
                 }
                 ne.add(&row, -r0[i]);
             }
-            let active: Vec<bool> = (0..p).map(|j| ne_diag_positive(&ne, j)).collect();
             let Some(fit) = ne.solve() else {
                 return Err(IdentError::Failed(format!(
                     "{}: the data do not determine the parameters (no excitation of this effect)",
@@ -400,12 +502,15 @@ impl<'a> Problem<'a> {
             };
             let stderr = fit.stderr();
             let step: Vec<f64> = fit.theta.iter().copied().collect();
-            let small = step.iter().zip(&stderr).all(|(d, s)| d.abs() <= 0.05 * s.max(1e-300));
+            let small = step
+                .iter()
+                .zip(&stderr)
+                .all(|(d, s)| d.abs() <= 0.05 * s.max(1e-300));
             let rss0 = rss(&r0);
             if let Some((threshold, reference)) = screen.filter(|_| last.is_none()) {
                 let predicted = (reference - fit.rss) / fit.sigma2().max(1e-300);
                 if predicted < 0.5 * threshold {
-                    last = Some((fit, active));
+                    last = Some(fit);
                     break;
                 }
             }
@@ -413,7 +518,11 @@ impl<'a> Problem<'a> {
             let mut scale = 1.0;
             let mut accepted = false;
             for _ in 0..6 {
-                let mut t: Vec<f64> = theta.iter().zip(&step).map(|(a, d)| a + scale * d).collect();
+                let mut t: Vec<f64> = theta
+                    .iter()
+                    .zip(&step)
+                    .map(|(a, d)| a + scale * d)
+                    .collect();
                 clamp(&mut t);
                 let r = self.fit_innovations(&*self.recon(&build(&t))?);
                 if rss(&r) <= rss0 {
@@ -424,13 +533,13 @@ impl<'a> Problem<'a> {
                 }
                 scale *= 0.5;
             }
-            last = Some((fit, active));
+            last = Some(fit);
             if small || !accepted {
                 break;
             }
         }
         let config = build(&theta);
-        let (fit, _active) = last.ok_or_else(|| IdentError::Failed("sensor fit did not run".into()))?;
+        let fit = last.ok_or_else(|| IdentError::Failed("sensor fit did not run".into()))?;
         // Standard errors: residual-scaled Gauss–Newton covariance at the last linearisation.
         let stderr = fit.stderr();
         let mut out = Vec::new();
@@ -440,11 +549,21 @@ impl<'a> Problem<'a> {
             let se: Vec<f64> = (0..len)
                 .map(|j| {
                     let (lo, hi) = cause.bounds(j);
-                    if values[j] <= lo || values[j] >= hi { f64::NAN } else { stderr[i + j] }
+                    if values[j] <= lo || values[j] >= hi {
+                        f64::NAN
+                    } else {
+                        stderr[i + j]
+                    }
                 })
                 .collect();
             let free = se.iter().filter(|s| s.is_finite()).count();
-            out.push(FittedCause { cause, values, stderr: se, free, note: String::new() });
+            out.push(FittedCause {
+                cause,
+                values,
+                stderr: se,
+                free,
+                note: String::new(),
+            });
             i += len;
         }
         Ok((config, out))
@@ -452,11 +571,22 @@ impl<'a> Problem<'a> {
 
     /// A sensor fit that stopped at its starting values (screened out): the values, no standard
     /// errors, every value counted as estimated.
-    fn unchanged(&self, layout: &[(Cause, usize)], theta: &[f64], config: &ModelConfig) -> (ModelConfig, Vec<FittedCause>) {
+    fn unchanged(
+        &self,
+        layout: &[(Cause, usize)],
+        theta: &[f64],
+        config: &ModelConfig,
+    ) -> (ModelConfig, Vec<FittedCause>) {
         let mut out = Vec::new();
         let mut i = 0;
         for &(cause, len) in layout {
-            out.push(FittedCause { cause, values: theta[i..i + len].to_vec(), stderr: vec![f64::NAN; len], free: len, note: "screened out: not significant to first order".into() });
+            out.push(FittedCause {
+                cause,
+                values: theta[i..i + len].to_vec(),
+                stderr: vec![f64::NAN; len],
+                free: len,
+                note: "screened out: not significant to first order".into(),
+            });
             i += len;
         }
         (config.clone(), out)
@@ -477,20 +607,37 @@ impl<'a> Problem<'a> {
         let rss_of = |v: &[f64]| -> Result<f64, IdentError> {
             let mut c = self.base.clone();
             Cause::MagneticDisturbance.apply(&mut c, v);
-            Ok(self.fit_innovations(&*self.recon(&c)?).iter().map(|x| x * x).sum())
+            Ok(self
+                .fit_innovations(&*self.recon(&c)?)
+                .iter()
+                .map(|x| x * x)
+                .sum())
         };
-        Ok(if rss_of(&h)? < rss_of(&neutral)? { h.to_vec() } else { neutral })
+        Ok(if rss_of(&h)? < rss_of(&neutral)? {
+            h.to_vec()
+        } else {
+            neutral
+        })
     }
 
     // -----------------------------------------------------------------------------------------
     // Torque causes: linear least squares on the torque channel.
     // -----------------------------------------------------------------------------------------
 
-    fn fit_torque(&self, state: &State, set: &[Cause]) -> Result<([f64; TORQUE_COLUMNS], Vec<FittedCause>), IdentError> {
+    fn fit_torque(
+        &self,
+        state: &State,
+        set: &[Cause],
+    ) -> Result<([f64; TORQUE_COLUMNS], Vec<FittedCause>), IdentError> {
         let ch = &state.torque;
-        let columns: Vec<usize> = set.iter().flat_map(|c| torque_columns(*c).into_iter().flatten()).collect();
+        let columns: Vec<usize> = set
+            .iter()
+            .flat_map(|c| torque_columns(*c).into_iter().flatten())
+            .collect();
         if ch.len() < 30 {
-            return Err(IdentError::Failed("too few usable torque-channel samples to fit".into()));
+            return Err(IdentError::Failed(
+                "too few usable torque-channel samples to fit".into(),
+            ));
         }
         // Base values of the fitted columns (drag must stay ≥ 0 in total).
         let base_value = |col: usize| -> f64 {
@@ -547,7 +694,13 @@ impl<'a> Problem<'a> {
                 se[off] = stderr[j];
             }
             let free = se.iter().filter(|s| s.is_finite()).count();
-            out.push(FittedCause { cause, values, stderr: se, free, note: String::new() });
+            out.push(FittedCause {
+                cause,
+                values,
+                stderr: se,
+                free,
+                note: String::new(),
+            });
         }
         Ok((delta, out))
     }
@@ -559,7 +712,9 @@ impl<'a> Problem<'a> {
     fn fit_wheels(&self, state: &State, set: &[Cause]) -> Result<Vec<FittedCause>, IdentError> {
         let ch = &state.wheel;
         if ch.len() < 10 {
-            return Err(IdentError::Failed("too few usable wheel-channel intervals to fit".into()));
+            return Err(IdentError::Failed(
+                "too few usable wheel-channel intervals to fit".into(),
+            ));
         }
         let fit_scale = set.contains(&Cause::WheelTorqueScale);
         let fit_friction = set.contains(&Cause::WheelFriction);
@@ -571,12 +726,17 @@ impl<'a> Problem<'a> {
         let mut result: [WheelSolve; 3] = Default::default();
         let mut delay_se = f64::NAN;
         let rounds = if fit_delay && fit_friction { 3 } else { 1 };
-        for round in 0..rounds {
+        for _ in 0..rounds {
             if fit_delay {
                 let total = |d: f64| -> f64 {
-                    (0..3).map(|w| self.solve_wheel(ch, &base, w, d, fit_scale, fit_friction, stribeck[w]).map_or(0.0, |s| s.rss)).sum()
+                    (0..3)
+                        .map(|w| {
+                            self.solve_wheel(ch, &base, w, d, fit_scale, fit_friction, stribeck[w])
+                                .map_or(0.0, |s| s.rss)
+                        })
+                        .sum()
                 };
-                let (d, se) = search_1d(total, 0.0, self.options.max_delay_s, 41, false);
+                let (d, se) = search_1d(total, 0.0, self.options.max_delay_s, 41);
                 delay = d;
                 delay_se = se;
             }
@@ -584,10 +744,13 @@ impl<'a> Problem<'a> {
                 if fit_friction {
                     let none = self.solve_wheel(ch, &base, w, delay, fit_scale, true, None);
                     let rss_of = |ns: f64| {
-                        self.solve_wheel(ch, &base, w, delay, fit_scale, true, Some(ns)).map_or(f64::INFINITY, |s| s.rss)
+                        self.solve_wheel(ch, &base, w, delay, fit_scale, true, Some(ns))
+                            .map_or(f64::INFINITY, |s| s.rss)
                     };
-                    let (log_ns, log_se) = search_1d(|x: f64| rss_of(x.exp()), 0.02f64.ln(), 30.0f64.ln(), 31, true);
-                    let with = self.solve_wheel(ch, &base, w, delay, fit_scale, true, Some(log_ns.exp()));
+                    let (log_ns, log_se) =
+                        search_1d(|x: f64| rss_of(x.exp()), 0.02f64.ln(), 30.0f64.ln(), 31);
+                    let with =
+                        self.solve_wheel(ch, &base, w, delay, fit_scale, true, Some(log_ns.exp()));
                     let threshold = stribeck_threshold(ch.rows[w].len(), self.options.alpha);
                     let (choice, model) = match (none, with) {
                         (Some(a), Some(b)) if a.rss - b.rss > threshold && b.theta[3] > 0.0 => {
@@ -602,10 +765,11 @@ impl<'a> Problem<'a> {
                     stribeck[w] = model;
                     result[w] = choice;
                 } else {
-                    result[w] = self.solve_wheel(ch, &base, w, delay, fit_scale, false, None).unwrap_or_default();
+                    result[w] = self
+                        .solve_wheel(ch, &base, w, delay, fit_scale, false, None)
+                        .unwrap_or_default();
                 }
             }
-            let _ = round;
         }
 
         let mut out = Vec::new();
@@ -613,11 +777,25 @@ impl<'a> Problem<'a> {
             let mut values = vec![0.0; 3];
             let mut se = vec![f64::NAN; 3];
             for w in 0..3 {
-                values[w] = if result[w].valid { result[w].theta[0] } else { base.scale[w] };
-                se[w] = if result[w].valid { result[w].stderr[0] } else { f64::NAN };
+                values[w] = if result[w].valid {
+                    result[w].theta[0]
+                } else {
+                    base.scale[w]
+                };
+                se[w] = if result[w].valid {
+                    result[w].stderr[0]
+                } else {
+                    f64::NAN
+                };
             }
             let free = se.iter().filter(|s| s.is_finite()).count();
-            out.push(FittedCause { cause: Cause::WheelTorqueScale, values, stderr: se, free, note: String::new() });
+            out.push(FittedCause {
+                cause: Cause::WheelTorqueScale,
+                values,
+                stderr: se,
+                free,
+                note: String::new(),
+            });
         }
         if fit_friction {
             let nominal = Cause::WheelFriction.values(&self.base);
@@ -628,7 +806,10 @@ impl<'a> Problem<'a> {
             for w in 0..3 {
                 let r = &result[w];
                 if !r.valid {
-                    notes.push(format!("wheel {}: no usable data, nominal kept", "XYZ".as_bytes()[w] as char));
+                    notes.push(format!(
+                        "wheel {}: no usable data, nominal kept",
+                        "XYZ".as_bytes()[w] as char
+                    ));
                     continue;
                 }
                 // theta: [scale, c_pos, c_neg, t_s, k]
@@ -645,23 +826,41 @@ impl<'a> Problem<'a> {
                         values[12 + w] = ns;
                         se[9 + w] = r.stderr[3];
                         se[12 + w] = ns_se;
-                        notes.push(format!("wheel {}: asymmetric with Stribeck term", "XYZ".as_bytes()[w] as char));
+                        notes.push(format!(
+                            "wheel {}: asymmetric with Stribeck term",
+                            "XYZ".as_bytes()[w] as char
+                        ));
                     }
                     None => {
                         // No Stribeck term: breakaway at the larger Coulomb level, the Stribeck
                         // speed so small the term vanishes for any speed the data resolve.
                         values[9 + w] = cp.max(cn);
                         values[12 + w] = 1e-3;
-                        notes.push(format!("wheel {}: asymmetric, no Stribeck term", "XYZ".as_bytes()[w] as char));
+                        notes.push(format!(
+                            "wheel {}: asymmetric, no Stribeck term",
+                            "XYZ".as_bytes()[w] as char
+                        ));
                     }
                 }
                 free += r.free.saturating_sub(usize::from(fit_scale)) + usize::from(r.ns.is_some());
             }
-            out.push(FittedCause { cause: Cause::WheelFriction, values, stderr: se, free, note: notes.join("; ") });
+            out.push(FittedCause {
+                cause: Cause::WheelFriction,
+                values,
+                stderr: se,
+                free,
+                note: notes.join("; "),
+            });
         }
         if fit_delay {
             let free = usize::from(delay_se.is_finite());
-            out.push(FittedCause { cause: Cause::ActuatorDelay, values: vec![delay], stderr: vec![delay_se], free, note: String::new() });
+            out.push(FittedCause {
+                cause: Cause::ActuatorDelay,
+                values: vec![delay],
+                stderr: vec![delay_se],
+                free,
+                note: String::new(),
+            });
         }
         Ok(out)
     }
@@ -687,7 +886,9 @@ impl<'a> Problem<'a> {
         let mut n = 0usize;
         let base_friction = &base.friction[w];
         for row in rows.iter().filter(|r| !self.held_out[r.k]) {
-            let tau = self.data.wheel_cmd_integral(row.t0, row.t1, delay, ch.max_torque_nm)[w];
+            let tau = self
+                .data
+                .wheel_cmd_integral(row.t0, row.t1, delay, ch.max_torque_nm)[w];
             let mut y = row.ja;
             if fit_scale {
                 x[0] = tau;
@@ -714,7 +915,13 @@ impl<'a> Problem<'a> {
         }
         // Undetermined columns (no data in that direction, no Stribeck term, not fitted) are
         // held at their base values.
-        let base_theta = [base.scale[w], base_friction.coulomb_pos_nm, base_friction.coulomb_neg_nm, base_friction.breakaway_nm, base_friction.viscous_nm_per_rad_s];
+        let base_theta = [
+            base.scale[w],
+            base_friction.coulomb_pos_nm,
+            base_friction.coulomb_neg_nm,
+            base_friction.breakaway_nm,
+            base_friction.viscous_nm_per_rad_s,
+        ];
         let mut fixed: Vec<(usize, f64)> = Vec::new();
         for j in 0..5 {
             let used = match j {
@@ -757,7 +964,14 @@ impl<'a> Problem<'a> {
         let free = se.iter().filter(|s| s.is_finite()).count();
         let theta: [f64; 5] = std::array::from_fn(|j| full[j]);
         let stderr: [f64; 5] = std::array::from_fn(|j| se[j]);
-        Some(WheelSolve { valid: true, theta, stderr, rss, free, ns: None })
+        Some(WheelSolve {
+            valid: true,
+            theta,
+            stderr,
+            rss,
+            free,
+            ns: None,
+        })
     }
 }
 
@@ -785,14 +999,28 @@ pub struct WheelModel {
 impl WheelModel {
     pub fn from_config(config: &ModelConfig) -> Self {
         Self {
-            scale: config.effects.wheel_torque_scale.as_ref().map_or([1.0; 3], |s| s.scale),
+            scale: config
+                .effects
+                .wheel_torque_scale
+                .as_ref()
+                .map_or([1.0; 3], |s| s.scale),
             friction: Wheel::ALL.map(|w| WheelFrictionModel::from_config(config, w)),
-            delay_s: config.effects.actuator_delay.as_ref().map_or(0.0, |d| d.delay_s),
+            delay_s: config
+                .effects
+                .actuator_delay
+                .as_ref()
+                .map_or(0.0, |d| d.delay_s),
         }
     }
 
     /// Wheel-channel residual of a row, Nms.
-    pub fn residual(&self, data: &Aligned, ch: &WheelChannel, w: usize, row: &WheelInterval) -> f64 {
+    pub fn residual(
+        &self,
+        data: &Aligned,
+        ch: &WheelChannel,
+        w: usize,
+        row: &WheelInterval,
+    ) -> f64 {
         let tau = data.wheel_cmd_integral(row.t0, row.t1, self.delay_s, ch.max_torque_nm)[w];
         row.ja - self.scale[w] * tau + friction_integral(&self.friction[w], row)
     }
@@ -820,7 +1048,9 @@ fn column_negligible(ne: &NormalEquations, j: usize) -> bool {
 /// (NaN for the held ones).
 fn solve_fixed(ne: &NormalEquations, fixed: &[(usize, f64)]) -> Option<(Vec<f64>, Vec<f64>)> {
     let p = ne.params();
-    let free: Vec<usize> = (0..p).filter(|j| !fixed.iter().any(|(f, _)| f == j)).collect();
+    let free: Vec<usize> = (0..p)
+        .filter(|j| !fixed.iter().any(|(f, _)| f == j))
+        .collect();
     let mut values = vec![0.0; p];
     for (j, v) in fixed {
         values[*j] = *v;
@@ -863,10 +1093,12 @@ fn column_cause(col: usize) -> (Cause, usize) {
 /// Minimise `f` on `[lo, hi]`: a grid of `points`, then golden-section refinement between the
 /// best point's neighbours. Returns the minimiser and its standard error from the curvature,
 /// `sqrt(2 s² / f'')` with `s² = 1` (f is a whitened residual sum); NaN when the minimum is on a
-/// bound or flat. `log`: the variable is a logarithm (only changes nothing here but documents).
-fn search_1d(f: impl Fn(f64) -> f64, lo: f64, hi: f64, points: usize, _log: bool) -> (f64, f64) {
+/// bound or flat.
+fn search_1d(f: impl Fn(f64) -> f64, lo: f64, hi: f64, points: usize) -> (f64, f64) {
     let n = points.max(3);
-    let xs: Vec<f64> = (0..n).map(|i| lo + (hi - lo) * i as f64 / (n - 1) as f64).collect();
+    let xs: Vec<f64> = (0..n)
+        .map(|i| lo + (hi - lo) * i as f64 / (n - 1) as f64)
+        .collect();
     let fs: Vec<f64> = xs.iter().map(|&x| f(x)).collect();
     let best = (0..n).min_by(|a, b| fs[*a].total_cmp(&fs[*b])).unwrap_or(0);
     let (mut a, mut b) = (xs[best.saturating_sub(1)], xs[(best + 1).min(n - 1)]);
@@ -894,7 +1126,11 @@ fn search_1d(f: impl Fn(f64) -> f64, lo: f64, hi: f64, points: usize, _log: bool
     let (fm, f0, fp) = (f(x - h), f(x), f(x + h));
     let curvature = (fp - 2.0 * f0 + fm) / (h * h);
     let at_bound = x - lo < 0.5 * h || hi - x < 0.5 * h;
-    let se = if curvature > 0.0 && !at_bound { (2.0 / curvature).sqrt() } else { f64::NAN };
+    let se = if curvature > 0.0 && !at_bound {
+        (2.0 / curvature).sqrt()
+    } else {
+        f64::NAN
+    };
     (x, se)
 }
 
@@ -913,14 +1149,24 @@ pub fn sphere_fit(data: &Aligned, config: &ModelConfig) -> Option<[f64; 3]> {
         while i < data.tilt.len() && data.tilt[i].0 < t - 1e-6 {
             i += 1;
         }
-        let Some(&(tt, tilt)) = data.tilt.get(i) else { break };
+        let Some(&(tt, tilt)) = data.tilt.get(i) else {
+            break;
+        };
         if (tt - t).abs() > 1e-6 {
             continue;
         }
-        let Some(g) = attitude::gravity_from_tilt(tilt[0], tilt[1]) else { continue };
-        ne.add(&[g.x / sigma, g.y / sigma, g.z / sigma, 0.0], (m.dot(&g) - vertical) / sigma);
+        let Some(g) = attitude::gravity_from_tilt(tilt[0], tilt[1]) else {
+            continue;
+        };
+        ne.add(
+            &[g.x / sigma, g.y / sigma, g.z / sigma, 0.0],
+            (m.dot(&g) - vertical) / sigma,
+        );
         let k = 1.0 / (2.0 * r * sigma);
-        ne.add(&[2.0 * m.x * k, 2.0 * m.y * k, 2.0 * m.z * k, -k], (m.norm_squared() - r * r) * k);
+        ne.add(
+            &[2.0 * m.x * k, 2.0 * m.y * k, 2.0 * m.z * k, -k],
+            (m.norm_squared() - r * r) * k,
+        );
     }
     if ne.rows() < 20 {
         return None;

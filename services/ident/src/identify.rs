@@ -73,15 +73,29 @@ impl Default for Options {
 
 impl Options {
     fn validate(&self) -> Result<(), IdentError> {
-        let bad = |key: &str, value: String, reason: &str| Err(IdentError::Options { key: key.into(), value, reason: reason.into() });
+        let bad = |key: &str, value: String, reason: &str| {
+            Err(IdentError::Options {
+                key: key.into(),
+                value,
+                reason: reason.into(),
+            })
+        };
         if !(self.horizon_s.is_finite() && self.horizon_s > 0.0) {
             return bad("horizon_s", self.horizon_s.to_string(), "must be > 0");
         }
         if !(self.block_s.is_finite() && self.block_s >= self.horizon_s) {
-            return bad("block_s", self.block_s.to_string(), "must be at least the prediction horizon");
+            return bad(
+                "block_s",
+                self.block_s.to_string(),
+                "must be at least the prediction horizon",
+            );
         }
         if self.held_out_every < 2 {
-            return bad("held_out_every", self.held_out_every.to_string(), "must be >= 2");
+            return bad(
+                "held_out_every",
+                self.held_out_every.to_string(),
+                "must be >= 2",
+            );
         }
         if !(self.alpha > 0.0 && self.alpha < 0.5) {
             return bad("alpha", self.alpha.to_string(), "must be within (0, 0.5)");
@@ -252,15 +266,29 @@ pub struct Identification {
 }
 
 /// Identify what the model gets wrong in `data` (see the module documentation).
-pub fn identify(data: &Dataset, model: &ModelConfig, options: &Options) -> Result<Identification, IdentError> {
+pub fn identify(
+    data: &Dataset,
+    model: &ModelConfig,
+    options: &Options,
+) -> Result<Identification, IdentError> {
     options.validate()?;
     model.validate()?;
     data.check()?;
     let aligned = Aligned::new(data);
     let block = |t: f64| (t / options.block_s).floor() as usize;
-    let held_out: Vec<bool> = aligned.t.iter().map(|&t| block(t) % options.held_out_every == options.held_out_every - 1).collect();
-    let held_fraction = held_out.iter().filter(|h| **h).count() as f64 / held_out.len().max(1) as f64;
-    let problem = Problem::new(&aligned, model.clone(), held_out.clone(), options.fit.clone());
+    let held_out: Vec<bool> = aligned
+        .t
+        .iter()
+        .map(|&t| block(t) % options.held_out_every == options.held_out_every - 1)
+        .collect();
+    let held_fraction =
+        held_out.iter().filter(|h| **h).count() as f64 / held_out.len().max(1) as f64;
+    let problem = Problem::new(
+        &aligned,
+        model.clone(),
+        held_out.clone(),
+        options.fit.clone(),
+    );
 
     // Baseline.
     let empty = HashMap::new();
@@ -274,7 +302,12 @@ pub fn identify(data: &Dataset, model: &ModelConfig, options: &Options) -> Resul
     let n_fit = nominal.evaluation.fit.total().max(2) as f64;
 
     // Forward selection.
-    let available: Vec<Cause> = options.candidates.iter().copied().filter(|c| available(*c, &problem, &nominal)).collect();
+    let available: Vec<Cause> = options
+        .candidates
+        .iter()
+        .copied()
+        .filter(|c| available(*c, &problem, &nominal))
+        .collect();
     let mut selected: Vec<Cause> = Vec::new();
     let mut current = nominal.clone();
     let mut steps = Vec::new();
@@ -286,22 +319,30 @@ pub fn identify(data: &Dataset, model: &ModelConfig, options: &Options) -> Resul
         for &cause in available.iter().filter(|c| !selected.contains(c)) {
             let mut set = selected.clone();
             set.push(cause);
-            let threshold_for = |k: usize| (k as f64 * n_fit.ln()).max(chi_square_quantile(1.0 - options.alpha, k.max(1) as f64).unwrap_or(f64::INFINITY));
-            let screen = (cause.kind() == Kind::Sensor).then(|| (threshold_for(cause.len()), current.evaluation.fit.rss[0]));
-            let runs0 = problem.filter_runs.get();
-            let t0 = std::time::Instant::now();
-            let result = problem.fit_screened(&set, &warm, screen);
-            if std::env::var_os("IDENT_DEBUG").is_some() {
-                eprintln!("  {:22} {} runs {:?}", cause.name(), problem.filter_runs.get() - runs0, t0.elapsed());
-            }
-            match result {
+            let threshold_for = |k: usize| {
+                (k as f64 * n_fit.ln()).max(
+                    chi_square_quantile(1.0 - options.alpha, k.max(1) as f64)
+                        .unwrap_or(f64::INFINITY),
+                )
+            };
+            let screen = (cause.kind() == Kind::Sensor)
+                .then(|| (threshold_for(cause.len()), current.evaluation.fit.rss[0]));
+            match problem.fit_screened(&set, &warm, screen) {
                 Ok(fit) => {
                     let lr = current.evaluation.fit.log_ratio(&fit.evaluation.fit);
                     let k = fit.free().saturating_sub(current.free());
                     let threshold = threshold_for(k);
-                    let lr_held = current.evaluation.held_out.log_ratio(&fit.evaluation.held_out);
+                    let lr_held = current
+                        .evaluation
+                        .held_out
+                        .log_ratio(&fit.evaluation.held_out);
                     let significant = k > 0 && lr > threshold;
-                    let note = fit.causes.iter().find(|c| c.cause == cause).map(|c| c.note.clone()).unwrap_or_default();
+                    let note = fit
+                        .causes
+                        .iter()
+                        .find(|c| c.cause == cause)
+                        .map(|c| c.note.clone())
+                        .unwrap_or_default();
                     rows.push(CandidateRow {
                         name: cause.name(),
                         k,
@@ -313,7 +354,12 @@ pub fn identify(data: &Dataset, model: &ModelConfig, options: &Options) -> Resul
                         chosen: false,
                         note,
                     });
-                    if significant && lr_held > 0.0 && best.as_ref().is_none_or(|(i, _)| lr_held > rows[*i].lr_held_out) {
+                    if significant
+                        && lr_held > 0.0
+                        && best
+                            .as_ref()
+                            .is_none_or(|(i, _)| lr_held > rows[*i].lr_held_out)
+                    {
                         best = Some((rows.len() - 1, fit));
                     }
                 }
@@ -339,7 +385,12 @@ pub fn identify(data: &Dataset, model: &ModelConfig, options: &Options) -> Resul
         chosen_rows.push(rows[i].clone());
         steps.push(rows);
         selected.push(cause);
-        warm = fit.causes.iter().filter(|c| c.cause.kind() == Kind::Sensor).map(|c| (c.cause, c.clone())).collect();
+        warm = fit
+            .causes
+            .iter()
+            .filter(|c| c.cause.kind() == Kind::Sensor)
+            .map(|c| (c.cause, c.clone()))
+            .collect();
         current = fit;
         problem.trim_cache(&[&current.config]);
     }
@@ -362,7 +413,15 @@ pub fn identify(data: &Dataset, model: &ModelConfig, options: &Options) -> Resul
             })
         })
         .collect();
-    let verdict = if causes.is_empty() { "none".to_string() } else { causes.iter().map(|c| c.name).collect::<Vec<_>>().join(" + ") };
+    let verdict = if causes.is_empty() {
+        "none".to_string()
+    } else {
+        causes
+            .iter()
+            .map(|c| c.name)
+            .collect::<Vec<_>>()
+            .join(" + ")
+    };
     let extended = current.config.clone();
     // The extended model must load as it is written.
     ModelConfig::from_toml_str(&extended.to_toml_string(), "extended model")?;
@@ -371,19 +430,25 @@ pub fn identify(data: &Dataset, model: &ModelConfig, options: &Options) -> Resul
     let all_spans = [(nominal.state.recon.start, aligned.len())];
     let all_windows = predict::windows(&aligned, &all_spans, options.horizon_s);
     let nominal_prediction = predict::predict(&aligned, &nominal.state.recon, model, &all_windows)?;
-    let (nominal_equation, nominal_report) = equation_error(&problem, &nominal, &nominal_prediction);
+    let (nominal_equation, nominal_report) =
+        equation_error(&problem, &nominal, &nominal_prediction);
     let extended_prediction = if selected.is_empty() {
         nominal_prediction.clone()
     } else {
         predict::predict(&aligned, &current.state.recon, &extended, &all_windows)?
     };
-    let (extended_equation, extended_report) = equation_error(&problem, &current, &extended_prediction);
+    let (extended_equation, extended_report) =
+        equation_error(&problem, &current, &extended_prediction);
 
     // Gain on the held-out blocks.
     let spans = held_out_spans(&held_out, nominal.state.recon.start);
     let windows = predict::windows(&aligned, &spans, options.horizon_s);
     let base_held = predict::predict(&aligned, &nominal.state.recon, model, &windows)?;
-    let ext_held = if selected.is_empty() { base_held.clone() } else { predict::predict(&aligned, &current.state.recon, &extended, &windows)? };
+    let ext_held = if selected.is_empty() {
+        base_held.clone()
+    } else {
+        predict::predict(&aligned, &current.state.recon, &extended, &windows)?
+    };
     let base_rms = base_held.rms(|_| true);
     let ext_rms = ext_held.rms(|_| true);
     let baseline_rms = rms_report(&base_rms);
@@ -395,8 +460,11 @@ pub fn identify(data: &Dataset, model: &ModelConfig, options: &Options) -> Resul
             gain_by_component.insert(COMPONENTS[c], a.rms / b.rms);
         }
     }
-    let gain_by_group =
-        baseline_rms.groups.iter().filter_map(|(g, a)| extended_rms.groups.get(g).map(|b| (*g, a / b))).collect();
+    let gain_by_group = baseline_rms
+        .groups
+        .iter()
+        .filter_map(|(g, a)| extended_rms.groups.get(g).map(|b| (*g, a / b)))
+        .collect();
 
     let remaining = remaining(&problem, &current, options);
     let figures = FigureData {
@@ -439,7 +507,11 @@ pub fn identify(data: &Dataset, model: &ModelConfig, options: &Options) -> Resul
         gain_by_group,
         filter_runs: problem.filter_runs.get(),
     };
-    Ok(Identification { report, extended, figures })
+    Ok(Identification {
+        report,
+        extended,
+        figures,
+    })
 }
 
 /// Whether the data can say anything about a cause.
@@ -447,7 +519,8 @@ fn available(cause: Cause, problem: &Problem, nominal: &SetFit) -> bool {
     let s = &nominal.state;
     match cause.kind() {
         Kind::Sensor => {
-            !s.recon.innovations.is_empty() && (cause != Cause::MagneticDisturbance || !problem.data.field.is_empty())
+            !s.recon.innovations.is_empty()
+                && (cause != Cause::MagneticDisturbance || !problem.data.field.is_empty())
         }
         Kind::Torque => s.torque.len() >= 30,
         Kind::Wheel => s.wheel.len() >= 10,
@@ -486,14 +559,20 @@ fn rms_report(rms: &[Option<ComponentRms>; 11]) -> RmsReport {
     RmsReport {
         overall: Predictions::overall(rms),
         components,
-        groups: groups.into_iter().map(|(g, (s, n))| (g, (s / n as f64).sqrt())).collect(),
+        groups: groups
+            .into_iter()
+            .map(|(g, (s, n))| (g, (s / n as f64).sqrt()))
+            .collect(),
     }
 }
 
 fn prediction_curves(p: &Predictions) -> Vec<Curve> {
     (0..COMPONENTS.len())
         .filter(|&c| !p.residuals[c].is_empty())
-        .map(|c| Curve { label: COMPONENTS[c].to_string(), points: p.residuals[c].iter().map(|(t, r, _)| (*t, *r)).collect() })
+        .map(|c| Curve {
+            label: COMPONENTS[c].to_string(),
+            points: p.residuals[c].iter().map(|(t, r, _)| (*t, *r)).collect(),
+        })
         .collect()
 }
 
@@ -502,7 +581,11 @@ fn window_curves(p: &Predictions, data: &Aligned) -> Vec<Curve> {
     let mut groups: BTreeMap<&'static str, BTreeMap<u64, (f64, f64, usize)>> = BTreeMap::new();
     for (c, series) in per.iter().enumerate() {
         for &(t, v) in series {
-            let e = groups.entry(predict::group(c)).or_default().entry(t.to_bits()).or_insert((t, 0.0, 0));
+            let e = groups
+                .entry(predict::group(c))
+                .or_default()
+                .entry(t.to_bits())
+                .or_insert((t, 0.0, 0));
             e.1 += v * v;
             e.2 += 1;
         }
@@ -510,23 +593,36 @@ fn window_curves(p: &Predictions, data: &Aligned) -> Vec<Curve> {
     groups
         .into_iter()
         .map(|(g, m)| {
-            let mut points: Vec<(f64, f64)> = m.into_values().map(|(t, s, n)| (t, (s / n as f64).sqrt())).collect();
+            let mut points: Vec<(f64, f64)> = m
+                .into_values()
+                .map(|(t, s, n)| (t, (s / n as f64).sqrt()))
+                .collect();
             points.sort_by(|a, b| a.0.total_cmp(&b.0));
-            Curve { label: g.to_string(), points }
+            Curve {
+                label: g.to_string(),
+                points,
+            }
         })
         .collect()
 }
 
 /// Equation-error residual series of a fitted set: torque (Nm), wheel torque (Nm), innovations
 /// (whitened); and its residual report with the prediction residuals.
-fn equation_error(problem: &Problem, fit: &SetFit, prediction: &Predictions) -> (Vec<Curve>, ResidualReport) {
+fn equation_error(
+    problem: &Problem,
+    fit: &SetFit,
+    prediction: &Predictions,
+) -> (Vec<Curve>, ResidualReport) {
     let data = problem.data;
     let s = &fit.state;
     let mut curves = Vec::new();
     // Torque channel: momentum residual (integral of the torque residual), Nms.
     let mut torque: [Vec<(f64, f64)>; 3] = Default::default();
     for (i, &k) in s.torque.ticks.iter().enumerate() {
-        let r = s.torque.whitened(i, &fit.torque_delta).component_mul(&s.torque.sigma);
+        let r = s
+            .torque
+            .whitened(i, &fit.torque_delta)
+            .component_mul(&s.torque.sigma);
         for axis in 0..3 {
             torque[axis].push((data.t[k], r[axis]));
         }
@@ -553,11 +649,22 @@ fn equation_error(problem: &Problem, fit: &SetFit, prediction: &Predictions) -> 
     let mut equation = Vec::new();
     let names_t = ["momentum_x", "momentum_y", "momentum_z"];
     let names_w = ["wheel_torque_x", "wheel_torque_y", "wheel_torque_z"];
-    let names_i = ["innovation_tilt_1", "innovation_tilt_2", "innovation_field_x", "innovation_field_y", "innovation_field_z"];
+    let names_i = [
+        "innovation_tilt_1",
+        "innovation_tilt_2",
+        "innovation_field_x",
+        "innovation_field_y",
+        "innovation_field_z",
+    ];
     for (series, names, unit, sigma) in [
         (&torque[..], &names_t[..], "Nms", &torque_sigma[..]),
         (&wheel[..], &names_w[..], "Nm", &[wheel_sigma; 3][..]),
-        (&innovations[..], &names_i[..], "1 (whitened)", &[1.0; 5][..]),
+        (
+            &innovations[..],
+            &names_i[..],
+            "1 (whitened)",
+            &[1.0; 5][..],
+        ),
     ] {
         for (c, xs) in series.iter().enumerate() {
             if xs.is_empty() {
@@ -566,8 +673,16 @@ fn equation_error(problem: &Problem, fit: &SetFit, prediction: &Predictions) -> 
             let t: Vec<f64> = xs.iter().map(|p| p.0).collect();
             let v: Vec<f64> = xs.iter().map(|p| p.1).collect();
             let stats = series_stats(&t, &v, 10);
-            equation.push(ComponentReport { name: names[c].to_string(), unit, normalised_rms: stats.rms / sigma[c].max(1e-300), stats });
-            curves.push(Curve { label: names[c].to_string(), points: xs.clone() });
+            equation.push(ComponentReport {
+                name: names[c].to_string(),
+                unit,
+                normalised_rms: stats.rms / sigma[c].max(1e-300),
+                stats,
+            });
+            curves.push(Curve {
+                label: names[c].to_string(),
+                points: xs.clone(),
+            });
         }
     }
     let mut pred = Vec::new();
@@ -579,20 +694,46 @@ fn equation_error(problem: &Problem, fit: &SetFit, prediction: &Predictions) -> 
         let t: Vec<f64> = xs.iter().map(|p| p.0).collect();
         let v: Vec<f64> = xs.iter().map(|p| p.1).collect();
         let stats = series_stats(&t, &v, 10);
-        pred.push(ComponentReport { name: COMPONENTS[c].to_string(), unit: UNITS[c], normalised_rms: stats.rms / prediction.sigma[c], stats });
+        pred.push(ComponentReport {
+            name: COMPONENTS[c].to_string(),
+            unit: UNITS[c],
+            normalised_rms: stats.rms / prediction.sigma[c],
+            stats,
+        });
     }
     let rms_map = |e: &ChannelRss| -> BTreeMap<&'static str, f64> {
-        (0..3).filter(|&c| e.n[c] > 0).map(|c| (CHANNELS[c], e.normalised_rms(c))).collect()
+        (0..3)
+            .filter(|&c| e.n[c] > 0)
+            .map(|c| (CHANNELS[c], e.normalised_rms(c)))
+            .collect()
     };
-    let Evaluation { fit: f, held_out: h } = fit.evaluation;
-    (curves, ResidualReport { prediction: pred, equation_error: equation, channel_rms_fit: rms_map(&f), channel_rms_held_out: rms_map(&h) })
+    let Evaluation {
+        fit: f,
+        held_out: h,
+    } = fit.evaluation;
+    (
+        curves,
+        ResidualReport {
+            prediction: pred,
+            equation_error: equation,
+            channel_rms_fit: rms_map(&f),
+            channel_rms_held_out: rms_map(&h),
+        },
+    )
 }
 
 /// Is there residual left after the chosen causes, and what does it correlate with?
 fn remaining(problem: &Problem, fit: &SetFit, options: &Options) -> Remaining {
     let e = &fit.evaluation.held_out;
-    let channel_rms: BTreeMap<&'static str, f64> = (0..3).filter(|&c| e.n[c] > 0).map(|c| (CHANNELS[c], e.normalised_rms(c))).collect();
-    let high: Vec<&'static str> = channel_rms.iter().filter(|(_, v)| **v > options.remaining_rms).map(|(k, _)| *k).collect();
+    let channel_rms: BTreeMap<&'static str, f64> = (0..3)
+        .filter(|&c| e.n[c] > 0)
+        .map(|c| (CHANNELS[c], e.normalised_rms(c)))
+        .collect();
+    let high: Vec<&'static str> = channel_rms
+        .iter()
+        .filter(|(_, v)| **v > options.remaining_rms)
+        .map(|(k, _)| *k)
+        .collect();
     if high.is_empty() {
         return Remaining {
             residual_remains: false,
@@ -605,7 +746,12 @@ fn remaining(problem: &Problem, fit: &SetFit, options: &Options) -> Remaining {
         };
     }
     let correlations = correlate(problem, fit);
-    let top = correlations.first().map_or(String::new(), |c| format!("; strongest correlation: {} with {} (r = {:.2})", c.residual, c.signal, c.r));
+    let top = correlations.first().map_or(String::new(), |c| {
+        format!(
+            "; strongest correlation: {} with {} (r = {:.2})",
+            c.residual, c.signal, c.r
+        )
+    });
     Remaining {
         residual_remains: true,
         message: format!(
@@ -628,7 +774,9 @@ fn correlate(problem: &Problem, fit: &SetFit) -> Vec<Correlation> {
     // Torque channel: against every torque regressor and the rates.
     if !s.torque.is_empty() {
         for axis in 0..3 {
-            let r: Vec<f64> = (0..s.torque.len()).map(|i| s.torque.whitened(i, &fit.torque_delta)[axis]).collect();
+            let r: Vec<f64> = (0..s.torque.len())
+                .map(|i| s.torque.whitened(i, &fit.torque_delta)[axis])
+                .collect();
             for col in 0..TORQUE_COLUMNS {
                 let x: Vec<f64> = s.torque.x.iter().map(|row| row[col][axis]).collect();
                 let (cause, off) = match col {
@@ -637,11 +785,19 @@ fn correlate(problem: &Problem, fit: &SetFit) -> Vec<Correlation> {
                     6..12 => (Cause::AeroDrag, col - 6),
                     _ => (Cause::InertiaError, col - 12),
                 };
-                out.push(Correlation { residual: format!("momentum_{}", "xyz".as_bytes()[axis] as char), signal: cause.value_name(off), r: correlation(&r, &x) });
+                out.push(Correlation {
+                    residual: format!("momentum_{}", "xyz".as_bytes()[axis] as char),
+                    signal: cause.value_name(off),
+                    r: correlation(&r, &x),
+                });
             }
             for c in 0..3 {
                 let x: Vec<f64> = s.torque.ticks.iter().map(|&k| s.recon.rate[k][c]).collect();
-                out.push(Correlation { residual: format!("momentum_{}", "xyz".as_bytes()[axis] as char), signal: format!("rate_{}", "xyz".as_bytes()[c] as char), r: correlation(&r, &x) });
+                out.push(Correlation {
+                    residual: format!("momentum_{}", "xyz".as_bytes()[axis] as char),
+                    signal: format!("rate_{}", "xyz".as_bytes()[c] as char),
+                    r: correlation(&r, &x),
+                });
             }
         }
     }
@@ -651,22 +807,55 @@ fn correlate(problem: &Problem, fit: &SetFit) -> Vec<Correlation> {
         if rows.len() < 3 {
             continue;
         }
-        let r: Vec<f64> = rows.iter().map(|row| model.residual(data, &s.wheel, w, row)).collect();
+        let r: Vec<f64> = rows
+            .iter()
+            .map(|row| model.residual(data, &s.wheel, w, row))
+            .collect();
         let name = format!("wheel_torque_{}", "xyz".as_bytes()[w] as char);
-        let tau: Vec<f64> = rows.iter().map(|row| data.wheel_cmd_integral(row.t0, row.t1, model.delay_s, s.wheel.max_torque_nm)[w]).collect();
+        let tau: Vec<f64> = rows
+            .iter()
+            .map(|row| {
+                data.wheel_cmd_integral(row.t0, row.t1, model.delay_s, s.wheel.max_torque_nm)[w]
+            })
+            .collect();
         let dtau: Vec<f64> = rows
             .iter()
             .map(|row| {
                 data.wheel_cmd_integral(row.t0, row.t1, model.delay_s, s.wheel.max_torque_nm)[w]
-                    - data.wheel_cmd_integral(row.t0, row.t1, model.delay_s + data.period_s, s.wheel.max_torque_nm)[w]
+                    - data.wheel_cmd_integral(
+                        row.t0,
+                        row.t1,
+                        model.delay_s + data.period_s,
+                        s.wheel.max_torque_nm,
+                    )[w]
             })
             .collect();
-        out.push(Correlation { residual: name.clone(), signal: "wheel_torque_scale (command)".into(), r: correlation(&r, &tau) });
-        out.push(Correlation { residual: name.clone(), signal: "actuator_delay (command change)".into(), r: correlation(&r, &dtau) });
-        let labels = ["wheel_friction.coulomb_pos_nm", "wheel_friction.coulomb_neg_nm", "wheel_friction.stribeck_nm (n_s = 1 rad/s)", "wheel_friction.viscous_nm_per_rad_s"];
+        out.push(Correlation {
+            residual: name.clone(),
+            signal: "wheel_torque_scale (command)".into(),
+            r: correlation(&r, &tau),
+        });
+        out.push(Correlation {
+            residual: name.clone(),
+            signal: "actuator_delay (command change)".into(),
+            r: correlation(&r, &dtau),
+        });
+        let labels = [
+            "wheel_friction.coulomb_pos_nm",
+            "wheel_friction.coulomb_neg_nm",
+            "wheel_friction.stribeck_nm (n_s = 1 rad/s)",
+            "wheel_friction.viscous_nm_per_rad_s",
+        ];
         for (j, label) in labels.iter().enumerate() {
-            let x: Vec<f64> = rows.iter().map(|row| friction_regressors(row, Some(1.0))[j]).collect();
-            out.push(Correlation { residual: name.clone(), signal: (*label).into(), r: correlation(&r, &x) });
+            let x: Vec<f64> = rows
+                .iter()
+                .map(|row| friction_regressors(row, Some(1.0))[j])
+                .collect();
+            out.push(Correlation {
+                residual: name.clone(),
+                signal: (*label).into(),
+                r: correlation(&r, &x),
+            });
         }
     }
     // Innovations: against the rates and the heading.
@@ -677,15 +866,42 @@ fn correlate(problem: &Problem, fit: &SetFit) -> Vec<Correlation> {
             continue;
         }
         let r: Vec<f64> = rows.iter().map(|i| i.values[c]).collect();
-        let name = ["innovation_tilt_1", "innovation_tilt_2", "innovation_field_x", "innovation_field_y", "innovation_field_z"][c];
+        let name = [
+            "innovation_tilt_1",
+            "innovation_tilt_2",
+            "innovation_field_x",
+            "innovation_field_y",
+            "innovation_field_z",
+        ][c];
         for axis in 0..3 {
             let x: Vec<f64> = rows.iter().map(|i| s.recon.rate[i.tick][axis]).collect();
-            out.push(Correlation { residual: name.into(), signal: format!("rate_{} (gyro scale/misalignment)", "xyz".as_bytes()[axis] as char), r: correlation(&r, &x) });
+            out.push(Correlation {
+                residual: name.into(),
+                signal: format!(
+                    "rate_{} (gyro scale/misalignment)",
+                    "xyz".as_bytes()[axis] as char
+                ),
+                r: correlation(&r, &x),
+            });
         }
-        let cos: Vec<f64> = rows.iter().map(|i| attitude::heading(&s.recon.q[i.tick]).cos()).collect();
-        let sin: Vec<f64> = rows.iter().map(|i| attitude::heading(&s.recon.q[i.tick]).sin()).collect();
-        out.push(Correlation { residual: name.into(), signal: "cos(heading) (earth rate, hard iron)".into(), r: correlation(&r, &cos) });
-        out.push(Correlation { residual: name.into(), signal: "sin(heading) (earth rate, hard iron)".into(), r: correlation(&r, &sin) });
+        let cos: Vec<f64> = rows
+            .iter()
+            .map(|i| attitude::heading(&s.recon.q[i.tick]).cos())
+            .collect();
+        let sin: Vec<f64> = rows
+            .iter()
+            .map(|i| attitude::heading(&s.recon.q[i.tick]).sin())
+            .collect();
+        out.push(Correlation {
+            residual: name.into(),
+            signal: "cos(heading) (earth rate, hard iron)".into(),
+            r: correlation(&r, &cos),
+        });
+        out.push(Correlation {
+            residual: name.into(),
+            signal: "sin(heading) (earth rate, hard iron)".into(),
+            r: correlation(&r, &sin),
+        });
     }
     out.retain(|c| c.r.is_finite());
     out.sort_by(|a, b| b.r.abs().total_cmp(&a.r.abs()));

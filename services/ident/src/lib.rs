@@ -13,6 +13,9 @@
 //! * [`experiment`]: an excitation schedule for the closed loop and its data as a CSV directory.
 //! * [`stats`]: least squares and residual statistics.
 
+// Index loops over the 3 axes and the parameter columns read as the maths they implement.
+#![allow(clippy::needless_range_loop)]
+
 pub mod channels;
 pub mod csv;
 pub mod data;

@@ -21,11 +21,15 @@ use testbed_model::config::{DEG, GAUSS, RPM};
 use testbed_model::physics::{ActuatorCommand, CmgPyramid, Plant, PlatformState};
 
 /// The predicted measurement components, in this order.
-pub const COMPONENTS: [&str; 11] =
-    ["gyro_x", "gyro_y", "gyro_z", "tilt_x", "tilt_y", "field_x", "field_y", "field_z", "wheel_x", "wheel_y", "wheel_z"];
+pub const COMPONENTS: [&str; 11] = [
+    "gyro_x", "gyro_y", "gyro_z", "tilt_x", "tilt_y", "field_x", "field_y", "field_z", "wheel_x",
+    "wheel_y", "wheel_z",
+];
 
 /// Unit of each component.
-pub const UNITS: [&str; 11] = ["rad/s", "rad/s", "rad/s", "rad", "rad", "T", "T", "T", "rad/s", "rad/s", "rad/s"];
+pub const UNITS: [&str; 11] = [
+    "rad/s", "rad/s", "rad/s", "rad", "rad", "T", "T", "T", "rad/s", "rad/s", "rad/s",
+];
 
 /// Channel group of each component (rates, tilt, field, wheel speeds).
 pub fn group(component: usize) -> &'static str {
@@ -60,10 +64,18 @@ impl Predictions {
     /// RMS per component over the samples `keep` accepts (by window index).
     pub fn rms(&self, keep: impl Fn(usize) -> bool) -> [Option<ComponentRms>; 11] {
         std::array::from_fn(|c| {
-            let xs: Vec<f64> = self.residuals[c].iter().filter(|(_, _, w)| keep(*w)).map(|(_, r, _)| *r).collect();
+            let xs: Vec<f64> = self.residuals[c]
+                .iter()
+                .filter(|(_, _, w)| keep(*w))
+                .map(|(_, r, _)| *r)
+                .collect();
             (!xs.is_empty()).then(|| {
                 let rms = (xs.iter().map(|x| x * x).sum::<f64>() / xs.len() as f64).sqrt();
-                ComponentRms { rms, normalised: rms / self.sigma[c], n: xs.len() }
+                ComponentRms {
+                    rms,
+                    normalised: rms / self.sigma[c],
+                    n: xs.len(),
+                }
             })
         })
     }
@@ -72,7 +84,11 @@ impl Predictions {
     /// normalised RMS (dimensionless; 1 = every component at its sensor's noise).
     pub fn overall(rms: &[Option<ComponentRms>; 11]) -> f64 {
         let present: Vec<f64> = rms.iter().flatten().map(|r| r.normalised).collect();
-        if present.is_empty() { f64::NAN } else { (present.iter().map(|x| x * x).sum::<f64>() / present.len() as f64).sqrt() }
+        if present.is_empty() {
+            f64::NAN
+        } else {
+            (present.iter().map(|x| x * x).sum::<f64>() / present.len() as f64).sqrt()
+        }
     }
 
     /// Normalised RMS of every component in each window (for figures): per component
@@ -119,17 +135,37 @@ pub fn windows(data: &Aligned, spans: &[(usize, usize)], horizon_s: f64) -> Vec<
 /// Predict the measurements over `windows` with `config` (its plant, effects and sensor model),
 /// starting each from the estimated state `recon` (which should be the reconstruction with
 /// `config`'s sensor model).
-pub fn predict(data: &Aligned, recon: &Reconstruction, config: &ModelConfig, windows: &[(usize, usize)]) -> Result<Predictions, IdentError> {
+pub fn predict(
+    data: &Aligned,
+    recon: &Reconstruction,
+    config: &ModelConfig,
+    windows: &[(usize, usize)],
+) -> Result<Predictions, IdentError> {
     config.validate()?;
     let sensors = SensorModel::from_config(config);
-    let delay = config.effects.actuator_delay.as_ref().map_or(0.0, |d| d.delay_s);
+    let delay = config
+        .effects
+        .actuator_delay
+        .as_ref()
+        .map_or(0.0, |d| d.delay_s);
     let mut plant_config = config.clone();
     plant_config.effects.actuator_delay = None;
     let inertia = config.true_inertia().unwrap_or_else(Matrix3::identity);
     let inertia_inv = inertia.try_inverse().unwrap_or_else(Matrix3::identity);
-    let j = if data.has_wheels() { config.wheels.inertia_kgm2 } else { 0.0 };
+    let j = if data.has_wheels() {
+        config.wheels.inertia_kgm2
+    } else {
+        0.0
+    };
     let cmg = CmgPyramid::from_config(&config.cmg);
-    let rotor = |k: usize| data.wheel_speed_at(k) * j + if data.gimbal.is_some() { cmg.momentum(&data.gimbal_at(k)) } else { Vector3::zeros() };
+    let rotor = |k: usize| {
+        data.wheel_speed_at(k) * j
+            + if data.gimbal.is_some() {
+                cmg.momentum(&data.gimbal_at(k))
+            } else {
+                Vector3::zeros()
+            }
+    };
     let tach = config.wheels.speed_noise_rpm * RPM;
     let tilt_range = config.inclinometer.range_deg * DEG - 1e-9;
     let gyro_sigma = config.gyro.noise_density_rad_sqrt_s() / data.period_s.sqrt();
@@ -157,16 +193,28 @@ pub fn predict(data: &Aligned, recon: &Reconstruction, config: &ModelConfig, win
             continue;
         }
         // Initial rate from the averaged total momentum.
-        let half = average.min(k0 - recon.start.min(k0)).min(data.len() - 1 - k0);
+        let half = average
+            .min(k0 - recon.start.min(k0))
+            .min(data.len() - 1 - k0);
         let mut h_mean = Vector3::zeros();
         for k in k0 - half..=k0 + half {
             h_mean += inertia * recon.rate[k] + rotor(k);
         }
         h_mean /= (2 * half + 1) as f64;
         let rate = inertia_inv * (h_mean - rotor(k0));
-        let wheel_speed = data.wheel_speed_at(k0).map(|n| if n.abs() < 3.0 * tach { 0.0 } else { n });
-        let state = PlatformState { q: recon.q[k0], rate_b: rate, wheel_speed, gimbal: data.gimbal_at(k0) };
-        let Ok(mut plant) = Plant::new(&plant_config, state) else { continue };
+        let wheel_speed = data
+            .wheel_speed_at(k0)
+            .map(|n| if n.abs() < 3.0 * tach { 0.0 } else { n });
+        let q0 = onto_stop(&recon.q[k0], config.platform.tilt_limit_rad());
+        let state = PlatformState {
+            q: q0,
+            rate_b: rate,
+            wheel_speed,
+            gimbal: data.gimbal_at(k0),
+        };
+        let Ok(mut plant) = Plant::new(&plant_config, state) else {
+            continue;
+        };
         let bias = recon.bias[k0];
         let window = out.windows.len();
         let mut attitudes: Vec<Attitude> = Vec::with_capacity(k1 - k0 + 1);
@@ -217,7 +265,11 @@ pub fn predict(data: &Aligned, recon: &Reconstruction, config: &ModelConfig, win
                 .min_by(|a, b| (data.t[*a] - t).abs().total_cmp(&(data.t[*b] - t).abs()))
                 .filter(|&k| (data.t[k] - t).abs() <= 0.5 * data.period_s)
         };
-        for &(t, tilt) in data.tilt.iter().filter(|(t, _)| *t >= ta - 1e-9 && *t <= tb + 1e-9) {
+        for &(t, tilt) in data
+            .tilt
+            .iter()
+            .filter(|(t, _)| *t >= ta - 1e-9 && *t <= tb + 1e-9)
+        {
             if tilt[0].abs() >= tilt_range || tilt[1].abs() >= tilt_range {
                 continue;
             }
@@ -229,7 +281,11 @@ pub fn predict(data: &Aligned, recon: &Reconstruction, config: &ModelConfig, win
             }
         }
         let field_range = config.magnetometer.range_gauss * GAUSS;
-        for &(t, field) in data.field.iter().filter(|(t, _)| *t >= ta - 1e-9 && *t <= tb + 1e-9) {
+        for &(t, field) in data
+            .field
+            .iter()
+            .filter(|(t, _)| *t >= ta - 1e-9 && *t <= tb + 1e-9)
+        {
             if field.iter().any(|x| x.abs() >= field_range) {
                 continue;
             }
@@ -249,6 +305,22 @@ pub fn predict(data: &Aligned, recon: &Reconstruction, config: &ModelConfig, win
     Ok(out)
 }
 
+/// An estimated attitude a little beyond the tilt stop (resting on it, within the estimate's
+/// error) put back onto the stop by the smallest rotation; further beyond it is left as it is
+/// (and the plant refuses the window).
+fn onto_stop(q: &Attitude, limit_rad: f64) -> Attitude {
+    let g = attitude::gravity_b(q);
+    let s = limit_rad.sin();
+    let beyond = g.x.abs().max(g.y.abs()) - s;
+    if beyond <= 0.0 || beyond > 0.05 {
+        return *q;
+    }
+    let (x, y) = (g.x.clamp(-s, s), g.y.clamp(-s, s));
+    let z = -(1.0 - x * x - y * y).max(0.0).sqrt();
+    let target = Vector3::new(x, y, z);
+    nalgebra::UnitQuaternion::rotation_between(&g, &target).map_or(*q, |r| r * q)
+}
+
 /// Times of a time-ordered series strictly inside `(a, b)`.
 fn times_inside<T>(series: &[(f64, T)], a: f64, b: f64) -> impl Iterator<Item = f64> + '_ {
     let lo = series.partition_point(|(t, _)| *t <= a + 1e-9);
@@ -259,7 +331,9 @@ fn times_inside<T>(series: &[(f64, T)], a: f64, b: f64) -> impl Iterator<Item = 
 /// The commands acting over `[a, b]` after a delay, as `(duration, command)` pieces.
 fn command_pieces(data: &Aligned, a: f64, b: f64, delay: f64) -> Vec<(f64, ActuatorCommand)> {
     let (sa, sb) = (a - delay, b - delay);
-    let mut cuts: Vec<f64> = times_inside(&data.wheel_cmd, sa, sb).chain(times_inside(&data.gimbal_cmd, sa, sb)).collect();
+    let mut cuts: Vec<f64> = times_inside(&data.wheel_cmd, sa, sb)
+        .chain(times_inside(&data.gimbal_cmd, sa, sb))
+        .collect();
     cuts.sort_by(f64::total_cmp);
     cuts.dedup();
     let mut out = Vec::with_capacity(cuts.len() + 1);
@@ -268,7 +342,11 @@ fn command_pieces(data: &Aligned, a: f64, b: f64, delay: f64) -> Vec<(f64, Actua
         let mid = start + 1e-9;
         let command = ActuatorCommand {
             wheel_torque_nm: data.wheel_cmd_at(mid),
-            gimbal_rate_rad_s: if data.gimbal_cmd.is_empty() { Vector4::zeros() } else { data.gimbal_cmd_at(mid) },
+            gimbal_rate_rad_s: if data.gimbal_cmd.is_empty() {
+                Vector4::zeros()
+            } else {
+                data.gimbal_cmd_at(mid)
+            },
         };
         if end - start > 1e-9 {
             out.push((end - start, command));

@@ -41,8 +41,12 @@ impl SensorModel {
         let scale = e.gyro_scale.as_ref().map_or_else(Matrix3::identity, |s| {
             Matrix3::from_diagonal(&Vector3::from(s.ppm).map(|p| 1.0 + p * 1e-6))
         });
-        let misalignment =
-            e.gyro_misalignment.as_ref().map_or_else(Matrix3::identity, |m| Matrix3::identity() - skew(&Vector3::from(m.angles_rad)));
+        let misalignment = e
+            .gyro_misalignment
+            .as_ref()
+            .map_or_else(Matrix3::identity, |m| {
+                Matrix3::identity() - skew(&Vector3::from(m.angles_rad))
+            });
         let gyro_matrix = scale * misalignment;
         let earth_rate_l = e.earth_rate.as_ref().map_or_else(Vector3::zeros, |x| {
             let lat = x.latitude_deg * DEG;
@@ -52,7 +56,10 @@ impl SensorModel {
             gyro_matrix,
             gyro_matrix_inv: gyro_matrix.try_inverse().unwrap_or_else(Matrix3::identity),
             earth_rate_l,
-            hard_iron_t: e.magnetic_disturbance.as_ref().map_or_else(Vector3::zeros, |d| Vector3::from(d.hard_iron_gauss) * GAUSS),
+            hard_iron_t: e
+                .magnetic_disturbance
+                .as_ref()
+                .map_or_else(Vector3::zeros, |d| Vector3::from(d.hard_iron_gauss) * GAUSS),
             field_l_t: config.platform.field_l_t(),
         }
     }
@@ -64,7 +71,12 @@ impl SensorModel {
 
     /// The noise-free gyro reading at body rate `w` (rad/s), attitude `q` and corrected-frame
     /// bias `bias` (the filter's estimate): `S (w + A Ω_L + bias)`.
-    pub fn gyro_reading(&self, w: &Vector3<f64>, q: &Attitude, bias: &Vector3<f64>) -> Vector3<f64> {
+    pub fn gyro_reading(
+        &self,
+        w: &Vector3<f64>,
+        q: &Attitude,
+        bias: &Vector3<f64>,
+    ) -> Vector3<f64> {
         self.gyro_matrix * (w + q * self.earth_rate_l + bias)
     }
 
@@ -152,8 +164,16 @@ pub fn reconstruct(data: &Aligned, config: &ModelConfig) -> Result<Reconstructio
         previous = Some(w);
         // Vector samples up to this tick, grouped by time.
         loop {
-            let next_tilt = data.tilt.get(i_tilt).map(|s| s.0).filter(|t| *t <= tk + 1e-6);
-            let next_field = data.field.get(i_field).map(|s| s.0).filter(|t| *t <= tk + 1e-6);
+            let next_tilt = data
+                .tilt
+                .get(i_tilt)
+                .map(|s| s.0)
+                .filter(|t| *t <= tk + 1e-6);
+            let next_field = data
+                .field
+                .get(i_field)
+                .map(|s| s.0)
+                .filter(|t| *t <= tk + 1e-6);
             let t_sample = match (next_tilt, next_field) {
                 (None, None) => break,
                 (Some(a), None) => a,
@@ -161,14 +181,21 @@ pub fn reconstruct(data: &Aligned, config: &ModelConfig) -> Result<Reconstructio
                 (Some(a), Some(b)) => a.min(b),
             };
             let mut meas = VectorMeasurements::default();
-            if let Some(&(t, tilt)) = data.tilt.get(i_tilt).filter(|s| (s.0 - t_sample).abs() <= 1e-6) {
-                let _ = t;
+            if let Some(&(_, tilt)) = data
+                .tilt
+                .get(i_tilt)
+                .filter(|s| (s.0 - t_sample).abs() <= 1e-6)
+            {
                 i_tilt += 1;
                 if tilt[0].abs() < tilt_range && tilt[1].abs() < tilt_range {
                     meas.tilt_rad = Some(tilt);
                 }
             }
-            if let Some(&(_, field)) = data.field.get(i_field).filter(|s| (s.0 - t_sample).abs() <= 1e-6) {
+            if let Some(&(_, field)) = data
+                .field
+                .get(i_field)
+                .filter(|s| (s.0 - t_sample).abs() <= 1e-6)
+            {
                 i_field += 1;
                 if field.iter().all(|x| x.abs() < field_range) {
                     meas.field_b_t = Some(sensors.correct_field(&field));
@@ -185,11 +212,22 @@ pub fn reconstruct(data: &Aligned, config: &ModelConfig) -> Result<Reconstructio
                     let v = [values[0], values[1], values[3], values[4], values[5]];
                     let m = (mask & 0b11) as u8 | (((mask >> 3) & 0b111) as u8) << 2;
                     if m != 0 {
-                        out.innovations.push(Innovation { tick: k, values: v, mask: m });
+                        out.innovations.push(Innovation {
+                            tick: k,
+                            values: v,
+                            mask: m,
+                        });
                     }
                 }
                 None => {
-                    if let Some(f) = start_filter(&filter_cfg, t_ns(t_sample), &meas, &sensors, has_tilt, has_field) {
+                    if let Some(f) = start_filter(
+                        &filter_cfg,
+                        t_ns(t_sample),
+                        &meas,
+                        &sensors,
+                        has_tilt,
+                        has_field,
+                    ) {
                         let mut f = f;
                         f.propagate(t_ns(tk), &w)?;
                         q_prior = f.attitude();
@@ -235,7 +273,9 @@ fn start_filter(
     has_tilt: bool,
     has_field: bool,
 ) -> Option<Mekf> {
-    let gravity = meas.tilt_rad.and_then(|[a, b]| attitude::gravity_from_tilt(a, b));
+    let gravity = meas
+        .tilt_rad
+        .and_then(|[a, b]| attitude::gravity_from_tilt(a, b));
     match (gravity, meas.field_b_t) {
         (Some(g), Some(m)) => Mekf::initialise_from_vectors(cfg.clone(), t, &g, &m).ok(),
         (Some(g), None) if !has_field => {

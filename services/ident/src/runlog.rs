@@ -4,7 +4,10 @@
 
 use crate::data::{CmgRow, Dataset, FieldRow, GyroRow, TiltRow, WheelRow};
 use crate::error::DataError;
-use ipc_types::{CmgCommand, CmgTelemetry, GyroSample, InclinometerSample, MagnetometerSample, WheelCommand, WheelTelemetry};
+use ipc_types::{
+    CmgCommand, CmgTelemetry, GyroSample, InclinometerSample, MagnetometerSample, WheelCommand,
+    WheelTelemetry,
+};
 use nalgebra::{Vector3, Vector4};
 use std::path::Path;
 use testbed_log::{LogEncode, RunLog};
@@ -14,19 +17,31 @@ const S_PER_NS: f64 = 1e-9;
 
 /// Read the data of a run log.
 pub fn read_log(path: &Path) -> Result<Dataset, DataError> {
-    let err = |source| DataError::Log { file: path.to_path_buf(), source };
+    let err = |source| DataError::Log {
+        file: path.to_path_buf(),
+        source,
+    };
     let log = RunLog::open(path).map_err(err)?;
     let gyro = samples::<GyroSample>(&log, path)?
         .into_iter()
-        .map(|s| GyroRow { t_s: s.header.time_ns as f64 * S_PER_NS, rate_rad_s: Vector3::from(s.rate) })
+        .map(|s| GyroRow {
+            t_s: s.header.time_ns as f64 * S_PER_NS,
+            rate_rad_s: Vector3::from(s.rate),
+        })
         .collect();
     let inclinometer = samples::<InclinometerSample>(&log, path)?
         .into_iter()
-        .map(|s| TiltRow { t_s: s.header.time_ns as f64 * S_PER_NS, tilt_rad: s.tilt })
+        .map(|s| TiltRow {
+            t_s: s.header.time_ns as f64 * S_PER_NS,
+            tilt_rad: s.tilt,
+        })
         .collect();
     let magnetometer = samples::<MagnetometerSample>(&log, path)?
         .into_iter()
-        .map(|s| FieldRow { t_s: s.header.time_ns as f64 * S_PER_NS, field_t: Vector3::from(s.field) })
+        .map(|s| FieldRow {
+            t_s: s.header.time_ns as f64 * S_PER_NS,
+            field_t: Vector3::from(s.field),
+        })
         .collect();
     // Wheel rows: telemetry speeds with the command in force at that time (the telemetry's
     // measured torque when no command was logged).
@@ -41,7 +56,11 @@ pub fn read_log(path: &Path) -> Result<Dataset, DataError> {
             } else {
                 latest(&commands, t, |c| c.header.time_ns).map_or([0.0; 3], |c| c.torque)
             };
-            WheelRow { t_s: t as f64 * S_PER_NS, speed_rad_s: Vector3::from(s.speed), torque_nm: Vector3::from(torque) }
+            WheelRow {
+                t_s: t as f64 * S_PER_NS,
+                speed_rad_s: Vector3::from(s.speed),
+                torque_nm: Vector3::from(torque),
+            }
         })
         .collect();
     let cmg_telemetry = samples::<CmgTelemetry>(&log, path)?;
@@ -50,19 +69,37 @@ pub fn read_log(path: &Path) -> Result<Dataset, DataError> {
         .iter()
         .map(|s| {
             let t = s.header.time_ns;
-            let rate = latest(&cmg_commands, t, |c| c.header.time_ns).map_or([0.0; 4], |c| c.gimbal_rate);
-            CmgRow { t_s: t as f64 * S_PER_NS, gimbal_rad: Vector4::from(s.gimbal_angle), rate_cmd_rad_s: Vector4::from(rate) }
+            let rate =
+                latest(&cmg_commands, t, |c| c.header.time_ns).map_or([0.0; 4], |c| c.gimbal_rate);
+            CmgRow {
+                t_s: t as f64 * S_PER_NS,
+                gimbal_rad: Vector4::from(s.gimbal_angle),
+                rate_cmd_rad_s: Vector4::from(rate),
+            }
         })
         .collect();
-    Ok(Dataset { source: path.to_path_buf(), gyro, inclinometer, magnetometer, wheels, cmg })
+    Ok(Dataset {
+        source: path.to_path_buf(),
+        gyro,
+        inclinometer,
+        magnetometer,
+        wheels,
+        cmg,
+    })
 }
 
 /// The valid samples of one topic, in time order (a log written in file order may interleave
 /// publishers; equal times keep the later sample).
 fn samples<T: LogEncode + HasHeader>(log: &RunLog, path: &Path) -> Result<Vec<T>, DataError> {
     let mut out = Vec::new();
-    for sample in log.samples::<T>().map_err(|source| DataError::Log { file: path.to_path_buf(), source })? {
-        let sample = sample.map_err(|source| DataError::Log { file: path.to_path_buf(), source })?;
+    for sample in log.samples::<T>().map_err(|source| DataError::Log {
+        file: path.to_path_buf(),
+        source,
+    })? {
+        let sample = sample.map_err(|source| DataError::Log {
+            file: path.to_path_buf(),
+            source,
+        })?;
         if sample.sample_header().is_valid() {
             out.push(sample);
         }
@@ -92,4 +129,12 @@ trait HasHeader {
 macro_rules! has_header {
     ($($t:ty),*) => {$(impl HasHeader for $t { fn sample_header(&self) -> &ipc_types::SampleHeader { &self.header } })*};
 }
-has_header!(GyroSample, InclinometerSample, MagnetometerSample, WheelTelemetry, WheelCommand, CmgTelemetry, CmgCommand);
+has_header!(
+    GyroSample,
+    InclinometerSample,
+    MagnetometerSample,
+    WheelTelemetry,
+    WheelCommand,
+    CmgTelemetry,
+    CmgCommand
+);

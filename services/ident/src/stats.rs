@@ -41,13 +41,20 @@ impl LsFit {
     /// Standard errors (residual-scaled).
     pub fn stderr(&self) -> Vec<f64> {
         let s2 = self.sigma2();
-        (0..self.theta.len()).map(|i| (self.cov_unit[(i, i)] * s2).max(0.0).sqrt()).collect()
+        (0..self.theta.len())
+            .map(|i| (self.cov_unit[(i, i)] * s2).max(0.0).sqrt())
+            .collect()
     }
 }
 
 impl NormalEquations {
     pub fn new(p: usize) -> Self {
-        Self { xtx: DMatrix::zeros(p, p), xty: DVector::zeros(p), yty: 0.0, n: 0 }
+        Self {
+            xtx: DMatrix::zeros(p, p),
+            xty: DVector::zeros(p),
+            yty: 0.0,
+            n: 0,
+        }
     }
 
     pub fn params(&self) -> usize {
@@ -106,15 +113,25 @@ impl NormalEquations {
         let s: Vec<f64> = d.iter().map(|x| 1.0 / x.sqrt()).collect();
         let scaled = DMatrix::from_fn(p, p, |i, j| a[(i, j)] * s[i] * s[j]);
         let eig = scaled.clone().symmetric_eigen();
-        let (min, max) = eig.eigenvalues.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), &x| (lo.min(x), hi.max(x)));
-        if !(min > max * 1e-12) {
+        let (min, max) = eig
+            .eigenvalues
+            .iter()
+            .fold((f64::INFINITY, 0.0f64), |(lo, hi), &x| {
+                (lo.min(x), hi.max(x))
+            });
+        if min.is_nan() || min <= max * 1e-12 {
             return None;
         }
         let inv_scaled = scaled.cholesky()?.inverse();
         let cov_unit = DMatrix::from_fn(p, p, |i, j| inv_scaled[(i, j)] * s[i] * s[j]);
         let theta = &cov_unit * &self.xty;
         let rss = (self.yty - theta.dot(&self.xty)).max(0.0);
-        Some(LsFit { theta, cov_unit, rss, n: self.n })
+        Some(LsFit {
+            theta,
+            cov_unit,
+            rss,
+            n: self.n,
+        })
     }
 
     /// Diagonal element `(XᵀX)_jj`: the weight of column j.
@@ -126,7 +143,13 @@ impl NormalEquations {
     /// `values` (moved to the observations' side).
     pub fn reduce(&self, free: &[usize], values: &[f64]) -> Option<NormalEquations> {
         let p = self.xty.len();
-        let a = |i: usize, j: usize| if j <= i { self.xtx[(i, j)] } else { self.xtx[(j, i)] };
+        let a = |i: usize, j: usize| {
+            if j <= i {
+                self.xtx[(i, j)]
+            } else {
+                self.xtx[(j, i)]
+            }
+        };
         let fixed: Vec<usize> = (0..p).filter(|j| !free.contains(j)).collect();
         let mut out = NormalEquations::new(free.len());
         for (r, &i) in free.iter().enumerate() {
@@ -153,7 +176,11 @@ impl NormalEquations {
         let mut quad = 0.0;
         for i in 0..p {
             for j in 0..p {
-                let a = if j <= i { self.xtx[(i, j)] } else { self.xtx[(j, i)] };
+                let a = if j <= i {
+                    self.xtx[(i, j)]
+                } else {
+                    self.xtx[(j, i)]
+                };
                 quad += theta[i] * a * theta[j];
             }
         }
@@ -192,23 +219,42 @@ pub fn series_stats(t: &[f64], x: &[f64], lags: usize) -> SeriesStats {
     let rms = (x.iter().map(|v| v * v).sum::<f64>() / nf).sqrt();
     let tm = t.iter().sum::<f64>() / nf;
     let stt: f64 = t.iter().map(|ti| (ti - tm).powi(2)).sum();
-    let stx: f64 = t.iter().zip(x).map(|(ti, xi)| (ti - tm) * (xi - mean)).sum();
+    let stx: f64 = t
+        .iter()
+        .zip(x)
+        .map(|(ti, xi)| (ti - tm) * (xi - mean))
+        .sum();
     let slope = if stt > 0.0 { stx / stt } else { 0.0 };
     let resid_var = if n > 2 {
-        t.iter().zip(x).map(|(ti, xi)| (xi - mean - slope * (ti - tm)).powi(2)).sum::<f64>() / (n - 2) as f64
+        t.iter()
+            .zip(x)
+            .map(|(ti, xi)| (xi - mean - slope * (ti - tm)).powi(2))
+            .sum::<f64>()
+            / (n - 2) as f64
     } else {
         0.0
     };
-    let slope_se = if stt > 0.0 { (resid_var / stt).sqrt() } else { f64::NAN };
+    let slope_se = if stt > 0.0 {
+        (resid_var / stt).sqrt()
+    } else {
+        f64::NAN
+    };
     let var: f64 = x.iter().map(|v| (v - mean).powi(2)).sum();
     let acf = |k: usize| -> f64 {
         if var <= 0.0 || k >= n {
             return 0.0;
         }
-        (0..n - k).map(|i| (x[i] - mean) * (x[i + k] - mean)).sum::<f64>() / var
+        (0..n - k)
+            .map(|i| (x[i] - mean) * (x[i + k] - mean))
+            .sum::<f64>()
+            / var
     };
     let lags = lags.min(n.saturating_sub(2)).max(1);
-    let q: f64 = (1..=lags).map(|k| acf(k).powi(2) / (nf - k as f64).max(1.0)).sum::<f64>() * nf * (nf + 2.0);
+    let q: f64 = (1..=lags)
+        .map(|k| acf(k).powi(2) / (nf - k as f64).max(1.0))
+        .sum::<f64>()
+        * nf
+        * (nf + 2.0);
     SeriesStats {
         n,
         rms,
@@ -237,7 +283,11 @@ pub fn correlation(a: &[f64], b: &[f64]) -> f64 {
         saa += da * da;
         sbb += db * db;
     }
-    if saa <= 0.0 || sbb <= 0.0 { 0.0 } else { sab / (saa * sbb).sqrt() }
+    if saa <= 0.0 || sbb <= 0.0 {
+        0.0
+    } else {
+        sab / (saa * sbb).sqrt()
+    }
 }
 
 #[cfg(test)]
@@ -253,7 +303,11 @@ mod tests {
             ne.add(&[1.0, x], 2.0 + 3e6 * x);
         }
         let fit = ne.solve().unwrap();
-        assert!((fit.theta[0] - 2.0).abs() < 1e-9 && (fit.theta[1] - 3e6).abs() < 1e-3, "{:?}", fit.theta);
+        assert!(
+            (fit.theta[0] - 2.0).abs() < 1e-9 && (fit.theta[1] - 3e6).abs() < 1e-3,
+            "{:?}",
+            fit.theta
+        );
         assert!(fit.rss < 1e-9 * ne.yty(), "{}", fit.rss);
         assert!((ne.rss_at(&fit.theta) - fit.rss).abs() < 1e-9);
         // A column that is identically zero is not determined.
@@ -269,7 +323,9 @@ mod tests {
         // A deterministic pseudo-random sequence (LCG) is white enough for the test.
         let mut state = 12345u64;
         let mut next = || {
-            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             ((state >> 11) as f64 / (1u64 << 53) as f64) - 0.5
         };
         let t: Vec<f64> = (0..2000).map(|i| i as f64).collect();

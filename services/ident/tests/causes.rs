@@ -26,7 +26,14 @@ fn com_offset() {
     for seed in SEEDS {
         let id = identify_blind(&truth, seed, 600.0);
         // Within 10 % or 0.2 µm, whichever is larger.
-        check_single(&format!("com_offset seed {seed}"), &truth, Cause::ComOffset, &id, 10.0, |_, t| (0.1 * t.abs()).max(0.2e-6));
+        check_single(
+            &format!("com_offset seed {seed}"),
+            &truth,
+            Cause::ComOffset,
+            &id,
+            10.0,
+            |_, t| (0.1 * t.abs()).max(0.2e-6),
+        );
     }
 }
 
@@ -35,7 +42,14 @@ fn earth_rate() {
     let truth = truth("[effects.earth_rate]\nlatitude_deg = 43.88\n");
     for seed in SEEDS {
         let id = identify_blind(&truth, seed, 600.0);
-        check_single(&format!("earth_rate seed {seed}"), &truth, Cause::EarthRate, &id, 1.5, |_, _| 3.0);
+        check_single(
+            &format!("earth_rate seed {seed}"),
+            &truth,
+            Cause::EarthRate,
+            &id,
+            1.5,
+            |_, _| 3.0,
+        );
     }
 }
 
@@ -47,24 +61,45 @@ fn aero_drag() {
     let truth = truth("[effects.aero_drag]\nc1 = [0.01, 0.01, 0.03]\nc2 = [0.3, 0.3, 1.0]\n");
     for seed in SEEDS {
         let data = experiment_data(&truth, seed, 1200.0);
-        let id = testbed_ident::identify(&data, &nominal(), &testbed_ident::Options::default()).expect("identification runs");
+        let id = testbed_ident::identify(&data, &nominal(), &testbed_ident::Options::default())
+            .expect("identification runs");
         let label = format!("aero_drag seed {seed}");
-        assert_eq!(names(&id), vec!["aero_drag"], "{label}: {:?}", id.report.steps);
+        assert_eq!(
+            names(&id),
+            vec!["aero_drag"],
+            "{label}: {:?}",
+            id.report.steps
+        );
         let fitted = Cause::AeroDrag.values(&id.extended);
         let hidden = Cause::AeroDrag.values(&truth);
         for axis in 0..3 {
             let n = data.gyro.len() as f64;
-            let rms = (data.gyro.iter().map(|r| r.rate_rad_s[axis].powi(2)).sum::<f64>() / n).sqrt();
+            let rms = (data
+                .gyro
+                .iter()
+                .map(|r| r.rate_rad_s[axis].powi(2))
+                .sum::<f64>()
+                / n)
+                .sqrt();
             let torque = |v: &[f64]| v[axis] * rms + v[3 + axis] * rms * rms;
             let (f, t) = (torque(&fitted), torque(&hidden));
-            println!("{label}: axis {axis}: drag at the RMS rate {rms:.2e} rad/s: {f:.3e} Nm (true {t:.3e})");
+            println!(
+                "{label}: axis {axis}: drag at the RMS rate {rms:.2e} rad/s: {f:.3e} Nm (true {t:.3e})"
+            );
             // Within 30 % on X and Y, 10 % on Z.
             let allowed = if axis == 2 { 0.1 } else { 0.3 };
-            assert!((f - t).abs() <= allowed * t, "{label}: axis {axis}: drag torque {f} vs {t}");
+            assert!(
+                (f - t).abs() <= allowed * t,
+                "{label}: axis {axis}: drag torque {f} vs {t}"
+            );
         }
         println!("{label}: held-out gain {:.3}", id.report.gain);
         assert!(id.report.gain > 1.05, "{label}: gain {}", id.report.gain);
-        assert!(!id.report.remaining.residual_remains, "{label}: {}", id.report.remaining.message);
+        assert!(
+            !id.report.remaining.residual_remains,
+            "{label}: {}",
+            id.report.remaining.message
+        );
         assert_eq!(extended_round_trip(&id, &label), id.extended);
     }
 }
@@ -76,7 +111,14 @@ fn constant_torque() {
     for seed in SEEDS {
         let id = identify_blind(&truth, seed, 600.0);
         // Within 2 %.
-        check_single(&format!("constant_torque seed {seed}"), &truth, Cause::ConstantTorque, &id, 5.0, |_, t| 0.02 * t.abs());
+        check_single(
+            &format!("constant_torque seed {seed}"),
+            &truth,
+            Cause::ConstantTorque,
+            &id,
+            5.0,
+            |_, t| 0.02 * t.abs(),
+        );
     }
 }
 
@@ -86,7 +128,14 @@ fn inertia_error() {
     for seed in SEEDS {
         let id = identify_blind(&truth, seed, 600.0);
         // Within 0.3 % of the moment (a tenth of the smallest error).
-        check_single(&format!("inertia_error seed {seed}"), &truth, Cause::InertiaError, &id, 2.0, |_, _| 0.003);
+        check_single(
+            &format!("inertia_error seed {seed}"),
+            &truth,
+            Cause::InertiaError,
+            &id,
+            2.0,
+            |_, _| 0.003,
+        );
     }
 }
 
@@ -96,7 +145,14 @@ fn gyro_scale() {
     for seed in SEEDS {
         let id = identify_blind(&truth, seed, 1200.0);
         // Within 250 ppm (about 3 standard errors on 1200 s).
-        check_single(&format!("gyro_scale seed {seed}"), &truth, Cause::GyroScale, &id, 1.02, |_, _| 250.0);
+        check_single(
+            &format!("gyro_scale seed {seed}"),
+            &truth,
+            Cause::GyroScale,
+            &id,
+            1.02,
+            |_, _| 250.0,
+        );
     }
 }
 
@@ -106,7 +162,14 @@ fn gyro_misalignment() {
     for seed in SEEDS {
         let id = identify_blind(&truth, seed, 1200.0);
         // Within 0.2 mrad.
-        check_single(&format!("gyro_misalignment seed {seed}"), &truth, Cause::GyroMisalignment, &id, 1.05, |_, _| 2e-4);
+        check_single(
+            &format!("gyro_misalignment seed {seed}"),
+            &truth,
+            Cause::GyroMisalignment,
+            &id,
+            1.05,
+            |_, _| 2e-4,
+        );
     }
 }
 
@@ -146,7 +209,14 @@ fn wheel_torque_scale() {
     for seed in SEEDS {
         let id = identify_blind(&truth, seed, 600.0);
         // Within 0.3 %.
-        check_single(&format!("wheel_torque_scale seed {seed}"), &truth, Cause::WheelTorqueScale, &id, 20.0, |_, _| 0.003);
+        check_single(
+            &format!("wheel_torque_scale seed {seed}"),
+            &truth,
+            Cause::WheelTorqueScale,
+            &id,
+            20.0,
+            |_, _| 0.003,
+        );
     }
 }
 
@@ -157,7 +227,14 @@ fn actuator_delay() {
     for seed in SEEDS {
         let id = identify_blind(&truth, seed, 600.0);
         // Within 2 ms.
-        check_single(&format!("actuator_delay seed {seed}"), &truth, Cause::ActuatorDelay, &id, 10.0, |_, _| 2e-3);
+        check_single(
+            &format!("actuator_delay seed {seed}"),
+            &truth,
+            Cause::ActuatorDelay,
+            &id,
+            10.0,
+            |_, _| 2e-3,
+        );
     }
 }
 
@@ -169,7 +246,14 @@ fn magnetic_disturbance() {
     for seed in SEEDS {
         let id = identify_blind(&truth, seed, 600.0);
         // Within 0.001 G (0.1 µT).
-        check_single(&format!("magnetic_disturbance seed {seed}"), &truth, Cause::MagneticDisturbance, &id, 10.0, |_, _| 1e-3);
+        check_single(
+            &format!("magnetic_disturbance seed {seed}"),
+            &truth,
+            Cause::MagneticDisturbance,
+            &id,
+            10.0,
+            |_, _| 1e-3,
+        );
     }
 }
 
@@ -179,12 +263,18 @@ fn clean_data_gives_none_on_at_least_19_of_20_seeds() {
     let mut named = Vec::new();
     for seed in 100..120 {
         let id = identify_blind(&clean, seed, 600.0);
-        println!("clean seed {seed}: {} (gain {:.4})", id.report.verdict, id.report.gain);
+        println!(
+            "clean seed {seed}: {} (gain {:.4})",
+            id.report.verdict, id.report.gain
+        );
         if !id.report.causes.is_empty() {
             named.push((seed, id.report.verdict.clone()));
         } else {
             assert_eq!(id.report.verdict, "none");
-            assert_eq!(id.extended, clean, "nothing named: the extended model is the nominal");
+            assert_eq!(
+                id.extended, clean,
+                "nothing named: the extended model is the nominal"
+            );
             assert!((id.report.gain - 1.0).abs() < 1e-12);
         }
     }
@@ -195,14 +285,26 @@ fn clean_data_gives_none_on_at_least_19_of_20_seeds() {
 #[test]
 fn two_hidden_effects_are_both_found() {
     // A dynamics effect and a sensor effect.
-    let truth_a = truth("[effects.com_offset]\nr_m = [2.5e-6, -1.5e-6, -1.0e-6]\n[effects.magnetic_disturbance]\nhard_iron_gauss = [0.08, -0.05, 0.1]\n");
+    let truth_a = truth(
+        "[effects.com_offset]\nr_m = [2.5e-6, -1.5e-6, -1.0e-6]\n[effects.magnetic_disturbance]\nhard_iron_gauss = [0.08, -0.05, 0.1]\n",
+    );
     // Two effects in the same channel (the wheels), fitted jointly.
     let truth_b = truth(
         "[effects.wheel_torque_scale]\nscale = [0.95, 1.04, 0.97]\n[effects.actuator_delay]\ndelay_s = 0.15\n",
     );
     for (label, truth, seed, expected) in [
-        ("com + hard iron", &truth_a, 31, ["com_offset", "magnetic_disturbance"]),
-        ("torque scale + delay", &truth_b, 32, ["wheel_torque_scale", "actuator_delay"]),
+        (
+            "com + hard iron",
+            &truth_a,
+            31,
+            ["com_offset", "magnetic_disturbance"],
+        ),
+        (
+            "torque scale + delay",
+            &truth_b,
+            32,
+            ["wheel_torque_scale", "actuator_delay"],
+        ),
     ] {
         let id = identify_blind(truth, seed, 600.0);
         let mut found = names(&id);
@@ -216,10 +318,67 @@ fn two_hidden_effects_are_both_found() {
             let fitted = cause.values(&id.extended);
             let hidden = cause.values(truth);
             for (i, (f, t)) in fitted.iter().zip(&hidden).enumerate() {
-                assert!((f - t).abs() <= 0.1 * t.abs() + 1e-7, "{label}: {} = {f} vs {t}", cause.value_name(i));
+                assert!(
+                    (f - t).abs() <= 0.1 * t.abs() + 1e-7,
+                    "{label}: {} = {f} vs {t}",
+                    cause.value_name(i)
+                );
             }
         }
         assert!(id.report.gain > 10.0, "{label}: gain {}", id.report.gain);
-        assert!(!id.report.remaining.residual_remains, "{label}: {}", id.report.remaining.message);
+        assert!(
+            !id.report.remaining.residual_remains,
+            "{label}: {}",
+            id.report.remaining.message
+        );
     }
+}
+
+#[test]
+fn residual_is_reported_when_the_cause_is_not_among_the_candidates() {
+    // The centre-of-mass offset hidden, but left out of the candidates: something else is named
+    // (a constant torque explains its level part), the tilt-dependent part remains, and the
+    // remaining residual correlates most with the missing effect's signal.
+    let truth = truth("[effects.com_offset]\nr_m = [2.5e-6, -1.5e-6, -1.0e-6]\n");
+    let data = experiment_data(&truth, 41, 600.0);
+    let options = testbed_ident::Options {
+        candidates: Cause::ALL
+            .into_iter()
+            .filter(|c| *c != Cause::ComOffset)
+            .collect(),
+        ..testbed_ident::Options::default()
+    };
+    let id = testbed_ident::identify(&data, &nominal(), &options).expect("identification runs");
+    let r = &id.report;
+    println!("{}: {}", r.verdict, r.remaining.message);
+    for c in &r.remaining.correlations {
+        println!("  {} ~ {}: {:+.3}", c.residual, c.signal, c.r);
+    }
+    assert!(!r.causes.is_empty());
+    assert!(r.remaining.residual_remains, "{}", r.remaining.message);
+    assert!(
+        r.remaining.message.contains("torque"),
+        "{}",
+        r.remaining.message
+    );
+    let top = r
+        .remaining
+        .correlations
+        .first()
+        .expect("correlations reported");
+    assert!(
+        top.signal.starts_with("com_offset.r_m"),
+        "top correlation {top:?}"
+    );
+    assert!(top.r.abs() > 0.5, "{top:?}");
+}
+
+#[test]
+fn a_model_that_already_has_the_effect_gives_none() {
+    let truth = truth("[effects.constant_torque]\ntorque_nm = [1.5e-3, -1.0e-3, 2.0e-3]\n");
+    let data = experiment_data(&truth, 42, 600.0);
+    let id = testbed_ident::identify(&data, &truth, &testbed_ident::Options::default())
+        .expect("identification runs");
+    assert_eq!(id.report.verdict, "none", "{:?}", id.report.steps);
+    assert_eq!(id.extended, truth);
 }

@@ -151,6 +151,64 @@ impl Field for u32 {
     }
 }
 
+impl Field for u8 {
+    fn write(&self, out: &mut Vec<u8>) {
+        write_serde(self, out);
+    }
+
+    fn read(value: &Value, field: &str) -> Result<Self, DecodeError> {
+        value.as_u64().and_then(|v| u8::try_from(v).ok()).ok_or_else(|| DecodeError::Type {
+            field: field.to_owned(),
+            expected: "an integer from 0 to 255",
+        })
+    }
+
+    fn schema(description: &str) -> Value {
+        json!({
+            "type": "integer",
+            "minimum": 0,
+            "maximum": u8::MAX,
+            "description": description,
+        })
+    }
+}
+
+/// Eight raw bytes (a CAN frame's payload), as an array of integers.
+impl Field for [u8; 8] {
+    fn write(&self, out: &mut Vec<u8>) {
+        write_serde(&self[..], out);
+    }
+
+    fn read(value: &Value, field: &str) -> Result<Self, DecodeError> {
+        let items = value.as_array().ok_or_else(|| DecodeError::Type {
+            field: field.to_owned(),
+            expected: "an array of 8 bytes",
+        })?;
+        if items.len() != 8 {
+            return Err(DecodeError::Length {
+                field: field.to_owned(),
+                expected: 8,
+                found: items.len(),
+            });
+        }
+        let mut out = [0u8; 8];
+        for (i, (slot, item)) in out.iter_mut().zip(items).enumerate() {
+            *slot = u8::read(item, &format!("{field}[{i}]"))?;
+        }
+        Ok(out)
+    }
+
+    fn schema(description: &str) -> Value {
+        json!({
+            "type": "array",
+            "items": {"type": "integer", "minimum": 0, "maximum": 255},
+            "minItems": 8,
+            "maxItems": 8,
+            "description": description,
+        })
+    }
+}
+
 impl<const N: usize> Field for [f64; N] {
     fn write(&self, out: &mut Vec<u8>) {
         out.push(b'[');

@@ -2,9 +2,10 @@
 
 use crate::json::{DecodeError, Field, as_object, check_no_extra, member, object_schema};
 use ipc_types::{
-    AttitudeEstimate, CmgCommand, CmgTelemetry, ControllerStatus, GyroSample, Heartbeat,
-    InclinometerSample, MagnetometerSample, SampleHeader, SimClockTick, SimTruth, Topic,
-    WheelCommand, WheelTelemetry,
+    AppliedCmgCommand, AppliedWheelCommand, AttitudeEstimate, CanBusFrame, CanLinkStatus,
+    CmgCommand, CmgTelemetry, ControllerStatus, GyroSample, Heartbeat, InclinometerSample,
+    MagnetometerSample, SampleHeader, SimClockTick, SimTruth, Topic, WheelCommand,
+    WheelTelemetry,
 };
 use serde_json::Value;
 
@@ -375,6 +376,67 @@ log_types! {
         frames_ok: "Device frames decoded successfully since start (gateways; 0 elsewhere).",
         frames_bad: "Device frames rejected since start (gateways; 0 elsewhere).",
     } pad [];
+
+    /// [`CanBusFrame`] on [`topic::CAN_BUS`](ipc_types::topic::CAN_BUS).
+    CanBus(CanBusFrame) = "testbed::CanBusFrame.v1",
+    "One classic CAN frame on the software CAN bus, as its sender put it on the bus." {
+        header: "Common header; time_ns is the run-clock time the frame was sent, sequence \
+                 counts the sender's frames, source_id is the sender: 1 CAN node, 2 gyro, \
+                 3 inclinometer, 4 magnetometer, 5 wheel, 6 CMG gateway, 7 replay.",
+        can_id: "Identifier with the Linux flags: bit 31 extended (29-bit) identifier, bit 30 \
+                 remote frame; otherwise the 11-bit identifier.",
+        len: "Data length code, 0 to 8 (bytes).",
+        data: "Payload bytes; bytes past len are zero.",
+        check: "Frame check sequence (CRC-15/CAN) over the frame's 16 bytes; a frame whose \
+                check does not match was corrupted on the bus.",
+    } pad [_pad0, _pad1, _pad2];
+
+    /// [`CanLinkStatus`] on [`topic::CAN_STATUS`](ipc_types::topic::CAN_STATUS).
+    CanStatus(CanLinkStatus) = "testbed::CanLinkStatus.v1",
+    "Frame and error counters of one CAN link (a gateway or the CAN node), totals since start." {
+        header: "Common header; time_ns is the latest tick of the link, source_id the link: \
+                 1 CAN node, 2 gyro, 3 inclinometer, 4 magnetometer, 5 wheel, 6 CMG gateway.",
+        frames_ok: "Frames of the link's device decoded and used (count).",
+        frames_bad: "Frames rejected: CRC, DLC, unknown identifier, duplicate, late (count).",
+        crc_errors: "Frames dropped for a failed frame check (count).",
+        wrong_dlc: "Frames with the wrong data length (count).",
+        unknown_id: "Frames outside the identifier map (count).",
+        duplicates: "Repeated frames (count).",
+        lost_frames: "Frames missed, from rolling-counter jumps (count).",
+        incomplete_samples: "Multi-frame samples abandoned incomplete (count).",
+        late_frames: "Frames arriving after their tick's deadline (count).",
+        out_of_range: "Frames with a value beyond the device range (count).",
+        stale_samples: "Samples published STALE, not VALID, at the tick deadline (count).",
+        frames_sent: "Frames sent (count).",
+        commands_clamped: "Commands clamped to their limit before sending (count).",
+        commands_refused: "Commands refused and replaced by the safe command (count).",
+        transport_errors: "Transport send or receive errors (count).",
+        injected_tx_drop: "Simulated node: sent frames dropped by fault injection (count).",
+        injected_tx_corrupt: "Simulated node: sent frames corrupted (count).",
+        injected_tx_delay: "Simulated node: sent frames delayed past the tick sync (count).",
+        injected_tx_duplicate: "Simulated node: sent frames duplicated (count).",
+        injected_rx_drop: "Simulated node: received command frames dropped (count).",
+        injected_rx_corrupt: "Simulated node: received command frames corrupted (count).",
+        injected_rx_delay: "Simulated node: received command frames delayed (count).",
+        injected_rx_duplicate: "Simulated node: received command frames duplicated (count).",
+    } pad [];
+
+    /// [`AppliedWheelCommand`] on [`topic::WHEEL_APPLIED`](ipc_types::topic::WHEEL_APPLIED).
+    WheelApplied(AppliedWheelCommand) = "testbed::AppliedWheelCommand.v1",
+    "Reaction wheel motor torques as the CAN node applies them (CAN actuation path)." {
+        header: "Common header; time_ns is the tick the command is applied for; STALE: the \
+                 node holds the previous command (none complete and valid for this tick).",
+        torque: "Motor torque on each wheel, about its axis, N m. The platform feels the \
+                 opposite torque.",
+    } pad [];
+
+    /// [`AppliedCmgCommand`] on [`topic::CMG_APPLIED`](ipc_types::topic::CMG_APPLIED).
+    CmgApplied(AppliedCmgCommand) = "testbed::AppliedCmgCommand.v1",
+    "CMG gimbal rates as the CAN node applies them (CAN actuation path)." {
+        header: "Common header; time_ns is the tick the command is applied for; STALE: the \
+                 node holds the previous command.",
+        gimbal_rate: "Gimbal rates, rad/s.",
+    } pad [];
 }
 
 #[cfg(test)]
@@ -408,6 +470,10 @@ mod tests {
         check::<SimTruth>();
         check::<SimClockTick>();
         check::<Heartbeat>();
+        check::<CanBusFrame>();
+        check::<CanLinkStatus>();
+        check::<AppliedWheelCommand>();
+        check::<AppliedCmgCommand>();
     }
 
     #[test]
@@ -446,6 +512,10 @@ mod tests {
             TopicKind::SimTruth => LogRecord::SimTruth(Default::default()),
             TopicKind::SimClock => LogRecord::SimClock(Default::default()),
             TopicKind::Heartbeat => LogRecord::Heartbeat(Default::default()),
+            TopicKind::CanBus => LogRecord::CanBus(Default::default()),
+            TopicKind::CanStatus => LogRecord::CanStatus(Default::default()),
+            TopicKind::WheelApplied => LogRecord::WheelApplied(Default::default()),
+            TopicKind::CmgApplied => LogRecord::CmgApplied(Default::default()),
         };
         let mut out = Vec::new();
         record.encode_json(&mut out);

@@ -6,6 +6,11 @@
 //! as soon as a later tick's gyro sample shows that the tick is over (the missing update is
 //! skipped and counted). Within a tick the order is fixed: propagate, then update, so the result
 //! does not depend on the order in which samples arrived.
+//!
+//! A gyro sample without `VALID` (a CAN gateway publishes one, flagged `STALE`, when the tick's
+//! frames did not all arrive by the node's tick sync) still answers its tick: the filter
+//! propagates with the last valid rate (zero before the first), counted in
+//! [`EstimatorCounters::gyro_held`]. Invalid vector samples skip their update.
 
 use crate::convert::{a3, quaternion_to_array, v3, Sequence};
 use ipc_types::{AttitudeEstimate, GyroSample, InclinometerSample, MagnetometerSample, SampleHeader};
@@ -17,7 +22,8 @@ use testbed_gnc::tasks::EstimatorTask;
 
 #[derive(Debug, Default, Clone, Copy)]
 struct Pending {
-    gyro: Option<[f64; 3]>,
+    /// `Some(None)`: the sample arrived but is invalid (as for the vectors).
+    gyro: Option<Option<[f64; 3]>>,
     /// `Some(None)`: the sample arrived but is invalid.
     tilt: Option<Option<[f64; 2]>>,
     field: Option<Option<[f64; 3]>>,
@@ -32,6 +38,8 @@ pub struct EstimatorCounters {
     pub vectors_missing: u64,
     /// Filter errors (out-of-order or non-finite samples).
     pub filter_errors: u64,
+    /// Ticks whose gyro sample was invalid: propagated with the last valid rate instead.
+    pub gyro_held: u64,
 }
 
 pub struct EstimatorNode {
@@ -39,6 +47,8 @@ pub struct EstimatorNode {
     schedule: Schedule,
     pending: BTreeMap<u64, Pending>,
     last_processed: Option<u64>,
+    /// The rate of the latest valid gyro sample processed.
+    last_valid_rate: Option<[f64; 3]>,
     counters: EstimatorCounters,
     seq: Sequence,
 }
@@ -50,6 +60,7 @@ impl EstimatorNode {
             schedule,
             pending: BTreeMap::new(),
             last_processed: None,
+            last_valid_rate: None,
             counters: EstimatorCounters::default(),
             seq: Sequence::default(),
         }
@@ -71,8 +82,9 @@ impl EstimatorNode {
     }
 
     pub fn on_gyro(&mut self, s: &GyroSample) {
+        let valid = s.header.is_valid();
         if let Some(p) = self.slot(s.header.time_ns) {
-            p.gyro = Some(s.rate);
+            p.gyro = Some(valid.then_some(s.rate));
         }
     }
 
@@ -116,10 +128,20 @@ impl EstimatorNode {
 
     fn process(&mut self, t_ns: u64, p: &Pending) -> Option<AttitudeEstimate> {
         let k = self.schedule.tick_at(t_ns)?;
-        let Some(rate) = p.gyro else {
+        let Some(reading) = p.gyro else {
             // Vector samples of a tick whose gyro sample was lost: nothing to propagate with.
             self.counters.samples_refused += 1;
             return None;
+        };
+        let rate = match reading {
+            Some(rate) => {
+                self.last_valid_rate = Some(rate);
+                rate
+            }
+            None => {
+                self.counters.gyro_held += 1;
+                self.last_valid_rate.unwrap_or([0.0; 3])
+            }
         };
         if self.task.on_gyro(t_ns, &v3(&rate)).is_err() {
             self.counters.filter_errors += 1;
@@ -167,5 +189,70 @@ impl EstimatorNode {
             }
         }
         out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::run_config::RunConfig;
+    use crate::sim_devices::{SimGyro, SimInclinometer, SimMagnetometer};
+    use crate::plant_node::PlantNode;
+
+    /// 8 s of the default run's sensor samples (the plant coasting without commands).
+    fn samples() -> (RunConfig, Vec<(GyroSample, Option<InclinometerSample>, Option<MagnetometerSample>)>) {
+        let mut config = RunConfig::default();
+        config.run.duration_s = 8.0;
+        let schedule = config.schedule().unwrap();
+        let mut plant = PlantNode::new(&config).unwrap();
+        let (mut gyro, mut tilt, mut field) = (
+            SimGyro::new(&config, schedule),
+            SimInclinometer::new(&config, schedule),
+            SimMagnetometer::new(&config, schedule),
+        );
+        let mut out = Vec::new();
+        loop {
+            let (truth, _) = plant.outputs();
+            out.push((gyro.on_truth(&truth).unwrap(), tilt.on_truth(&truth), field.on_truth(&truth)));
+            if plant.at_end() {
+                return (config, out);
+            }
+            plant.advance().unwrap();
+        }
+    }
+
+    fn run(config: &RunConfig, samples: &[(GyroSample, Option<InclinometerSample>, Option<MagnetometerSample>)]) -> (Vec<AttitudeEstimate>, EstimatorCounters) {
+        let mut node = EstimatorNode::new(config.estimator_config(), config.schedule().unwrap());
+        let mut out = Vec::new();
+        for (g, t, f) in samples {
+            node.on_gyro(g);
+            t.iter().for_each(|t| node.on_inclinometer(t));
+            f.iter().for_each(|f| node.on_magnetometer(f));
+            out.extend(node.ready());
+        }
+        (out, node.counters())
+    }
+
+    #[test]
+    fn an_invalid_gyro_sample_answers_its_tick_with_the_last_valid_rate() {
+        let (config, samples) = samples();
+        let (reference, counters) = run(&config, &samples);
+        assert_eq!(reference.len(), samples.len());
+        assert_eq!(counters.gyro_held, 0);
+        // Ticks 20 and 21: the gateway publishes stale samples (values repeated, not VALID).
+        let mut stale = samples.clone();
+        let mut held = samples.clone();
+        for k in [20, 21] {
+            let g = &mut stale[k].0;
+            g.header.flags = SampleHeader::STALE;
+            g.rate = [9.0; 3]; // never used
+            held[k].0.rate = samples[19].0.rate;
+        }
+        let (with_stale, counters) = run(&config, &stale);
+        let (with_held, _) = run(&config, &held);
+        assert_eq!(counters.gyro_held, 2);
+        assert_eq!(with_stale.len(), samples.len(), "every tick answered");
+        assert_eq!(with_stale, with_held);
+        assert_ne!(with_stale, reference);
     }
 }

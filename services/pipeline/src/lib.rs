@@ -25,6 +25,7 @@ pub mod estimator_node;
 pub mod in_memory;
 pub mod plant_node;
 pub mod process;
+pub mod replay_node;
 pub mod run_config;
 pub mod sim_devices;
 pub mod summary;

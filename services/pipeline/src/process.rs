@@ -2,9 +2,16 @@
 
 use crate::run_config::RunConfig;
 use anyhow::Context;
+use ipc_types::{Heartbeat, ProcessState};
+use std::collections::BTreeSet;
+use std::time::Instant;
+use testbed_bus::{EventLoop, Flow, LoopExit, SubscriberOptions, Waiter};
 use std::path::PathBuf;
 use std::time::Duration;
 use testbed_bus::{Bus, BusConfig};
+
+/// How long the participants of a run have to come up.
+pub const START_TIMEOUT: Duration = Duration::from_secs(60);
 
 /// Heartbeat period of every process.
 pub const HEARTBEAT_PERIOD: Duration = Duration::from_millis(200);
@@ -59,7 +66,6 @@ pub fn run_sim_gateway<T: ipc_types::Topic>(
     mut drain_commands: impl FnMut() -> anyhow::Result<()>,
     mut sample: impl FnMut(&ipc_types::SimTruth) -> Option<T>,
 ) -> anyhow::Result<()> {
-    use testbed_bus::{EventLoop, Flow, Waiter};
     let truth = bus.subscriber::<ipc_types::SimTruth>()?;
     let output = bus.publisher::<T>()?;
     let heartbeat = bus.heartbeat(HEARTBEAT_PERIOD)?;
@@ -89,4 +95,42 @@ pub fn run_sim_gateway<T: ipc_types::Topic>(
     })?;
     heartbeat.set_state(ipc_types::ProcessState::Stopping);
     error.into_result()
+}
+
+/// The start barrier of a clock owner (plant, replay): block until every process named in
+/// `participants` has published a `Running` heartbeat, so every subscriber exists before the
+/// first sample.
+pub fn wait_for_participants(bus: &Bus, participants: &[String]) -> anyhow::Result<LoopExit> {
+    let mut waiting: BTreeSet<&str> = participants.iter().map(String::as_str).collect();
+    if waiting.is_empty() {
+        return Ok(LoopExit::Stopped);
+    }
+    // Dropped on return: nothing subscribes to heartbeats during the run, so a heartbeat can
+    // never block a lossless publisher.
+    let heartbeats = bus.subscriber_with::<Heartbeat>(SubscriberOptions::buffer(64))?;
+    let waiter = Waiter::new()?;
+    let mut events = EventLoop::new(&waiter);
+    events.on_data(&heartbeats)?;
+    let deadline = Instant::now() + START_TIMEOUT;
+    while !waiting.is_empty() {
+        let left = deadline.saturating_duration_since(Instant::now());
+        anyhow::ensure!(!left.is_zero(), "participants never reported Running: {waiting:?}");
+        let mut seen = Vec::new();
+        let exit = events.run_once(left, |_| {
+            let _ = heartbeats.drain(|h| {
+                if h.state() == Some(ProcessState::Running) {
+                    seen.push(h.name().to_string());
+                }
+            });
+            Flow::Continue
+        });
+        if let Some(exit) = exit.context("waiting for the participants")? {
+            return Ok(exit);
+        }
+        for name in &seen {
+            waiting.remove(name.as_str());
+        }
+    }
+    tracing::info!(participants = participants.len(), "all participants running; starting the clock");
+    Ok(LoopExit::Stopped)
 }

@@ -19,7 +19,11 @@ pub fn truth(effects: &str) -> ModelConfig {
 
 /// Simulated measured data of the identification experiment on `truth`.
 pub fn experiment_data(truth: &ModelConfig, seed: u64, duration_s: f64) -> Dataset {
-    let options = ExperimentOptions { duration_s, seed, ..ExperimentOptions::default() };
+    let options = ExperimentOptions {
+        duration_s,
+        seed,
+        ..ExperimentOptions::default()
+    };
     experiment::run(truth, &options).expect("experiment runs").0
 }
 
@@ -31,12 +35,20 @@ pub fn identify_blind(truth: &ModelConfig, seed: u64, duration_s: f64) -> Identi
 
 /// Standard errors of a named cause, in the cause's value order (NaN where not estimated).
 pub fn stderr(id: &Identification, cause: Cause) -> Vec<f64> {
-    let report = id.report.causes.iter().find(|c| c.name == cause.name()).expect("cause reported");
+    let report = id
+        .report
+        .causes
+        .iter()
+        .find(|c| c.name == cause.name())
+        .expect("cause reported");
     cause
         .params()
         .iter()
         .flat_map(|p| match report.stderr.get(p.key) {
-            Some(serde_json::Value::Array(a)) => a.iter().map(|x| x.as_f64().unwrap_or(f64::NAN)).collect::<Vec<_>>(),
+            Some(serde_json::Value::Array(a)) => a
+                .iter()
+                .map(|x| x.as_f64().unwrap_or(f64::NAN))
+                .collect::<Vec<_>>(),
             Some(x) => vec![x.as_f64().unwrap_or(f64::NAN)],
             None => vec![f64::NAN; p.len],
         })
@@ -70,7 +82,12 @@ pub fn check_single(
     tol: impl Fn(usize, f64) -> f64,
 ) {
     let report = &id.report;
-    assert_eq!(names(id), vec![cause.name()], "{label}: causes {:?}", report.steps);
+    assert_eq!(
+        names(id),
+        vec![cause.name()],
+        "{label}: causes {:?}",
+        report.steps
+    );
     let fitted = cause.values(&id.extended);
     let hidden = cause.values(truth);
     let se = stderr(id, cause);
@@ -86,13 +103,35 @@ pub fn check_single(
             err / se[i],
             allowed
         );
-        assert!(err.abs() <= allowed, "{label}: {} = {} vs true {} (allowed ±{allowed})", cause.value_name(i), fitted[i], hidden[i]);
+        assert!(
+            err.abs() <= allowed,
+            "{label}: {} = {} vs true {} (allowed ±{allowed})",
+            cause.value_name(i),
+            fitted[i],
+            hidden[i]
+        );
         if se[i].is_finite() {
-            assert!(err.abs() <= 5.0 * se[i], "{label}: {} error {err} is more than 5 standard errors ({})", cause.value_name(i), se[i]);
+            assert!(
+                err.abs() <= 5.0 * se[i],
+                "{label}: {} error {err} is more than 5 standard errors ({})",
+                cause.value_name(i),
+                se[i]
+            );
         }
     }
-    println!("{label}: held-out gain {:.3} (groups {:?})", report.gain, report.gain_by_group);
-    assert!(report.gain > min_gain, "{label}: held-out gain {} ≤ {min_gain}", report.gain);
-    assert!(!report.remaining.residual_remains, "{label}: {}", report.remaining.message);
+    println!(
+        "{label}: held-out gain {:.3} (groups {:?})",
+        report.gain, report.gain_by_group
+    );
+    assert!(
+        report.gain > min_gain,
+        "{label}: held-out gain {} ≤ {min_gain}",
+        report.gain
+    );
+    assert!(
+        !report.remaining.residual_remains,
+        "{label}: {}",
+        report.remaining.message
+    );
     assert_eq!(extended_round_trip(id, label), id.extended);
 }

@@ -3,9 +3,10 @@
 #![allow(dead_code)] // each test binary uses a subset
 
 use ipc_types::{
-    AttitudeEstimate, CmgCommand, CmgTelemetry, ControllerMode, ControllerStatus, GyroSample,
-    Heartbeat, InclinometerSample, MagnetometerSample, ProcessState, SampleHeader, SimClockTick,
-    SimTruth, WheelCommand, WheelTelemetry,
+    AppliedCmgCommand, AppliedWheelCommand, AttitudeEstimate, CanBusFrame, CanLinkStatus,
+    CmgCommand, CmgTelemetry, ControllerMode, ControllerStatus, GyroSample, Heartbeat,
+    InclinometerSample, MagnetometerSample, ProcessState, SampleHeader, SimClockTick, SimTruth,
+    WheelCommand, WheelTelemetry,
 };
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -113,6 +114,39 @@ pub fn tick_records(k: u64, rng: &mut Rng) -> Vec<LogRecord> {
     out.push(status.into());
     out.push(WheelCommand::new(header(t, k, rng), rng.array()).into());
     out.push(CmgCommand::new(header(t, k, rng), rng.array()).into());
+    for i in 0..3u64 {
+        let len = (rng.next_u64() % 9) as u8;
+        let mut data = [0u8; 8];
+        for b in data.iter_mut().take(usize::from(len)) {
+            *b = rng.next_u64() as u8;
+        }
+        out.push(
+            CanBusFrame {
+                header: header(t, 3 * k + i, rng).with_source(1 + (i as u32)),
+                can_id: 0x100 + (rng.next_u64() % 0x60) as u32,
+                len,
+                data,
+                check: (rng.next_u64() & 0x7FFF) as u32,
+                ..CanBusFrame::default()
+            }
+            .into(),
+        );
+    }
+    out.push(AppliedWheelCommand { header: header(t, k, rng), torque: rng.array() }.into());
+    out.push(AppliedCmgCommand { header: header(t, k, rng), gimbal_rate: rng.array() }.into());
+    if matches!(k % 10, 0) {
+        out.push(
+            CanLinkStatus {
+                header: SampleHeader::new(t, k / 10, SampleHeader::VALID).with_source(2),
+                frames_ok: 2 * k,
+                frames_bad: k / 50,
+                lost_frames: k / 70,
+                injected_rx_duplicate: u64::MAX - k,
+                ..CanLinkStatus::default()
+            }
+            .into(),
+        );
+    }
     if matches!(k % 10, 0) {
         for name in ["estimator", "controller"] {
             let mut hb = Heartbeat::new(name, 0);

@@ -3,9 +3,19 @@
 //! next tick shows the tick complete, so two runs with the same seed give identical bytes
 //! (heartbeats, which carry pids, are left out there). On SIGINT/SIGTERM it drains what is
 //! queued and finalises the file; killed outright, every record written so far stays readable.
+//!
+//! With `can.record_candump`, the software CAN bus's frames also go to `<log>.candump.log` as
+//! `candump -L` lines (can-utils reads them: `canplayer`, `log2asc`), time-stamped with the run
+//! clock and, in lockstep, ordered per tick by (time, sender, sender's sequence) so the file is
+//! as reproducible as the log. Frames whose frame check fails (corrupted on the bus) are left
+//! out, as `candump` never sees a frame that failed its CRC.
 
 use anyhow::Context;
 use ipc_types::*;
+use std::collections::BTreeMap;
+use std::io::BufWriter;
+use testbed_can::transport::CandumpWriter;
+use testbed_can::CanFrame;
 use testbed_bus::{Bus, EventLoop, Flow, SourceId, SubscriberOptions, TopicSubscriber, Waiter};
 use testbed_log::{LogEncode, LogRecord, RunInfo, RunLogWriter, WriterOptions};
 use testbed_pipeline::process::{self, FirstError, HEARTBEAT_PERIOD};
@@ -48,6 +58,10 @@ fn main() -> anyhow::Result<()> {
         logged::<ControllerStatus>(&bus)?,
         logged::<WheelCommand>(&bus)?,
         logged::<CmgCommand>(&bus)?,
+        logged::<CanBusFrame>(&bus)?,
+        logged::<CanLinkStatus>(&bus)?,
+        logged::<AppliedWheelCommand>(&bus)?,
+        logged::<AppliedCmgCommand>(&bus)?,
     ];
     if !lockstep {
         topics.push(logged::<Heartbeat>(&bus)?);
@@ -65,6 +79,10 @@ fn main() -> anyhow::Result<()> {
     }
     let options = if lockstep { WriterOptions::lockstep() } else { WriterOptions::default() };
     let mut writer = RunLogWriter::create_with(path, &info, options).with_context(|| format!("creating the log {}", path.display()))?;
+    let mut candump = match config.can.record_candump {
+        true => Some(BusRecording::create(&path.with_extension("candump.log"), &config.can.interface)?),
+        false => None,
+    };
     let heartbeat = bus.heartbeat(HEARTBEAT_PERIOD)?;
 
     let waiter = Waiter::new()?;
@@ -76,7 +94,7 @@ fn main() -> anyhow::Result<()> {
     heartbeat.set_state(ProcessState::Running);
 
     let mut error = FirstError::default();
-    let write_pass = |writer: &mut RunLogWriter| -> anyhow::Result<Option<u64>> {
+    let write_pass = |writer: &mut RunLogWriter, candump: &mut Option<BusRecording>| -> anyhow::Result<Option<u64>> {
         let mut newest_tick = None;
         let mut failure = None;
         for topic in &topics {
@@ -85,6 +103,9 @@ fn main() -> anyhow::Result<()> {
                     newest_tick = Some(tick.header.time_ns);
                 }
                 heartbeat.add_samples_in(1);
+                if let (LogRecord::CanBus(frame), Some(candump)) = (&record, candump.as_mut()) {
+                    candump.push(*frame);
+                }
                 if let Err(e) = writer.write_record(&record) {
                     failure.get_or_insert(e);
                 }
@@ -93,21 +114,77 @@ fn main() -> anyhow::Result<()> {
         failure.map_or(Ok(newest_tick), |e| Err(e.into()))
     };
     events.run(|_| {
-        let result = write_pass(&mut writer).and_then(|tick| match tick {
+        let result = write_pass(&mut writer, &mut candump).and_then(|tick| match tick {
             // Everything published before tick k's clock sample is queued by now; one more pass
             // collects what landed in subscribers drained before the clock's.
             Some(t_ns) if lockstep && t_ns > 0 => {
-                write_pass(&mut writer)?;
+                write_pass(&mut writer, &mut candump)?;
                 writer.complete_until(t_ns - 1)?;
-                Ok(())
+                candump.as_mut().map_or(Ok(()), |c| c.write_until(t_ns - 1))
             }
-            _ => Ok(writer.flush()?),
+            _ => {
+                if !lockstep {
+                    candump.as_mut().map_or(Ok(()), |c| c.write_until(u64::MAX))?;
+                }
+                Ok(writer.flush()?)
+            }
         });
         if error.failed(result) { Flow::Stop } else { Flow::Continue }
     })?;
     heartbeat.set_state(ProcessState::Stopping);
-    let last = write_pass(&mut writer);
+    let last = write_pass(&mut writer, &mut candump);
     let stats = writer.finish().with_context(|| format!("finalising the log {}", path.display()))?;
     tracing::info!(log = %path.display(), ?stats, "log finalised");
+    if let Some(candump) = candump {
+        candump.finish()?;
+    }
     error.into_result().and(last.map(|_| ()))
+}
+
+/// The software CAN bus written as a `candump -L` file.
+struct BusRecording {
+    path: std::path::PathBuf,
+    writer: CandumpWriter<BufWriter<std::fs::File>>,
+    /// Frames not yet written, by (time, sender, sender's sequence).
+    pending: BTreeMap<(u64, u32, u64), CanBusFrame>,
+    written: u64,
+    corrupted: u64,
+}
+
+impl BusRecording {
+    fn create(path: &std::path::Path, iface: &str) -> anyhow::Result<Self> {
+        let file = std::fs::File::create(path).with_context(|| format!("creating {}", path.display()))?;
+        let writer = CandumpWriter::new(BufWriter::new(file), iface).with_context(|| format!("can.interface for {}", path.display()))?;
+        Ok(Self { path: path.to_path_buf(), writer, pending: BTreeMap::new(), written: 0, corrupted: 0 })
+    }
+
+    fn push(&mut self, frame: CanBusFrame) {
+        let h = frame.header;
+        self.pending.insert((h.time_ns, h.source_id, h.sequence), frame);
+    }
+
+    /// Writes the frames sent at or before `t_ns`, in key order.
+    fn write_until(&mut self, t_ns: u64) -> anyhow::Result<()> {
+        while let Some(entry) = self.pending.first_entry() {
+            if entry.key().0 > t_ns {
+                break;
+            }
+            let sample = entry.remove();
+            match CanFrame::from_bus_frame(&sample) {
+                Ok(frame) => {
+                    self.writer.write(sample.header.time_ns, &frame).with_context(|| format!("writing {}", self.path.display()))?;
+                    self.written += 1;
+                }
+                Err(_) => self.corrupted += 1,
+            }
+        }
+        Ok(())
+    }
+
+    fn finish(mut self) -> anyhow::Result<()> {
+        self.write_until(u64::MAX)?;
+        self.writer.flush().with_context(|| format!("writing {}", self.path.display()))?;
+        tracing::info!(candump = %self.path.display(), frames = self.written, corrupted_left_out = self.corrupted, "bus recording finalised");
+        Ok(())
+    }
 }

@@ -3,35 +3,47 @@
 //! Lockstep: it advances as soon as the tick's wheel and CMG commands are in. Paced: it advances
 //! every period of wall time, holding the last command when an answer is late. It exits when the
 //! run's duration is reached; the launcher then stops the rest.
+//!
+//! The commands it integrates are the controller's (`run.actuation = "direct"`), or, with
+//! `run.actuation = "can_node"`, the ones the smart CAN node applies after the wheel and CMG
+//! gateways and the CAN bus (`AppliedWheelCommand`, `AppliedCmgCommand`, same time stamps).
 
-use anyhow::Context;
-use ipc_types::{CmgCommand, Heartbeat, ProcessState, SimClockTick, SimTruth, WheelCommand};
-use std::collections::BTreeSet;
+use ipc_types::{
+    AppliedCmgCommand, AppliedWheelCommand, CmgCommand, ProcessState, SimClockTick, SimTruth, WheelCommand,
+};
 use std::time::{Duration, Instant};
-use testbed_bus::{Bus, EventLoop, Flow, LoopExit, SubscriberOptions, Waiter, Wake};
+use testbed_bus::{EventLoop, Flow, LoopExit, SubscriberOptions, Waiter, Wake};
 use testbed_pipeline::plant_node::PlantNode;
 use testbed_pipeline::process::{self, FirstError, HEARTBEAT_PERIOD};
+use testbed_pipeline::run_config::Actuation;
 use testbed_pipeline::ClockMode;
-
-/// How long the participants have to come up.
-const START_TIMEOUT: Duration = Duration::from_secs(60);
 
 fn main() -> anyhow::Result<()> {
     let (config, bus) = process::start("plant")?;
     let mut node = PlantNode::new(&config)?;
     let truth = bus.publisher::<SimTruth>()?;
     let clock = bus.publisher::<SimClockTick>()?;
-    let wheel_command = bus.subscriber_with::<WheelCommand>(SubscriberOptions::buffer(64))?;
-    let cmg_command = bus.subscriber_with::<CmgCommand>(SubscriberOptions::buffer(64))?;
+    let direct = config.run.actuation == Actuation::Direct;
+    let options = SubscriberOptions::buffer(64);
+    let wheel_command = direct.then(|| bus.subscriber_with::<WheelCommand>(options)).transpose()?;
+    let cmg_command = direct.then(|| bus.subscriber_with::<CmgCommand>(options)).transpose()?;
+    let wheel_applied = (!direct).then(|| bus.subscriber_with::<AppliedWheelCommand>(options)).transpose()?;
+    let cmg_applied = (!direct).then(|| bus.subscriber_with::<AppliedCmgCommand>(options)).transpose()?;
     let heartbeat = bus.heartbeat(HEARTBEAT_PERIOD)?;
 
-    if wait_for_participants(&bus, &config.run.participants)? == LoopExit::TerminationRequested {
+    if process::wait_for_participants(&bus, &config.run.participants)? == LoopExit::TerminationRequested {
         return Ok(());
     }
     let waiter = Waiter::new()?;
     let mut events = EventLoop::new(&waiter);
-    events.on_data(&wheel_command)?;
-    events.on_data(&cmg_command)?;
+    if let (Some(wheel), Some(cmg)) = (&wheel_command, &cmg_command) {
+        events.on_data(wheel)?;
+        events.on_data(cmg)?;
+    }
+    if let (Some(wheel), Some(cmg)) = (&wheel_applied, &cmg_applied) {
+        events.on_data(wheel)?;
+        events.on_data(cmg)?;
+    }
     let pace = match config.run.mode {
         ClockMode::Paced => Some(events.on_interval(Duration::from_secs_f64(config.schedule()?.period_s()))?),
         ClockMode::Lockstep => None,
@@ -51,9 +63,15 @@ fn main() -> anyhow::Result<()> {
     }
     let started = Instant::now();
     let exit = events.run(|wake| {
-        let drained = wheel_command
-            .drain(|c| node.on_wheel_command(&c))
-            .and_then(|_| cmg_command.drain(|c| node.on_cmg_command(&c)));
+        let mut drained = Ok(0);
+        if let (Some(wheel), Some(cmg)) = (&wheel_command, &cmg_command) {
+            drained = wheel.drain(|c| node.on_wheel_command(&c)).and_then(|_| cmg.drain(|c| node.on_cmg_command(&c)));
+        }
+        if let (Some(wheel), Some(cmg)) = (&wheel_applied, &cmg_applied) {
+            drained = wheel
+                .drain(|c| node.on_wheel_command(&WheelCommand::new(c.header, c.torque)))
+                .and_then(|_| cmg.drain(|c| node.on_cmg_command(&CmgCommand::new(c.header, c.gimbal_rate))));
+        }
         if error.failed(drained.map_err(anyhow::Error::from)) {
             return Flow::Stop;
         }
@@ -85,40 +103,4 @@ fn main() -> anyhow::Result<()> {
     );
     heartbeat.set_state(ProcessState::Stopping);
     error.into_result()
-}
-
-/// Block until every process named in `participants` has published a `Running` heartbeat.
-fn wait_for_participants(bus: &Bus, participants: &[String]) -> anyhow::Result<LoopExit> {
-    let mut waiting: BTreeSet<&str> = participants.iter().map(String::as_str).collect();
-    if waiting.is_empty() {
-        return Ok(LoopExit::Stopped);
-    }
-    // Dropped on return: nothing subscribes to heartbeats during the run, so a heartbeat can
-    // never block a lossless publisher.
-    let heartbeats = bus.subscriber_with::<Heartbeat>(SubscriberOptions::buffer(64))?;
-    let waiter = Waiter::new()?;
-    let mut events = EventLoop::new(&waiter);
-    events.on_data(&heartbeats)?;
-    let deadline = Instant::now() + START_TIMEOUT;
-    while !waiting.is_empty() {
-        let left = deadline.saturating_duration_since(Instant::now());
-        anyhow::ensure!(!left.is_zero(), "participants never reported Running: {waiting:?}");
-        let mut seen = Vec::new();
-        let exit = events.run_once(left, |_| {
-            let _ = heartbeats.drain(|h| {
-                if h.state() == Some(ProcessState::Running) {
-                    seen.push(h.name().to_string());
-                }
-            });
-            Flow::Continue
-        });
-        if let Some(exit) = exit.context("waiting for the participants")? {
-            return Ok(exit);
-        }
-        for name in &seen {
-            waiting.remove(name.as_str());
-        }
-    }
-    tracing::info!(participants = participants.len(), "all participants running; starting the clock");
-    Ok(LoopExit::Stopped)
 }

@@ -1,0 +1,293 @@
+//! How an [`EventLoop`](crate::EventLoop) waits between wake-ups: sleep in the WaitSet
+//! (default), or sleep and poll the subscribers briefly where a sample is expected.
+//!
+//! Why polling helps: a publisher's notification reaches a sleeping process through a Unix
+//! datagram socket and `epoll_wait`, and the scheduler then has to wake the process (on a
+//! virtual machine, often a halted virtual CPU). That wake-up, not the shared-memory transfer,
+//! is most of a hop's latency. A process that is already polling its subscribers when the
+//! sample lands sees it within about a microsecond. Polling all the time burns a core, so the
+//! strategies here poll only in short windows: right after a wake-up (bursts), or around the
+//! time the next sample of a periodic source is due (learned from its arrivals). The
+//! measurements behind the choice are in `bench/` (`latency`).
+
+use std::fmt;
+use std::str::FromStr;
+use std::time::{Duration, Instant};
+
+use crate::BusError;
+
+/// Environment variable selecting the [`WaitStrategy`] of every [`EventLoop`](crate::EventLoop)
+/// a process creates: `block` (default), `spin:<µs>`, `anticipate` or
+/// `anticipate:<lead µs>,<late µs>`.
+pub const ENV_WAIT: &str = "TESTBED_BUS_WAIT";
+
+/// How an [`EventLoop`](crate::EventLoop) waits for its next wake-up.
+///
+/// Every strategy delivers the same wake-ups in the same order for the same arrivals; they
+/// differ only in how soon a data wake-up follows a sample's arrival and in CPU time. While
+/// polling, the loop yields the CPU between polls (`sched_yield`), so a poll window never
+/// starves another runnable process, and it still serves termination requests, intervals,
+/// deadlines and heartbeats at least every millisecond.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum WaitStrategy {
+    /// Sleep in `epoll_wait` (iceoryx2 WaitSet) until an attachment fires. Costs no CPU
+    /// between wake-ups; every sample pays a scheduler wake-up.
+    #[default]
+    Block,
+    /// Sleep, and after every handled data wake-up poll the subscribers for up to `spin`
+    /// before sleeping again: a sample following within `spin` (a burst, the next stage of a
+    /// fast exchange) is seen without a wake-up. Costs up to `spin` of CPU per wake-up.
+    SpinAfterWake {
+        /// How long to poll after a data wake-up.
+        spin: Duration,
+    },
+    /// Learn each data source's arrival period; sleep until `lead` before the next sample of a
+    /// source is due, then poll until a sample arrives or `late` after it was due, then sleep
+    /// again. Costs about `lead` plus the arrival jitter of CPU per expected sample; a source
+    /// without a regular period (fewer than two arrivals, or irregular ones) is waited for by
+    /// sleeping only.
+    Anticipate {
+        /// How long before the expected arrival polling starts.
+        lead: Duration,
+        /// How long after the expected arrival polling gives up.
+        late: Duration,
+    },
+}
+
+impl WaitStrategy {
+    /// [`WaitStrategy::Anticipate`] with the default window (200 µs before, 300 µs after).
+    pub const ANTICIPATE: Self = Self::Anticipate {
+        lead: Duration::from_micros(200),
+        late: Duration::from_micros(300),
+    };
+
+    /// The strategy named by [`ENV_WAIT`]; [`WaitStrategy::Block`] when unset or empty.
+    pub fn from_env() -> Result<Self, BusError> {
+        Self::from_lookup(|key| std::env::var(key).ok())
+    }
+
+    /// Like [`from_env`](Self::from_env), reading the variable through `lookup`.
+    pub fn from_lookup(lookup: impl Fn(&str) -> Option<String>) -> Result<Self, BusError> {
+        match lookup(ENV_WAIT).filter(|v| !v.is_empty()) {
+            Some(value) => value.parse(),
+            None => Ok(Self::Block),
+        }
+    }
+
+    /// Whether the loop polls at all.
+    pub fn polls(self) -> bool {
+        !matches!(self, Self::Block)
+    }
+}
+
+impl fmt::Display for WaitStrategy {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::Block => f.write_str("block"),
+            Self::SpinAfterWake { spin } => write!(f, "spin:{}", spin.as_micros()),
+            Self::Anticipate { lead, late } => {
+                write!(f, "anticipate:{},{}", lead.as_micros(), late.as_micros())
+            }
+        }
+    }
+}
+
+impl FromStr for WaitStrategy {
+    type Err = BusError;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        let invalid = |reason: &str| BusError::Config {
+            key: ENV_WAIT,
+            value: s.to_owned(),
+            reason: reason.to_owned(),
+        };
+        let micros = |v: &str| -> Result<Duration, BusError> {
+            let us: u64 = v
+                .trim()
+                .parse()
+                .map_err(|_| invalid("durations are whole microseconds"))?;
+            if us > 100_000 {
+                return Err(invalid("a poll window longer than 100 ms is a busy loop"));
+            }
+            Ok(Duration::from_micros(us))
+        };
+        let (name, args) = s.split_once(':').unwrap_or((s, ""));
+        match (name.trim(), args.trim()) {
+            ("block", "") => Ok(Self::Block),
+            ("spin", us) if !us.is_empty() => Ok(Self::SpinAfterWake { spin: micros(us)? }),
+            ("anticipate", "") => Ok(Self::ANTICIPATE),
+            ("anticipate", window) => {
+                let (lead, late) = window
+                    .split_once(',')
+                    .ok_or_else(|| invalid("expected anticipate:<lead µs>,<late µs>"))?;
+                Ok(Self::Anticipate {
+                    lead: micros(lead)?,
+                    late: micros(late)?,
+                })
+            }
+            _ => Err(invalid(
+                "expected \"block\", \"spin:<µs>\", \"anticipate\" or \
+                 \"anticipate:<lead µs>,<late µs>\"",
+            )),
+        }
+    }
+}
+
+/// How a loop's wake-ups came about (for benchmarks and diagnostics).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct WaitStats {
+    /// Data wake-ups delivered after sleeping in the WaitSet.
+    pub woken: u64,
+    /// Data wake-ups delivered by polling (no scheduler wake-up on the way).
+    pub polled: u64,
+    /// Poll windows that ended without a sample.
+    pub empty_windows: u64,
+    /// Notifications whose samples had already been taken by polling or by an earlier
+    /// callback (no callback; only with a polling strategy).
+    pub stale_notifications: u64,
+}
+
+/// Samples of one source seen closer together than this are one arrival (a burst); periods
+/// shorter than this are not learned.
+pub(crate) const BURST: Duration = Duration::from_micros(100);
+
+/// Arrival times of one data source and its learned period.
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct Arrivals {
+    last: Option<Instant>,
+    period: Option<Duration>,
+    outliers: u8,
+}
+
+impl Arrivals {
+    /// Records a sample seen at `now`. A sighting within [`BURST`] of the previous one is the
+    /// same arrival (a burst); an interval far from the period counts as an outlier, and three
+    /// in a row replace the period.
+    pub(crate) fn note(&mut self, now: Instant) {
+        let Some(last) = self.last else {
+            self.last = Some(now);
+            return;
+        };
+        let dt = now.saturating_duration_since(last);
+        if dt < BURST {
+            return;
+        }
+        match self.period {
+            None => self.period = Some(dt),
+            Some(p) if dt >= p / 2 && dt <= p + p / 2 => {
+                // First-order filter with gain 1/8: follows drift, shrugs off jitter.
+                let p_ns = p.as_nanos() as i128;
+                let next = p_ns + (dt.as_nanos() as i128 - p_ns) / 8;
+                self.period = Some(Duration::from_nanos(next.max(1) as u64));
+                self.outliers = 0;
+            }
+            Some(_) => {
+                self.outliers += 1;
+                if self.outliers >= 3 {
+                    self.period = Some(dt);
+                    self.outliers = 0;
+                }
+            }
+        }
+        self.last = Some(now);
+    }
+
+    /// When the next sample is due: the first multiple of the period after the last arrival
+    /// that is not more than `late` in the past at `now`.
+    pub(crate) fn next_due(&self, now: Instant, late: Duration) -> Option<Instant> {
+        let (last, period) = (self.last?, self.period?);
+        if period.is_zero() {
+            return None;
+        }
+        let mut due = last + period;
+        if due + late < now {
+            let behind = now.saturating_duration_since(due + late).as_nanos();
+            let skip = behind / period.as_nanos() + 1;
+            due += period * u32::try_from(skip).ok()?;
+        }
+        Some(due)
+    }
+
+    #[cfg(test)]
+    pub(crate) fn period(&self) -> Option<Duration> {
+        self.period
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parses_and_prints_every_strategy() {
+        for (text, strategy) in [
+            ("block", WaitStrategy::Block),
+            (
+                "spin:50",
+                WaitStrategy::SpinAfterWake {
+                    spin: Duration::from_micros(50),
+                },
+            ),
+            ("anticipate", WaitStrategy::ANTICIPATE),
+            (
+                "anticipate:100,250",
+                WaitStrategy::Anticipate {
+                    lead: Duration::from_micros(100),
+                    late: Duration::from_micros(250),
+                },
+            ),
+        ] {
+            let parsed: WaitStrategy = text.parse().expect(text);
+            assert_eq!(parsed, strategy);
+            assert_eq!(parsed.to_string().parse::<WaitStrategy>().unwrap(), strategy);
+        }
+        assert_eq!(
+            WaitStrategy::from_lookup(|_| None).unwrap(),
+            WaitStrategy::Block
+        );
+        assert_eq!(
+            WaitStrategy::from_lookup(|_| Some(String::new())).unwrap(),
+            WaitStrategy::Block
+        );
+    }
+
+    #[test]
+    fn refuses_bad_values_by_name() {
+        for bad in ["spin", "spin:x", "poll", "anticipate:5", "spin:1000000", "block:3"] {
+            let err = bad.parse::<WaitStrategy>().expect_err(bad).to_string();
+            assert!(err.contains(ENV_WAIT) && err.contains(bad), "{err}");
+        }
+    }
+
+    #[test]
+    fn learns_a_period_and_predicts_the_next_arrival() {
+        let t0 = Instant::now();
+        let ms = Duration::from_millis;
+        let mut a = Arrivals::default();
+        assert_eq!(a.next_due(t0, ms(1)), None);
+        for k in 0..20u32 {
+            // 100 ms with ±1 ms of jitter.
+            let jitter = if k % 2 == 0 { ms(1) } else { Duration::ZERO };
+            a.note(t0 + ms(100) * k + jitter);
+        }
+        let p = a.period().unwrap();
+        assert!(p > ms(98) && p < ms(102), "{p:?}");
+        let last = t0 + ms(1900);
+        let due = a.next_due(last, ms(1)).unwrap();
+        assert!(due > last + ms(97) && due < last + ms(103));
+        // A burst is one arrival.
+        a.note(last + Duration::from_micros(10));
+        assert_eq!(a.period(), Some(p));
+        // Missed samples: the prediction moves on to the next slot.
+        let much_later = last + ms(350);
+        let due = a.next_due(much_later, ms(1)).unwrap();
+        assert!(due >= much_later - ms(1) && due < much_later + ms(100), "{due:?}");
+        // A new rate replaces the old one after three outliers.
+        let mut t = last + ms(10);
+        for _ in 0..4 {
+            t += ms(10);
+            a.note(t);
+        }
+        let p = a.period().unwrap();
+        assert!(p >= ms(9) && p <= ms(11), "{p:?}");
+    }
+}

@@ -1,0 +1,214 @@
+//! The event loop's wait strategies deliver what the blocking loop delivers: every sample, in
+//! order, one data wake-up per arrival with samples to read, deadlines only when nothing came,
+//! and termination requests while polling. Each test uses its own `BusConfig::isolated()`.
+//!
+//! Time bounds below only keep a broken test from hanging; no test asserts a latency.
+
+use std::sync::mpsc;
+use std::thread;
+use std::time::{Duration, Instant};
+
+use ipc_types::{GyroSample, SampleHeader};
+use testbed_bus::{
+    Bus, BusConfig, BusError, Delivery, EventLoop, Flow, LoopExit, TopicPublisher, WaitStrategy,
+    Waiter, Wake, remove_all,
+};
+
+const HANG_GUARD: Duration = Duration::from_secs(30);
+
+fn gyro(sequence: u64) -> GyroSample {
+    GyroSample {
+        header: SampleHeader::new(sequence * 100_000_000, sequence, SampleHeader::VALID),
+        ..GyroSample::default()
+    }
+}
+
+/// Publishes from its own thread (ports are not `Send`) once `start` is received.
+fn publisher_thread(
+    config: &BusConfig,
+    publish: impl FnOnce(&TopicPublisher<GyroSample>) + Send + 'static,
+) -> (mpsc::Sender<()>, thread::JoinHandle<Result<(), BusError>>) {
+    let config = config.clone();
+    let (start_tx, start_rx) = mpsc::channel::<()>();
+    let handle = thread::spawn(move || {
+        let bus = Bus::open("publisher", &config)?;
+        let publisher = bus.publisher::<GyroSample>()?;
+        if start_rx.recv_timeout(HANG_GUARD).is_ok() {
+            publish(&publisher);
+            // Keep the ports until the receiver has read everything.
+            let _ = start_rx.recv_timeout(HANG_GUARD);
+        }
+        Ok(())
+    });
+    (start_tx, handle)
+}
+
+const STRATEGIES: [WaitStrategy; 3] = [
+    WaitStrategy::Block,
+    WaitStrategy::SpinAfterWake {
+        spin: Duration::from_micros(300),
+    },
+    WaitStrategy::Anticipate {
+        lead: Duration::from_micros(500),
+        late: Duration::from_micros(500),
+    },
+];
+
+#[test]
+fn every_strategy_delivers_every_sample_in_order_without_empty_wakes() {
+    const N: u64 = 200;
+    for strategy in STRATEGIES {
+        let config = BusConfig::isolated().with_delivery(Delivery::Lossless);
+        {
+            let bus = Bus::open("subscriber", &config).expect("bus");
+            let sub = bus.subscriber::<GyroSample>().expect("subscriber");
+            let waiter = Waiter::new().expect("waiter");
+            let mut events = EventLoop::with_wait_strategy(&waiter, strategy);
+            assert_eq!(events.wait_strategy(), strategy);
+            let on_gyro = events
+                .on_data_with_deadline(&sub, Duration::from_millis(100))
+                .expect("attach");
+            let (start, handle) = publisher_thread(&config, |publisher| {
+                // A periodic source with a burst now and then.
+                for i in 0..N {
+                    publisher.publish(&gyro(i)).expect("publish");
+                    if i % 10 != 9 {
+                        thread::sleep(Duration::from_millis(2));
+                    }
+                }
+            });
+            start.send(()).expect("start");
+            let begin = Instant::now();
+            let (mut next, mut wakes) = (0, 0_u64);
+            while next < N {
+                assert!(begin.elapsed() < HANG_GUARD, "{strategy}: timed out at {next}");
+                let exit = events
+                    .run_once(Duration::from_millis(100), |wake| {
+                        assert_eq!(wake, Wake::Data(on_gyro), "{strategy}: {wake:?}");
+                        wakes += 1;
+                        let n = sub
+                            .drain(|s| {
+                                assert_eq!(s.header.sequence, next, "{strategy}: lost or reordered");
+                                next += 1;
+                            })
+                            .expect("drain");
+                        if strategy.polls() {
+                            // Polling strategies call back only when there is something to read.
+                            assert!(n > 0, "{strategy}: a data wake-up without data");
+                        }
+                        Flow::Continue
+                    })
+                    .expect("event loop");
+                assert_eq!(exit, None);
+            }
+            let stats = events.wait_stats();
+            assert_eq!(stats.woken + stats.polled, wakes, "{strategy}: {stats:?}");
+            if !strategy.polls() {
+                assert_eq!(stats.polled, 0);
+            }
+            assert_eq!(events.missed_deadlines(on_gyro), 0, "{strategy}");
+            println!("{strategy}: {wakes} wake-ups for {N} samples, {stats:?}");
+            drop(start);
+            handle.join().expect("thread").expect("publisher");
+        }
+        remove_all(&config).expect("remove_all");
+    }
+}
+
+#[test]
+fn polling_loops_still_serve_intervals_and_report_missed_deadlines() {
+    for strategy in &STRATEGIES[1..] {
+        let config = BusConfig::isolated();
+        {
+            let bus = Bus::open("watchdog", &config).expect("bus");
+            let sub = bus.subscriber::<GyroSample>().expect("subscriber");
+            let publisher = bus.publisher::<GyroSample>().expect("publisher");
+            let waiter = Waiter::new().expect("waiter");
+            let mut events = EventLoop::with_wait_strategy(&waiter, *strategy);
+            let on_gyro = events
+                .on_data_with_deadline(&sub, Duration::from_millis(40))
+                .expect("attach");
+            let tick = events
+                .on_interval(Duration::from_millis(15))
+                .expect("interval");
+            // Teach the anticipating loop a period, then stop publishing.
+            let (mut ticks, mut missed, mut data) = (0, 0, 0);
+            let begin = Instant::now();
+            let mut published = 0;
+            while missed < 2 || ticks < 5 {
+                assert!(begin.elapsed() < HANG_GUARD, "{strategy}: timed out");
+                if published < 5 {
+                    publisher.publish(&gyro(published)).expect("publish");
+                    published += 1;
+                }
+                events
+                    .run_once(Duration::from_millis(5), |wake| {
+                        match wake {
+                            Wake::Data(s) if s == on_gyro => {
+                                data += sub.drain(|_| {}).expect("drain");
+                            }
+                            Wake::DeadlineMissed(s) if s == on_gyro => missed += 1,
+                            Wake::Tick(s) if s == tick => ticks += 1,
+                            other => panic!("{strategy}: unexpected {other:?}"),
+                        }
+                        Flow::Continue
+                    })
+                    .expect("event loop");
+            }
+            assert_eq!(data, 5, "{strategy}");
+            assert_eq!(events.missed_deadlines(on_gyro), missed, "{strategy}");
+        }
+        remove_all(&config).expect("remove_all");
+    }
+}
+
+#[test]
+fn a_callback_stops_a_polling_loop() {
+    for strategy in &STRATEGIES[1..] {
+        let config = BusConfig::isolated();
+        {
+            let bus = Bus::open("stopper", &config).expect("bus");
+            let sub = bus.subscriber::<GyroSample>().expect("subscriber");
+            let waiter = Waiter::new().expect("waiter");
+            let mut events = EventLoop::with_wait_strategy(&waiter, *strategy);
+            events.on_data(&sub).expect("attach");
+            let (start, handle) = publisher_thread(&config, |publisher| {
+                for i in 0..50 {
+                    publisher.publish(&gyro(i)).expect("publish");
+                    thread::sleep(Duration::from_millis(1));
+                }
+            });
+            start.send(()).expect("start");
+            let mut seen = 0;
+            let exit = events
+                .run(|_| {
+                    seen += sub.drain(|_| {}).expect("drain");
+                    if seen >= 20 { Flow::Stop } else { Flow::Continue }
+                })
+                .expect("event loop");
+            assert_eq!(exit, LoopExit::Stopped, "{strategy}");
+            drop(start);
+            handle.join().expect("thread").expect("publisher");
+        }
+        remove_all(&config).expect("remove_all");
+    }
+}
+
+#[test]
+fn the_environment_chooses_the_strategy_and_bad_values_are_refused_by_name() {
+    let lookup = |value: &'static str| {
+        move |key: &str| (key == testbed_bus::ENV_WAIT).then(|| value.to_owned())
+    };
+    let config = BusConfig::from_lookup(lookup("anticipate:100,200")).expect("valid");
+    assert_eq!(config.delivery, Delivery::Overflow);
+    assert_eq!(
+        WaitStrategy::from_lookup(lookup("anticipate:100,200")).unwrap(),
+        WaitStrategy::Anticipate {
+            lead: Duration::from_micros(100),
+            late: Duration::from_micros(200)
+        }
+    );
+    let err = BusConfig::from_lookup(lookup("fast")).expect_err("invalid");
+    let msg = err.to_string();
+    assert!(msg.contains(testbed_bus::ENV_WAIT) && msg.contains("fast"), "{msg}");
+}
