@@ -14,7 +14,7 @@ use testbed_bus::{Bus, BusConfig};
 pub const START_TIMEOUT: Duration = Duration::from_secs(60);
 
 /// Heartbeat period of every process.
-pub const HEARTBEAT_PERIOD: Duration = Duration::from_millis(200);
+pub const HEARTBEAT_PERIOD: Duration = Duration::from_millis(500);
 
 /// Command line shared by the pipeline's processes.
 #[derive(Debug, clap::Parser)]

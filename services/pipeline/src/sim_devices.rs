@@ -12,6 +12,12 @@ use testbed_model::devices::{CmgEncoder, Gyro, Inclinometer, Magnetometer, Wheel
 
 const SIMULATED_VALID: u32 = SampleHeader::VALID | SampleHeader::SIMULATED;
 
+/// Flags of a simulated sample from a ranged sensor: out of range is published without `VALID`.
+fn ranged_flags(valid: bool, saturated: &[bool]) -> u32 {
+    let range = if valid { SampleHeader::VALID } else { SampleHeader::OUT_OF_RANGE };
+    SampleHeader::SIMULATED | saturation_flags(saturated) | range
+}
+
 /// The tick of a truth sample, if it is a valid one on the schedule.
 fn tick_of(schedule: &Schedule, truth: &SimTruth) -> Option<u64> {
     schedule.tick_at(truth.header.time_ns)
@@ -57,12 +63,7 @@ impl SimInclinometer {
         }
         let q = quaternion_from_array(&truth.quaternion)?;
         let r = self.device.sample(&q);
-        let mut flags = SampleHeader::SIMULATED | saturation_flags(&r.saturated);
-        if r.valid() {
-            flags |= SampleHeader::VALID;
-        } else {
-            flags |= SampleHeader::OUT_OF_RANGE;
-        }
+        let flags = ranged_flags(r.valid(), &r.saturated);
         Some(InclinometerSample { header: self.seq.header(truth.header.time_ns, flags), tilt: r.tilt_rad })
     }
 }
@@ -85,12 +86,7 @@ impl SimMagnetometer {
         }
         let q = quaternion_from_array(&truth.quaternion)?;
         let r = self.device.sample(&q);
-        let mut flags = SampleHeader::SIMULATED | saturation_flags(&r.saturated);
-        if r.valid() {
-            flags |= SampleHeader::VALID;
-        } else {
-            flags |= SampleHeader::OUT_OF_RANGE;
-        }
+        let flags = ranged_flags(r.valid(), &r.saturated);
         Some(MagnetometerSample { header: self.seq.header(truth.header.time_ns, flags), field: a3(&r.field_t) })
     }
 }
