@@ -133,6 +133,9 @@ struct Attachment<'w, 'a> {
 /// How often a polling loop serves the WaitSet (termination, intervals, deadlines) at least.
 const SERVICE_PERIOD: Duration = Duration::from_millis(1);
 
+/// Granularity of the WaitSet's timeouts (epoll: whole milliseconds, rounded up).
+const COARSE: Duration = Duration::from_millis(1);
+
 /// Waits on subscribers, intervals and deadlines and calls back with the source that fired.
 ///
 /// With the default [`WaitStrategy::Block`] it never busy-waits: between wake-ups the thread
@@ -330,9 +333,18 @@ impl<'w, 'a> EventLoop<'w, 'a> {
                         Polled::Nothing => (None, false),
                     }
                 }
-                // Sleep until the window opens (or something fires).
+                // Sleep until the window opens (or something fires). The WaitSet rounds its
+                // timeout up to whole milliseconds, so it sleeps the bulk and `ppoll` on the
+                // listeners (nanosecond timeout) the last stretch.
                 Window::OpensAt(open) => {
-                    self.waitset_round(left.min(open.saturating_duration_since(now)), on_wake)?
+                    let wait = left.min(open.saturating_duration_since(now));
+                    if wait > 2 * COARSE {
+                        self.waitset_round(wait - COARSE, on_wake)?
+                    } else if self.ppoll_listeners(wait)? {
+                        self.waitset_round(Duration::ZERO, on_wake)?
+                    } else {
+                        (None, false)
+                    }
                 }
                 Window::None => self.waitset_round(left, on_wake)?,
             };
@@ -345,6 +357,39 @@ impl<'w, 'a> EventLoop<'w, 'a> {
         }
     }
 
+    /// Sleeps until a data listener is notified or `timeout` has passed (precisely, unlike the
+    /// WaitSet); true if a listener was notified. Intervals and deadlines wait meanwhile (at
+    /// most [`COARSE`] twice over).
+    fn ppoll_listeners(&self, timeout: Duration) -> Result<bool, BusError> {
+        let mut fds: Vec<libc::pollfd> = self
+            .data_attachments()
+            .map(|(_, _, port)| libc::pollfd {
+                // SAFETY: the listener outlives this call; the descriptor is only polled.
+                fd: unsafe { port.listener().file_descriptor().native_handle() },
+                events: libc::POLLIN,
+                revents: 0,
+            })
+            .collect();
+        let ts = libc::timespec {
+            tv_sec: timeout.as_secs() as libc::time_t,
+            tv_nsec: timeout.subsec_nanos() as libc::c_long,
+        };
+        // SAFETY: ppoll reads `fds.len()` pollfds and the timespec, writes only `revents`.
+        let n = unsafe { libc::ppoll(fds.as_mut_ptr(), fds.len() as libc::nfds_t, &ts, std::ptr::null()) };
+        if n < 0 {
+            let e = std::io::Error::last_os_error();
+            if e.kind() == std::io::ErrorKind::Interrupted {
+                // A signal: the next WaitSet round reports a termination request.
+                return Ok(true);
+            }
+            return Err(BusError::WaitSet {
+                operation: "polling the listeners",
+                source: Box::new(e),
+            });
+        }
+        Ok(n > 0)
+    }
+
     /// Where the current poll window stands at `now`.
     fn poll_window(&self, now: Instant) -> Window {
         match self.wait {
@@ -354,16 +399,22 @@ impl<'w, 'a> EventLoop<'w, 'a> {
                 _ => Window::None,
             },
             WaitStrategy::Anticipate { lead, late } => {
-                let next = self
+                // The earliest window of any source; if it is open, poll until the latest
+                // close among the open ones.
+                let windows = self
                     .data_attachments()
-                    .filter_map(|(_, a, _)| a.arrivals.get().next_due(now, late))
-                    .min();
-                match next {
-                    None => Window::None,
-                    Some(due) if due.checked_sub(lead).is_none_or(|open| open <= now) => {
-                        Window::Open(due + late)
+                    .filter_map(|(_, a, _)| a.arrivals.get().window(now, lead, late));
+                let (mut open, mut close) = (None::<Instant>, None::<Instant>);
+                for (o, c) in windows {
+                    if o <= now {
+                        close = Some(close.map_or(c, |close| close.max(c)));
                     }
-                    Some(due) => Window::OpensAt(due - lead),
+                    open = Some(open.map_or(o, |open| open.min(o)));
+                }
+                match (open, close) {
+                    (_, Some(close)) => Window::Open(close),
+                    (Some(open), None) => Window::OpensAt(open),
+                    (None, None) => Window::None,
                 }
             }
         }
@@ -381,12 +432,17 @@ impl<'w, 'a> EventLoop<'w, 'a> {
             })
     }
 
-    /// Records, at `now`, an arrival for every data source with samples pending.
-    fn observe_arrivals(&self, now: Instant) -> Result<(), BusError> {
+    /// Records, at `now`, an arrival for every data source with samples pending; `polled`: the
+    /// loop was polling (the time is exact), not woken.
+    fn observe_arrivals(&self, now: Instant, polled: bool) -> Result<(), BusError> {
+        let cap = match self.wait {
+            WaitStrategy::Anticipate { lead, .. } => lead,
+            _ => Duration::ZERO,
+        };
         for (_, attachment, port) in self.data_attachments() {
             if port.attach()? {
                 let mut arrivals = attachment.arrivals.get();
-                arrivals.note(now);
+                arrivals.note(now, polled, cap);
                 attachment.arrivals.set(arrivals);
             }
         }
@@ -417,7 +473,7 @@ impl<'w, 'a> EventLoop<'w, 'a> {
             for (index, _, port) in self.data_attachments() {
                 if port.attach()? {
                     let now = Instant::now();
-                    self.observe_arrivals(now)?;
+                    self.observe_arrivals(now, true)?;
                     self.count(|s| s.polled += 1);
                     let flow = on_wake(Wake::Data(SourceId(index)));
                     self.handled_data();
@@ -464,7 +520,7 @@ impl<'w, 'a> EventLoop<'w, 'a> {
                             port.last_received()
                                 .is_some_and(|t| t.elapsed() < deadline)
                         });
-                        if received_in_time && false {
+                        if received_in_time {
                             return CallbackProgression::Continue;
                         }
                         attachment.missed.set(attachment.missed.get() + 1);
@@ -493,7 +549,7 @@ impl<'w, 'a> EventLoop<'w, 'a> {
                             // came; then there is nothing to call back for.
                             let now = Instant::now();
                             if !observed {
-                                if let Err(e) = self.observe_arrivals(now) {
+                                if let Err(e) = self.observe_arrivals(now, false) {
                                     failure = Some(e);
                                     return CallbackProgression::Stop;
                                 }

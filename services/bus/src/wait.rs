@@ -41,21 +41,23 @@ pub enum WaitStrategy {
         /// How long to poll after a data wake-up.
         spin: Duration,
     },
-    /// Learn each data source's arrival period; sleep until `lead` before the next sample of a
-    /// source is due, then poll until a sample arrives or `late` after it was due, then sleep
-    /// again. Costs about `lead` plus the arrival jitter of CPU per expected sample; a source
-    /// without a regular period (fewer than two arrivals, or irregular ones) is waited for by
-    /// sleeping only.
+    /// Learn each data source's arrival period; sleep until shortly before the next sample of
+    /// a source is due, then poll until a sample arrives or the window closes, then sleep
+    /// again. The window adapts to how well arrivals are predicted (four times the mean
+    /// prediction error on either side, at least 10 µs), capped at `lead` before and `late`
+    /// after the expected time. Costs about the window's width of CPU per expected sample; a
+    /// source without a regular period (fewer than two arrivals, or irregular ones) is waited
+    /// for by sleeping only.
     Anticipate {
-        /// How long before the expected arrival polling starts.
+        /// The earliest polling starts before the expected arrival.
         lead: Duration,
-        /// How long after the expected arrival polling gives up.
+        /// The latest polling gives up after the expected arrival.
         late: Duration,
     },
 }
 
 impl WaitStrategy {
-    /// [`WaitStrategy::Anticipate`] with the default window (200 µs before, 300 µs after).
+    /// [`WaitStrategy::Anticipate`] with windows of at most 200 µs before and 300 µs after.
     pub const ANTICIPATE: Self = Self::Anticipate {
         lead: Duration::from_micros(200),
         late: Duration::from_micros(300),
@@ -150,19 +152,31 @@ pub struct WaitStats {
 /// shorter than this are not learned.
 pub(crate) const BURST: Duration = Duration::from_micros(100);
 
-/// Arrival times of one data source and its learned period.
+/// Narrowest poll window on either side of an expected arrival.
+pub(crate) const MIN_WINDOW: Duration = Duration::from_micros(10);
+
+/// Arrival times of one data source, its learned period and how well arrivals are predicted.
+///
+/// The poll window around the next expected arrival is four times the mean absolute prediction
+/// error on either side (at least [`MIN_WINDOW`], at most the strategy's `lead` and `late`):
+/// arrivals seen by polling are timed to within a poll and shrink the error; an arrival the
+/// loop slept through is timed only by the scheduler's wake-up and widens the window instead
+/// (doubling the error), so the next window opens earlier.
 #[derive(Debug, Clone, Copy, Default)]
 pub(crate) struct Arrivals {
     last: Option<Instant>,
     period: Option<Duration>,
     outliers: u8,
+    /// Mean absolute prediction error; `None` until the first prediction was checked.
+    error: Option<Duration>,
 }
 
 impl Arrivals {
-    /// Records a sample seen at `now`. A sighting within [`BURST`] of the previous one is the
-    /// same arrival (a burst); an interval far from the period counts as an outlier, and three
-    /// in a row replace the period.
-    pub(crate) fn note(&mut self, now: Instant) {
+    /// Records a sample seen at `now`, `polled` if the loop was polling when it came (the time
+    /// is exact) rather than woken by its notification. A sighting within [`BURST`] of the
+    /// previous one is the same arrival (a burst); an interval far from the period counts as an
+    /// outlier, and three in a row replace the period.
+    pub(crate) fn note(&mut self, now: Instant, polled: bool, cap: Duration) {
         let Some(last) = self.last else {
             self.last = Some(now);
             return;
@@ -170,6 +184,17 @@ impl Arrivals {
         let dt = now.saturating_duration_since(last);
         if dt < BURST {
             return;
+        }
+        if let Some(p) = self.period.filter(|p| !p.is_zero()) {
+            let error = self.error.unwrap_or(cap / 4);
+            self.error = Some(if polled {
+                // Distance to the nearest slot of the predicted schedule.
+                let phase = dt.as_nanos() % p.as_nanos();
+                let miss = Duration::from_nanos(phase.min(p.as_nanos() - phase) as u64);
+                (error * 3 + miss) / 4
+            } else {
+                (error * 2 + Duration::from_micros(5)).min(cap)
+            });
         }
         match self.period {
             None => self.period = Some(dt),
@@ -191,20 +216,24 @@ impl Arrivals {
         self.last = Some(now);
     }
 
-    /// When the next sample is due: the first multiple of the period after the last arrival
-    /// that is not more than `late` in the past at `now`.
-    pub(crate) fn next_due(&self, now: Instant, late: Duration) -> Option<Instant> {
+    /// The poll window `(open, close)` around the next expected sample: the first slot of the
+    /// period after the last arrival whose window has not closed at `now`. `None` while no
+    /// period is known.
+    pub(crate) fn window(&self, now: Instant, lead: Duration, late: Duration) -> Option<(Instant, Instant)> {
         let (last, period) = (self.last?, self.period?);
         if period.is_zero() {
             return None;
         }
+        let spread = self.error.map_or(lead.max(late), |e| e * 4);
+        let before = spread.clamp(MIN_WINDOW.min(lead), lead);
+        let after = spread.clamp(MIN_WINDOW.min(late), late);
         let mut due = last + period;
-        if due + late < now {
-            let behind = now.saturating_duration_since(due + late).as_nanos();
+        if due + after < now {
+            let behind = now.saturating_duration_since(due + after).as_nanos();
             let skip = behind / period.as_nanos() + 1;
             due += period * u32::try_from(skip).ok()?;
         }
-        Some(due)
+        Some((due.checked_sub(before).unwrap_or(due), due + after))
     }
 
     #[cfg(test)]
@@ -262,30 +291,39 @@ mod tests {
     fn learns_a_period_and_predicts_the_next_arrival() {
         let t0 = Instant::now();
         let ms = Duration::from_millis;
+        let us = Duration::from_micros;
+        let (lead, late) = (us(200), us(300));
         let mut a = Arrivals::default();
-        assert_eq!(a.next_due(t0, ms(1)), None);
+        assert_eq!(a.window(t0, lead, late), None);
         for k in 0..20u32 {
-            // 100 ms with ±1 ms of jitter.
-            let jitter = if k % 2 == 0 { ms(1) } else { Duration::ZERO };
-            a.note(t0 + ms(100) * k + jitter);
+            // 100 ms with 20 µs of jitter, seen by polling.
+            let jitter = if k % 2 == 0 { us(20) } else { Duration::ZERO };
+            a.note(t0 + ms(100) * k + jitter, true, lead);
         }
         let p = a.period().unwrap();
-        assert!(p > ms(98) && p < ms(102), "{p:?}");
+        assert!(p > ms(99) && p < ms(101), "{p:?}");
         let last = t0 + ms(1900);
-        let due = a.next_due(last, ms(1)).unwrap();
-        assert!(due > last + ms(97) && due < last + ms(103));
+        let (open, close) = a.window(last, lead, late).unwrap();
+        // A window around the next slot, narrowed to the observed jitter.
+        assert!(open > last + ms(99) && close < last + ms(101), "{:?} {:?}", open - last, close - last);
+        assert!(close - open < us(200), "{:?}", close - open);
+        // An arrival slept through widens the window.
+        a.note(last + ms(100) + us(40), false, lead);
+        let (open2, close2) = a.window(last + ms(100) + us(40), lead, late).unwrap();
+        assert!(close2 - open2 > close - open);
         // A burst is one arrival.
-        a.note(last + Duration::from_micros(10));
-        assert_eq!(a.period(), Some(p));
-        // Missed samples: the prediction moves on to the next slot.
-        let much_later = last + ms(350);
-        let due = a.next_due(much_later, ms(1)).unwrap();
-        assert!(due >= much_later - ms(1) && due < much_later + ms(100), "{due:?}");
+        let p = a.period();
+        a.note(last + ms(100) + us(50), true, lead);
+        assert_eq!(a.period(), p);
+        // Missed samples: the window moves on to the next slot.
+        let much_later = last + ms(450);
+        let (open, close) = a.window(much_later, lead, late).unwrap();
+        assert!(close >= much_later && open < much_later + ms(100), "{:?}", open - much_later);
         // A new rate replaces the old one after three outliers.
-        let mut t = last + ms(10);
+        let mut t = last + ms(120);
         for _ in 0..4 {
             t += ms(10);
-            a.note(t);
+            a.note(t, true, lead);
         }
         let p = a.period().unwrap();
         assert!(p >= ms(9) && p <= ms(11), "{p:?}");

@@ -212,3 +212,50 @@ fn the_environment_chooses_the_strategy_and_bad_values_are_refused_by_name() {
     let msg = err.to_string();
     assert!(msg.contains(testbed_bus::ENV_WAIT) && msg.contains("fast"), "{msg}");
 }
+
+#[test]
+fn a_sample_taken_outside_its_own_wake_up_counts_for_its_deadline() {
+    // The binaries drain every subscriber on any wake-up, and polling takes samples before
+    // their notification is seen: the WaitSet's deadline timer then never sees the listener
+    // fire, but the subscriber did receive. That is not a missed deadline.
+    for strategy in STRATEGIES {
+        let config = BusConfig::isolated();
+        {
+            let bus = Bus::open("drainer", &config).expect("bus");
+            let sub = bus.subscriber::<GyroSample>().expect("subscriber");
+            let publisher = bus.publisher::<GyroSample>().expect("publisher");
+            let waiter = Waiter::new().expect("waiter");
+            let mut events = EventLoop::with_wait_strategy(&waiter, strategy);
+            let on_gyro = events
+                .on_data_with_deadline(&sub, Duration::from_millis(50))
+                .expect("attach");
+            let begin = Instant::now();
+            let mut i = 0;
+            while begin.elapsed() < Duration::from_millis(300) {
+                // Published and taken (notification included) outside the loop's wake-ups.
+                publisher.publish(&gyro(i)).expect("publish");
+                assert_eq!(sub.drain(|_| {}).expect("drain"), 1);
+                i += 1;
+                events
+                    .run_once(Duration::from_millis(10), |wake| {
+                        panic!("{strategy}: nothing should wake the loop, got {wake:?}")
+                    })
+                    .expect("event loop");
+            }
+            assert_eq!(events.missed_deadlines(on_gyro), 0, "{strategy}");
+            // Nothing more arrives: the miss is reported.
+            let mut missed = false;
+            while !missed {
+                assert!(begin.elapsed() < HANG_GUARD, "{strategy}: no miss reported");
+                events
+                    .run_once(Duration::from_millis(10), |wake| {
+                        assert_eq!(wake, Wake::DeadlineMissed(on_gyro), "{strategy}");
+                        missed = true;
+                        Flow::Continue
+                    })
+                    .expect("event loop");
+            }
+        }
+        remove_all(&config).expect("remove_all");
+    }
+}
