@@ -15,7 +15,7 @@ use testbed_pipeline::{ClockMode, RunConfig};
 
 #[derive(Debug, clap::Args)]
 pub struct RunArgs {
-    /// Launch profile: a name in launch/profiles (simulation, platform, mixed) or a TOML path.
+    /// Launch profile: a name in launch/profiles (simulation, can-sim, platform, mixed) or a TOML path.
     #[arg(long, default_value = "simulation")]
     profile: String,
     /// Simulated duration, s [default: the profile's].

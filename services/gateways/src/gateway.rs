@@ -224,6 +224,7 @@ pub struct Gateway {
     commands_refused: u64,
     transport_errors: u64,
     node_state: Option<NodeState>,
+    node_heartbeats: u64,
 }
 
 impl Gateway {
@@ -254,6 +255,7 @@ impl Gateway {
             commands_refused: 0,
             transport_errors: 0,
             node_state: None,
+            node_heartbeats: 0,
         }
     }
 
@@ -265,6 +267,11 @@ impl Gateway {
     /// The node's state from its latest heartbeat.
     pub fn node_state(&self) -> Option<NodeState> {
         self.node_state
+    }
+
+    /// Node heartbeats received so far (the node is alive while this grows).
+    pub fn node_heartbeats(&self) -> u64 {
+        self.node_heartbeats
     }
 
     /// Samples completed after their tick was published (dropped), and complete messages of
@@ -342,6 +349,7 @@ impl Gateway {
                     self.closed_counter = None;
                 }
                 self.node_state = Some(hb.state);
+                self.node_heartbeats += 1;
                 match run_time_ns(&mut self.clock, &self.schedule, hb.node_time_us) {
                     Some(t_ns) if self.tick_sync => self.on_sync(t_ns),
                     _ => FrameOutcome::default(),

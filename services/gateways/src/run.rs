@@ -28,11 +28,14 @@ use testbed_pipeline::ClockMode;
 pub const POLL_PERIOD: Duration = Duration::from_millis(2);
 /// Frames a software-bus receiver buffers (a tick holds about 20).
 pub const BUS_BUFFER: usize = 128;
+/// Without a node heartbeat for this long a free-running gateway reports itself `Degraded`
+/// (PROTOCOL.md: the node is lost after 3 s).
+pub const NODE_LOST_AFTER: Duration = Duration::from_secs(3);
 
 /// A gateway's device link.
 pub enum Link {
     /// The software CAN bus.
-    Bus(SoftwareBusTransport),
+    Bus(Box<SoftwareBusTransport>),
     /// A SocketCAN interface, filtered to the device's and the node's identifiers.
     SocketCan(SocketCanTransport),
     /// A `candump -L` file.
@@ -52,7 +55,9 @@ impl Link {
             return Ok(Link::Serial(transport));
         }
         Ok(match can.link {
-            CanLink::SoftwareBus => Link::Bus(SoftwareBusTransport::open(bus, device.source_id(), SampleHeader::VALID, BUS_BUFFER)?),
+            CanLink::SoftwareBus => {
+                Link::Bus(Box::new(SoftwareBusTransport::open(bus, device.source_id(), SampleHeader::VALID, BUS_BUFFER)?))
+            }
             CanLink::Socketcan => {
                 let mut transport = SocketCanTransport::open(&can.interface)
                     .with_context(|| format!("can.interface = {:?}", can.interface))?;
@@ -202,6 +207,7 @@ pub fn run_gateway(device: GatewayDevice) -> anyhow::Result<()> {
     let mut latest_ns = 0u64;
     let mut error = FirstError::default();
     let mut ended = false;
+    let mut node_seen = (0u64, Instant::now(), false); // (heartbeats, when they last grew, lost)
     let exit = events.run(|wake| {
         let mut publish_status = |gateway: &Gateway, t_ns: u64| -> anyhow::Result<()> {
             if let Some(s) = tracker.due(t_ns, gateway.status()) {
@@ -297,8 +303,22 @@ pub fn run_gateway(device: GatewayDevice) -> anyhow::Result<()> {
                 }
             }
         }
-        if status_interval.is_some_and(|s| wake == Wake::Tick(s)) && error.failed(publish_status(&gateway, latest_ns)) {
-            return Flow::Stop;
+        if gateway.node_heartbeats() != node_seen.0 {
+            if node_seen.2 {
+                tracing::info!("{name}: the CAN node is back");
+                heartbeat.set_state(ProcessState::Running);
+            }
+            node_seen = (gateway.node_heartbeats(), Instant::now(), false);
+        }
+        if status_interval.is_some_and(|s| wake == Wake::Tick(s)) {
+            if !node_seen.2 && node_seen.1.elapsed() > NODE_LOST_AFTER {
+                tracing::warn!("{name}: no CAN node heartbeat for {NODE_LOST_AFTER:?}: node lost");
+                heartbeat.set_state(ProcessState::Degraded);
+                node_seen.2 = true;
+            }
+            if error.failed(publish_status(&gateway, latest_ns)) {
+                return Flow::Stop;
+            }
         }
         if !tick_sync {
             counters.update(&heartbeat, &gateway.status());

@@ -199,8 +199,11 @@ mod tests {
     use crate::sim_devices::{SimGyro, SimInclinometer, SimMagnetometer};
     use crate::plant_node::PlantNode;
 
+    /// One tick's sensor samples.
+    type Tick = (GyroSample, Option<InclinometerSample>, Option<MagnetometerSample>);
+
     /// 8 s of the default run's sensor samples (the plant coasting without commands).
-    fn samples() -> (RunConfig, Vec<(GyroSample, Option<InclinometerSample>, Option<MagnetometerSample>)>) {
+    fn samples() -> (RunConfig, Vec<Tick>) {
         let mut config = RunConfig::default();
         config.run.duration_s = 8.0;
         let schedule = config.schedule().unwrap();
@@ -221,7 +224,7 @@ mod tests {
         }
     }
 
-    fn run(config: &RunConfig, samples: &[(GyroSample, Option<InclinometerSample>, Option<MagnetometerSample>)]) -> (Vec<AttitudeEstimate>, EstimatorCounters) {
+    fn run(config: &RunConfig, samples: &[Tick]) -> (Vec<AttitudeEstimate>, EstimatorCounters) {
         let mut node = EstimatorNode::new(config.estimator_config(), config.schedule().unwrap());
         let mut out = Vec::new();
         for (g, t, f) in samples {

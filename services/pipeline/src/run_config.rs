@@ -271,7 +271,7 @@ impl CanSection {
     /// `(key, value, reason)` of the first invalid setting.
     fn validate(&self) -> Result<(), (String, String, &'static str)> {
         let bad = |key: &str, value: String, reason| Err((format!("can.{key}"), value, reason));
-        if self.id_base % 16 != 0 || self.id_base > 0x7A0 {
+        if !self.id_base.is_multiple_of(16) || self.id_base > 0x7A0 {
             return bad("id_base", self.id_base.to_string(), "must be a multiple of 16, at most 1952 (0x7A0)");
         }
         if !(self.replay_speed.is_finite() && self.replay_speed >= 0.0) {

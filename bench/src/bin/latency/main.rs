@@ -59,12 +59,14 @@ struct Args {
     /// Period of the chain's gyro samples, µs of wall time.
     #[arg(long, default_value_t = 500)]
     period_us: u64,
-    /// Payload sizes of the sweep, bytes (64, 1024, 8192, 65536).
-    #[arg(long, value_delimiter = ',', default_value = "64,1024,8192,65536")]
-    sizes: Vec<usize>,
-    /// Wait strategies of the bus rows (`TESTBED_BUS_WAIT` syntax).
-    #[arg(long, value_delimiter = ',', default_value = "block,anticipate,spin:50")]
-    waits: Vec<String>,
+    /// Payload sizes of the sweep, bytes, of 64, 1024, 8192, 65536 [default: all; --quick:
+    /// 64,65536].
+    #[arg(long, value_delimiter = ',')]
+    sizes: Option<Vec<usize>>,
+    /// Wait strategies of the bus rows (`TESTBED_BUS_WAIT` syntax) [default:
+    /// block,anticipate,spin:50; --quick: block,anticipate].
+    #[arg(long, value_delimiter = ',')]
+    waits: Option<Vec<String>>,
     /// Simulated (= wall) seconds of each paced run [default: 60; --quick: 3].
     #[arg(long)]
     paced_duration: Option<f64>,
@@ -117,6 +119,8 @@ pub struct PacedRun {
     pub ticks: usize,
     /// Deadline misses the controller counted (ControllerStatus.deadline_misses, from the log).
     pub deadline_misses: u64,
+    /// Of those, counted before its first control cycle (while the pipeline was starting).
+    pub deadline_misses_at_start: u64,
     /// Ticks whose wheel command arrived after the next tick's truth (the plant held the old
     /// command), or never.
     pub late_commands: u64,
@@ -131,6 +135,8 @@ pub struct PacedRun {
     /// CPU of the whole pipeline (launcher, logger, plant, gateways, estimator, controller)
     /// in % of one core.
     pub pipeline_cpu_percent: f64,
+    /// Stages of truth → command: (name, distribution in µs).
+    pub stages: Vec<(String, Percentiles)>,
     pub summary: serde_json::Value,
     pub error: Option<String>,
 }
@@ -160,7 +166,12 @@ fn main() -> Result<()> {
     let cycles = args.cycles.unwrap_or(if quick { 400 } else { 20_000 });
     let paced_duration = args.paced_duration.unwrap_or(if quick { 3.0 } else { 60.0 });
     let skip = |part: &str| args.skip.iter().any(|s| s == part);
-    for w in args.waits.iter().chain(&args.paced_waits) {
+    let sizes = args.sizes.clone().unwrap_or_else(|| if quick { vec![64, 65_536] } else { vec![64, 1024, 8192, 65_536] });
+    let waits: Vec<String> = args.waits.clone().unwrap_or_else(|| {
+        let w: &[&str] = if quick { &["block", "anticipate"] } else { &["block", "anticipate", "spin:50"] };
+        w.iter().map(|s| s.to_string()).collect()
+    });
+    for w in waits.iter().chain(&args.paced_waits) {
         w.parse::<testbed_bus::WaitStrategy>().with_context(|| format!("--waits / --paced-waits: {w}"))?;
     }
     std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
@@ -175,14 +186,14 @@ fn main() -> Result<()> {
             "hops": hops, "sweep_hops": sweep_hops, "cycles": cycles,
             "rounds": rounds,
             "warmup_hops": warmup(hops / rounds), "warmup_cycles": warmup(cycles / rounds),
-            "gap_us": args.gap_us, "period_us": args.period_us, "sizes": args.sizes,
-            "waits": args.waits, "paced_duration_s": paced_duration, "paced_waits": args.paced_waits,
+            "gap_us": args.gap_us, "period_us": args.period_us, "sizes": sizes,
+            "waits": waits, "paced_duration_s": paced_duration, "paced_waits": args.paced_waits,
             "hog_cpu": hog_cpu,
         }),
         ..Report::default()
     };
     let mut ctx = Ctx { n: 0, hog_cpu, scratch: scratch_dir()? };
-    let bus_transports: Vec<Transport> = args.waits.iter().map(|w| Transport::IoxEvent(w.clone())).collect();
+    let bus_transports: Vec<Transport> = waits.iter().map(|w| Transport::IoxEvent(w.clone())).collect();
     let transports: Vec<Transport> = bus_transports.iter().cloned().chain([Transport::IoxPoll, Transport::Uds, Transport::Udp]).collect();
 
     // Every configuration runs in `rounds` interleaved rounds (transports and loads taking
@@ -215,7 +226,7 @@ fn main() -> Result<()> {
     }
     if !skip("sweep") {
         let sweep_transports = [Transport::IoxEvent("block".into()), Transport::IoxPoll, Transport::Uds, Transport::Udp];
-        for &size in &args.sizes {
+        for &size in &sizes {
             for t in &sweep_transports {
                 for load in [false, true] {
                     plan.push(Plan { kind: "sweep", transport: t.clone(), size, count: sweep_hops, gap_us: 0, load, binaries: false });
@@ -585,6 +596,7 @@ impl Ctx {
         run.deadline_misses = run.summary["deadline_misses"].as_u64().unwrap_or(0);
         let observed = observed?;
         run.deadline_misses = run.deadline_misses.max(observed.deadline_misses);
+        run.deadline_misses_at_start = observed.deadline_misses_first.unwrap_or(0);
         let ticks = &observed.ticks;
         let period = chain::TICK_NS;
         let commands: Vec<u64> = ticks.iter().map(|t| t[3]).collect();
@@ -604,6 +616,16 @@ impl Ctx {
         run.clock_error = stats::percentiles(&mut error(&truths));
         let (mut chain, _) = stats::differences(&truths, &commands);
         run.truth_to_command = stats::percentiles(&mut chain);
+        let column = |c: usize| ticks.iter().map(|t| t[c]).collect::<Vec<u64>>();
+        let (gyros, estimates) = (column(1), column(2));
+        run.stages = [
+            ("truth → gyro sample (plant, simulated gyro gateway)", &truths, &gyros),
+            ("gyro sample → estimate (estimator)", &gyros, &estimates),
+            ("estimate → wheel command (controller)", &estimates, &commands),
+        ]
+        .into_iter()
+        .map(|(name, from, to)| (name.to_string(), stats::percentiles(&mut stats::differences(from, to).0)))
+        .collect();
         if run.ticks == 0 {
             bail!("the observer saw no wheel command (bus {})", spec.bus_prefix);
         }

@@ -98,11 +98,13 @@ pub fn checks(r: &Report) -> Vec<String> {
     for p in &r.paced {
         lines.push(match &p.error {
             None => format!(
-                "Paced 10 Hz run, {} s, {}, `TESTBED_BUS_WAIT={}`: **{} deadline misses** (controller), {} late or missing wheel commands over {} ticks",
+                "Paced 10 Hz run, {} s, {}, `TESTBED_BUS_WAIT={}`: **{} deadline misses during the run** ({} counted by the controller, {} of them before its first cycle while the pipeline started), {} late or missing wheel commands over {} ticks",
                 p.duration_s,
                 if p.load { "under load" } else { "idle" },
                 p.wait,
+                p.deadline_misses - p.deadline_misses_at_start,
                 p.deadline_misses,
+                p.deadline_misses_at_start,
                 p.late_commands,
                 p.ticks
             ),
@@ -144,14 +146,15 @@ pub fn headline(r: &Report) -> String {
         if p.error.is_none() {
             let _ = writeln!(
                 out,
-                "| 10 Hz paced, {} s under load | `TESTBED_BUS_WAIT={}` | truth→command p50 {} | p99 {} | period error p99 {} | max {} | {} deadline misses |",
+                "| 10 Hz paced, {} s under load | `TESTBED_BUS_WAIT={}` | truth→command p50 {} | p99 {} | period error p99 {} | max {} | {} deadline misses during the run ({} at start-up) |",
                 p.duration_s,
                 p.wait,
                 us(p.truth_to_command.p50),
                 us(p.truth_to_command.p99),
                 us(p.period_error.p99),
                 us(p.period_error.max),
-                p.deadline_misses
+                p.deadline_misses - p.deadline_misses_at_start,
+                p.deadline_misses_at_start
             );
         }
     }
@@ -161,7 +164,7 @@ pub fn headline(r: &Report) -> String {
 fn paced_table(out: &mut String, runs: &[PacedRun]) {
     let _ = writeln!(
         out,
-        "| wait strategy | load | duration s | ticks | deadline misses | late commands | truth→command p50 / p99 / p99.9 / max µs | command period error p50 / p99 / p99.9 / max µs | period min / max ms | plant clock error p99 / max µs | pipeline CPU % of a core |"
+        "| wait strategy | load | duration s | ticks | deadline misses (at start-up) | late commands | truth→command p50 / p99 / p99.9 / max µs | command period error p50 / p99 / p99.9 / max µs | period min / max ms | plant clock error p99 / max µs | pipeline CPU % of a core |"
     );
     let _ = writeln!(out, "|---|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|");
     for p in runs {
@@ -173,12 +176,13 @@ fn paced_table(out: &mut String, runs: &[PacedRun]) {
         let e = &p.period_error;
         let _ = writeln!(
             out,
-            "| {} | {} | {} | {} | {} | {} | {} / {} / {} / {} | {} / {} / {} / {} | {:.3} / {:.3} | {} / {} | {:.1} |",
+            "| {} | {} | {} | {} | {} ({}) | {} | {} / {} / {} / {} | {} / {} / {} / {} | {:.3} / {:.3} | {} / {} | {:.1} |",
             p.wait,
             load_name(p.load),
             p.duration_s,
             p.ticks,
             p.deadline_misses,
+            p.deadline_misses_at_start,
             p.late_commands,
             us(t.p50),
             us(t.p99),
@@ -344,6 +348,17 @@ pub fn markdown(r: &Report) -> String {
     );
     paced_table(&mut out, &r.paced);
     let _ = writeln!(out);
+    if r.paced.iter().any(|p| !p.stages.is_empty()) {
+        let _ = writeln!(out, "Stages of truth → wheel command, as the observer saw them arrive (p50 / p99 µs):\n");
+        let _ = writeln!(out, "| wait strategy | {} |", r.paced.iter().find(|p| !p.stages.is_empty()).map(|p| p.stages.iter().map(|(n, _)| n.as_str()).collect::<Vec<_>>().join(" | ")).unwrap_or_default());
+        let n = r.paced.iter().map(|p| p.stages.len()).max().unwrap_or(0);
+        let _ = writeln!(out, "|---|{}", "--:|".repeat(n));
+        for p in r.paced.iter().filter(|p| !p.stages.is_empty()) {
+            let cells: Vec<String> = p.stages.iter().map(|(_, s)| format!("{} / {}", us(s.p50), us(s.p99))).collect();
+            let _ = writeln!(out, "| {} | {} |", p.wait, cells.join(" | "));
+        }
+        let _ = writeln!(out);
+    }
     let _ = writeln!(out, "## How the polling wait strategies woke\n");
     let _ = writeln!(out, "Data wake-ups of the event loops with a polling `WaitStrategy`: after sleeping in the WaitSet (a scheduler wake-up) or by polling (none).\n");
     wait_table(&mut out, r);
