@@ -217,6 +217,7 @@ impl Bus {
         };
         let iox_config = config.to_iceoryx2()?;
         let node_name = NodeName::new(name).map_err(|e| node_error(Box::new(e)))?;
+        wait::set_process_name(name);
         let node = NodeBuilder::new()
             .name(&node_name)
             .config(&iox_config)

@@ -12,14 +12,26 @@
 
 use std::fmt;
 use std::str::FromStr;
+use std::sync::OnceLock;
 use std::time::{Duration, Instant};
 
 use crate::BusError;
 
 /// Environment variable selecting the [`WaitStrategy`] of every [`EventLoop`](crate::EventLoop)
 /// a process creates: `block` (default), `spin:<µs>`, `anticipate` or
-/// `anticipate:<lead µs>,<late µs>`.
+/// `anticipate:<lead µs>,<late µs>`, optionally followed by `@` and the bus names of the
+/// processes it applies to (`anticipate@estimator,controller`); the others then block. One
+/// variable for a whole run (the launcher passes its environment to every process) can so
+/// choose the strategy of a few.
 pub const ENV_WAIT: &str = "TESTBED_BUS_WAIT";
+
+/// This process's name on the bus (its first [`Bus::open`](crate::Bus::open)), for the process
+/// list of [`ENV_WAIT`].
+static PROCESS_NAME: OnceLock<String> = OnceLock::new();
+
+pub(crate) fn set_process_name(name: &str) {
+    let _ = PROCESS_NAME.set(name.to_owned());
+}
 
 /// How an [`EventLoop`](crate::EventLoop) waits for its next wake-up.
 ///
@@ -63,17 +75,46 @@ impl WaitStrategy {
         late: Duration::from_micros(300),
     };
 
-    /// The strategy named by [`ENV_WAIT`]; [`WaitStrategy::Block`] when unset or empty.
+    /// The strategy [`ENV_WAIT`] gives this process; [`WaitStrategy::Block`] when unset or
+    /// empty, or when it names other processes only.
     pub fn from_env() -> Result<Self, BusError> {
         Self::from_lookup(|key| std::env::var(key).ok())
     }
 
     /// Like [`from_env`](Self::from_env), reading the variable through `lookup`.
     pub fn from_lookup(lookup: impl Fn(&str) -> Option<String>) -> Result<Self, BusError> {
-        match lookup(ENV_WAIT).filter(|v| !v.is_empty()) {
-            Some(value) => value.parse(),
-            None => Ok(Self::Block),
+        Self::from_lookup_for(lookup, PROCESS_NAME.get().map(String::as_str))
+    }
+
+    /// Like [`from_lookup`](Self::from_lookup) for the process named `process` on the bus.
+    pub fn from_lookup_for(
+        lookup: impl Fn(&str) -> Option<String>,
+        process: Option<&str>,
+    ) -> Result<Self, BusError> {
+        let Some(value) = lookup(ENV_WAIT).filter(|v| !v.is_empty()) else {
+            return Ok(Self::Block);
+        };
+        let Some((strategy, names)) = value.split_once('@') else {
+            return value.parse();
+        };
+        let strategy: Self = strategy.parse().map_err(|_| BusError::Config {
+            key: ENV_WAIT,
+            value: value.clone(),
+            reason: "expected <strategy>@<process>,<process>...".to_owned(),
+        })?;
+        let mut names = names.split(',').map(str::trim).filter(|n| !n.is_empty()).peekable();
+        if names.peek().is_none() {
+            return Err(BusError::Config {
+                key: ENV_WAIT,
+                value: value.clone(),
+                reason: "no process names after '@'".to_owned(),
+            });
         }
+        Ok(if process.is_some_and(|p| names.any(|n| n == p)) {
+            strategy
+        } else {
+            Self::Block
+        })
     }
 
     /// Whether the loop polls at all.
@@ -277,6 +318,24 @@ mod tests {
             WaitStrategy::from_lookup(|_| Some(String::new())).unwrap(),
             WaitStrategy::Block
         );
+    }
+
+    #[test]
+    fn a_process_list_chooses_who_polls() {
+        let env = |value: &'static str| move |_: &str| Some(value.to_owned());
+        let anticipate = "anticipate@estimator, controller";
+        for (process, expected) in [
+            (Some("estimator"), WaitStrategy::ANTICIPATE),
+            (Some("controller"), WaitStrategy::ANTICIPATE),
+            (Some("logger"), WaitStrategy::Block),
+            (None, WaitStrategy::Block),
+        ] {
+            assert_eq!(WaitStrategy::from_lookup_for(env(anticipate), process).unwrap(), expected);
+        }
+        for bad in ["anticipate@", "fast@estimator", "anticipate@ , "] {
+            let err = WaitStrategy::from_lookup_for(env(bad), Some("x")).expect_err(bad).to_string();
+            assert!(err.contains(ENV_WAIT) && err.contains(bad), "{err}");
+        }
     }
 
     #[test]

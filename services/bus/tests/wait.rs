@@ -259,3 +259,37 @@ fn a_sample_taken_outside_its_own_wake_up_counts_for_its_deadline() {
         remove_all(&config).expect("remove_all");
     }
 }
+
+#[test]
+fn draining_an_empty_subscriber_leaves_no_sample_behind() {
+    // `drain` skips the listener when nothing is pending; every sample still arrives, and a
+    // sample published after such a drain still wakes the loop.
+    let config = BusConfig::isolated();
+    {
+        let bus = Bus::open("drainer", &config).expect("bus");
+        let sub = bus.subscriber::<GyroSample>().expect("subscriber");
+        let publisher = bus.publisher::<GyroSample>().expect("publisher");
+        let waiter = Waiter::new().expect("waiter");
+        let mut events = EventLoop::with_wait_strategy(&waiter, WaitStrategy::Block);
+        let on_gyro = events.on_data(&sub).expect("attach");
+        assert_eq!(sub.drain(|_| {}).expect("drain"), 0);
+        for i in 0..3 {
+            publisher.publish(&gyro(i)).expect("publish");
+            let mut got = Vec::new();
+            let begin = Instant::now();
+            while got.is_empty() {
+                assert!(begin.elapsed() < HANG_GUARD, "sample {i} never woke the loop");
+                events
+                    .run_once(Duration::from_millis(100), |wake| {
+                        assert_eq!(wake, Wake::Data(on_gyro));
+                        sub.drain_into(&mut got).expect("drain");
+                        Flow::Continue
+                    })
+                    .expect("event loop");
+            }
+            assert_eq!(got, vec![gyro(i)]);
+            assert_eq!(sub.drain(|_| {}).expect("drain"), 0);
+        }
+    }
+    remove_all(&config).expect("remove_all");
+}

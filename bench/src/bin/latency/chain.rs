@@ -149,8 +149,9 @@ macro_rules! define_messages {
         #[derive(Debug, Clone, Copy, PartialEq, Eq)]
         pub enum Kind { $($v),* }
 
-        /// A sample of one of the chain's topics.
+        /// A sample of one of the chain's topics (by value, as the bus hands them out).
         #[derive(Debug, Clone, Copy)]
+        #[allow(clippy::large_enum_variant)]
         pub enum Msg { $($v($t)),* }
 
         impl Msg {
@@ -320,7 +321,7 @@ impl ChainLink for PollChain {
                 return Ok(());
             }
             polls = polls.wrapping_add(1);
-            if polls % 65_536 == 0 && start.elapsed() > STALL {
+            if polls.is_multiple_of(65_536) && start.elapsed() > STALL {
                 bail!("nothing arrived for {STALL:?}");
             }
             std::thread::yield_now();
@@ -448,6 +449,7 @@ fn gyro_gateway(spec: &WorkerSpec, link: &mut dyn ChainLink) -> Result<()> {
     std::thread::sleep(Duration::from_millis(200));
     let period = spec.period_us * 1000;
     let start = now_ns() + 10_000_000;
+    #[allow(clippy::needless_range_loop)]
     for k in 0..total {
         sleep_until(start + k as u64 * period);
         if k == spec.warmup {

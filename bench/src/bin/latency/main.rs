@@ -63,15 +63,17 @@ struct Args {
     /// 64,65536].
     #[arg(long, value_delimiter = ',')]
     sizes: Option<Vec<usize>>,
-    /// Wait strategies of the bus rows (`TESTBED_BUS_WAIT` syntax) [default:
-    /// block,anticipate,spin:50; --quick: block,anticipate].
-    #[arg(long, value_delimiter = ',')]
+    /// Wait strategies of the bus rows, `;`-separated (`TESTBED_BUS_WAIT` syntax) [default:
+    /// block;anticipate;spin:50; --quick: block;anticipate].
+    #[arg(long, value_delimiter = ';')]
     waits: Option<Vec<String>>,
-    /// Simulated (= wall) seconds of each paced run [default: 60; --quick: 3].
+    /// Simulated (= wall) seconds of each paced run [default: 30; --quick: 3].
     #[arg(long)]
     paced_duration: Option<f64>,
-    /// Wait strategies of the paced runs (all under load).
-    #[arg(long, value_delimiter = ',', default_value = "block,anticipate")]
+    /// Wait strategies of the paced runs (all under load), `;`-separated, each a
+    /// `TESTBED_BUS_WAIT` value for the whole pipeline; `+fifo` at the end also gives sim-gyro,
+    /// estimator and controller SCHED_FIFO priority 10 (needs the privilege).
+    #[arg(long, value_delimiter = ';', default_value = "block;block+fifo;anticipate@sim-gyro,estimator,controller")]
     paced_waits: Vec<String>,
     /// Parts to leave out: hop, chain, sweep, paced, binaries.
     #[arg(long, value_delimiter = ',')]
@@ -137,8 +139,19 @@ pub struct PacedRun {
     pub pipeline_cpu_percent: f64,
     /// Stages of truth → command: (name, distribution in µs).
     pub stages: Vec<(String, Percentiles)>,
+    /// CPU and run-queue time of each process of the run, per tick.
+    pub processes: Vec<ProcessCost>,
     pub summary: serde_json::Value,
     pub error: Option<String>,
+}
+
+/// What one process of a paced run cost.
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+pub struct ProcessCost {
+    pub name: String,
+    pub cpu_us_per_tick: f64,
+    /// Time runnable but waiting for a CPU.
+    pub runqueue_us_per_tick: f64,
 }
 
 #[derive(Debug, Clone, Default, Serialize, Deserialize)]
@@ -164,15 +177,19 @@ fn main() -> Result<()> {
     let hops = args.hops.unwrap_or(if quick { 2_000 } else { 100_000 });
     let sweep_hops = args.sweep_hops.unwrap_or(if quick { 1_000 } else { 20_000 });
     let cycles = args.cycles.unwrap_or(if quick { 400 } else { 20_000 });
-    let paced_duration = args.paced_duration.unwrap_or(if quick { 3.0 } else { 60.0 });
+    let paced_duration = args.paced_duration.unwrap_or(if quick { 3.0 } else { 30.0 });
     let skip = |part: &str| args.skip.iter().any(|s| s == part);
     let sizes = args.sizes.clone().unwrap_or_else(|| if quick { vec![64, 65_536] } else { vec![64, 1024, 8192, 65_536] });
     let waits: Vec<String> = args.waits.clone().unwrap_or_else(|| {
         let w: &[&str] = if quick { &["block", "anticipate"] } else { &["block", "anticipate", "spin:50"] };
         w.iter().map(|s| s.to_string()).collect()
     });
-    for w in waits.iter().chain(&args.paced_waits) {
-        w.parse::<testbed_bus::WaitStrategy>().with_context(|| format!("--waits / --paced-waits: {w}"))?;
+    for w in &waits {
+        w.parse::<testbed_bus::WaitStrategy>().with_context(|| format!("--waits: {w}"))?;
+    }
+    for w in &args.paced_waits {
+        let strategy = w.trim_end_matches("+fifo").to_string();
+        testbed_bus::WaitStrategy::from_lookup(|_| Some(strategy.clone())).with_context(|| format!("--paced-waits: {w}"))?;
     }
     std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
     let hog_cpu = system::cpu_count() - 1;
@@ -217,7 +234,7 @@ fn main() -> Result<()> {
             }
         }
         if !skip("binaries") && pipeline_binary("estimator").is_some() {
-            for t in &bus_transports {
+            for t in bus_transports.iter().filter(|t| !matches!(t, Transport::IoxEvent(w) if w.starts_with("spin"))) {
                 for load in [false, true] {
                     plan.push(Plan { kind: "chain", transport: t.clone(), size: 0, count: cycles, gap_us: args.period_us, load, binaries: true });
                 }
@@ -309,6 +326,10 @@ fn progress(m: &Measurement) {
         Some(e) => eprintln!("{:<6} {} {}: FAILED: {e}", m.kind, m.label, if m.load { "load" } else { "idle" }),
     }
 }
+
+/// The processes a `+fifo` paced run gives SCHED_FIFO priority: the gyro's path to the
+/// wheel command.
+const FIFO_CHAIN: [&str; 3] = ["sim-gyro", "estimator", "controller"];
 
 /// Warm-up samples before the measured ones.
 fn warmup(n: usize) -> usize {
@@ -560,7 +581,7 @@ impl Ctx {
         command
             .args(["run", "--profile", "simulation", "--paced", "--json", "--duration", &duration_s.to_string(), "--log"])
             .arg(&log)
-            .env(testbed_bus::ENV_WAIT, wait)
+            .env(testbed_bus::ENV_WAIT, wait.trim_end_matches("+fifo"))
             .env("RUST_LOG", "warn")
             .stdout(std::process::Stdio::piped());
         let child = command.spawn().context("starting testbed run")?;
@@ -581,8 +602,38 @@ impl Ctx {
         };
         let mut group = runner::Group::new();
         let observer = group.worker("observer", &spec)?;
+        // The instrument: above everything it watches, so that its time stamps are taken when
+        // the samples arrive, not when the loaded CPU gets round to it.
+        system::set_fifo(group.pid(observer), 20);
+        // Follow the run's processes (found by their bus prefix) for their CPU and run-queue
+        // time; with `+fifo`, give the control chain real-time priority once it is up.
+        let (wait, fifo) = match wait.strip_suffix("+fifo") {
+            Some(w) => (w, true),
+            None => (wait, false),
+        };
+        let _ = wait;
+        let mut child = child;
+        let mut procs = system::RunProcesses::new(&spec.bus_prefix);
+        let mut raised = std::collections::HashSet::new();
+        while child.try_wait()?.is_none() {
+            procs.sample();
+            if fifo {
+                for (name, pid) in procs.pids() {
+                    if FIFO_CHAIN.contains(&name.as_str()) && raised.insert(pid) {
+                        system::set_fifo(pid, 10);
+                    }
+                }
+            }
+            std::thread::sleep(Duration::from_millis(50));
+        }
         let output = child.wait_with_output().context("waiting for testbed run")?;
         let wall = wall.elapsed().as_secs_f64();
+        let ticks_run = (duration_s * 10.0).round().max(1.0);
+        run.processes = procs
+            .totals()
+            .into_iter()
+            .map(|(name, cpu)| ProcessCost { name, cpu_us_per_tick: cpu.run_ns as f64 / 1e3 / ticks_run, runqueue_us_per_tick: cpu.wait_ns as f64 / 1e3 / ticks_run })
+            .collect();
         let observed = group.result(observer, Duration::from_secs(30));
         group.finish(Duration::from_secs(10))?;
         run.pipeline_cpu_percent = (system::children_cpu_ns() - cpu_before) as f64 / 1e9 / wall * 100.0;

@@ -359,6 +359,27 @@ pub fn markdown(r: &Report) -> String {
         }
         let _ = writeln!(out);
     }
+    if r.paced.iter().any(|p| !p.processes.is_empty()) {
+        let _ = writeln!(out, "What each process of the paced runs cost per tick (CPU / time runnable but waiting for a CPU, µs; the whole run including start-up):\n");
+        let mut names: Vec<String> = Vec::new();
+        for p in &r.paced {
+            for c in &p.processes {
+                if !names.contains(&c.name) {
+                    names.push(c.name.clone());
+                }
+            }
+        }
+        let _ = writeln!(out, "| wait strategy | {} |", names.join(" | "));
+        let _ = writeln!(out, "|---|{}", "--:|".repeat(names.len()));
+        for p in r.paced.iter().filter(|p| !p.processes.is_empty()) {
+            let cells: Vec<String> = names
+                .iter()
+                .map(|n| p.processes.iter().find(|c| &c.name == n).map_or("–".into(), |c| format!("{} / {}", us(c.cpu_us_per_tick), us(c.runqueue_us_per_tick))))
+                .collect();
+            let _ = writeln!(out, "| {} | {} |", p.wait, cells.join(" | "));
+        }
+        let _ = writeln!(out);
+    }
     let _ = writeln!(out, "## How the polling wait strategies woke\n");
     let _ = writeln!(out, "Data wake-ups of the event loops with a polling `WaitStrategy`: after sleeping in the WaitSet (a scheduler wake-up) or by polling (none).\n");
     wait_table(&mut out, r);

@@ -52,6 +52,10 @@ impl Group {
         self.spawn(name, command, true)
     }
 
+    pub fn pid(&self, who: usize) -> u32 {
+        self.procs[who].pid
+    }
+
     /// Starts another program (its stdout is not part of the protocol).
     pub fn program(&mut self, name: &str, command: Command) -> Result<usize> {
         self.spawn(name, command, false)

@@ -338,7 +338,7 @@ impl<Tx: Topic, Rx: Topic> Link<Tx, Rx> for PollLink<Tx, Rx> {
                 return Ok(());
             }
             polls = polls.wrapping_add(1);
-            if polls % 65_536 == 0 && start.elapsed() > STALL {
+            if polls.is_multiple_of(65_536) && start.elapsed() > STALL {
                 bail!("nothing arrived on poll/{} for {STALL:?}", Rx::NAME);
             }
             std::thread::yield_now();

@@ -114,6 +114,7 @@ pub fn bus_config(spec: &WorkerSpec) -> BusConfig {
 
 /// Runs the worker `spec` describes.
 pub fn run(spec: &WorkerSpec) -> Result<()> {
+    crate::system::precise_timers();
     match spec.role {
         Role::Ping | Role::Pong => hop(spec),
         Role::Gyro | Role::Estimator | Role::Controller | Role::Wheels => chain::worker(spec),
@@ -283,7 +284,7 @@ fn observer(spec: &WorkerSpec) -> Result<()> {
             let t = now_ns();
             let mut note = |time_ns: u64, column: usize| {
                 let k = (time_ns / period_ns) as usize;
-                if time_ns % period_ns == 0 && k <= last_tick && ticks[k][column] == 0 {
+                if time_ns.is_multiple_of(period_ns) && k <= last_tick && ticks[k][column] == 0 {
                     ticks[k][column] = t;
                 }
             };
