@@ -212,8 +212,15 @@ args = [\"-c\", \"sleep 1000 & echo $! > {{dir}}/grandchild; wait\"]
     }
     launch.wait_for(&["b: ready"]);
     launch.wait_for(&["c: ready"]);
-    launch.signal(libc::SIGINT);
+    // The shell writes its grandchild's pid after starting it: stop only once it has, or a
+    // loaded machine can stop the shell first and leave no file to check.
     let grandchild_file = launch.path("grandchild");
+    let started = std::time::Instant::now();
+    while !std::fs::read_to_string(&grandchild_file).is_ok_and(|pid| pid.trim().parse::<i32>().is_ok()) {
+        assert!(started.elapsed() < std::time::Duration::from_secs(30), "the shell never started its grandchild");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    launch.signal(libc::SIGINT);
     let (code, log) = launch.finish();
     assert_eq!(code, 0, "{}", log.join("\n"));
     let stops: Vec<usize> = ["\"c\"", "\"b\"", "\"a\""]
