@@ -133,9 +133,6 @@ struct Attachment<'w, 'a> {
 /// How often a polling loop serves the WaitSet (termination, intervals, deadlines) at least.
 const SERVICE_PERIOD: Duration = Duration::from_millis(1);
 
-/// Polls between two `sched_yield`s of a poll window (a poll takes some 0.1 to 0.3 µs).
-const POLLS_PER_YIELD: u32 = 64;
-
 /// Most a poll window is opened early to make up for late timer wake-ups.
 const MAX_LATENESS: Duration = Duration::from_micros(200);
 
@@ -361,7 +358,9 @@ impl<'w, 'a> EventLoop<'w, 'a> {
                         self.waitset_round(Duration::ZERO, on_wake)?
                     } else {
                         if wait == open.saturating_duration_since(now) {
-                            let late = Instant::now().saturating_duration_since(open).min(MAX_LATENESS);
+                            let late = Instant::now()
+                                .saturating_duration_since(open)
+                                .min(MAX_LATENESS);
                             self.lateness.set((self.lateness.get() * 3 + late) / 4);
                         }
                         (None, false)
@@ -396,7 +395,14 @@ impl<'w, 'a> EventLoop<'w, 'a> {
             tv_nsec: timeout.subsec_nanos() as libc::c_long,
         };
         // SAFETY: ppoll reads `fds.len()` pollfds and the timespec, writes only `revents`.
-        let n = unsafe { libc::ppoll(fds.as_mut_ptr(), fds.len() as libc::nfds_t, &ts, std::ptr::null()) };
+        let n = unsafe {
+            libc::ppoll(
+                fds.as_mut_ptr(),
+                fds.len() as libc::nfds_t,
+                &ts,
+                std::ptr::null(),
+            )
+        };
         if n < 0 {
             let e = std::io::Error::last_os_error();
             if e.kind() == std::io::ErrorKind::Interrupted {
@@ -484,14 +490,14 @@ impl<'w, 'a> EventLoop<'w, 'a> {
     }
 
     /// Polls every data source until one has samples (calls back for it) or `close` passes,
-    /// yielding the CPU every [`POLLS_PER_YIELD`] polls (a yield on a busy machine can hand
-    /// the CPU away for a whole time slice, so not after every poll).
+    /// yielding the CPU between polls: the publisher the loop waits for may share its CPU
+    /// (the scheduler likes to put processes that wake each other on one CPU), and a poll
+    /// loop that kept the CPU would delay the very sample it waits for.
     fn poll_until(
         &self,
         close: Instant,
         on_wake: &mut impl FnMut(Wake) -> Flow,
     ) -> Result<Polled, BusError> {
-        let mut polls: u32 = 0;
         loop {
             for (index, _, port) in self.data_attachments() {
                 if port.attach()? {
@@ -511,12 +517,7 @@ impl<'w, 'a> EventLoop<'w, 'a> {
                 self.spin_until.set(None);
                 return Ok(Polled::Nothing);
             }
-            polls = polls.wrapping_add(1);
-            if polls.is_multiple_of(POLLS_PER_YIELD) {
-                std::thread::yield_now();
-            } else {
-                std::hint::spin_loop();
-            }
+            std::thread::yield_now();
         }
     }
 
@@ -545,8 +546,7 @@ impl<'w, 'a> EventLoop<'w, 'a> {
                 Kind::Data(port) => {
                     if attachment.guard.missed_deadline(&id) {
                         let received_in_time = attachment.deadline.is_some_and(|deadline| {
-                            port.last_received()
-                                .is_some_and(|t| t.elapsed() < deadline)
+                            port.last_received().is_some_and(|t| t.elapsed() < deadline)
                         });
                         if received_in_time {
                             return CallbackProgression::Continue;
@@ -634,9 +634,7 @@ impl<'w, 'a> EventLoop<'w, 'a> {
                 None => Ok((Some(LoopExit::Stopped), handled)),
             },
             // An interrupting signal: the next wait reports it if it asked for termination.
-            WaitSetRunResult::Interrupt | WaitSetRunResult::AllEventsHandled => {
-                Ok((None, handled))
-            }
+            WaitSetRunResult::Interrupt | WaitSetRunResult::AllEventsHandled => Ok((None, handled)),
         }
     }
 }

@@ -102,7 +102,11 @@ impl WaitStrategy {
             value: value.clone(),
             reason: "expected <strategy>@<process>,<process>...".to_owned(),
         })?;
-        let mut names = names.split(',').map(str::trim).filter(|n| !n.is_empty()).peekable();
+        let mut names = names
+            .split(',')
+            .map(str::trim)
+            .filter(|n| !n.is_empty())
+            .peekable();
         if names.peek().is_none() {
             return Err(BusError::Config {
                 key: ENV_WAIT,
@@ -260,7 +264,12 @@ impl Arrivals {
     /// The poll window `(open, close)` around the next expected sample: the first slot of the
     /// period after the last arrival whose window has not closed at `now`. `None` while no
     /// period is known.
-    pub(crate) fn window(&self, now: Instant, lead: Duration, late: Duration) -> Option<(Instant, Instant)> {
+    pub(crate) fn window(
+        &self,
+        now: Instant,
+        lead: Duration,
+        late: Duration,
+    ) -> Option<(Instant, Instant)> {
         let (last, period) = (self.last?, self.period?);
         if period.is_zero() {
             return None;
@@ -308,7 +317,10 @@ mod tests {
         ] {
             let parsed: WaitStrategy = text.parse().expect(text);
             assert_eq!(parsed, strategy);
-            assert_eq!(parsed.to_string().parse::<WaitStrategy>().unwrap(), strategy);
+            assert_eq!(
+                parsed.to_string().parse::<WaitStrategy>().unwrap(),
+                strategy
+            );
         }
         assert_eq!(
             WaitStrategy::from_lookup(|_| None).unwrap(),
@@ -330,17 +342,29 @@ mod tests {
             (Some("logger"), WaitStrategy::Block),
             (None, WaitStrategy::Block),
         ] {
-            assert_eq!(WaitStrategy::from_lookup_for(env(anticipate), process).unwrap(), expected);
+            assert_eq!(
+                WaitStrategy::from_lookup_for(env(anticipate), process).unwrap(),
+                expected
+            );
         }
         for bad in ["anticipate@", "fast@estimator", "anticipate@ , "] {
-            let err = WaitStrategy::from_lookup_for(env(bad), Some("x")).expect_err(bad).to_string();
+            let err = WaitStrategy::from_lookup_for(env(bad), Some("x"))
+                .expect_err(bad)
+                .to_string();
             assert!(err.contains(ENV_WAIT) && err.contains(bad), "{err}");
         }
     }
 
     #[test]
     fn refuses_bad_values_by_name() {
-        for bad in ["spin", "spin:x", "poll", "anticipate:5", "spin:1000000", "block:3"] {
+        for bad in [
+            "spin",
+            "spin:x",
+            "poll",
+            "anticipate:5",
+            "spin:1000000",
+            "block:3",
+        ] {
             let err = bad.parse::<WaitStrategy>().expect_err(bad).to_string();
             assert!(err.contains(ENV_WAIT) && err.contains(bad), "{err}");
         }
@@ -364,7 +388,12 @@ mod tests {
         let last = t0 + ms(1900);
         let (open, close) = a.window(last, lead, late).unwrap();
         // A window around the next slot, narrowed to the observed jitter.
-        assert!(open > last + ms(99) && close < last + ms(101), "{:?} {:?}", open - last, close - last);
+        assert!(
+            open > last + ms(99) && close < last + ms(101),
+            "{:?} {:?}",
+            open - last,
+            close - last
+        );
         assert!(close - open < us(200), "{:?}", close - open);
         // An arrival slept through widens the window.
         a.note(last + ms(100) + us(40), false, lead);
@@ -377,7 +406,11 @@ mod tests {
         // Missed samples: the window moves on to the next slot.
         let much_later = last + ms(450);
         let (open, close) = a.window(much_later, lead, late).unwrap();
-        assert!(close >= much_later && open < much_later + ms(100), "{:?}", open - much_later);
+        assert!(
+            close >= much_later && open < much_later + ms(100),
+            "{:?}",
+            open - much_later
+        );
         // A new rate replaces the old one after three outliers.
         let mut t = last + ms(120);
         for _ in 0..4 {

@@ -81,14 +81,20 @@ fn every_strategy_delivers_every_sample_in_order_without_empty_wakes() {
             let begin = Instant::now();
             let (mut next, mut wakes) = (0, 0_u64);
             while next < N {
-                assert!(begin.elapsed() < HANG_GUARD, "{strategy}: timed out at {next}");
+                assert!(
+                    begin.elapsed() < HANG_GUARD,
+                    "{strategy}: timed out at {next}"
+                );
                 let exit = events
                     .run_once(Duration::from_millis(100), |wake| {
                         assert_eq!(wake, Wake::Data(on_gyro), "{strategy}: {wake:?}");
                         wakes += 1;
                         let n = sub
                             .drain(|s| {
-                                assert_eq!(s.header.sequence, next, "{strategy}: lost or reordered");
+                                assert_eq!(
+                                    s.header.sequence, next,
+                                    "{strategy}: lost or reordered"
+                                );
                                 next += 1;
                             })
                             .expect("drain");
@@ -183,7 +189,11 @@ fn a_callback_stops_a_polling_loop() {
             let exit = events
                 .run(|_| {
                     seen += sub.drain(|_| {}).expect("drain");
-                    if seen >= 20 { Flow::Stop } else { Flow::Continue }
+                    if seen >= 20 {
+                        Flow::Stop
+                    } else {
+                        Flow::Continue
+                    }
                 })
                 .expect("event loop");
             assert_eq!(exit, LoopExit::Stopped, "{strategy}");
@@ -210,7 +220,10 @@ fn the_environment_chooses_the_strategy_and_bad_values_are_refused_by_name() {
     );
     let err = BusConfig::from_lookup(lookup("fast")).expect_err("invalid");
     let msg = err.to_string();
-    assert!(msg.contains(testbed_bus::ENV_WAIT) && msg.contains("fast"), "{msg}");
+    assert!(
+        msg.contains(testbed_bus::ENV_WAIT) && msg.contains("fast"),
+        "{msg}"
+    );
 }
 
 #[test]
@@ -278,7 +291,10 @@ fn draining_an_empty_subscriber_leaves_no_sample_behind() {
             let mut got = Vec::new();
             let begin = Instant::now();
             while got.is_empty() {
-                assert!(begin.elapsed() < HANG_GUARD, "sample {i} never woke the loop");
+                assert!(
+                    begin.elapsed() < HANG_GUARD,
+                    "sample {i} never woke the loop"
+                );
                 events
                     .run_once(Duration::from_millis(100), |wake| {
                         assert_eq!(wake, Wake::Data(on_gyro));

@@ -73,15 +73,15 @@ pub fn write(path: &Path, report: &Report) -> Result<()> {
             .map(|(t, load)| {
                 let rows: Vec<&Measurement> = report.measurements.iter().filter(|m| m.kind == "sweep" && &m.transport == t && m.load == *load && m.error.is_none()).collect();
                 Curve {
-                    label: format!("{} {} p99", rows[0].label, if *load { "load" } else { "idle" }),
+                    label: format!("{} {} p50", rows[0].label, if *load { "load" } else { "idle" }),
                     colour: colour_of(&mut transports, &format!("{t}false")),
                     faint: *load,
-                    points: rows.iter().map(|m| (m.size as f64, m.latency.p99.max(0.01))).collect(),
+                    points: rows.iter().map(|m| (m.size as f64, m.latency.p50.max(0.01))).collect(),
                 }
             })
             .collect()
     };
-    panel(&areas[2], "payload sweep: p99 of one hop vs sample size (bytes)", &sweep, true, "sample size (bytes)", |x| format!("{x:.0}"))?;
+    panel(&areas[2], "payload sweep: median of one hop vs sample size (idle solid, load faint)", &sweep, true, "sample size (bytes)", |x| format!("{x:.0}"))?;
     let paced: Vec<Curve> = report
         .paced
         .iter()

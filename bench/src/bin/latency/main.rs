@@ -78,6 +78,9 @@ struct Args {
     /// Parts to leave out: hop, chain, sweep, paced, binaries.
     #[arg(long, value_delimiter = ',')]
     skip: Vec<String>,
+    /// Measure nothing: write report.md and latency.svg to --out from this report.json.
+    #[arg(long)]
+    render: Option<PathBuf>,
 }
 
 /// One measured configuration.
@@ -172,6 +175,14 @@ fn main() -> Result<()> {
         return worker::run(&spec).with_context(|| format!("worker {:?} over {:?}", spec.role, spec.transport));
     }
     let args = Args::parse();
+    if let Some(json) = &args.render {
+        let report: Report = serde_json::from_str(&std::fs::read_to_string(json).with_context(|| format!("reading {}", json.display()))?)?;
+        std::fs::create_dir_all(&args.out)?;
+        figure::write(&args.out.join("latency.svg"), &report)?;
+        std::fs::write(args.out.join("report.md"), report::markdown(&report))?;
+        println!("{}", report::headline(&report));
+        return Ok(());
+    }
     let started = Instant::now();
     let quick = args.quick;
     let hops = args.hops.unwrap_or(if quick { 2_000 } else { 100_000 });
@@ -271,6 +282,15 @@ fn main() -> Result<()> {
         progress(&m);
         report.measurements.push(m);
     }
+    // Saved after every phase: an interrupted run keeps what it measured.
+    let save = |report: &Report| -> Result<()> {
+        std::fs::write(args.out.join("report.json"), serde_json::to_string_pretty(report)?)?;
+        figure::write(&args.out.join("latency.svg"), report)?;
+        std::fs::write(args.out.join("report.md"), report::markdown(report))?;
+        Ok(())
+    };
+    report.wall_s = started.elapsed().as_secs_f64();
+    save(&report)?;
     if !skip("paced") {
         for wait in &args.paced_waits {
             eprintln!("paced run: {paced_duration} s at 10 Hz under load, TESTBED_BUS_WAIT={wait} ...");
@@ -284,16 +304,15 @@ fn main() -> Result<()> {
                 run.error.as_deref().map(|e| format!(" (error: {e})")).unwrap_or_default()
             );
             report.paced.push(run);
+            report.wall_s = started.elapsed().as_secs_f64();
+            save(&report)?;
         }
     }
     report.machine.loadavg_end = system::loadavg();
     report.wall_s = started.elapsed().as_secs_f64();
     let _ = std::fs::remove_dir_all(&ctx.scratch);
 
-    std::fs::write(args.out.join("report.json"), serde_json::to_string_pretty(&report)?)?;
-    figure::write(&args.out.join("latency.svg"), &report)?;
-    let markdown = report::markdown(&report);
-    std::fs::write(args.out.join("report.md"), &markdown)?;
+    save(&report)?;
     println!("{}", report::headline(&report));
     println!("report: {}", args.out.join("report.md").display());
     let failed: Vec<String> = report

@@ -82,8 +82,9 @@ pub fn checks(r: &Report) -> Vec<String> {
         };
         let p99_ok = m.latency.p99 <= uds.latency.p99;
         let median_ok = m.latency.p50 <= 3.0 * floor.latency.p50;
+        let no_floor = floor.latency.p50 > uds.latency.p50;
         lines.push(format!(
-            "{} chain, {}: p99 {} µs vs Unix socket {} µs → {}; median {} µs vs busy-poll floor {} µs = {} → {}",
+            "{} chain, {}: p99 {} µs vs Unix socket {} µs → {}; median {} µs vs busy-poll floor {} µs = {} → {}{}",
             m.label,
             load_name(m.load),
             us(m.latency.p99),
@@ -93,6 +94,7 @@ pub fn checks(r: &Report) -> Vec<String> {
             us(floor.latency.p50),
             ratio(m.latency.p50, floor.latency.p50),
             if median_ok { "**within 3×**" } else { "**not within 3×**" },
+            if no_floor { " (busy-polling is no floor here: four spinning processes and the hog starve each other on two CPUs)" } else { "" },
         ));
     }
     for p in &r.paced {
@@ -221,20 +223,75 @@ fn stage_table(out: &mut String, r: &Report) {
     }
 }
 
-fn wait_table(out: &mut String, r: &Report) {
-    let _ = writeln!(out, "| measurement | load | process | data wake-ups after sleeping | by polling | empty poll windows | stale notifications |");
+/// Each polling wait strategy against plain event waiting (block), same run, same load.
+fn wait_verdict(out: &mut String, r: &Report) {
+    let strategies: Vec<&Measurement> = r
+        .measurements
+        .iter()
+        .filter(|m| m.transport.starts_with("iox-event") && m.transport != "iox-event-block" && m.kind != "sweep" && m.error.is_none())
+        .collect();
+    if strategies.is_empty() {
+        return;
+    }
+    let _ = writeln!(out, "## Wait strategies against plain event waiting\n");
+    let _ = writeln!(out, "Each polling `WaitStrategy` of the bus's `EventLoop` next to `block` (the default) of the same run and load; ratios below 1 are better.\n");
+    let _ = writeln!(out, "| measurement | strategy | load | p50 µs (÷ block) | p99 µs (÷ block) | p99.9 µs (÷ block) | CPU µs/msg (÷ block) |");
     let _ = writeln!(out, "|---|---|---|--:|--:|--:|--:|");
-    for m in r.measurements.iter().filter(|m| m.transport.starts_with("iox-event") && m.transport != "iox-event-block" && m.kind != "sweep") {
+    for m in strategies {
+        let Some(b) = find(r, &m.kind, "iox-event-block", m.load, m.size, m.real_binaries) else { continue };
+        let cell = |x: f64, y: f64| format!("{} ({})", us(x), ratio(x, y));
+        let _ = writeln!(
+            out,
+            "| {}{} | {} | {} | {} | {} | {} | {} |",
+            m.kind,
+            if m.real_binaries { " (real binaries)" } else { "" },
+            m.transport.trim_start_matches("iox-event-"),
+            load_name(m.load),
+            cell(m.latency.p50, b.latency.p50),
+            cell(m.latency.p99, b.latency.p99),
+            cell(m.latency.p999, b.latency.p999),
+            cell(m.cpu_us_per_msg, b.cpu_us_per_msg),
+        );
+    }
+    if let Some(b) = r.paced.iter().find(|p| p.wait == "block" && p.error.is_none()) {
+        for p in r.paced.iter().filter(|p| p.wait != "block" && p.error.is_none()) {
+            let cell = |x: f64, y: f64| format!("{} ({})", us(x), ratio(x, y));
+            let _ = writeln!(
+                out,
+                "| paced 10 Hz, truth → wheel command | {} | {} | {} | {} | {} | {:.1} % of a core ({}) |",
+                p.wait,
+                load_name(p.load),
+                cell(p.truth_to_command.p50, b.truth_to_command.p50),
+                cell(p.truth_to_command.p99, b.truth_to_command.p99),
+                cell(p.truth_to_command.p999, b.truth_to_command.p999),
+                p.pipeline_cpu_percent,
+                ratio(p.pipeline_cpu_percent, b.pipeline_cpu_percent),
+            );
+        }
+    }
+    let _ = writeln!(out);
+}
+
+fn wait_table(out: &mut String, r: &Report) {
+    let _ = writeln!(out, "| measurement | load | process | data wake-ups after sleeping | by polling | per message | empty poll windows | stale notifications |");
+    let _ = writeln!(out, "|---|---|---|--:|--:|--:|--:|--:|");
+    for m in r.measurements.iter().filter(|m| m.transport.starts_with("iox-event") && m.kind != "sweep" && m.error.is_none()) {
+        // Wake-up counts cover warm-up too: per message over all the process handled.
+        let per = |w: &crate::worker::WaitStatsJson| {
+            let handled = (m.messages + m.incomplete) as f64 * if m.kind == "hop" { 0.5 } else { 1.0 };
+            if handled > 0.0 { format!("{:.2}", (w.woken + w.polled) as f64 / handled) } else { "–".into() }
+        };
         for (process, w) in &m.wait {
             let _ = writeln!(
                 out,
-                "| {} {} | {} | {} | {} | {} | {} | {} |",
+                "| {} {} | {} | {} | {} | {} | {} | {} | {} |",
                 m.kind,
                 label(m),
                 load_name(m.load),
                 process,
                 w.woken,
                 w.polled,
+                per(w),
                 w.empty_windows,
                 w.stale_notifications
             );
@@ -297,6 +354,9 @@ pub fn markdown(r: &Report) -> String {
     let _ = writeln!(out, "| virtualisation | {} |", m.hypervisor);
     let _ = writeln!(out, "| kernel | {} |", m.kernel);
     let _ = writeln!(out, "| clock source | {} |", m.clocksource);
+    if !m.cpuidle.is_empty() {
+        let _ = writeln!(out, "| idle states | {} |", m.cpuidle);
+    }
     let _ = writeln!(out, "| memory | {:.1} GiB |", m.memory_gib);
     let _ = writeln!(out, "| load average 1/5/15 min, start → end | {} → {} |", m.loadavg_start, m.loadavg_end);
     let _ = writeln!(out, "| toolchain | {} |", m.rustc);
@@ -314,6 +374,7 @@ pub fn markdown(r: &Report) -> String {
         let _ = writeln!(out, "- {line}");
     }
     let _ = writeln!(out);
+    wait_verdict(&mut out, r);
     let _ = writeln!(out, "## Chain: gyro gateway → estimator → controller → wheel gateway\n");
     let _ = writeln!(
         out,
@@ -380,8 +441,8 @@ pub fn markdown(r: &Report) -> String {
         }
         let _ = writeln!(out);
     }
-    let _ = writeln!(out, "## How the polling wait strategies woke\n");
-    let _ = writeln!(out, "Data wake-ups of the event loops with a polling `WaitStrategy`: after sleeping in the WaitSet (a scheduler wake-up) or by polling (none).\n");
+    let _ = writeln!(out, "## How the event loops woke\n");
+    let _ = writeln!(out, "Data wake-ups of the bus processes' event loops: after sleeping in the WaitSet (a scheduler wake-up) or by polling (none); *per message* is per hop or chain cycle the process took part in (warm-up included, so slightly high). The bus has one event service per topic, so a process is woken once per topic that has news; a socket process takes every datagram that has arrived in one wake-up.\n");
     wait_table(&mut out, r);
     let _ = writeln!(out);
     let _ = writeln!(out, "## Method\n");

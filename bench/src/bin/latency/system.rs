@@ -173,6 +173,7 @@ pub fn cpu_count() -> usize {
 
 /// What the numbers were measured on.
 #[derive(Debug, Clone, Default, Serialize, Deserialize)]
+#[serde(default)]
 pub struct Machine {
     pub cpu_model: String,
     pub cpus: usize,
@@ -185,6 +186,9 @@ pub struct Machine {
     pub loadavg_end: String,
     pub rustc: String,
     pub started: String,
+    /// cpuidle driver and, for `haltpoll`, how long an idle virtual CPU polls before it halts
+    /// (a halted one needs the hypervisor to wake it).
+    pub cpuidle: String,
 }
 
 impl Machine {
@@ -215,7 +219,15 @@ impl Machine {
         let uname = std::process::Command::new("uname").arg("-srvm").output().map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string()).unwrap_or_default();
         let rustc = std::process::Command::new("rustc").arg("--version").output().map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string()).unwrap_or_default();
         let started = std::process::Command::new("date").args(["-u", "+%Y-%m-%d %H:%M:%S UTC"]).output().map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string()).unwrap_or_default();
+        let driver = read("/sys/devices/system/cpu/cpuidle/current_driver").trim().to_string();
+        let halt_poll = read("/sys/module/haltpoll/parameters/guest_halt_poll_ns").trim().to_string();
+        let cpuidle = match (driver.as_str(), halt_poll.as_str()) {
+            ("", _) => "unknown".to_string(),
+            (d, "") => d.to_string(),
+            (d, ns) => format!("{d}, guest_halt_poll_ns = {ns}"),
+        };
         Self {
+            cpuidle,
             cpu_model: field("model name"),
             cpus: cpu_count(),
             kernel: uname,

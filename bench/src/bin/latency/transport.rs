@@ -156,7 +156,7 @@ pub enum Sock {
 impl Sock {
     /// A socket receiving at `addr`.
     pub fn bind(addr: &Addr) -> Result<Self> {
-        Ok(match addr {
+        let sock = match addr {
             Addr::Uds(path) => {
                 let _ = std::fs::remove_file(path);
                 Self::Uds(UnixDatagram::bind(path).with_context(|| format!("binding {}", path.display()))?)
@@ -166,7 +166,11 @@ impl Sock {
                 set_buffers(s.as_raw_fd());
                 Self::Udp(s)
             }
-        })
+        };
+        // Once, not per receive: a broken run must not hang, but the baseline pays no extra
+        // system call per sample.
+        sock.set_timeout(Some(STALL))?;
+        Ok(sock)
     }
 
     /// A socket that only sends, to addresses of `family`'s kind.
@@ -200,7 +204,6 @@ impl Sock {
     /// Blocks until a whole message of `buf.len()` bytes is in `buf` (UDP: reassembled from
     /// its chunks), or until a shorter datagram arrives; returns the bytes received.
     pub fn recv(&self, buf: &mut [u8]) -> Result<usize> {
-        self.set_timeout(Some(STALL))?;
         let mut filled = 0;
         loop {
             let n = match self {
