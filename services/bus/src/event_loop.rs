@@ -62,7 +62,8 @@ pub enum Wake {
     /// An interval elapsed.
     Tick(SourceId),
     /// A subscriber attached with a deadline received nothing for the whole deadline. Repeats
-    /// every deadline period for as long as nothing arrives.
+    /// every deadline period for as long as nothing arrives. Never before the subscriber's
+    /// first sample: a stream that has not started cannot be late.
     DeadlineMissed(SourceId),
 }
 
@@ -246,6 +247,12 @@ impl<'w, 'a> EventLoop<'w, 'a> {
 
     /// Like [`on_data`](Self::on_data), and also wakes with [`Wake::DeadlineMissed`] when
     /// nothing arrived for `deadline` (again after every further `deadline` without data).
+    ///
+    /// The deadline is supervised from the subscriber's first sample on: while a pipeline
+    /// starts, its streams begin one after another, and a process cannot be late for a stream
+    /// that has not delivered anything yet. A stream that never starts is for start-up checks
+    /// to catch (in the pipeline: the plant counts every tick it advances unanswered), not a
+    /// missed deadline.
     ///
     /// "Nothing arrived" means that the subscriber took no sample
     /// ([`TopicSubscriber::last_received`]) for the whole deadline: a sample whose notification
@@ -545,9 +552,14 @@ impl<'w, 'a> EventLoop<'w, 'a> {
             let wake = match attachment.kind {
                 Kind::Data(port) => {
                     if attachment.guard.missed_deadline(&id) {
-                        let received_in_time = attachment.deadline.is_some_and(|deadline| {
-                            port.last_received().is_some_and(|t| t.elapsed() < deadline)
-                        });
+                        // Supervised only once the stream has started: before its first
+                        // sample nothing can be late (the pipeline is still starting).
+                        let Some(last) = port.last_received() else {
+                            return CallbackProgression::Continue;
+                        };
+                        let received_in_time = attachment
+                            .deadline
+                            .is_some_and(|deadline| last.elapsed() < deadline);
                         if received_in_time {
                             return CallbackProgression::Continue;
                         }

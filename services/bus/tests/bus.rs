@@ -274,10 +274,19 @@ fn missed_deadlines_are_reported_and_counted() {
         let on_gyro = events
             .on_data_with_deadline(&sub, Duration::from_millis(50))
             .expect("attach");
+        // Deadlines are supervised once the stream has started.
+        publisher.publish(&gyro(0)).expect("publish");
         let mut missed = 0;
         run_until(&mut events, |wake| {
-            assert_eq!(wake, Wake::DeadlineMissed(on_gyro));
-            missed += 1;
+            match wake {
+                Wake::Data(s) if s == on_gyro => {
+                    assert_eq!(sub.latest().expect("drain"), Some(gyro(0)));
+                }
+                other => {
+                    assert_eq!(other, Wake::DeadlineMissed(on_gyro));
+                    missed += 1;
+                }
+            }
             missed == 3
         });
         assert_eq!(events.missed_deadlines(on_gyro), 3);

@@ -274,6 +274,65 @@ fn a_sample_taken_outside_its_own_wake_up_counts_for_its_deadline() {
 }
 
 #[test]
+fn a_deadline_is_supervised_only_once_its_stream_has_started() {
+    // While a pipeline starts, its streams begin one after another: a process cannot be late
+    // for a stream that has delivered nothing yet (the paced pipeline's controller counted
+    // such start-up "misses" in ControllerStatus.deadline_misses). From the first sample on,
+    // a silence longer than the deadline is a miss.
+    const DEADLINE: Duration = Duration::from_millis(30);
+    for strategy in STRATEGIES {
+        let config = BusConfig::isolated();
+        {
+            let bus = Bus::open("late-starter", &config).expect("bus");
+            let sub = bus.subscriber::<GyroSample>().expect("subscriber");
+            let publisher = bus.publisher::<GyroSample>().expect("publisher");
+            let waiter = Waiter::new().expect("waiter");
+            let mut events = EventLoop::with_wait_strategy(&waiter, strategy);
+            let on_gyro = events
+                .on_data_with_deadline(&sub, DEADLINE)
+                .expect("attach");
+            // Five deadlines without a first sample: nothing is late.
+            let begin = Instant::now();
+            while begin.elapsed() < 5 * DEADLINE {
+                events
+                    .run_once(Duration::from_millis(10), |wake| {
+                        panic!("{strategy}: nothing should wake the loop before the stream starts, got {wake:?}")
+                    })
+                    .expect("event loop");
+            }
+            assert_eq!(events.missed_deadlines(on_gyro), 0, "{strategy}");
+            // The stream starts, then falls silent: that is a miss.
+            publisher.publish(&gyro(0)).expect("publish");
+            let (mut data, mut missed) = (0, 0);
+            let begin = Instant::now();
+            while missed == 0 {
+                assert!(begin.elapsed() < HANG_GUARD, "{strategy}: no miss reported");
+                events
+                    .run_once(Duration::from_millis(10), |wake| {
+                        match wake {
+                            Wake::Data(s) if s == on_gyro => {
+                                data += sub.drain(|_| {}).expect("drain")
+                            }
+                            Wake::DeadlineMissed(s) if s == on_gyro => missed += 1,
+                            other => panic!("{strategy}: unexpected {other:?}"),
+                        }
+                        Flow::Continue
+                    })
+                    .expect("event loop");
+            }
+            assert_eq!(data, 1, "{strategy}");
+            assert!(
+                begin.elapsed() >= DEADLINE,
+                "{strategy}: a miss {:?} after the first sample",
+                begin.elapsed()
+            );
+            assert_eq!(events.missed_deadlines(on_gyro), 1, "{strategy}");
+        }
+        remove_all(&config).expect("remove_all");
+    }
+}
+
+#[test]
 fn draining_an_empty_subscriber_leaves_no_sample_behind() {
     // `drain` skips the listener when nothing is pending; every sample still arrives, and a
     // sample published after such a drain still wakes the loop.

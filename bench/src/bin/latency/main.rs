@@ -122,10 +122,10 @@ pub struct PacedRun {
     pub duration_s: f64,
     /// Ticks whose wheel command the observer saw.
     pub ticks: usize,
-    /// Deadline misses the controller counted (ControllerStatus.deadline_misses, from the log).
+    /// Deadline misses the controller counted (ControllerStatus.deadline_misses, supervised
+    /// from the first estimate on): the run summary's, or the observer's last status if that
+    /// says more.
     pub deadline_misses: u64,
-    /// Of those, counted before its first control cycle (while the pipeline was starting).
-    pub deadline_misses_at_start: u64,
     /// Ticks whose wheel command arrived after the next tick's truth (the plant held the old
     /// command), or never.
     pub late_commands: u64,
@@ -166,6 +166,10 @@ pub struct Report {
     pub measurements: Vec<Measurement>,
     pub paced: Vec<PacedRun>,
     pub wall_s: f64,
+    /// The run measured everything it planned (false in the reports saved along the way, so
+    /// an interrupted run's report says so).
+    #[serde(default)]
+    pub complete: bool,
 }
 
 fn main() -> Result<()> {
@@ -245,7 +249,8 @@ fn main() -> Result<()> {
             }
         }
         if !skip("binaries") && pipeline_binary("estimator").is_some() {
-            for t in bus_transports.iter().filter(|t| !matches!(t, Transport::IoxEvent(w) if w.starts_with("spin"))) {
+            // Every bus wait strategy: the decision on the pipeline's default weighs these rows.
+            for t in &bus_transports {
                 for load in [false, true] {
                     plan.push(Plan { kind: "chain", transport: t.clone(), size: 0, count: cycles, gap_us: args.period_us, load, binaries: true });
                 }
@@ -310,6 +315,7 @@ fn main() -> Result<()> {
     }
     report.machine.loadavg_end = system::loadavg();
     report.wall_s = started.elapsed().as_secs_f64();
+    report.complete = true;
     let _ = std::fs::remove_dir_all(&ctx.scratch);
 
     save(&report)?;
@@ -666,7 +672,6 @@ impl Ctx {
         run.deadline_misses = run.summary["deadline_misses"].as_u64().unwrap_or(0);
         let observed = observed?;
         run.deadline_misses = run.deadline_misses.max(observed.deadline_misses);
-        run.deadline_misses_at_start = observed.deadline_misses_first.unwrap_or(0);
         let ticks = &observed.ticks;
         let period = chain::TICK_NS;
         let commands: Vec<u64> = ticks.iter().map(|t| t[3]).collect();

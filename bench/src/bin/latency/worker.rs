@@ -61,9 +61,8 @@ pub struct WorkerResult {
     pub wait: Option<WaitStatsJson>,
     /// Observer: arrival times per tick of truth, gyro, estimate, wheel command, status.
     pub ticks: Vec<[u64; 5]>,
-    /// Observer: the controller's deadline-miss count in its last and in its first status.
+    /// Observer: the controller's deadline-miss count in its last status.
     pub deadline_misses: u64,
-    pub deadline_misses_first: Option<u64>,
     /// Wheel commands out of range (wheel gateway's check).
     pub out_of_range: u64,
 }
@@ -271,7 +270,6 @@ fn observer(spec: &WorkerSpec) -> Result<()> {
     let last_tick = spec.count;
     let mut ticks: Vec<[u64; 5]> = vec![[0; 5]; last_tick + 1];
     let mut deadline_misses = 0;
-    let mut first_misses = None;
     let mut last_data = Instant::now();
     let mut seen_any = false;
     let mut done = false;
@@ -303,7 +301,6 @@ fn observer(spec: &WorkerSpec) -> Result<()> {
                 .drain(|s| {
                     note(s.header.time_ns, 4);
                     deadline_misses = deadline_misses.max(s.deadline_misses);
-                    first_misses.get_or_insert(s.deadline_misses);
                 })
                 .unwrap_or(0);
             if n > 0 {
@@ -316,7 +313,7 @@ fn observer(spec: &WorkerSpec) -> Result<()> {
             break;
         }
     }
-    report(&WorkerResult { ticks, deadline_misses, deadline_misses_first: first_misses, ..WorkerResult::default() })?;
+    report(&WorkerResult { ticks, deadline_misses, ..WorkerResult::default() })?;
     Ok(())
 }
 
