@@ -67,7 +67,6 @@ fn assert_candump_lines(path: &Path) -> usize {
 }
 
 #[test]
-#[ignore = "can-sim lockstep can deadlock under heavy CPU load (seen with a CPU hog and two pipelines in parallel); run with --ignored; see issue 6"]
 fn can_sim_gateways_on_the_simulated_node_stabilise_like_the_simulated_gateways() {
     let scratch = Scratch::new("can-sim150");
     let log = scratch.path().join("can.mcap");
@@ -104,7 +103,6 @@ fn can_sim_gateways_on_the_simulated_node_stabilise_like_the_simulated_gateways(
 }
 
 #[test]
-#[ignore = "can-sim lockstep can deadlock under heavy CPU load (seen with a CPU hog and two pipelines in parallel); run with --ignored; see issue 6"]
 fn with_one_percent_of_frames_dropped_or_corrupted_the_loop_stabilises_and_every_fault_is_counted() {
     let scratch = Scratch::new("can-faults");
     // 0.5 % dropped + 0.5 % corrupted, and a few delayed past their tick and duplicated.
@@ -141,7 +139,6 @@ fn with_one_percent_of_frames_dropped_or_corrupted_the_loop_stabilises_and_every
 }
 
 #[test]
-#[ignore = "can-sim lockstep can deadlock under heavy CPU load (seen with a CPU hog and two pipelines in parallel); run with --ignored; see issue 6"]
 fn can_sim_with_faults_is_byte_identical_run_to_run() {
     let scratch = Scratch::new("can-determinism");
     let profile = can_sim_with_faults(scratch.path(), 0.01, 0.01, 0.005, 0.005);
@@ -157,7 +154,6 @@ fn can_sim_with_faults_is_byte_identical_run_to_run() {
 }
 
 #[test]
-#[ignore = "can-sim lockstep can deadlock under heavy CPU load (seen with a CPU hog and two pipelines in parallel); run with --ignored; see issue 6"]
 fn replaying_a_recorded_candump_file_through_the_gateways_reproduces_the_estimates() {
     let scratch = Scratch::new("can-replay");
     // Record a run with bus faults, so the replay meets stale, late and duplicated frames too.

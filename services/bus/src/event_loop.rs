@@ -98,6 +98,8 @@ enum Kind<'a> {
     Data(&'a dyn SubscriberPort),
     Interval,
     Heartbeat(&'a HeartbeatPublisher),
+    /// The [`LISTENER_SWEEP_PERIOD`] timer.
+    Sweep,
 }
 
 /// WaitSet guards of intervals borrow nothing but the WaitSet (`'static` attachment).
@@ -130,6 +132,22 @@ struct Attachment<'w, 'a> {
     /// The deadline of a subscriber attached with one.
     deadline: Option<Duration>,
 }
+
+/// How often the loop looks at every subscriber's listener and samples without having been
+/// woken for them.
+///
+/// iceoryx2 0.10's inter-process event (`UnixDatagramShmCountingBitSet`) skips the wake-up
+/// datagram while its shared state says one is pending. That state can be left set after the
+/// listener has already consumed the datagram: the listener resets the state, a notifier
+/// marks it pending and sends, the listener's drain empties the socket (taking that datagram),
+/// then the notifier marks the state "notified". From then on every notifier skips the
+/// datagram and the listener is never woken again, with its samples piling up. Seen under
+/// heavy load (two cores, a CPU hog, two can-sim pipelines): one gateway's CAN listener went
+/// deaf with its state byte at "notified", an empty socket and 53 activations pending, and the
+/// lockstep run stopped. Draining the listener by hand (`try_wait`) resets the state, so a
+/// periodic sweep turns that permanent stop into a delay of at most this period, which the
+/// loop counts ([`WaitStats::swept`]).
+pub const LISTENER_SWEEP_PERIOD: Duration = Duration::from_millis(100);
 
 /// How often a polling loop serves the WaitSet (termination, intervals, deadlines) at least.
 const SERVICE_PERIOD: Duration = Duration::from_millis(1);
@@ -216,6 +234,15 @@ impl<'w, 'a> EventLoop<'w, 'a> {
         kind: Kind<'a>,
         deadline: Option<Duration>,
     ) -> SourceId {
+        self.push_attachment(guard, kind, deadline)
+    }
+
+    fn push_attachment(
+        &mut self,
+        guard: Guard<'w, 'a>,
+        kind: Kind<'a>,
+        deadline: Option<Duration>,
+    ) -> SourceId {
         self.attachments.push(Attachment {
             guard,
             kind,
@@ -242,6 +269,7 @@ impl<'w, 'a> EventLoop<'w, 'a> {
             .waitset
             .attach_notification(SubscriberPort::listener(subscriber))
             .map_err(Self::attach_error("attaching a subscriber"))?;
+        self.ensure_sweep()?;
         Ok(self.push(Guard::Listener(guard), Kind::Data(subscriber)))
     }
 
@@ -268,11 +296,52 @@ impl<'w, 'a> EventLoop<'w, 'a> {
             .waitset
             .attach_deadline(SubscriberPort::listener(subscriber), deadline)
             .map_err(Self::attach_error("attaching a subscriber with a deadline"))?;
+        self.ensure_sweep()?;
         Ok(self.push_with_deadline(
             Guard::Listener(guard),
             Kind::Data(subscriber),
             Some(deadline),
         ))
+    }
+
+    /// Attaches the [`LISTENER_SWEEP_PERIOD`] timer with the first subscriber.
+    fn ensure_sweep(&mut self) -> Result<(), BusError> {
+        if self.attachments.iter().any(|a| matches!(a.kind, Kind::Sweep)) {
+            return Ok(());
+        }
+        let guard = self
+            .waitset
+            .attach_interval(LISTENER_SWEEP_PERIOD)
+            .map_err(Self::attach_error("attaching the listener sweep"))?;
+        self.push_attachment(Guard::Interval(guard), Kind::Sweep, None);
+        Ok(())
+    }
+
+    /// The sweep ([`LISTENER_SWEEP_PERIOD`]): drains every subscriber's listener (which also
+    /// resets a listener left deaf) and calls back [`Wake::Data`] for every subscriber with
+    /// samples pending.
+    fn sweep(&self, on_wake: &mut impl FnMut(Wake) -> Flow) -> Result<Flow, BusError> {
+        for (index, _, port) in self.data_attachments() {
+            let pending = drain_listener(port.listener(), port.event_name())?;
+            if pending.new_publisher {
+                port.attach()?;
+            }
+            if !port.attach()? {
+                continue;
+            }
+            self.count(|s| s.swept += 1);
+            tracing::debug!(
+                service = port.event_name(),
+                notified = pending.samples,
+                "samples found by the listener sweep"
+            );
+            let flow = on_wake(Wake::Data(SourceId(index)));
+            self.handled_data();
+            if flow == Flow::Stop {
+                return Ok(Flow::Stop);
+            }
+        }
+        Ok(Flow::Continue)
     }
 
     /// Wakes with [`Wake::Tick`] every `period`.
@@ -613,6 +682,19 @@ impl<'w, 'a> EventLoop<'w, 'a> {
                     }
                 }
                 Kind::Interval => Wake::Tick(source),
+                Kind::Sweep => {
+                    return match self.sweep(on_wake) {
+                        Ok(Flow::Continue) => CallbackProgression::Continue,
+                        Ok(Flow::Stop) => {
+                            handled = true;
+                            CallbackProgression::Stop
+                        }
+                        Err(e) => {
+                            failure = Some(e);
+                            CallbackProgression::Stop
+                        }
+                    };
+                }
                 Kind::Heartbeat(heartbeat) => {
                     heartbeat.publish_or_count();
                     return CallbackProgression::Continue;
@@ -675,4 +757,74 @@ enum Polled {
     Handled(Option<LoopExit>),
     /// The window closed without a sample.
     Nothing,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{Bus, BusConfig, remove_all};
+    use ipc_types::{GyroSample, SampleHeader};
+
+    fn gyro(sequence: u64) -> GyroSample {
+        GyroSample {
+            header: SampleHeader::new(sequence, sequence, SampleHeader::VALID),
+            ..GyroSample::default()
+        }
+    }
+
+    /// Whether `fd` becomes readable within `timeout`.
+    fn readable(fd: i32, timeout: Duration) -> bool {
+        let mut pfd = libc::pollfd { fd, events: libc::POLLIN, revents: 0 };
+        // SAFETY: one valid pollfd.
+        unsafe { libc::poll(&mut pfd, 1, timeout.as_millis() as libc::c_int) == 1 }
+    }
+
+    /// Puts a listener into the state iceoryx2's notifier/listener race leaves behind (see
+    /// [`LISTENER_SWEEP_PERIOD`]): its wake-up datagram consumed while the shared state still
+    /// says "notified". Further notifications then send nothing; the sweep must still deliver.
+    #[test]
+    fn the_sweep_delivers_samples_to_a_listener_whose_wake_up_was_lost() {
+        let config = BusConfig::isolated();
+        {
+            let bus = Bus::open("deaf", &config).expect("bus");
+            let subscriber = bus.subscriber::<GyroSample>().expect("subscriber");
+            let publisher = bus.publisher::<GyroSample>().expect("publisher");
+            // SAFETY: the listener outlives its descriptor's use here.
+            let fd = unsafe { SubscriberPort::listener(&subscriber).file_descriptor().native_handle() };
+            // Drop the publisher-created wake-up so that the socket starts empty.
+            let _ = drain_listener(SubscriberPort::listener(&subscriber), "test");
+
+            publisher.publish(&gyro(0)).expect("publish 0");
+            assert!(readable(fd, Duration::from_secs(5)), "a first notification wakes the listener");
+            let mut byte = [0u8; 16];
+            // SAFETY: reads at most 16 bytes into `byte`.
+            let n = unsafe { libc::recv(fd, byte.as_mut_ptr().cast(), byte.len(), libc::MSG_DONTWAIT) };
+            assert_eq!(n, 1, "the wake-up is one datagram");
+
+            publisher.publish(&gyro(1)).expect("publish 1");
+            // iceoryx2 0.10 behaviour behind the sweep: with the state still "notified", the
+            // next notification sends no datagram (if this starts failing, iceoryx2 changed and
+            // the sweep may be unnecessary).
+            assert!(!readable(fd, Duration::from_millis(300)), "the listener stays deaf");
+
+            let waiter = Waiter::new().expect("waiter");
+            let mut events = EventLoop::with_wait_strategy(&waiter, WaitStrategy::Block);
+            let source = events.on_data(&subscriber).expect("attach");
+            let mut received = Vec::new();
+            let started = Instant::now();
+            while received.len() < 2 && started.elapsed() < Duration::from_secs(10) {
+                events
+                    .run_once(Duration::from_secs(1), |wake| {
+                        assert_eq!(wake, Wake::Data(source));
+                        subscriber.drain(|s| received.push(s.header.sequence)).expect("drain");
+                        Flow::Continue
+                    })
+                    .expect("run_once");
+            }
+            assert_eq!(received, vec![0, 1], "both samples delivered by the sweep");
+            assert!(events.wait_stats().swept >= 1, "{:?}", events.wait_stats());
+            assert_eq!(events.wait_stats().woken, 0, "no wake-up came through the WaitSet");
+        }
+        remove_all(&config).expect("remove_all");
+    }
 }

@@ -191,6 +191,9 @@ pub struct WaitStats {
     /// Notifications whose samples had already been taken by polling or by an earlier
     /// callback (no callback; only with a polling strategy).
     pub stale_notifications: u64,
+    /// Data wake-ups delivered by the listener sweep ([`crate::LISTENER_SWEEP_PERIOD`]):
+    /// samples that were pending at a sweep, including ones whose wake-up iceoryx2 lost.
+    pub swept: u64,
 }
 
 /// Samples of one source seen closer together than this are one arrival (a burst); periods

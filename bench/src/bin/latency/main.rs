@@ -780,6 +780,7 @@ impl Plan {
                         sum.polled += w.polled;
                         sum.empty_windows += w.empty_windows;
                         sum.stale_notifications += w.stale_notifications;
+                        sum.swept += w.swept;
                     }
                     None => m.wait.push((process, w)),
                 }

@@ -507,7 +507,7 @@ pub fn event_vs_socket(r: &Report) -> String {
             if handled > 0.0 {
                 measured.push(format!(
                     "The bus wakes a process once per topic with news: the controller {:.2} times per cycle {} (estimate, wheel and CMG telemetry each have their own event service), where a socket process takes every datagram that has arrived in one wake-up.",
-                    (w.woken + w.polled) as f64 / handled,
+                    (w.woken + w.polled + w.swept) as f64 / handled,
                     load_name(*load)
                 ));
             }
@@ -626,24 +626,25 @@ fn size_name(size: usize) -> String {
 }
 
 fn wait_table(out: &mut String, r: &Report) {
-    let _ = writeln!(out, "| measurement | load | process | data wake-ups after sleeping | by polling | per message | empty poll windows | stale notifications |");
-    let _ = writeln!(out, "|---|---|---|--:|--:|--:|--:|--:|");
+    let _ = writeln!(out, "| measurement | load | process | data wake-ups after sleeping | by polling | by the listener sweep | per message | empty poll windows | stale notifications |");
+    let _ = writeln!(out, "|---|---|---|--:|--:|--:|--:|--:|--:|");
     for m in r.measurements.iter().filter(|m| m.transport.starts_with("iox-event") && m.kind != "sweep" && m.error.is_none()) {
         // Wake-up counts cover warm-up too: per message over all the process handled.
         let per = |w: &crate::worker::WaitStatsJson| {
             let handled = (m.messages + m.incomplete) as f64 * if m.kind == "hop" { 0.5 } else { 1.0 };
-            if handled > 0.0 { format!("{:.2}", (w.woken + w.polled) as f64 / handled) } else { "–".into() }
+            if handled > 0.0 { format!("{:.2}", (w.woken + w.polled + w.swept) as f64 / handled) } else { "–".into() }
         };
         for (process, w) in &m.wait {
             let _ = writeln!(
                 out,
-                "| {} {} | {} | {} | {} | {} | {} | {} | {} |",
+                "| {} {} | {} | {} | {} | {} | {} | {} | {} | {} |",
                 m.kind,
                 label(m),
                 load_name(m.load),
                 process,
                 w.woken,
                 w.polled,
+                w.swept,
                 per(w),
                 w.empty_windows,
                 w.stale_notifications

@@ -73,11 +73,14 @@ pub struct WaitStatsJson {
     pub polled: u64,
     pub empty_windows: u64,
     pub stale_notifications: u64,
+    /// Data wake-ups delivered by the bus's listener sweep.
+    #[serde(default)]
+    pub swept: u64,
 }
 
 impl From<WaitStats> for WaitStatsJson {
     fn from(s: WaitStats) -> Self {
-        Self { woken: s.woken, polled: s.polled, empty_windows: s.empty_windows, stale_notifications: s.stale_notifications }
+        Self { woken: s.woken, polled: s.polled, empty_windows: s.empty_windows, stale_notifications: s.stale_notifications, swept: s.swept }
     }
 }
 
