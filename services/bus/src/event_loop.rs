@@ -98,8 +98,6 @@ enum Kind<'a> {
     Data(&'a dyn SubscriberPort),
     Interval,
     Heartbeat(&'a HeartbeatPublisher),
-    /// The [`LISTENER_SWEEP_PERIOD`] timer.
-    Sweep,
 }
 
 /// WaitSet guards of intervals borrow nothing but the WaitSet (`'static` attachment).
@@ -145,9 +143,16 @@ struct Attachment<'w, 'a> {
 /// heavy load (two cores, a CPU hog, two can-sim pipelines): one gateway's CAN listener went
 /// deaf with its state byte at "notified", an empty socket and 53 activations pending, and the
 /// lockstep run stopped. Draining the listener by hand (`try_wait`) resets the state, so a
-/// periodic sweep turns that permanent stop into a delay of at most this period, which the
-/// loop counts ([`WaitStats::swept`]).
+/// sweep turns that permanent stop into a delay. The sweep rides on the loop's other wake-ups
+/// (data, intervals, the heartbeat) at most every this period, so it costs no wake-up of its
+/// own; a loop with subscribers never sleeps longer than [`LISTENER_SWEEP_MAX_SLEEP`]. Samples
+/// it finds are called back and counted ([`WaitStats::swept`]).
 pub const LISTENER_SWEEP_PERIOD: Duration = Duration::from_millis(100);
+
+/// Longest a loop with subscribers sleeps without sweeping its listeners
+/// ([`LISTENER_SWEEP_PERIOD`]): the pipeline's heartbeat period, so that a pipeline process,
+/// which wakes for its heartbeat anyway, has no extra wake-up.
+pub const LISTENER_SWEEP_MAX_SLEEP: Duration = Duration::from_millis(500);
 
 /// How often a polling loop serves the WaitSet (termination, intervals, deadlines) at least.
 const SERVICE_PERIOD: Duration = Duration::from_millis(1);
@@ -176,6 +181,8 @@ pub struct EventLoop<'w, 'a> {
     stats: Cell<WaitStats>,
     /// How late timed wake-ups for poll windows come (moving average).
     lateness: Cell<Duration>,
+    /// When the listeners were last swept ([`LISTENER_SWEEP_PERIOD`]).
+    last_sweep: Cell<Instant>,
 }
 
 impl<'w, 'a> EventLoop<'w, 'a> {
@@ -204,6 +211,7 @@ impl<'w, 'a> EventLoop<'w, 'a> {
             last_round: Cell::new(Instant::now()),
             stats: Cell::new(WaitStats::default()),
             lateness: Cell::new(Duration::ZERO),
+            last_sweep: Cell::new(Instant::now()),
         }
     }
 
@@ -269,7 +277,6 @@ impl<'w, 'a> EventLoop<'w, 'a> {
             .waitset
             .attach_notification(SubscriberPort::listener(subscriber))
             .map_err(Self::attach_error("attaching a subscriber"))?;
-        self.ensure_sweep()?;
         Ok(self.push(Guard::Listener(guard), Kind::Data(subscriber)))
     }
 
@@ -296,7 +303,6 @@ impl<'w, 'a> EventLoop<'w, 'a> {
             .waitset
             .attach_deadline(SubscriberPort::listener(subscriber), deadline)
             .map_err(Self::attach_error("attaching a subscriber with a deadline"))?;
-        self.ensure_sweep()?;
         Ok(self.push_with_deadline(
             Guard::Listener(guard),
             Kind::Data(subscriber),
@@ -304,23 +310,11 @@ impl<'w, 'a> EventLoop<'w, 'a> {
         ))
     }
 
-    /// Attaches the [`LISTENER_SWEEP_PERIOD`] timer with the first subscriber.
-    fn ensure_sweep(&mut self) -> Result<(), BusError> {
-        if self.attachments.iter().any(|a| matches!(a.kind, Kind::Sweep)) {
-            return Ok(());
-        }
-        let guard = self
-            .waitset
-            .attach_interval(LISTENER_SWEEP_PERIOD)
-            .map_err(Self::attach_error("attaching the listener sweep"))?;
-        self.push_attachment(Guard::Interval(guard), Kind::Sweep, None);
-        Ok(())
-    }
-
     /// The sweep ([`LISTENER_SWEEP_PERIOD`]): drains every subscriber's listener (which also
     /// resets a listener left deaf) and calls back [`Wake::Data`] for every subscriber with
     /// samples pending.
-    fn sweep(&self, on_wake: &mut impl FnMut(Wake) -> Flow) -> Result<Flow, BusError> {
+    fn sweep(&self, on_wake: &mut impl FnMut(Wake) -> Flow) -> Result<(Flow, bool), BusError> {
+        let mut handled = false;
         for (index, _, port) in self.data_attachments() {
             let pending = drain_listener(port.listener(), port.event_name())?;
             if pending.new_publisher {
@@ -335,13 +329,14 @@ impl<'w, 'a> EventLoop<'w, 'a> {
                 notified = pending.samples,
                 "samples found by the listener sweep"
             );
+            handled = true;
             let flow = on_wake(Wake::Data(SourceId(index)));
             self.handled_data();
             if flow == Flow::Stop {
-                return Ok(Flow::Stop);
+                return Ok((Flow::Stop, true));
             }
         }
-        Ok(Flow::Continue)
+        Ok((Flow::Continue, handled))
     }
 
     /// Wakes with [`Wake::Tick`] every `period`.
@@ -682,19 +677,6 @@ impl<'w, 'a> EventLoop<'w, 'a> {
                     }
                 }
                 Kind::Interval => Wake::Tick(source),
-                Kind::Sweep => {
-                    return match self.sweep(on_wake) {
-                        Ok(Flow::Continue) => CallbackProgression::Continue,
-                        Ok(Flow::Stop) => {
-                            handled = true;
-                            CallbackProgression::Stop
-                        }
-                        Err(e) => {
-                            failure = Some(e);
-                            CallbackProgression::Stop
-                        }
-                    };
-                }
                 Kind::Heartbeat(heartbeat) => {
                     heartbeat.publish_or_count();
                     return CallbackProgression::Continue;
@@ -709,6 +691,12 @@ impl<'w, 'a> EventLoop<'w, 'a> {
                 Flow::Continue => CallbackProgression::Continue,
                 Flow::Stop => CallbackProgression::Stop,
             }
+        };
+        let has_data = self.data_attachments().next().is_some();
+        let timeout = if has_data {
+            timeout.min(LISTENER_SWEEP_MAX_SLEEP)
+        } else {
+            timeout
         };
         let result = self
             .waitset
@@ -728,7 +716,19 @@ impl<'w, 'a> EventLoop<'w, 'a> {
                 None => Ok((Some(LoopExit::Stopped), handled)),
             },
             // An interrupting signal: the next wait reports it if it asked for termination.
-            WaitSetRunResult::Interrupt | WaitSetRunResult::AllEventsHandled => Ok((None, handled)),
+            WaitSetRunResult::Interrupt | WaitSetRunResult::AllEventsHandled => {
+                let now = Instant::now();
+                if !has_data
+                    || now.saturating_duration_since(self.last_sweep.get()) < LISTENER_SWEEP_PERIOD
+                {
+                    return Ok((None, handled));
+                }
+                self.last_sweep.set(now);
+                match self.sweep(on_wake)? {
+                    (Flow::Continue, swept) => Ok((None, handled || swept)),
+                    (Flow::Stop, _) => Ok((Some(LoopExit::Stopped), true)),
+                }
+            }
         }
     }
 }
@@ -774,7 +774,11 @@ mod tests {
 
     /// Whether `fd` becomes readable within `timeout`.
     fn readable(fd: i32, timeout: Duration) -> bool {
-        let mut pfd = libc::pollfd { fd, events: libc::POLLIN, revents: 0 };
+        let mut pfd = libc::pollfd {
+            fd,
+            events: libc::POLLIN,
+            revents: 0,
+        };
         // SAFETY: one valid pollfd.
         unsafe { libc::poll(&mut pfd, 1, timeout.as_millis() as libc::c_int) == 1 }
     }
@@ -790,22 +794,33 @@ mod tests {
             let subscriber = bus.subscriber::<GyroSample>().expect("subscriber");
             let publisher = bus.publisher::<GyroSample>().expect("publisher");
             // SAFETY: the listener outlives its descriptor's use here.
-            let fd = unsafe { SubscriberPort::listener(&subscriber).file_descriptor().native_handle() };
+            let fd = unsafe {
+                SubscriberPort::listener(&subscriber)
+                    .file_descriptor()
+                    .native_handle()
+            };
             // Drop the publisher-created wake-up so that the socket starts empty.
             let _ = drain_listener(SubscriberPort::listener(&subscriber), "test");
 
             publisher.publish(&gyro(0)).expect("publish 0");
-            assert!(readable(fd, Duration::from_secs(5)), "a first notification wakes the listener");
+            assert!(
+                readable(fd, Duration::from_secs(5)),
+                "a first notification wakes the listener"
+            );
             let mut byte = [0u8; 16];
             // SAFETY: reads at most 16 bytes into `byte`.
-            let n = unsafe { libc::recv(fd, byte.as_mut_ptr().cast(), byte.len(), libc::MSG_DONTWAIT) };
+            let n =
+                unsafe { libc::recv(fd, byte.as_mut_ptr().cast(), byte.len(), libc::MSG_DONTWAIT) };
             assert_eq!(n, 1, "the wake-up is one datagram");
 
             publisher.publish(&gyro(1)).expect("publish 1");
             // iceoryx2 0.10 behaviour behind the sweep: with the state still "notified", the
             // next notification sends no datagram (if this starts failing, iceoryx2 changed and
             // the sweep may be unnecessary).
-            assert!(!readable(fd, Duration::from_millis(300)), "the listener stays deaf");
+            assert!(
+                !readable(fd, Duration::from_millis(300)),
+                "the listener stays deaf"
+            );
 
             let waiter = Waiter::new().expect("waiter");
             let mut events = EventLoop::with_wait_strategy(&waiter, WaitStrategy::Block);
@@ -816,14 +831,20 @@ mod tests {
                 events
                     .run_once(Duration::from_secs(1), |wake| {
                         assert_eq!(wake, Wake::Data(source));
-                        subscriber.drain(|s| received.push(s.header.sequence)).expect("drain");
+                        subscriber
+                            .drain(|s| received.push(s.header.sequence))
+                            .expect("drain");
                         Flow::Continue
                     })
                     .expect("run_once");
             }
             assert_eq!(received, vec![0, 1], "both samples delivered by the sweep");
             assert!(events.wait_stats().swept >= 1, "{:?}", events.wait_stats());
-            assert_eq!(events.wait_stats().woken, 0, "no wake-up came through the WaitSet");
+            assert_eq!(
+                events.wait_stats().woken,
+                0,
+                "no wake-up came through the WaitSet"
+            );
         }
         remove_all(&config).expect("remove_all");
     }

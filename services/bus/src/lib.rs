@@ -55,7 +55,8 @@
 //!   deadlines attached; returns [`LoopExit::TerminationRequested`] on SIGINT/SIGTERM. How it
 //!   waits is its [`WaitStrategy`]: sleep until notified (default), or also poll the
 //!   subscribers in short windows where a sample is expected (`TESTBED_BUS_WAIT`, [`ENV_WAIT`]).
-//!   Every [`LISTENER_SWEEP_PERIOD`] it also drains each listener and calls back for samples it
+//!   On its wake-ups, at most every [`LISTENER_SWEEP_PERIOD`] and at least every
+//!   [`LISTENER_SWEEP_MAX_SLEEP`], it also drains each listener and calls back for samples it
 //!   was not woken for: iceoryx2 0.10 can leave a listener that never wakes again (a
 //!   notifier/listener race, described there), which without the sweep stops a lockstep run.
 //! - [`HeartbeatPublisher`]: the periodic [`ipc_types::Heartbeat`] of a process.
@@ -92,7 +93,10 @@ pub use config::{
     BusConfig, DEFAULT_PREFIX, DEFAULT_ROOT, Delivery, ENV_DELIVERY, ENV_PREFIX, ENV_ROOT,
     MAX_PREFIX_LEN, MAX_ROOT_LEN, ServiceLimits,
 };
-pub use event_loop::{EventLoop, Flow, LISTENER_SWEEP_PERIOD, LoopExit, SourceId, Waiter, Wake};
+pub use event_loop::{
+    EventLoop, Flow, LISTENER_SWEEP_MAX_SLEEP, LISTENER_SWEEP_PERIOD, LoopExit, SourceId, Waiter,
+    Wake,
+};
 pub use heartbeat::HeartbeatPublisher;
 pub use ports::{SubscriberOptions, TopicPublisher, TopicSubscriber};
 pub use wait::{ENV_WAIT, WaitStats, WaitStrategy};

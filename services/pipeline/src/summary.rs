@@ -27,7 +27,7 @@ pub struct RunSummary {
     pub steady_xy_deg: f64,
     pub steady_z_deg: f64,
     pub steady_deg: [f64; 3],
-    /// Missed control deadlines (controller) plus ticks the plant advanced unanswered.
+    /// Missed control deadlines: the controller's count ([`ipc_types::ControllerStatus`]), the largest value logged.
     pub deadline_misses: u64,
     pub simulated_s: f64,
     pub ticks: usize,
