@@ -36,7 +36,7 @@ const RUN: &str = "[run]\nmode = \"paced\"\n";
 
 #[test]
 fn shipped_profiles_are_valid() {
-    for name in ["simulation", "platform", "mixed", "replay", "can-sim"] {
+    for name in ["simulation", "platform", "mixed", "replay", "can-sim", "can-replay"] {
         let profile = Profile::load(&profiles_dir().join(format!("{name}.toml")))
             .unwrap_or_else(|e| panic!("{e}"));
         // Every dependency starts before its dependent.

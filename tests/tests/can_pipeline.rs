@@ -5,10 +5,8 @@
 use ipc_types::{can_source, AttitudeEstimate, CanLinkStatus, GyroSample, Heartbeat, InclinometerSample, MagnetometerSample};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use std::process::Command;
-use testbed_e2e::{binary, profile, testbed_run, Scratch};
+use testbed_e2e::{profile, testbed_run, Scratch};
 use testbed_log::{LogEncode, RunLog};
-use testbed_pipeline::RunConfig;
 
 fn number(json: &serde_json::Value, key: &str) -> f64 {
     json[key].as_f64().unwrap_or_else(|| panic!("{key} missing in {json}"))
@@ -164,52 +162,19 @@ fn replaying_a_recorded_candump_file_through_the_gateways_reproduces_the_estimat
     assert_candump_lines(&candump);
 
     // The replay: can-replay puts the file back on the software bus, the three sensor gateways
-    // decode it, the estimator estimates; no plant, no node.
-    let mut config = RunConfig::load(&recorded.with_extension("run.toml")).unwrap();
+    // decode it, the estimator estimates; no plant, no node (`launch/profiles/can-replay.toml`).
     let replayed = scratch.path().join("replayed.mcap");
-    config.run.log = replayed.clone();
-    config.run.participants =
-        ["logger", "can-replay", "gyro-gateway", "inclinometer-gateway", "magnetometer-gateway", "estimator"].map(String::from).to_vec();
-    config.can.candump = Some(candump.clone());
-    config.can.record_candump = false;
-    let config_path = scratch.path().join("replay.run.toml");
-    std::fs::write(&config_path, config.to_toml_string()).unwrap();
-    let replay_profile = scratch.path().join("can-replay.toml");
-    let mut text = String::from("[run]\nmode = \"lockstep\"\nseed = 21\n");
-    for (name, depends, ends) in [
-        ("logger", "", false),
-        ("can-replay", "logger", true),
-        ("gyro-gateway", "can-replay", false),
-        ("inclinometer-gateway", "can-replay", false),
-        ("magnetometer-gateway", "can-replay", false),
-        ("estimator", "gyro-gateway", false),
-    ] {
-        text += &format!("[[process]]\nname = \"{name}\"\ncommand = \"{name}\"\nends_run = {ends}\n");
-        if !depends.is_empty() {
-            text += &format!("depends_on = [\"{depends}\"]\n");
-        }
-    }
-    std::fs::write(&replay_profile, text).unwrap();
-    // Its own bus, removed afterwards.
-    let prefix = format!("tbcr{}_", std::process::id());
-    let root = PathBuf::from(format!("/tmp/tbcr{}/", std::process::id()));
-    let out = Command::new(binary("testbed-launch"))
-        .arg(&replay_profile)
-        .arg("--config")
-        .arg(&config_path)
-        .args(["--bus-prefix", &prefix, "--max-wall-s", "120"])
-        .arg("--bus-root")
-        .arg(&root)
-        .env("RUST_LOG", "warn")
+    let comparison = testbed_run(&["--replay-candump", recorded.to_str().unwrap(), "--log", replayed.to_str().unwrap()]);
+    assert_eq!(number(&comparison, "recorded"), 401.0);
+    assert_eq!(number(&comparison, "replayed"), 401.0);
+    assert_eq!(number(&comparison, "identical"), 401.0, "{comparison}");
+    // A log without its bus recording is refused, naming the file it lacks.
+    let refused = std::process::Command::new(testbed_e2e::binary("testbed"))
+        .args(["run", "--replay-candump", replayed.to_str().unwrap()])
         .output()
         .unwrap();
-    let _ = std::fs::remove_dir_all(&root);
-    for entry in std::fs::read_dir("/dev/shm").unwrap().flatten() {
-        if entry.file_name().to_string_lossy().starts_with(&prefix) {
-            let _ = std::fs::remove_file(entry.path());
-        }
-    }
-    assert!(out.status.success(), "the replay failed ({}):\n{}", out.status, String::from_utf8_lossy(&out.stderr));
+    let message = String::from_utf8_lossy(&refused.stderr);
+    assert!(!refused.status.success() && message.contains("replayed.candump.log"), "{message}");
 
     let original = samples::<AttitudeEstimate>(&recorded);
     let replay = samples::<AttitudeEstimate>(&replayed);

@@ -33,34 +33,53 @@ pub struct RunArgs {
     /// Feed this log's recorded inputs into the estimator and controller instead of simulating
     /// (with a profile that runs the `replay` process; default profile then: replay). The
     /// recorded run configuration is used, so the estimator and controller are set up as they were.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "replay_candump")]
     replay: Option<PathBuf>,
+    /// Put the CAN bus traffic this log's run recorded (the `.candump.log` file beside it) back
+    /// through the real sensor gateways into the estimator (default profile then: can-replay),
+    /// with the recorded run configuration; the summary compares the estimates with the log's.
+    #[arg(long)]
+    replay_candump: Option<PathBuf>,
     /// Print the summary as one JSON object.
     #[arg(long)]
     json: bool,
 }
 
 pub fn run(args: &RunArgs) -> Result<()> {
-    let profile_name = match (&args.replay, args.profile.as_str()) {
-        (Some(_), "simulation") => "replay",
-        (_, name) => name,
+    let profile_name = match (&args.replay, &args.replay_candump, args.profile.as_str()) {
+        (Some(_), _, "simulation") => "replay",
+        (_, Some(_), "simulation") => "can-replay",
+        (_, _, name) => name,
     };
     let profile_path = find_profile(profile_name)?;
     let profile = Profile::load(&profile_path)?;
-    let mut config = match (&args.replay, &profile.run.config) {
+    let recorded_log = args.replay.as_ref().or(args.replay_candump.as_ref());
+    let mut config = match (recorded_log, &profile.run.config) {
         (Some(source), _) => recorded_config(source)?,
         (None, Some(path)) => RunConfig::load(&profile.relative_to_profile(path))?,
         (None, None) => RunConfig::default(),
     };
-    if args.replay.is_some() && args.paced {
-        bail!("--replay runs in lockstep (the replay owns the clock); drop --paced");
+    if recorded_log.is_some() && args.paced {
+        bail!("--replay and --replay-candump run in lockstep (the replay owns the clock); drop --paced");
+    }
+    if let Some(source) = &args.replay_candump {
+        let candump = source.with_extension("candump.log");
+        if !candump.is_file() {
+            bail!(
+                "--replay-candump {}: no {} beside it (record the run with can.record_candump = true)",
+                source.display(),
+                candump.display()
+            );
+        }
+        config.can.candump = Some(candump);
+        config.can.record_candump = false;
     }
     config.run.profile = profile_path.file_stem().map_or_else(|| args.profile.clone(), |s| s.to_string_lossy().into_owned());
     config.run.mode = match (args.paced, profile.run.mode) {
         (true, _) | (false, Mode::Paced) => ClockMode::Paced,
         (false, Mode::Lockstep) => ClockMode::Lockstep,
     };
-    if args.replay.is_none() {
+    if recorded_log.is_none() {
         if let Some(d) = args.duration.or(profile.run.duration_s) {
             config.run.duration_s = d;
         }
@@ -84,6 +103,25 @@ pub fn run(args: &RunArgs) -> Result<()> {
         .with_context(|| format!("writing the run configuration {}", config_path.display()))?;
 
     launch(&profile_path, &config, &config_path)?;
+
+    if let Some(source) = &args.replay_candump {
+        let comparison = summary::compare_estimates(source, &log)?;
+        if args.json {
+            let mut value = serde_json::to_value(&comparison)?;
+            value["config"] = serde_json::json!(config_path.display().to_string());
+            println!("{}", serde_json::to_string_pretty(&value)?);
+        } else {
+            println!(
+                "CAN replay of {}: {} estimates replayed, {} recorded, {} identical bit for bit; log {}",
+                source.display(),
+                comparison.replayed,
+                comparison.recorded,
+                comparison.identical,
+                log.display()
+            );
+        }
+        return Ok(());
+    }
 
     let (summary, series, _) = summary::summarise(&log)?;
     let figure_path = log.with_extension("svg");

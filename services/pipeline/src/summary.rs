@@ -91,3 +91,27 @@ pub fn summarise(path: &Path) -> anyhow::Result<(RunSummary, RunSeries, RunConfi
     let summary = RunSummary { steady_xy_deg: summary.steady_deg[0].max(summary.steady_deg[1]), steady_z_deg: summary.steady_deg[2], ..summary };
     Ok((summary, series, config))
 }
+
+/// A replayed run's estimates against the recorded run's.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub struct EstimateComparison {
+    /// Estimates in the recorded log.
+    pub recorded: usize,
+    /// Estimates in the replay's log.
+    pub replayed: usize,
+    /// Replayed estimates equal, field for field, to the recorded one of the same position.
+    pub identical: usize,
+}
+
+/// Compares the estimates of `replayed` with those of `recorded`, in order.
+pub fn compare_estimates(recorded: &Path, replayed: &Path) -> anyhow::Result<EstimateComparison> {
+    let read = |path: &Path| -> anyhow::Result<Vec<AttitudeEstimate>> {
+        let log = RunLog::open(path).with_context(|| format!("opening the log {}", path.display()))?;
+        log.samples::<AttitudeEstimate>()?
+            .map(|e| e.with_context(|| format!("reading {}", path.display())))
+            .collect()
+    };
+    let (recorded, replayed) = (read(recorded)?, read(replayed)?);
+    let identical = recorded.iter().zip(&replayed).filter(|(a, b)| a == b).count();
+    Ok(EstimateComparison { recorded: recorded.len(), replayed: replayed.len(), identical })
+}
