@@ -242,15 +242,6 @@ impl<'w, 'a> EventLoop<'w, 'a> {
         kind: Kind<'a>,
         deadline: Option<Duration>,
     ) -> SourceId {
-        self.push_attachment(guard, kind, deadline)
-    }
-
-    fn push_attachment(
-        &mut self,
-        guard: Guard<'w, 'a>,
-        kind: Kind<'a>,
-        deadline: Option<Duration>,
-    ) -> SourceId {
         self.attachments.push(Attachment {
             guard,
             kind,
@@ -316,10 +307,8 @@ impl<'w, 'a> EventLoop<'w, 'a> {
     fn sweep(&self, on_wake: &mut impl FnMut(Wake) -> Flow) -> Result<(Flow, bool), BusError> {
         let mut handled = false;
         for (index, _, port) in self.data_attachments() {
+            // `attach` also connects to publishers created since the last look.
             let pending = drain_listener(port.listener(), port.event_name())?;
-            if pending.new_publisher {
-                port.attach()?;
-            }
             if !port.attach()? {
                 continue;
             }

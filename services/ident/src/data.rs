@@ -11,6 +11,7 @@
 //! * a `cmg.csv` row's `rate_cmd_*` is likewise held until the next row.
 
 use crate::error::DataError;
+use crate::csv::columns;
 use nalgebra::{Vector3, Vector4};
 use std::path::PathBuf;
 
@@ -103,19 +104,19 @@ impl Dataset {
             &self.file(files::GYRO),
             &self.gyro,
             |r| (r.t_s, r.rate_rad_s.as_slice().to_vec()),
-            &["wx", "wy", "wz"],
+            columns::GYRO,
         )?;
         check_series(
             &self.file(files::INCLINOMETER),
             &self.inclinometer,
             |r| (r.t_s, r.tilt_rad.to_vec()),
-            &["tilt_x", "tilt_y"],
+            columns::INCLINOMETER,
         )?;
         check_series(
             &self.file(files::MAGNETOMETER),
             &self.magnetometer,
             |r| (r.t_s, r.field_t.as_slice().to_vec()),
-            &["bx", "by", "bz"],
+            columns::MAGNETOMETER,
         )?;
         check_series(
             &self.file(files::WHEELS),
@@ -130,9 +131,7 @@ impl Dataset {
                         .collect(),
                 )
             },
-            &[
-                "speed_x", "speed_y", "speed_z", "torque_x", "torque_y", "torque_z",
-            ],
+            columns::WHEELS,
         )?;
         check_series(
             &self.file(files::CMG),
@@ -147,16 +146,7 @@ impl Dataset {
                         .collect(),
                 )
             },
-            &[
-                "gimbal_1",
-                "gimbal_2",
-                "gimbal_3",
-                "gimbal_4",
-                "rate_cmd_1",
-                "rate_cmd_2",
-                "rate_cmd_3",
-                "rate_cmd_4",
-            ],
+            columns::CMG,
         )?;
         if self.gyro.is_empty() {
             return Err(DataError::Missing {
@@ -240,6 +230,8 @@ fn check_series<R>(
     values: impl Fn(&R) -> (f64, Vec<f64>),
     columns: &[&str],
 ) -> Result<(), DataError> {
+    // The file's columns: time first, then the values in `values` order.
+    let (time_column, value_columns) = columns.split_first().unwrap_or((&"t_s", &[]));
     let mut previous: Option<f64> = None;
     for (i, row) in rows.iter().enumerate() {
         let (t, xs) = values(row);
@@ -250,9 +242,9 @@ fn check_series<R>(
             message,
         };
         if !t.is_finite() {
-            return Err(at(format!("column `t_s`: {t} is not a finite number")));
+            return Err(at(format!("column `{time_column}`: {t} is not a finite number")));
         }
-        for (x, name) in xs.iter().zip(columns) {
+        for (x, name) in xs.iter().zip(value_columns) {
             if !x.is_finite() {
                 return Err(at(format!("column `{name}`: {x} is not a finite number")));
             }
