@@ -6,10 +6,10 @@ use std::os::unix::process::CommandExt;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 use testbed_e2e::{binary, profile, testbed_run, Scratch};
-use testbed_gnc::closed_loop;
+use testbed_sim::closed_loop;
 use testbed_log::RunLog;
-use testbed_pipeline::convert::quaternion_from_array;
-use testbed_pipeline::RunConfig;
+use testbed_flight::convert::quaternion_from_array;
+use testbed_runtime::RunConfig;
 
 fn number(json: &serde_json::Value, key: &str) -> f64 {
     json[key].as_f64().unwrap_or_else(|| panic!("{key} missing in {json}"))
@@ -32,7 +32,7 @@ fn simulation_profile_stabilises_and_its_estimates_equal_the_in_process_loop() {
     // The same run in one process, from the configuration the log carries.
     let run_log = RunLog::open(&log).unwrap();
     let config = RunConfig::from_toml_str(run_log.config_toml(), "log").unwrap();
-    let trace = closed_loop::run(&config.scenario()).unwrap();
+    let trace = closed_loop::run(&closed_loop::Scenario::from_run(&config)).unwrap();
     let estimates: Vec<AttitudeEstimate> = run_log.samples::<AttitudeEstimate>().unwrap().map(Result::unwrap).collect();
     assert_eq!(estimates.len(), trace.ticks.len());
     for (sample, tick) in estimates.iter().zip(&trace.ticks) {

@@ -6,7 +6,7 @@
 use clap::Parser;
 use std::time::Duration;
 use testbed_bench::median_time;
-use testbed_gnc::closed_loop::{self, Scenario};
+use testbed_sim::closed_loop::{self, Scenario};
 use testbed_model::physics::{ActuatorCommand, Plant};
 use testbed_model::ModelConfig;
 

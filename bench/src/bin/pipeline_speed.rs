@@ -15,7 +15,7 @@ use std::path::PathBuf;
 use std::process::Command;
 use std::time::{Duration, Instant};
 use testbed_bench::median_time;
-use testbed_gnc::closed_loop::{self, Scenario};
+use testbed_sim::closed_loop::{self, Scenario};
 use testbed_model::ModelConfig;
 
 #[derive(Parser)]

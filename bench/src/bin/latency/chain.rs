@@ -19,10 +19,10 @@ use ipc_types::*;
 use std::path::Path;
 use std::time::{Duration, Instant};
 use testbed_bus::{Bus, EventLoop, Flow, TopicPublisher, TopicSubscriber, WaitStats, WaitStrategy, Waiter};
-use testbed_gnc::tasks::ControllerTask;
-use testbed_pipeline::controller_node::ControllerNode;
-use testbed_pipeline::estimator_node::EstimatorNode;
-use testbed_pipeline::RunConfig;
+use testbed_flight::tasks::ControllerTask;
+use testbed_flight::controller_node::ControllerNode;
+use testbed_flight::estimator_node::EstimatorNode;
+use testbed_runtime::RunConfig;
 
 /// `source_id` of the sample that ends the chain.
 pub const STOP_SOURCE: u32 = u32::MAX;
@@ -48,9 +48,9 @@ impl Recording {
     /// Runs the pipeline's scenario in process for `ticks` ticks and writes what its devices
     /// reported to `path`.
     pub fn record(path: &Path, ticks: usize) -> Result<()> {
-        let mut scenario = run_config().scenario();
+        let mut scenario = testbed_sim::closed_loop::Scenario::from_run(&run_config());
         scenario.duration_s = ticks as f64 * TICK_NS as f64 * 1e-9;
-        let (_, measurements) = testbed_gnc::closed_loop::run_recorded(&scenario)?;
+        let (_, measurements) = testbed_sim::closed_loop::run_recorded(&scenario)?;
         let mut bytes = Vec::with_capacity(measurements.len() * FIELDS * 8);
         for m in &measurements {
             let tilt = m.tilt_rad;

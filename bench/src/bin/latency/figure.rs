@@ -1,4 +1,4 @@
-//! The report's SVG figure (plotters, as in `services/cli/src/figure.rs`): latency percentile
+//! The report's SVG figure (plotters, as in `services/tools/cli/src/figure.rs`): latency percentile
 //! ladders of the chain and the hop, the payload sweep, and the paced 10 Hz loop.
 
 use crate::{Measurement, Report};

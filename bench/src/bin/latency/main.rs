@@ -513,7 +513,7 @@ impl Ctx {
             let Transport::IoxEvent(wait) = t else { bail!("the binaries use the bus") };
             let config_path = setup.sock_dir.join("run.toml");
             let mut config = chain::run_config();
-            config.run.mode = testbed_pipeline::ClockMode::Paced;
+            config.run.mode = testbed_runtime::ClockMode::Paced;
             std::fs::write(&config_path, config.to_toml_string())?;
             for name in ["estimator", "controller"] {
                 let mut command = Command::new(pipeline_binary(name).context("pipeline binary")?);
@@ -522,7 +522,7 @@ impl Ctx {
                     .env(testbed_bus::ENV_ROOT, &setup.root)
                     .env(testbed_bus::ENV_DELIVERY, "overflow")
                     .env(testbed_bus::ENV_WAIT, wait)
-                    .env(testbed_pipeline::ENV_RUN_CONFIG, &config_path)
+                    .env(testbed_runtime::ENV_RUN_CONFIG, &config_path)
                     .env("RUST_LOG", "warn");
                 programs.push(group.program(name, command)?);
             }
@@ -611,7 +611,7 @@ impl Ctx {
             .stdout(std::process::Stdio::piped());
         let child = command.spawn().context("starting testbed run")?;
         let pid = child.id();
-        // The bus `testbed run` creates for its run (see services/cli/src/run.rs).
+        // The bus `testbed run` creates for its run (see services/tools/cli/src/run.rs).
         let spec = WorkerSpec {
             role: Role::Observer,
             transport: Transport::IoxEvent("block".into()),

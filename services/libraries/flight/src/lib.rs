@@ -1,0 +1,22 @@
+//! Flight software of the test bed: what runs on the platform's computer. No simulation code.
+//!
+//! * [`mekf`]: the multiplicative EKF of Lefferts, Markley and Shuster (gyro propagation,
+//!   inclinometer + magnetometer vector updates, innovation gating).
+//! * [`control`]: PD attitude control on the reaction wheels with friction compensation.
+//! * [`cmg_steering`]: singularity-robust steering of the four-CMG pyramid and a slew law.
+//! * [`tasks`]: the estimator and controller as tasks (maths only), shared by the in-process
+//!   closed loop and the pipeline.
+//! * [`estimator_node`], [`controller_node`]: those tasks fed with the pipeline's samples on the
+//!   tick [`schedule`], returning samples; the processes wrap them.
+//! * [`manoeuvre`]: the experiment programme (initial condition, target).
+//! * [`convert`]: sample arrays to and from nalgebra types.
+
+pub mod cmg_steering;
+pub mod control;
+pub mod controller_node;
+pub mod convert;
+pub mod estimator_node;
+pub mod manoeuvre;
+pub mod mekf;
+pub mod schedule;
+pub mod tasks;

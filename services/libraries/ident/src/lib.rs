@@ -1,0 +1,37 @@
+//! System identification for the test bed: what the simulation gets wrong, which effect causes
+//! it, the extended model, and how much better it predicts.
+//!
+//! * [`data`], [`csv`], [`runlog`]: measured data (the CSV directory contract of
+//!   `shared/DESIGN.md`, or an MCAP run log) and its alignment on the gyro's clock.
+//! * [`reconstruct`]: the estimated state (the project's MEKF over the data).
+//! * [`channels`]: equation-error channels (platform momentum, wheels) and their regressors.
+//! * [`effects`]: the library of candidate causes (the model's effect tables).
+//! * [`fit`]: fitting sets of causes, with standard errors.
+//! * [`predict`]: multi-step predictions of the measurements by the plant model, re-initialised
+//!   from the estimated state.
+//! * [`identify`]: the whole analysis — residual report, forward selection, extended model, gain.
+//! * [`friction_id`]: wheel friction from spin-down data (paper eq. 4–5).
+//! * [`experiment`]: an excitation schedule for the closed loop and its data as a CSV directory.
+//! * [`stats`]: least squares and residual statistics.
+
+// Index loops over the 3 axes and the parameter columns read as the maths they implement.
+#![allow(clippy::needless_range_loop)]
+
+pub mod channels;
+pub mod csv;
+pub mod data;
+pub mod effects;
+pub mod error;
+pub mod experiment;
+pub mod fit;
+pub mod friction_id;
+pub mod identify;
+pub mod predict;
+pub mod reconstruct;
+pub mod runlog;
+pub mod stats;
+
+pub use data::Dataset;
+pub use effects::Cause;
+pub use error::{DataError, IdentError};
+pub use identify::{Identification, Options, Report, identify};

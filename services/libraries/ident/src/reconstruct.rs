@@ -1,0 +1,307 @@
+//! The platform's state estimated from the data: the project's MEKF (`testbed_flight::mekf`) run
+//! over the record, with the sensor-side effects of a model configuration taken out of the
+//! readings first. Its whitened innovations are the attitude channel of the fits; its attitude,
+//! bias and rate estimates are the state the torque and wheel channels and the predictions
+//! start from.
+//!
+//! Conventions: attitudes L→B ([`testbed_model::attitude`]); rates in body axes, rad/s; field in
+//! tesla. A gyro row is the rate at its time stamp, so the filter is propagated from tick k−1
+//! to tick k with the mean of the two corrected readings (the filter takes a sample as the mean
+//! rate over the interval it closes).
+
+use crate::data::Aligned;
+use crate::error::IdentError;
+use nalgebra::{Matrix3, UnitQuaternion, Vector3};
+use testbed_flight::mekf::{Mekf, MekfConfig, VectorMeasurements};
+use testbed_model::ModelConfig;
+use testbed_model::attitude::{self, Attitude, skew};
+use testbed_model::config::{DEG, EARTH_RATE_RAD_S, GAUSS};
+
+/// Components of one innovation row: gravity (2, tangent plane) then field (3).
+pub const INNOVATION_LEN: usize = 5;
+
+/// The sensor-side effects of a configuration, as the readings see them.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SensorModel {
+    /// Gyro sensor matrix `S = (I + diag(s))(I − [m×])`: `w_meas = S (w + A Ω_L) + b`.
+    pub gyro_matrix: Matrix3<f64>,
+    /// Its inverse.
+    pub gyro_matrix_inv: Matrix3<f64>,
+    /// Earth's rotation in the level frame, rad/s (zero without `earth_rate`).
+    pub earth_rate_l: Vector3<f64>,
+    /// Hard-iron field, body axes, tesla (zero without `magnetic_disturbance`).
+    pub hard_iron_t: Vector3<f64>,
+    /// Lab field in the level frame, tesla.
+    pub field_l_t: Vector3<f64>,
+}
+
+impl SensorModel {
+    pub fn from_config(config: &ModelConfig) -> Self {
+        let e = &config.effects;
+        let scale = e.gyro_scale.as_ref().map_or_else(Matrix3::identity, |s| {
+            Matrix3::from_diagonal(&Vector3::from(s.ppm).map(|p| 1.0 + p * 1e-6))
+        });
+        let misalignment = e
+            .gyro_misalignment
+            .as_ref()
+            .map_or_else(Matrix3::identity, |m| {
+                Matrix3::identity() - skew(&Vector3::from(m.angles_rad))
+            });
+        let gyro_matrix = scale * misalignment;
+        let earth_rate_l = e.earth_rate.as_ref().map_or_else(Vector3::zeros, |x| {
+            let lat = x.latitude_deg * DEG;
+            EARTH_RATE_RAD_S * Vector3::new(lat.cos(), 0.0, lat.sin())
+        });
+        Self {
+            gyro_matrix,
+            gyro_matrix_inv: gyro_matrix.try_inverse().unwrap_or_else(Matrix3::identity),
+            earth_rate_l,
+            hard_iron_t: e
+                .magnetic_disturbance
+                .as_ref()
+                .map_or_else(Vector3::zeros, |d| Vector3::from(d.hard_iron_gauss) * GAUSS),
+            field_l_t: config.platform.field_l_t(),
+        }
+    }
+
+    /// Body rate relative to L plus the (scaled) bias: `S⁻¹ w_meas − A(q) Ω_L`, rad/s.
+    pub fn correct_gyro(&self, w_meas: &Vector3<f64>, q: &Attitude) -> Vector3<f64> {
+        self.gyro_matrix_inv * w_meas - q * self.earth_rate_l
+    }
+
+    /// The noise-free gyro reading at body rate `w` (rad/s), attitude `q` and corrected-frame
+    /// bias `bias` (the filter's estimate): `S (w + A Ω_L + bias)`.
+    pub fn gyro_reading(
+        &self,
+        w: &Vector3<f64>,
+        q: &Attitude,
+        bias: &Vector3<f64>,
+    ) -> Vector3<f64> {
+        self.gyro_matrix * (w + q * self.earth_rate_l + bias)
+    }
+
+    /// The field reading with the hard iron taken out, tesla.
+    pub fn correct_field(&self, m: &Vector3<f64>) -> Vector3<f64> {
+        m - self.hard_iron_t
+    }
+
+    /// The noise-free field reading at attitude `q`, tesla.
+    pub fn field_reading(&self, q: &Attitude) -> Vector3<f64> {
+        q * self.field_l_t + self.hard_iron_t
+    }
+}
+
+/// One vector update of the filter.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Innovation {
+    /// Tick at which the update was applied (the first tick at or after the sample).
+    pub tick: usize,
+    /// Whitened innovation `[g_t1, g_t2, m_x, m_y, m_z]` (N(0, 1) each for a consistent filter).
+    pub values: [f64; INNOVATION_LEN],
+    /// Bit i set: component i present.
+    pub mask: u8,
+}
+
+/// The filter's estimates on the data's ticks.
+#[derive(Debug, Clone)]
+pub struct Reconstruction {
+    /// First tick with an estimate (the filter's start); earlier ticks repeat the first estimate.
+    pub start: usize,
+    /// Attitude estimate per tick, L→B.
+    pub q: Vec<Attitude>,
+    /// Bias estimate per tick (of the corrected readings), rad/s.
+    pub bias: Vec<Vector3<f64>>,
+    /// Body rate per tick: corrected reading minus bias, rad/s, body axes (one sample's noise).
+    pub rate: Vec<Vector3<f64>>,
+    /// Vector updates in time order.
+    pub innovations: Vec<Innovation>,
+}
+
+/// The filter's configuration for identification: the model's noises and field, gating off (the
+/// innovations must be a smooth function of the fitted parameters) and one linearisation per
+/// update.
+pub fn filter_config(config: &ModelConfig) -> MekfConfig {
+    let mut c = MekfConfig::from_model(config);
+    c.gate_enabled = false;
+    c.max_update_iterations = 1;
+    c.max_measurement_lag_s = 1.0 / config.gyro.rate_hz.max(1e-3);
+    c
+}
+
+fn t_ns(t: f64) -> u64 {
+    (t.max(0.0) * 1e9).round() as u64
+}
+
+/// Run the filter over the record with the sensor model of `config`.
+pub fn reconstruct(data: &Aligned, config: &ModelConfig) -> Result<Reconstruction, IdentError> {
+    let sensors = SensorModel::from_config(config);
+    let filter_cfg = filter_config(config);
+    let n = data.len();
+    let tilt_range = config.inclinometer.range_deg * DEG - 1e-9;
+    let field_range = config.magnetometer.range_gauss * GAUSS - 1e-12;
+    let has_tilt = !data.tilt.is_empty();
+    let has_field = !data.field.is_empty();
+
+    let mut mekf: Option<Mekf> = None;
+    let mut q_prior = Attitude::identity();
+    let mut out = Reconstruction {
+        start: n,
+        q: Vec::with_capacity(n),
+        bias: Vec::with_capacity(n),
+        rate: Vec::with_capacity(n),
+        innovations: Vec::with_capacity(data.tilt.len().max(data.field.len())),
+    };
+    let (mut i_tilt, mut i_field) = (0usize, 0usize);
+    let mut previous: Option<Vector3<f64>> = None;
+    for k in 0..n {
+        let tk = data.t[k];
+        let q_now = mekf.as_ref().map_or(q_prior, Mekf::attitude);
+        let w = sensors.correct_gyro(&data.gyro[k], &q_now);
+        if let Some(f) = mekf.as_mut() {
+            let mean = previous.map_or(w, |p| 0.5 * (p + w));
+            f.propagate(t_ns(tk), &mean)?;
+        }
+        previous = Some(w);
+        // Vector samples up to this tick, grouped by time.
+        loop {
+            let next_tilt = data
+                .tilt
+                .get(i_tilt)
+                .map(|s| s.0)
+                .filter(|t| *t <= tk + 1e-6);
+            let next_field = data
+                .field
+                .get(i_field)
+                .map(|s| s.0)
+                .filter(|t| *t <= tk + 1e-6);
+            let t_sample = match (next_tilt, next_field) {
+                (None, None) => break,
+                (Some(a), None) => a,
+                (None, Some(b)) => b,
+                (Some(a), Some(b)) => a.min(b),
+            };
+            let mut meas = VectorMeasurements::default();
+            if let Some(&(_, tilt)) = data
+                .tilt
+                .get(i_tilt)
+                .filter(|s| (s.0 - t_sample).abs() <= 1e-6)
+            {
+                i_tilt += 1;
+                if tilt[0].abs() < tilt_range && tilt[1].abs() < tilt_range {
+                    meas.tilt_rad = Some(tilt);
+                }
+            }
+            if let Some(&(_, field)) = data
+                .field
+                .get(i_field)
+                .filter(|s| (s.0 - t_sample).abs() <= 1e-6)
+            {
+                i_field += 1;
+                if field.iter().all(|x| x.abs() < field_range) {
+                    meas.field_b_t = Some(sensors.correct_field(&field));
+                }
+            }
+            if t_sample < -1e-9 || (meas.tilt_rad.is_none() && meas.field_b_t.is_none()) {
+                continue;
+            }
+            match mekf.as_mut() {
+                Some(f) => {
+                    let report = f.update(t_ns(t_sample), &meas)?;
+                    let (values, mask) = report.whitened_array();
+                    // [g_t1, g_t2, (radial), m_x, m_y, m_z] → 5 components.
+                    let v = [values[0], values[1], values[3], values[4], values[5]];
+                    let m = (mask & 0b11) as u8 | (((mask >> 3) & 0b111) as u8) << 2;
+                    if m != 0 {
+                        out.innovations.push(Innovation {
+                            tick: k,
+                            values: v,
+                            mask: m,
+                        });
+                    }
+                }
+                None => {
+                    if let Some(f) = start_filter(
+                        &filter_cfg,
+                        t_ns(t_sample),
+                        &meas,
+                        &sensors,
+                        has_tilt,
+                        has_field,
+                    ) {
+                        let mut f = f;
+                        f.propagate(t_ns(tk), &w)?;
+                        q_prior = f.attitude();
+                        mekf = Some(f);
+                        out.start = k;
+                    }
+                }
+            }
+        }
+        match mekf.as_ref() {
+            Some(f) => {
+                out.q.push(f.attitude());
+                out.bias.push(f.bias());
+                out.rate.push(w - f.bias());
+            }
+            None => {
+                out.q.push(q_prior);
+                let b = Vector3::from(filter_cfg.initial_bias_rad_s);
+                out.bias.push(b);
+                out.rate.push(w - b);
+            }
+        }
+    }
+    // Ticks before the start repeat the first estimate.
+    if out.start < n {
+        let (q0, b0) = (out.q[out.start], out.bias[out.start]);
+        for k in 0..out.start {
+            out.q[k] = q0;
+            out.bias[k] = b0;
+            out.rate[k] = sensors.correct_gyro(&data.gyro[k], &q0) - b0;
+        }
+    }
+    Ok(out)
+}
+
+/// Start the filter from the first usable vector samples: TRIAD from a tilt and field pair;
+/// with only one kind of vector sensor in the record, the shortest rotation that explains it.
+fn start_filter(
+    cfg: &MekfConfig,
+    t: u64,
+    meas: &VectorMeasurements,
+    sensors: &SensorModel,
+    has_tilt: bool,
+    has_field: bool,
+) -> Option<Mekf> {
+    let gravity = meas
+        .tilt_rad
+        .and_then(|[a, b]| attitude::gravity_from_tilt(a, b));
+    match (gravity, meas.field_b_t) {
+        (Some(g), Some(m)) => Mekf::initialise_from_vectors(cfg.clone(), t, &g, &m).ok(),
+        (Some(g), None) if !has_field => {
+            let q = UnitQuaternion::rotation_between(&attitude::gravity_l(), &g)?;
+            Mekf::new(cfg.clone(), t, q).ok()
+        }
+        (None, Some(m)) if !has_tilt => {
+            let q = UnitQuaternion::rotation_between(&sensors.field_l_t, &m)?;
+            Mekf::new(cfg.clone(), t, q).ok()
+        }
+        _ => None,
+    }
+}
+
+impl Reconstruction {
+    /// Whitened innovation components of the updates on the ticks `keep` accepts, flattened
+    /// (present components only), for fits.
+    pub fn innovation_vector(&self, keep: impl Fn(usize) -> bool) -> Vec<f64> {
+        let mut v = Vec::with_capacity(self.innovations.len() * INNOVATION_LEN);
+        for i in self.innovations.iter().filter(|i| keep(i.tick)) {
+            for c in 0..INNOVATION_LEN {
+                if i.mask & (1 << c) != 0 {
+                    v.push(i.values[c]);
+                }
+            }
+        }
+        v
+    }
+}

@@ -1,0 +1,331 @@
+//! The run configuration every process of a run reads: mode, duration, seed, log path, and the
+//! model, estimator, controller and manoeuvre. The launcher writes it once per run and passes its
+//! path in [`ENV_RUN_CONFIG`]; the logger stores it whole in the run's log.
+
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+use testbed_flight::manoeuvre::Manoeuvre;
+use testbed_flight::schedule::{Schedule, ScheduleError};
+use testbed_flight::mekf::MekfConfig;
+use testbed_flight::tasks::ControllerConfig;
+use testbed_model::ModelConfig;
+
+/// Environment variable holding the path of the run configuration.
+pub const ENV_RUN_CONFIG: &str = "TESTBED_RUN_CONFIG";
+
+/// Who owns time.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum ClockMode {
+    /// The plant advances only when the pipeline has answered the current tick: as fast as the
+    /// machine allows, and byte-identical logs for the same seed.
+    #[default]
+    Lockstep,
+    /// The plant advances at 1× wall time whether or not the pipeline answered (late answers are
+    /// deadline misses).
+    Paced,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct RunSection {
+    /// Launch profile the run came from (recorded in the log).
+    pub profile: String,
+    pub mode: ClockMode,
+    /// Simulated duration, s.
+    pub duration_s: f64,
+    /// Seed of every simulated device's noise.
+    pub seed: u64,
+    /// MCAP log of the run.
+    pub log: PathBuf,
+    /// Processes the plant waits for (heartbeat `Running`) before it starts the clock.
+    pub participants: Vec<String>,
+    /// Slack after a tick's period before the controller counts a missed deadline, s.
+    pub deadline_slack_s: f64,
+    /// Log whose inputs the `replay` process feeds to the estimator and controller.
+    pub replay: Option<PathBuf>,
+    /// How the controller's commands reach the plant: `direct`, or through the wheel and CMG
+    /// gateways, the CAN bus and the smart CAN node (`can_node`).
+    pub actuation: Actuation,
+}
+
+impl Default for RunSection {
+    fn default() -> Self {
+        Self {
+            profile: "simulation".into(),
+            mode: ClockMode::Lockstep,
+            duration_s: 150.0,
+            seed: 1,
+            log: PathBuf::from("out/run.mcap"),
+            participants: Vec::new(),
+            deadline_slack_s: 0.05,
+            replay: None,
+            actuation: Actuation::Direct,
+        }
+    }
+}
+
+/// A whole run.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+#[serde(deny_unknown_fields, default)]
+pub struct RunConfig {
+    pub run: RunSection,
+    pub model: ModelConfig,
+    /// Estimator settings; derived from `model` when absent.
+    pub estimator: Option<MekfConfig>,
+    pub controller: ControllerConfig,
+    pub manoeuvre: Manoeuvre,
+    /// The CAN gateways' links and the simulated CAN node (unused without CAN gateways).
+    pub can: CanSection,
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum RunConfigError {
+    #[error("cannot read run configuration {path}: {source}")]
+    Read { path: String, source: std::io::Error },
+    #[error("run configuration {path}: {message}")]
+    Parse { path: String, message: String },
+    #[error("run configuration {path}: {source}")]
+    Model { path: String, source: testbed_model::config::ConfigError },
+    #[error("run configuration {path}: `{key}` = {value}: {reason}")]
+    Invalid { path: String, key: String, value: String, reason: String },
+    #[error("{ENV_RUN_CONFIG} is not set: start this process through the launcher or `testbed run`, or pass --config")]
+    NotSet,
+}
+
+impl RunConfig {
+    pub fn from_toml_str(text: &str, origin: &str) -> Result<Self, RunConfigError> {
+        let config: Self = toml::from_str(text)
+            .map_err(|e| RunConfigError::Parse { path: origin.to_string(), message: e.to_string() })?;
+        config.validate(origin)?;
+        Ok(config)
+    }
+
+    pub fn load(path: &Path) -> Result<Self, RunConfigError> {
+        let text = std::fs::read_to_string(path)
+            .map_err(|source| RunConfigError::Read { path: path.display().to_string(), source })?;
+        Self::from_toml_str(&text, &path.display().to_string())
+    }
+
+    /// The configuration named by `--config`, else by [`ENV_RUN_CONFIG`].
+    pub fn from_arg_or_env(arg: Option<&Path>) -> Result<(Self, PathBuf), RunConfigError> {
+        let path = match arg {
+            Some(p) => p.to_path_buf(),
+            None => std::env::var_os(ENV_RUN_CONFIG).map(PathBuf::from).ok_or(RunConfigError::NotSet)?,
+        };
+        Ok((Self::load(&path)?, path))
+    }
+
+    pub fn to_toml_string(&self) -> String {
+        toml::to_string_pretty(self).expect("a RunConfig always serialises")
+    }
+
+    pub fn validate(&self, origin: &str) -> Result<(), RunConfigError> {
+        self.model.validate().map_err(|source| RunConfigError::Model { path: origin.to_string(), source })?;
+        let invalid = |key: &str, value: f64, reason: &str| RunConfigError::Invalid {
+            path: origin.to_string(),
+            key: key.to_string(),
+            value: value.to_string(),
+            reason: reason.to_string(),
+        };
+        if !(self.run.duration_s.is_finite() && self.run.duration_s > 0.0) {
+            return Err(invalid("run.duration_s", self.run.duration_s, "must be > 0"));
+        }
+        if !(self.run.deadline_slack_s.is_finite() && self.run.deadline_slack_s >= 0.0) {
+            return Err(invalid("run.deadline_slack_s", self.run.deadline_slack_s, "must be >= 0"));
+        }
+        self.schedule().map_err(|e| RunConfigError::Parse { path: origin.to_string(), message: e.to_string() })?;
+        self.can.validate().map_err(|(key, value, reason)| RunConfigError::Invalid {
+            path: origin.to_string(),
+            key,
+            value,
+            reason: reason.to_string(),
+        })?;
+        Ok(())
+    }
+
+    pub fn estimator_config(&self) -> MekfConfig {
+        self.estimator.clone().unwrap_or_else(|| MekfConfig::from_model(&self.model))
+    }
+
+    pub fn schedule(&self) -> Result<Schedule, ScheduleError> {
+        Schedule::from_model(&self.model)
+    }
+}
+
+/// How the controller's commands reach the plant (`run.actuation`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum Actuation {
+    /// The plant takes the controller's `WheelCommand` / `CmgCommand` (simulated gateways).
+    #[default]
+    Direct,
+    /// The plant takes the `AppliedWheelCommand` / `AppliedCmgCommand` the (simulated) smart
+    /// CAN node applies, after the wheel and CMG gateways have encoded the commands onto the bus.
+    CanNode,
+}
+
+/// The link a CAN gateway talks over (`can.link`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum CanLink {
+    /// A Linux SocketCAN interface (`can.interface`): the platform's CAN bus.
+    #[default]
+    Socketcan,
+    /// The software CAN bus on iceoryx2 (topic `testbed/can/bus`), served by `sim-can-node` or
+    /// `can-replay`.
+    SoftwareBus,
+    /// A `candump -L` file (`can.candump`), replayed at `can.replay_speed`.
+    Candump,
+}
+
+/// A device wired straight to the computer by RS-232 (`[can.serial.<device>]`).
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SerialLinkConfig {
+    /// Serial device, e.g. `/dev/ttyUSB0`.
+    pub path: PathBuf,
+    /// Line rate, baud.
+    #[serde(default = "default_baud")]
+    pub baud: u32,
+}
+
+fn default_baud() -> u32 {
+    115_200
+}
+
+/// Frame faults the simulated CAN node injects (`[can.faults]`): each frame (except the node's
+/// tick sync) is dropped, corrupted, delayed past its tick's sync or duplicated with these
+/// probabilities, seeded by `run.seed`. Both directions: the sensor frames it sends and the
+/// command frames it receives.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+#[serde(deny_unknown_fields, default)]
+pub struct CanFaults {
+    pub drop: f64,
+    pub corrupt: f64,
+    pub delay: f64,
+    pub duplicate: f64,
+}
+
+/// `[can]`: the CAN gateways' links and the simulated smart CAN node.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct CanSection {
+    /// The gateways' link.
+    pub link: CanLink,
+    /// SocketCAN interface (`link = "socketcan"`).
+    pub interface: String,
+    /// Identifier base of the node's protocol (a multiple of 16, at most 0x7A0).
+    pub id_base: u16,
+    /// `candump -L` file: the gateways' input with `link = "candump"`, and `can-replay`'s.
+    pub candump: Option<PathBuf>,
+    /// `link = "candump"`: replay speed relative to the recorded time stamps; 0 = as fast as
+    /// possible.
+    pub replay_speed: f64,
+    /// The logger also writes the software bus's traffic as a `candump -L` file beside the run
+    /// log (`<log>.candump.log`), readable by can-utils (`canplayer`, `log2asc`).
+    pub record_candump: bool,
+    /// The node commands zero torque / zero gimbal rate after this long without a valid
+    /// command, s.
+    pub command_timeout_s: f64,
+    /// Devices wired directly by RS-232, by device name (gyro, inclinometer, magnetometer,
+    /// wheels, cmg): their gateway uses this serial line instead of `link`.
+    pub serial: std::collections::BTreeMap<String, SerialLinkConfig>,
+    /// Faults the simulated node injects.
+    pub faults: CanFaults,
+}
+
+impl Default for CanSection {
+    fn default() -> Self {
+        Self {
+            link: CanLink::Socketcan,
+            interface: "can0".into(),
+            id_base: 0x100,
+            candump: None,
+            replay_speed: 1.0,
+            record_candump: false,
+            command_timeout_s: 0.5,
+            serial: Default::default(),
+            faults: CanFaults::default(),
+        }
+    }
+}
+
+/// Device names accepted in `[can.serial]`.
+pub const CAN_DEVICES: [&str; 5] = ["gyro", "inclinometer", "magnetometer", "wheels", "cmg"];
+
+impl CanSection {
+    /// `(key, value, reason)` of the first invalid setting.
+    fn validate(&self) -> Result<(), (String, String, &'static str)> {
+        let bad = |key: &str, value: String, reason| Err((format!("can.{key}"), value, reason));
+        if !self.id_base.is_multiple_of(16) || self.id_base > 0x7A0 {
+            return bad("id_base", self.id_base.to_string(), "must be a multiple of 16, at most 1952 (0x7A0)");
+        }
+        if !(self.replay_speed.is_finite() && self.replay_speed >= 0.0) {
+            return bad("replay_speed", self.replay_speed.to_string(), "must be >= 0 (0: as fast as possible)");
+        }
+        if !(self.command_timeout_s.is_finite() && self.command_timeout_s > 0.0) {
+            return bad("command_timeout_s", self.command_timeout_s.to_string(), "must be > 0");
+        }
+        if self.link == CanLink::Socketcan && self.interface.trim().is_empty() {
+            return bad("interface", format!("{:?}", self.interface), "must name a CAN interface");
+        }
+        for (device, link) in &self.serial {
+            if !CAN_DEVICES.contains(&device.as_str()) {
+                return bad(&format!("serial.{device}"), device.clone(), "not a device (gyro, inclinometer, magnetometer, wheels, cmg)");
+            }
+            if link.baud == 0 {
+                return bad(&format!("serial.{device}.baud"), "0".into(), "must be > 0");
+            }
+        }
+        let f = &self.faults;
+        for (key, rate) in [("drop", f.drop), ("corrupt", f.corrupt), ("delay", f.delay), ("duplicate", f.duplicate)] {
+            if !(rate.is_finite() && (0.0..=1.0).contains(&rate)) {
+                return bad(&format!("faults.{key}"), rate.to_string(), "must be a probability from 0 to 1");
+            }
+        }
+        let total = f.drop + f.corrupt + f.delay + f.duplicate;
+        if total > 1.0 {
+            return bad("faults", total.to_string(), "the fault probabilities must add up to at most 1");
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn round_trips_and_refuses_bad_values_by_name() {
+        let config = RunConfig::default();
+        let text = config.to_toml_string();
+        assert_eq!(RunConfig::from_toml_str(&text, "rt").unwrap(), config);
+        let err = RunConfig::from_toml_str("[run]\nduration_s = -3\n", "run.toml").unwrap_err().to_string();
+        assert!(err.contains("run.duration_s") && err.contains("-3") && err.contains("run.toml"), "{err}");
+        let err = RunConfig::from_toml_str("[run]\nspeed = 3\n", "run.toml").unwrap_err().to_string();
+        assert!(err.contains("speed"), "{err}");
+        let err = RunConfig::from_toml_str("[model.platform]\nmass_kg = nan\n", "run.toml").unwrap_err().to_string();
+        assert!(err.contains("platform.mass_kg"), "{err}");
+    }
+
+    #[test]
+    fn can_section_round_trips_and_refuses_bad_values_by_name() {
+        let text = "[run]\nactuation = \"can_node\"\n[can]\nlink = \"software_bus\"\nrecord_candump = true\n\
+                    [can.faults]\ndrop = 0.01\ncorrupt = 0.005\n[can.serial.gyro]\npath = \"/dev/ttyUSB0\"\n";
+        let config = RunConfig::from_toml_str(text, "can.toml").unwrap();
+        assert_eq!(config.run.actuation, Actuation::CanNode);
+        assert_eq!(config.can.link, CanLink::SoftwareBus);
+        assert_eq!(config.can.serial["gyro"].baud, 115_200);
+        assert_eq!(RunConfig::from_toml_str(&config.to_toml_string(), "rt").unwrap(), config);
+        for (text, key) in [
+            ("[can.faults]\ndrop = 1.5\n", "can.faults.drop"),
+            ("[can.faults]\ndrop = 0.6\ncorrupt = 0.6\n", "can.faults"),
+            ("[can]\nid_base = 257\n", "can.id_base"),
+            ("[can.serial.sonar]\npath = \"/dev/null\"\n", "can.serial.sonar"),
+        ] {
+            let err = RunConfig::from_toml_str(text, "run.toml").unwrap_err().to_string();
+            assert!(err.contains(key) && err.contains("run.toml"), "{err}");
+        }
+    }
+}

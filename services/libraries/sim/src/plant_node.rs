@@ -1,0 +1,138 @@
+//! The plant process's logic: owns the simulated platform and the clock.
+//!
+//! Each tick it publishes the true state ([`SimTruth`]) and the tick ([`SimClockTick`]), then
+//! waits for the controller's wheel and CMG commands stamped with that tick's time. In lockstep
+//! it advances only when both have arrived; paced, it advances on the wall-clock period and
+//! holds the previous command when the answer is late (a deadline miss).
+
+use testbed_flight::convert::{a3, a4, quaternion_to_array, v3, v4, Sequence};
+use testbed_runtime::run_config::RunConfig;
+use ipc_types::{CmgCommand, SampleHeader, SimClockTick, SimTruth, WheelCommand};
+use testbed_flight::schedule::Schedule;
+use testbed_model::devices::CmgStepperDrive;
+use testbed_model::physics::{ActuatorCommand, Plant, PhysicsError, StepReport};
+
+#[derive(Debug, thiserror::Error)]
+pub enum PlantNodeError {
+    #[error("plant: {0}")]
+    Physics(#[from] PhysicsError),
+    #[error("schedule: {0}")]
+    Schedule(#[from] testbed_flight::schedule::ScheduleError),
+}
+
+pub struct PlantNode {
+    plant: Plant,
+    stepper: CmgStepperDrive,
+    schedule: Schedule,
+    tick: u64,
+    last_tick: u64,
+    wheel: Option<WheelCommand>,
+    cmg: Option<CmgCommand>,
+    held: ActuatorCommand,
+    tilt_stop: u32,
+    deadline_misses: u64,
+    truth_seq: Sequence,
+    tick_seq: Sequence,
+}
+
+impl PlantNode {
+    pub fn new(config: &RunConfig) -> Result<Self, PlantNodeError> {
+        let schedule = config.schedule()?;
+        Ok(Self {
+            plant: Plant::new(&config.model, config.manoeuvre.initial_state())?,
+            stepper: CmgStepperDrive::new(&config.model.cmg),
+            last_tick: schedule.tick_count(config.run.duration_s),
+            schedule,
+            tick: 0,
+            wheel: None,
+            cmg: None,
+            held: ActuatorCommand::default(),
+            tilt_stop: 0,
+            deadline_misses: 0,
+            truth_seq: Sequence::default(),
+            tick_seq: Sequence::default(),
+        })
+    }
+
+    pub fn tick(&self) -> u64 {
+        self.tick
+    }
+
+    pub fn time_ns(&self) -> u64 {
+        self.schedule.time_ns(self.tick)
+    }
+
+    pub fn deadline_misses(&self) -> u64 {
+        self.deadline_misses
+    }
+
+    /// The current tick's truth and clock samples (publish truth first).
+    pub fn outputs(&mut self) -> (SimTruth, SimClockTick) {
+        let s = self.plant.state();
+        let t_ns = self.time_ns();
+        let truth = SimTruth {
+            header: self.truth_seq.header(t_ns, SampleHeader::VALID | SampleHeader::SIMULATED),
+            quaternion: quaternion_to_array(&s.q),
+            rate: a3(&s.rate_b),
+            wheel_speed: a3(&s.wheel_speed),
+            gimbal_angle: a4(&s.gimbal),
+            // The gyro's bias lives in the simulated gyro process, not in the plant.
+            gyro_bias: [0.0; 3],
+            angular_momentum: a3(&self.plant.angular_momentum_l()),
+            kinetic_energy: self.plant.kinetic_energy_j(),
+            tilt_stop: self.tilt_stop,
+            _pad0: 0,
+        };
+        let mut clock = SimClockTick::default();
+        clock.header = self.tick_seq.header(t_ns, SampleHeader::VALID | SampleHeader::SIMULATED);
+        clock.tick = self.tick;
+        clock.sim_time_ns = t_ns;
+        clock.step_ns = self.schedule.period_ns;
+        (truth, clock)
+    }
+
+    /// A wheel command; kept if it answers the current tick.
+    pub fn on_wheel_command(&mut self, c: &WheelCommand) {
+        if c.header.time_ns == self.time_ns() {
+            self.wheel = Some(*c);
+        }
+    }
+
+    pub fn on_cmg_command(&mut self, c: &CmgCommand) {
+        if c.header.time_ns == self.time_ns() {
+            self.cmg = Some(*c);
+        }
+    }
+
+    /// Both commands for the current tick have arrived.
+    pub fn answered(&self) -> bool {
+        self.wheel.is_some() && self.cmg.is_some()
+    }
+
+    /// The last tick has been published (and, in lockstep, answered): the run is over.
+    pub fn at_end(&self) -> bool {
+        self.tick >= self.last_tick
+    }
+
+    /// Integrate to the next tick with the current tick's commands, or the held ones if they
+    /// did not arrive (counted as a deadline miss).
+    pub fn advance(&mut self) -> Result<StepReport, PlantNodeError> {
+        let mut command = match (&self.wheel, &self.cmg) {
+            (Some(w), Some(c)) => ActuatorCommand { wheel_torque_nm: v3(&w.torque), gimbal_rate_rad_s: v4(&c.gimbal_rate) },
+            _ => {
+                self.deadline_misses += 1;
+                self.held.clone()
+            }
+        };
+        command.gimbal_rate_rad_s = self.stepper.command(&command.gimbal_rate_rad_s).rate_rad_s;
+        self.held = command.clone();
+        let report = self.plant.step(&command, self.schedule.period_s())?;
+        if let Some(event) = &report.tilt_stop {
+            self.tilt_stop |= 1 << event.axis.index();
+        }
+        self.tick += 1;
+        self.wheel = None;
+        self.cmg = None;
+        Ok(report)
+    }
+}

@@ -1,0 +1,67 @@
+//! The estimator node on simulated sensor samples: how it answers ticks with bad samples.
+
+use ipc_types::{AttitudeEstimate, GyroSample, InclinometerSample, MagnetometerSample, SampleHeader};
+use testbed_flight::estimator_node::{EstimatorCounters, EstimatorNode};
+use testbed_runtime::RunConfig;
+use testbed_sim::plant_node::PlantNode;
+use testbed_sim::sim_devices::{SimGyro, SimInclinometer, SimMagnetometer};
+
+/// One tick's sensor samples.
+type Tick = (GyroSample, Option<InclinometerSample>, Option<MagnetometerSample>);
+
+/// 8 s of the default run's sensor samples (the plant coasting without commands).
+fn samples() -> (RunConfig, Vec<Tick>) {
+    let mut config = RunConfig::default();
+    config.run.duration_s = 8.0;
+    let schedule = config.schedule().unwrap();
+    let mut plant = PlantNode::new(&config).unwrap();
+    let (mut gyro, mut tilt, mut field) = (
+        SimGyro::new(&config, schedule),
+        SimInclinometer::new(&config, schedule),
+        SimMagnetometer::new(&config, schedule),
+    );
+    let mut out = Vec::new();
+    loop {
+        let (truth, _) = plant.outputs();
+        out.push((gyro.on_truth(&truth).unwrap(), tilt.on_truth(&truth), field.on_truth(&truth)));
+        if plant.at_end() {
+            return (config, out);
+        }
+        plant.advance().unwrap();
+    }
+}
+
+fn run(config: &RunConfig, samples: &[Tick]) -> (Vec<AttitudeEstimate>, EstimatorCounters) {
+    let mut node = EstimatorNode::new(config.estimator_config(), config.schedule().unwrap());
+    let mut out = Vec::new();
+    for (g, t, f) in samples {
+        node.on_gyro(g);
+        t.iter().for_each(|t| node.on_inclinometer(t));
+        f.iter().for_each(|f| node.on_magnetometer(f));
+        out.extend(node.ready());
+    }
+    (out, node.counters())
+}
+
+#[test]
+fn an_invalid_gyro_sample_answers_its_tick_with_the_last_valid_rate() {
+    let (config, samples) = samples();
+    let (reference, counters) = run(&config, &samples);
+    assert_eq!(reference.len(), samples.len());
+    assert_eq!(counters.gyro_held, 0);
+    // Ticks 20 and 21: the gateway publishes stale samples (values repeated, not VALID).
+    let mut stale = samples.clone();
+    let mut held = samples.clone();
+    for k in [20, 21] {
+        let g = &mut stale[k].0;
+        g.header.flags = SampleHeader::STALE;
+        g.rate = [9.0; 3]; // never used
+        held[k].0.rate = samples[19].0.rate;
+    }
+    let (with_stale, counters) = run(&config, &stale);
+    let (with_held, _) = run(&config, &held);
+    assert_eq!(counters.gyro_held, 2);
+    assert_eq!(with_stale.len(), samples.len(), "every tick answered");
+    assert_eq!(with_stale, with_held);
+    assert_ne!(with_stale, reference);
+}
