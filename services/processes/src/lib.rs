@@ -1,7 +1,24 @@
-//! The test bed's processes as library code: the logic of each process is a plain struct fed
-//! with samples and returning samples ([`plant_node`], [`sim_devices`], [`estimator_node`],
-//! [`controller_node`]), so it is tested without iceoryx2; the binaries in `src/bin/` are thin
-//! shells that move samples between these structs and the bus.
+//! Every process of the pipeline, each a [`testbed_runtime::Node`]: a small struct that holds
+//! the process's logic (a plain struct of the flight or simulation crates, tested without
+//! iceoryx2) and its bus ports. The binaries in `src/bin/` only name the node they run:
+//!
+//! ```ignore
+//! fn main() -> anyhow::Result<()> {
+//!     testbed_runtime::run("estimator", EstimatorProcess::open)
+//! }
+//! ```
+//!
+//! | process | node | logic |
+//! |---|---|---|
+//! | `plant` | [`plant::PlantProcess`] | `testbed_sim::plant_node` |
+//! | `sim-gyro`, `sim-inclinometer`, `sim-magnetometer`, `sim-wheels`, `sim-cmg` | [`sim_gateway::SimGateway`] | `testbed_sim::sim_devices` |
+//! | `estimator` | [`estimator::EstimatorProcess`] | `testbed_flight::estimator_node` |
+//! | `controller` | [`controller::ControllerProcess`] | `testbed_flight::controller_node` |
+//! | `logger` | [`logger::LoggerProcess`] | `testbed_log` |
+//! | `replay` | [`replay::ReplayProcess`] | [`replay_log`] |
+//! | `gyro-gateway`, …, `cmg-gateway` | [`can_gateway::CanGateway`] | `testbed_gateways::gateway` |
+//! | `sim-can-node` | [`can_node::CanNodeProcess`] | `testbed_gateways::node` |
+//! | `can-replay` | [`can_replay::CanReplayProcess`] | `testbed_can::transport` |
 //!
 //! # Lockstep protocol
 //!
@@ -19,4 +36,14 @@
 //! run is deterministic however the OS schedules the processes, and identical to the in-process
 //! loop of `testbed_sim::closed_loop` for the same seed.
 
-pub mod replay_node;
+pub mod can_gateway;
+pub mod can_link;
+pub mod can_node;
+pub mod can_replay;
+pub mod controller;
+pub mod estimator;
+pub mod logger;
+pub mod plant;
+pub mod replay;
+pub mod replay_log;
+pub mod sim_gateway;

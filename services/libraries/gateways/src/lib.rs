@@ -58,7 +58,6 @@ pub mod bus_transport;
 pub mod faults;
 pub mod gateway;
 pub mod node;
-pub mod run;
 pub mod status;
 
 pub use bus_transport::SoftwareBusTransport;

@@ -1,7 +1,9 @@
-//! The process runtime of the pipeline: the run configuration every process reads, and what
-//! every process does to start.
+//! The process runtime of the pipeline: the run configuration every process reads, and one
+//! lifecycle for every process ([`Node`], [`run`]).
 
+pub mod node;
 pub mod process;
 pub mod run_config;
 
+pub use node::{Context, Io, Node, WakeOn, run};
 pub use run_config::{ClockMode, ENV_RUN_CONFIG, RunConfig};

@@ -5,10 +5,9 @@ use anyhow::Context;
 use ipc_types::{Heartbeat, ProcessState};
 use std::collections::BTreeSet;
 use std::time::Instant;
-use testbed_bus::{EventLoop, Flow, LoopExit, SubscriberOptions, Waiter};
 use std::path::PathBuf;
 use std::time::Duration;
-use testbed_bus::{Bus, BusConfig};
+use testbed_bus::{Bus, BusConfig, EventLoop, Flow, LoopExit, SubscriberOptions, Waiter};
 
 /// How long the participants of a run have to come up.
 pub const START_TIMEOUT: Duration = Duration::from_secs(60);
@@ -33,68 +32,6 @@ pub fn start(name: &str) -> anyhow::Result<(RunConfig, Bus)> {
     let bus = Bus::open(name, &bus_config).with_context(|| format!("{name}: opening the bus"))?;
     tracing::info!(config = %path.display(), mode = ?config.run.mode, seed = config.run.seed, "{name} starting");
     Ok((config, bus))
-}
-
-/// Keeps the first error raised inside an event-loop callback, so the callback can stop the
-/// loop and `main` can report it with its context.
-#[derive(Default)]
-pub struct FirstError(Option<anyhow::Error>);
-
-impl FirstError {
-    /// Record `result`'s error (if it is the first); true if the loop should stop.
-    pub fn failed<T>(&mut self, result: anyhow::Result<T>) -> bool {
-        match result {
-            Ok(_) => false,
-            Err(e) => {
-                self.0.get_or_insert(e);
-                true
-            }
-        }
-    }
-
-    pub fn into_result(self) -> anyhow::Result<()> {
-        self.0.map_or(Ok(()), Err)
-    }
-}
-
-/// The loop of a simulated gateway. On every wake-up the truth samples are taken first, then
-/// `drain_commands` reads the commands that preceded them (in lockstep a command of tick k−1
-/// always precedes the truth of tick k, so telemetry reports the command in effect
-/// deterministically), then `sample` turns each truth into at most one output sample.
-pub fn run_sim_gateway<T: ipc_types::Topic>(
-    bus: &Bus,
-    mut drain_commands: impl FnMut() -> anyhow::Result<()>,
-    mut sample: impl FnMut(&ipc_types::SimTruth) -> Option<T>,
-) -> anyhow::Result<()> {
-    let truth = bus.subscriber::<ipc_types::SimTruth>()?;
-    let output = bus.publisher::<T>()?;
-    let heartbeat = bus.heartbeat(HEARTBEAT_PERIOD)?;
-    let waiter = Waiter::new()?;
-    let mut events = EventLoop::new(&waiter);
-    events.on_data(&truth)?;
-    events.with_heartbeat(&heartbeat)?;
-    heartbeat.set_state(ipc_types::ProcessState::Running);
-    let mut error = FirstError::default();
-    let mut truths = Vec::new();
-    events.run(|_| {
-        truths.clear();
-        if error.failed(truth.drain_into(&mut truths).map_err(anyhow::Error::from)) || error.failed(drain_commands()) {
-            return Flow::Stop;
-        }
-        for t in &truths {
-            heartbeat.add_samples_in(1);
-            heartbeat.set_time_ns(t.header.time_ns);
-            if let Some(s) = sample(t) {
-                if error.failed(output.publish(&s).map_err(anyhow::Error::from)) {
-                    return Flow::Stop;
-                }
-                heartbeat.add_samples_out(1);
-            }
-        }
-        Flow::Continue
-    })?;
-    heartbeat.set_state(ipc_types::ProcessState::Stopping);
-    error.into_result()
 }
 
 /// The start barrier of a clock owner (plant, replay): block until every process named in

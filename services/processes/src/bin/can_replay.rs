@@ -1,6 +1,5 @@
-//! Replays a recorded `candump -L` file (`can.candump`) onto the software CAN bus, tick by tick
-//! in lockstep with the estimator (`testbed_gateways::run::run_replay`).
+//! The candump replay onto the software CAN bus (see `testbed_processes::can_replay`).
 
 fn main() -> anyhow::Result<()> {
-    testbed_gateways::run::run_replay()
+    testbed_runtime::run("can-replay", testbed_processes::can_replay::CanReplayProcess::open)
 }

@@ -1,6 +1,5 @@
-//! The simulated smart CAN node: the plant's truth through the device models onto the software
-//! CAN bus, and the commands from the bus to the plant (`testbed_gateways::node`).
+//! The simulated smart CAN node (see `testbed_processes::can_node`).
 
 fn main() -> anyhow::Result<()> {
-    testbed_gateways::run::run_node()
+    testbed_runtime::run("sim-can-node", testbed_processes::can_node::CanNodeProcess::open)
 }

@@ -1,10 +1,9 @@
-//! Simulated inclinometer gateway: tilt angles with noise and range, at the inclinometer's rate.
+//! The simulated inclinometer gateway: the device model on the plant's truth, publishing what the real
+//! gateway would (see `testbed_processes::sim_gateway`).
 
-use testbed_runtime::process;
+use testbed_processes::sim_gateway::SimGateway;
 use testbed_sim::sim_devices::SimInclinometer;
 
 fn main() -> anyhow::Result<()> {
-    let (config, bus) = process::start("sim-inclinometer")?;
-    let mut device = SimInclinometer::new(&config, config.schedule()?);
-    process::run_sim_gateway(&bus, || Ok(()), |truth| device.on_truth(truth))
+    testbed_runtime::run("sim-inclinometer", SimGateway::<SimInclinometer>::open)
 }

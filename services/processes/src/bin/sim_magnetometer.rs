@@ -1,11 +1,9 @@
-//! Simulated magnetometer gateway: the lab field in body axes with noise, hard iron and range, at
-//! the magnetometer's rate.
+//! The simulated magnetometer gateway: the device model on the plant's truth, publishing what the real
+//! gateway would (see `testbed_processes::sim_gateway`).
 
-use testbed_runtime::process;
+use testbed_processes::sim_gateway::SimGateway;
 use testbed_sim::sim_devices::SimMagnetometer;
 
 fn main() -> anyhow::Result<()> {
-    let (config, bus) = process::start("sim-magnetometer")?;
-    let mut device = SimMagnetometer::new(&config, config.schedule()?);
-    process::run_sim_gateway(&bus, || Ok(()), |truth| device.on_truth(truth))
+    testbed_runtime::run("sim-magnetometer", SimGateway::<SimMagnetometer>::open)
 }

@@ -1,6 +1,10 @@
 //! The wheel gateway: its link (software CAN bus, SocketCAN, candump file or serial line, from
-//! the run configuration) in, `testbed_gateways::gateway` decoding, samples out.
+//! the run configuration) in, decoding, samples out (see `testbed_processes::can_gateway`).
+
+use testbed_gateways::GatewayDevice;
+use testbed_processes::can_gateway::CanGateway;
 
 fn main() -> anyhow::Result<()> {
-    testbed_gateways::run::run_gateway(testbed_gateways::GatewayDevice::Wheels)
+    let device = GatewayDevice::Wheels;
+    testbed_runtime::run(device.process_name(), |cx| CanGateway::open(cx, device))
 }

@@ -10,7 +10,7 @@ use testbed_can::transport::{SerialTransport, SocketCanSupport, probe_socketcan}
 use testbed_can::{CanFrame, CanTransport, DeviceStatus, Encoder, GyroMsg, Message, Sample};
 use testbed_gateways::gateway::{Gateway, GatewayDevice, node_stamp_us};
 use testbed_gateways::node;
-use testbed_gateways::run::Link;
+use testbed_processes::can_link::Link;
 use testbed_gateways::SoftwareBusTransport;
 use testbed_runtime::run_config::{CanLink, RunConfig, SerialLinkConfig};
 use testbed_runtime::ClockMode;

@@ -1,0 +1,166 @@
+//! One lifecycle for every process of the pipeline.
+//!
+//! A process is a [`Node`]: a small struct holding its state, with its bus ports in a separate
+//! struct ([`Node::Ports`]) so that the event loop can borrow the ports while the node changes.
+//! [`run`] does everything around it, the same way for every process:
+//!
+//! 1. logging, command line and run configuration, the process's bus node
+//!    ([`process::start`]);
+//! 2. [`open`](run): the node and its ports from the run configuration;
+//! 3. the heartbeat; for a clock owner, the start barrier (every participant `Running`);
+//! 4. [`Node::wake_on`]: which ports wake the node, with wall-clock deadlines in paced runs
+//!    only (in lockstep time stands still while anything waits);
+//! 5. `Running`, [`Node::start`], then [`Node::on_wake`] for every wake-up until the node
+//!    returns [`Flow::Stop`], an error occurs, or SIGINT/SIGTERM arrives;
+//! 6. `Stopping`, [`Node::stop`] (always, also after an error: a logger still finalises its
+//!    file), and the first error, with the process name, as the process's result.
+//!
+//! ```ignore
+//! fn main() -> anyhow::Result<()> {
+//!     testbed_runtime::run("estimator", EstimatorProcess::open)
+//! }
+//! ```
+
+use crate::process::{self, HEARTBEAT_PERIOD};
+use crate::{ClockMode, RunConfig};
+use anyhow::Context as _;
+use ipc_types::{ProcessState, Topic};
+use std::time::Duration;
+use testbed_bus::{
+    Bus, BusError, EventLoop, Flow, HeartbeatPublisher, LoopExit, SourceId, TopicSubscriber, Waiter, Wake,
+};
+
+/// What a node is opened with.
+pub struct Context<'a> {
+    /// The process name (bus node, heartbeat, log messages).
+    pub name: &'a str,
+    /// The run configuration.
+    pub config: &'a RunConfig,
+    /// The process's bus node, to create ports on.
+    pub bus: &'a Bus,
+}
+
+/// What a running node reaches besides its own state and ports.
+pub struct Io<'a> {
+    /// The process name.
+    pub name: &'a str,
+    /// Who owns time in this run.
+    pub mode: ClockMode,
+    /// The process's heartbeat: its state and counters go out every heartbeat period.
+    pub heartbeat: &'a HeartbeatPublisher,
+}
+
+/// Where a node says what wakes it ([`Node::wake_on`]).
+pub struct WakeOn<'l, 'w, 'a> {
+    events: &'l mut EventLoop<'w, 'a>,
+    mode: ClockMode,
+}
+
+impl<'a> WakeOn<'_, '_, 'a> {
+    /// Wake with [`Wake::Data`] when `subscriber` receives a sample.
+    pub fn data<T: Topic>(&mut self, subscriber: &'a TopicSubscriber<T>) -> Result<SourceId, BusError> {
+        self.events.on_data(subscriber)
+    }
+
+    /// Like [`data`](Self::data), and in a paced run also [`Wake::DeadlineMissed`] when
+    /// nothing arrived for `deadline` (from the stream's first sample on). In lockstep no
+    /// wall-clock deadline applies: time stands still while anything waits.
+    pub fn data_within<T: Topic>(
+        &mut self,
+        subscriber: &'a TopicSubscriber<T>,
+        deadline: Duration,
+    ) -> Result<SourceId, BusError> {
+        match self.mode {
+            ClockMode::Lockstep => self.events.on_data(subscriber),
+            ClockMode::Paced => self.events.on_data_with_deadline(subscriber, deadline),
+        }
+    }
+
+    /// Wake with [`Wake::Tick`] every `period` of wall time.
+    pub fn interval(&mut self, period: Duration) -> Result<SourceId, BusError> {
+        self.events.on_interval(period)
+    }
+
+    /// Who owns time in this run.
+    pub fn mode(&self) -> ClockMode {
+        self.mode
+    }
+}
+
+/// A process of the pipeline (see the [module](self) for the lifecycle [`run`] gives it).
+pub trait Node {
+    /// The node's publishers and subscribers, created when the node is opened.
+    type Ports;
+
+    /// The processes this node waits for (heartbeat `Running`) before its first wake-up: the
+    /// start barrier of a clock owner, so that every subscriber exists before the first sample.
+    /// `None` (the default) for every other process.
+    fn start_barrier(&self, _config: &RunConfig) -> Option<Vec<String>> {
+        None
+    }
+
+    /// Attaches the ports that wake the node.
+    fn wake_on<'a>(&mut self, ports: &'a Self::Ports, wake: &mut WakeOn<'_, '_, 'a>) -> anyhow::Result<()>;
+
+    /// Called once, `Running`, before the first wake-up (a clock owner publishes its first
+    /// tick here). [`Flow::Stop`] ends the run at once.
+    fn start(&mut self, _ports: &Self::Ports, _io: &Io) -> anyhow::Result<Flow> {
+        Ok(Flow::Continue)
+    }
+
+    /// Called for every wake-up.
+    fn on_wake(&mut self, ports: &Self::Ports, wake: Wake, io: &Io) -> anyhow::Result<Flow>;
+
+    /// Called once when the loop has ended, also after an error (`Stopping`): last writes and
+    /// the process's report.
+    fn stop(&mut self, _ports: &Self::Ports, _io: &Io, _exit: LoopExit) -> anyhow::Result<()> {
+        Ok(())
+    }
+}
+
+/// Runs the process `name`: the node `open` makes, through the lifecycle of the [module](self).
+pub fn run<N: Node>(
+    name: &str,
+    open: impl FnOnce(&Context) -> anyhow::Result<(N, N::Ports)>,
+) -> anyhow::Result<()> {
+    let (config, bus) = process::start(name)?;
+    let (mut node, ports) =
+        open(&Context { name, config: &config, bus: &bus }).with_context(|| format!("{name}: starting"))?;
+    let heartbeat = bus.heartbeat(HEARTBEAT_PERIOD)?;
+    if let Some(participants) = node.start_barrier(&config) {
+        if process::wait_for_participants(&bus, &participants)? == LoopExit::TerminationRequested {
+            return Ok(());
+        }
+    }
+    let waiter = Waiter::new()?;
+    let mut events = EventLoop::new(&waiter);
+    node.wake_on(&ports, &mut WakeOn { events: &mut events, mode: config.run.mode })?;
+    events.with_heartbeat(&heartbeat)?;
+    heartbeat.set_state(ProcessState::Running);
+    let io = Io { name, mode: config.run.mode, heartbeat: &heartbeat };
+
+    let mut error = None;
+    let mut exit = LoopExit::Stopped;
+    let mut step = |result: anyhow::Result<Flow>| match result {
+        Ok(flow) => flow,
+        Err(e) => {
+            error.get_or_insert(e);
+            Flow::Stop
+        }
+    };
+    if step(node.start(&ports, &io)) == Flow::Continue {
+        match events.run(|wake| step(node.on_wake(&ports, wake, &io))) {
+            Ok(e) => exit = e,
+            Err(e) => {
+                error.get_or_insert(e.into());
+            }
+        }
+    }
+    heartbeat.set_state(ProcessState::Stopping);
+    let stopped = node.stop(&ports, &io, exit);
+    match (error, stopped) {
+        (Some(e), _) => Err(e.context(format!("{name} failed"))),
+        (None, Err(e)) => Err(e.context(format!("{name}: stopping"))),
+        (None, Ok(())) => Ok(()),
+    }
+}

@@ -1,0 +1,290 @@
+//! The CAN device gateways (`gyro-gateway`, …, `cmg-gateway`): the device's link in,
+//! [`Gateway`] decoding, samples out; for the wheels and CMGs, commands in, limited and encoded
+//! onto the link. A gateway on a candump file stops cleanly at its end.
+
+use crate::can_link::Link;
+use anyhow::{Context as _, bail};
+use ipc_types::{
+    CanLinkStatus, CmgCommand, CmgTelemetry, GyroSample, InclinometerSample, MagnetometerSample, ProcessState,
+    WheelCommand, WheelTelemetry,
+};
+use std::time::{Duration, Instant};
+use testbed_bus::{Bus, BusError, Flow, LoopExit, SourceId, TopicPublisher, TopicSubscriber, Wake};
+use testbed_can::{Sample, TransportError};
+use testbed_gateways::bus_transport::SoftwareBusTransport;
+use testbed_gateways::gateway::{Gateway, GatewayDevice};
+use testbed_gateways::node;
+use testbed_gateways::status::{HeartbeatCounters, StatusTracker};
+use testbed_runtime::{ClockMode, Context, Io, Node, WakeOn};
+
+/// How often a gateway polls a link that cannot wake its event loop (SocketCAN, serial,
+/// candump file).
+pub const POLL_PERIOD: Duration = Duration::from_millis(2);
+/// Without a node heartbeat for this long a free-running gateway reports itself `Degraded`
+/// (PROTOCOL.md: the node is lost after 3 s).
+pub const NODE_LOST_AFTER: Duration = Duration::from_secs(3);
+
+/// The publisher of a gateway's samples.
+enum SamplePublisher {
+    Gyro(TopicPublisher<GyroSample>),
+    Inclinometer(TopicPublisher<InclinometerSample>),
+    Magnetometer(TopicPublisher<MagnetometerSample>),
+    Wheels(TopicPublisher<WheelTelemetry>),
+    Cmg(TopicPublisher<CmgTelemetry>),
+}
+
+impl SamplePublisher {
+    fn new(bus: &Bus, device: GatewayDevice) -> Result<Self, BusError> {
+        Ok(match device {
+            GatewayDevice::Gyro => Self::Gyro(bus.publisher()?),
+            GatewayDevice::Inclinometer => Self::Inclinometer(bus.publisher()?),
+            GatewayDevice::Magnetometer => Self::Magnetometer(bus.publisher()?),
+            GatewayDevice::Wheels => Self::Wheels(bus.publisher()?),
+            GatewayDevice::Cmg => Self::Cmg(bus.publisher()?),
+        })
+    }
+
+    fn publish(&self, sample: &Sample) -> Result<(), BusError> {
+        match (self, sample) {
+            (Self::Gyro(p), Sample::Gyro(s)) => p.publish(s).map(drop),
+            (Self::Inclinometer(p), Sample::Inclinometer(s)) => p.publish(s).map(drop),
+            (Self::Magnetometer(p), Sample::Magnetometer(s)) => p.publish(s).map(drop),
+            (Self::Wheels(p), Sample::WheelTelemetry(s)) => p.publish(s).map(drop),
+            (Self::Cmg(p), Sample::CmgTelemetry(s)) => p.publish(s).map(drop),
+            _ => Ok(()),
+        }
+    }
+}
+
+/// A gateway's ports. The software CAN bus wakes the event loop (which borrows its subscriber)
+/// and works through `&self`, so it is a port; the other links are polled through `&mut` and
+/// belong to the node.
+pub struct CanGatewayPorts {
+    bus_link: Option<Box<SoftwareBusTransport>>,
+    samples: SamplePublisher,
+    status: TopicPublisher<CanLinkStatus>,
+    wheel_commands: Option<TopicSubscriber<WheelCommand>>,
+    cmg_commands: Option<TopicSubscriber<CmgCommand>>,
+}
+
+/// The gateway of one device.
+pub struct CanGateway {
+    gateway: Gateway,
+    /// A link that is not the software bus (polled).
+    other_link: Option<Link>,
+    describe: &'static str,
+    tick_sync: bool,
+    status_interval: Option<SourceId>,
+    tracker: StatusTracker,
+    counters: HeartbeatCounters,
+    latest_ns: u64,
+    ended: bool,
+    /// The CAN node's heartbeats: how many, when they last grew, whether the node is lost.
+    node_seen: (u64, Instant, bool),
+}
+
+impl CanGateway {
+    pub fn open(cx: &Context, device: GatewayDevice) -> anyhow::Result<(Self, CanGatewayPorts)> {
+        let (config, bus, name) = (cx.config, cx.bus, cx.name);
+        let schedule = config.schedule()?;
+        let protocol = node::protocol(config).context("the CAN protocol of the model configuration")?;
+        let tick_sync = config.run.mode == ClockMode::Lockstep;
+        let link = Link::open(bus, config, device).with_context(|| format!("{name}: opening its link"))?;
+        let describe = link.describe();
+        if tick_sync && !matches!(link, Link::Bus(_)) {
+            bail!(
+                "{name}: a lockstep run needs the software CAN bus (can.link = \"software_bus\"); a {describe} cannot \
+                 wait for the simulation clock (run paced, or replay a candump file with can-replay)"
+            );
+        }
+        let gateway = Gateway::new(device, protocol, schedule, tick_sync);
+        let (bus_link, other_link) = match link {
+            Link::Bus(t) => (Some(t), None),
+            other => (None, Some(other)),
+        };
+        let ports = CanGatewayPorts {
+            bus_link,
+            samples: SamplePublisher::new(bus, device)?,
+            status: bus.publisher()?,
+            wheel_commands: (device == GatewayDevice::Wheels).then(|| bus.subscriber()).transpose()?,
+            cmg_commands: (device == GatewayDevice::Cmg).then(|| bus.subscriber()).transpose()?,
+        };
+        let node = Self {
+            gateway,
+            other_link,
+            describe,
+            tick_sync,
+            status_interval: None,
+            tracker: StatusTracker::new(device.source_id()),
+            counters: HeartbeatCounters::default(),
+            latest_ns: 0,
+            ended: false,
+            node_seen: (0, Instant::now(), false),
+        };
+        Ok((node, ports))
+    }
+
+    fn publish_status(&mut self, ports: &CanGatewayPorts, io: &Io, t_ns: u64) -> anyhow::Result<()> {
+        if let Some(s) = self.tracker.due(t_ns, self.gateway.status()) {
+            ports.status.publish(&s)?;
+        }
+        self.counters.update(io.heartbeat, &self.gateway.status());
+        Ok(())
+    }
+
+    /// Decodes every received frame and publishes the samples; false when the link has ended.
+    fn receive(&mut self, ports: &CanGatewayPorts, io: &Io) -> anyhow::Result<bool> {
+        loop {
+            let received = match (&ports.bus_link, &mut self.other_link) {
+                (Some(t), _) => t.poll(),
+                (None, Some(link)) => link.poll(),
+                (None, None) => Ok(None),
+            };
+            let frame = match received {
+                Ok(Some(frame)) => frame,
+                Ok(None) => return Ok(true),
+                Err(TransportError::Closed) => return Ok(false),
+                Err(e) => {
+                    self.gateway.count_transport_error();
+                    tracing::warn!("{}: receiving: {e}", io.name);
+                    return Ok(true);
+                }
+            };
+            io.heartbeat.add_samples_in(1);
+            let outcome = self.gateway.on_frame(&frame.frame);
+            let rejected = match (&ports.bus_link, &self.other_link) {
+                (Some(t), _) => t.stats().check_errors + t.stats().invalid,
+                (None, Some(link)) => link.rejected(),
+                (None, None) => 0,
+            };
+            self.gateway.set_link_check_errors(rejected);
+            if let Some(t_ns) = outcome.tick.filter(|_| !outcome.samples.is_empty()) {
+                // The status goes out before the samples, which let the lockstep run go on; only
+                // at ticks with a sample (where the run waits for this gateway), so the status
+                // is always logged within its tick.
+                self.publish_status(ports, io, t_ns)?;
+            }
+            for sample in &outcome.samples {
+                self.latest_ns = testbed_gateways::gateway::sample_header(sample).time_ns;
+                io.heartbeat.set_time_ns(self.latest_ns);
+                ports.samples.publish(sample)?;
+                io.heartbeat.add_samples_out(1);
+            }
+        }
+    }
+
+    /// Limits, encodes and sends every pending command.
+    fn send_commands(&mut self, ports: &CanGatewayPorts, io: &Io) -> anyhow::Result<()> {
+        let gateway = &mut self.gateway;
+        let mut batches = Vec::new();
+        let drained = match (&ports.wheel_commands, &ports.cmg_commands) {
+            (Some(s), _) => s.drain(|c| batches.push((c.header.time_ns, gateway.wheel_command(&c))))?,
+            (_, Some(s)) => s.drain(|c| batches.push((c.header.time_ns, gateway.cmg_command(&c))))?,
+            _ => 0,
+        };
+        io.heartbeat.add_samples_in(drained as u64);
+        for (t_ns, batch) in batches {
+            let batch = match batch {
+                Ok(batch) => batch,
+                Err(e) => {
+                    // Cannot happen after limiting; counted rather than sent.
+                    tracing::warn!("{}: command not encoded: {e}", io.name);
+                    gateway.count_transport_error();
+                    continue;
+                }
+            };
+            for frame in &batch {
+                let sent = match (&ports.bus_link, &mut self.other_link) {
+                    (Some(t), _) => {
+                        t.set_time_ns(t_ns);
+                        t.send_frame(frame)
+                    }
+                    (None, Some(link)) => link.send(frame, t_ns),
+                    (None, None) => Ok(()),
+                };
+                match sent {
+                    Ok(()) => gateway.count_sent(1),
+                    Err(e) => {
+                        gateway.count_transport_error();
+                        tracing::warn!("{}: sending {frame}: {e}", io.name);
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+impl Node for CanGateway {
+    type Ports = CanGatewayPorts;
+
+    fn wake_on<'a>(&mut self, ports: &'a CanGatewayPorts, wake: &mut WakeOn<'_, '_, 'a>) -> anyhow::Result<()> {
+        match &ports.bus_link {
+            Some(t) => wake.data(t.subscriber())?,
+            None => wake.interval(POLL_PERIOD)?,
+        };
+        if let Some(s) = &ports.wheel_commands {
+            wake.data(s)?;
+        }
+        if let Some(s) = &ports.cmg_commands {
+            wake.data(s)?;
+        }
+        self.status_interval = (!self.tick_sync).then(|| wake.interval(Duration::from_secs(1))).transpose()?;
+        Ok(())
+    }
+
+    fn start(&mut self, _ports: &CanGatewayPorts, io: &Io) -> anyhow::Result<Flow> {
+        tracing::info!(link = self.describe, tick_sync = self.tick_sync, "{} running", io.name);
+        Ok(Flow::Continue)
+    }
+
+    fn on_wake(&mut self, ports: &CanGatewayPorts, wake: Wake, io: &Io) -> anyhow::Result<Flow> {
+        if !self.receive(ports, io)? {
+            self.ended = true;
+            return Ok(Flow::Stop);
+        }
+        self.send_commands(ports, io)?;
+        let name = io.name;
+        if self.gateway.node_heartbeats() != self.node_seen.0 {
+            if self.node_seen.2 {
+                tracing::info!("{name}: the CAN node is back");
+                io.heartbeat.set_state(ProcessState::Running);
+            }
+            self.node_seen = (self.gateway.node_heartbeats(), Instant::now(), false);
+        }
+        if self.status_interval.is_some_and(|s| wake == Wake::Tick(s)) {
+            if !self.node_seen.2 && self.node_seen.1.elapsed() > NODE_LOST_AFTER {
+                tracing::warn!("{name}: no CAN node heartbeat for {NODE_LOST_AFTER:?}: node lost");
+                io.heartbeat.set_state(ProcessState::Degraded);
+                self.node_seen.2 = true;
+            }
+            self.publish_status(ports, io, self.latest_ns)?;
+        }
+        if !self.tick_sync {
+            self.counters.update(io.heartbeat, &self.gateway.status());
+        }
+        Ok(Flow::Continue)
+    }
+
+    fn stop(&mut self, _ports: &CanGatewayPorts, io: &Io, exit: LoopExit) -> anyhow::Result<()> {
+        let s = self.gateway.status();
+        let (late_messages, foreign) = self.gateway.dropped_messages();
+        tracing::info!(
+            ?exit,
+            ended_with_input = self.ended,
+            frames_ok = s.frames_ok,
+            frames_bad = s.frames_bad,
+            lost = s.lost_frames,
+            crc = s.crc_errors,
+            late = s.late_frames,
+            stale = s.stale_samples,
+            clamped = s.commands_clamped,
+            refused = s.commands_refused,
+            late_messages,
+            foreign,
+            "{} stopping",
+            io.name
+        );
+        Ok(())
+    }
+}

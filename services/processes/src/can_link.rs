@@ -1,0 +1,108 @@
+//! A CAN gateway's device link: the software CAN bus, a SocketCAN interface, a `candump -L`
+//! file or a serial line, as the run configuration says.
+
+use anyhow::Context as _;
+use ipc_types::SampleHeader;
+use std::fs::File;
+use std::io::BufReader;
+use std::time::Duration;
+use testbed_bus::Bus;
+use testbed_can::transport::{CandumpReplay, Pacing, SerialConfig, SerialTransport, SocketCanTransport};
+use testbed_can::{CanFrame, CanTransport, Device, TimestampedFrame, TransportError};
+use testbed_gateways::bus_transport::SoftwareBusTransport;
+use testbed_gateways::gateway::GatewayDevice;
+use testbed_gateways::node;
+use testbed_runtime::run_config::{CanLink, RunConfig};
+
+/// Frames a software-bus receiver buffers (a tick holds about 20).
+pub const BUS_BUFFER: usize = 128;
+
+/// A gateway's device link.
+pub enum Link {
+    /// The software CAN bus.
+    Bus(Box<SoftwareBusTransport>),
+    /// A SocketCAN interface, filtered to the device's and the node's identifiers.
+    SocketCan(SocketCanTransport),
+    /// A `candump -L` file.
+    Candump(CandumpReplay<BufReader<File>>),
+    /// A device wired directly by RS-232.
+    Serial(SerialTransport),
+}
+
+impl Link {
+    /// Opens the link the run configuration gives `device`.
+    pub fn open(bus: &Bus, config: &RunConfig, device: GatewayDevice) -> anyhow::Result<Self> {
+        let can = &config.can;
+        if let Some(serial) = can.serial.get(device.config_name()) {
+            let path = serial.path.to_string_lossy().into_owned();
+            let transport = SerialTransport::open(&SerialConfig { path: path.clone(), baud: serial.baud })
+                .with_context(|| format!("can.serial.{}: opening {path}", device.config_name()))?;
+            return Ok(Link::Serial(transport));
+        }
+        Ok(match can.link {
+            CanLink::SoftwareBus => {
+                Link::Bus(Box::new(SoftwareBusTransport::open(bus, device.source_id(), SampleHeader::VALID, BUS_BUFFER)?))
+            }
+            CanLink::Socketcan => {
+                let mut transport = SocketCanTransport::open(&can.interface)
+                    .with_context(|| format!("can.interface = {:?}", can.interface))?;
+                let protocol = node::protocol(config)?;
+                transport
+                    .set_device_filters(protocol.ids(), &[device.can_device(), Device::Node])
+                    .with_context(|| format!("filters on {}", can.interface))?;
+                Link::SocketCan(transport)
+            }
+            CanLink::Candump => {
+                let path = can.candump.as_ref().context("can.link = \"candump\" needs can.candump (the file)")?;
+                let pacing = match can.replay_speed {
+                    0.0 => Pacing::AsFastAsPossible,
+                    speed => Pacing::Timed { speed },
+                };
+                Link::Candump(CandumpReplay::open(path, pacing).with_context(|| format!("can.candump = {}", path.display()))?)
+            }
+        })
+    }
+
+    /// The next received frame, without waiting.
+    pub fn poll(&mut self) -> Result<Option<TimestampedFrame>, TransportError> {
+        match self {
+            Link::Bus(t) => t.poll(),
+            Link::SocketCan(t) => t.recv(Duration::ZERO),
+            Link::Candump(t) => t.recv(Duration::ZERO),
+            Link::Serial(t) => t.recv(Duration::ZERO),
+        }
+    }
+
+    /// Sends `frame`, stamped `time_ns` where the link carries a time.
+    pub fn send(&mut self, frame: &CanFrame, time_ns: u64) -> Result<(), TransportError> {
+        match self {
+            Link::Bus(t) => {
+                t.set_time_ns(time_ns);
+                t.send_frame(frame)
+            }
+            Link::SocketCan(t) => t.send(frame),
+            Link::Candump(t) => t.send(frame),
+            Link::Serial(t) => t.send(frame),
+        }
+    }
+
+    /// Frames the link itself rejected so far: failed frame checks (software bus), error
+    /// frames (SocketCAN), bad packets (serial), malformed lines (candump).
+    pub fn rejected(&self) -> u64 {
+        match self {
+            Link::Bus(t) => t.stats().check_errors + t.stats().invalid,
+            Link::SocketCan(t) => t.error_frames(),
+            Link::Candump(t) => t.stats().malformed,
+            Link::Serial(t) => t.stats().dropped(),
+        }
+    }
+
+    pub fn describe(&self) -> &'static str {
+        match self {
+            Link::Bus(_) => "software CAN bus",
+            Link::SocketCan(_) => "SocketCAN",
+            Link::Candump(_) => "candump file",
+            Link::Serial(_) => "serial line",
+        }
+    }
+}

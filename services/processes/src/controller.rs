@@ -1,0 +1,82 @@
+//! The controller process: PD + friction compensation on the wheels (or the CMG slew law), one
+//! command per tick from the estimate and the actuators' telemetry. In a paced run a tick whose
+//! estimate is later than its period plus the configured slack is a missed deadline.
+
+use ipc_types::{AttitudeEstimate, CmgCommand, CmgTelemetry, ControllerStatus, WheelCommand, WheelTelemetry};
+use std::time::Duration;
+use testbed_bus::{Flow, LoopExit, TopicPublisher, TopicSubscriber, Wake};
+use testbed_flight::controller_node::ControllerNode;
+use testbed_flight::tasks::ControllerTask;
+use testbed_runtime::{Context, Io, Node, WakeOn};
+
+/// The controller's ports: estimate and actuator telemetry in; status and commands out.
+pub struct ControllerPorts {
+    estimate: TopicSubscriber<AttitudeEstimate>,
+    wheels: TopicSubscriber<WheelTelemetry>,
+    cmg: TopicSubscriber<CmgTelemetry>,
+    status: TopicPublisher<ControllerStatus>,
+    wheel_command: TopicPublisher<WheelCommand>,
+    cmg_command: TopicPublisher<CmgCommand>,
+}
+
+/// The controller process: [`ControllerNode`] on the bus.
+pub struct ControllerProcess {
+    node: ControllerNode,
+    /// How late an estimate may be (paced runs): the tick period plus `run.deadline_slack_s`.
+    deadline: Duration,
+}
+
+impl ControllerProcess {
+    pub fn open(cx: &Context) -> anyhow::Result<(Self, ControllerPorts)> {
+        let config = cx.config;
+        let schedule = config.schedule()?;
+        let task = ControllerTask::new(&config.controller, &config.model, config.manoeuvre.target())?;
+        let node = ControllerNode::new(task, config.controller.actuators, schedule);
+        let deadline = Duration::from_secs_f64(schedule.period_s() + config.run.deadline_slack_s);
+        let ports = ControllerPorts {
+            estimate: cx.bus.subscriber()?,
+            wheels: cx.bus.subscriber()?,
+            cmg: cx.bus.subscriber()?,
+            status: cx.bus.publisher()?,
+            wheel_command: cx.bus.publisher()?,
+            cmg_command: cx.bus.publisher()?,
+        };
+        Ok((Self { node, deadline }, ports))
+    }
+}
+
+impl Node for ControllerProcess {
+    type Ports = ControllerPorts;
+
+    fn wake_on<'a>(&mut self, ports: &'a ControllerPorts, wake: &mut WakeOn<'_, '_, 'a>) -> anyhow::Result<()> {
+        wake.data_within(&ports.estimate, self.deadline)?;
+        wake.data(&ports.wheels)?;
+        wake.data(&ports.cmg)?;
+        Ok(())
+    }
+
+    fn on_wake(&mut self, ports: &ControllerPorts, wake: Wake, io: &Io) -> anyhow::Result<Flow> {
+        let node = &mut self.node;
+        if let Wake::DeadlineMissed(_) = wake {
+            node.count_deadline_miss();
+            tracing::warn!(misses = node.deadline_misses(), "control cycle missed its deadline");
+        }
+        let received = ports.estimate.drain(|e| node.on_estimate(&e))?
+            + ports.wheels.drain(|t| node.on_wheel_telemetry(&t))?
+            + ports.cmg.drain(|t| node.on_cmg_telemetry(&t))?;
+        io.heartbeat.add_samples_in(received as u64);
+        for cycle in node.ready() {
+            io.heartbeat.set_time_ns(cycle.status.header.time_ns);
+            ports.status.publish(&cycle.status)?;
+            ports.wheel_command.publish(&cycle.wheels)?;
+            ports.cmg_command.publish(&cycle.cmg)?;
+            io.heartbeat.add_samples_out(3);
+        }
+        Ok(Flow::Continue)
+    }
+
+    fn stop(&mut self, _ports: &ControllerPorts, _io: &Io, _exit: LoopExit) -> anyhow::Result<()> {
+        tracing::info!(deadline_misses = self.node.deadline_misses(), errors = self.node.errors(), "controller stopping");
+        Ok(())
+    }
+}

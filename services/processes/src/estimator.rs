@@ -1,0 +1,64 @@
+//! The estimator process: the MEKF, propagating on every gyro sample and updating from the
+//! inclinometer and magnetometer; one attitude estimate per tick.
+
+use ipc_types::{AttitudeEstimate, GyroSample, InclinometerSample, MagnetometerSample};
+use testbed_bus::{Flow, TopicPublisher, TopicSubscriber, Wake};
+use testbed_flight::estimator_node::EstimatorNode;
+use testbed_runtime::{Context, Io, Node, WakeOn};
+
+/// The estimator's ports: the three sensor streams in, the estimate out.
+pub struct EstimatorPorts {
+    gyro: TopicSubscriber<GyroSample>,
+    tilt: TopicSubscriber<InclinometerSample>,
+    field: TopicSubscriber<MagnetometerSample>,
+    estimate: TopicPublisher<AttitudeEstimate>,
+}
+
+/// The estimator process: [`EstimatorNode`] on the bus.
+pub struct EstimatorProcess {
+    node: EstimatorNode,
+}
+
+impl EstimatorProcess {
+    pub fn open(cx: &Context) -> anyhow::Result<(Self, EstimatorPorts)> {
+        let node = EstimatorNode::new(cx.config.estimator_config(), cx.config.schedule()?);
+        let ports = EstimatorPorts {
+            gyro: cx.bus.subscriber()?,
+            tilt: cx.bus.subscriber()?,
+            field: cx.bus.subscriber()?,
+            estimate: cx.bus.publisher()?,
+        };
+        Ok((Self { node }, ports))
+    }
+}
+
+impl Node for EstimatorProcess {
+    type Ports = EstimatorPorts;
+
+    fn wake_on<'a>(&mut self, ports: &'a EstimatorPorts, wake: &mut WakeOn<'_, '_, 'a>) -> anyhow::Result<()> {
+        wake.data(&ports.gyro)?;
+        wake.data(&ports.tilt)?;
+        wake.data(&ports.field)?;
+        Ok(())
+    }
+
+    fn on_wake(&mut self, ports: &EstimatorPorts, _wake: Wake, io: &Io) -> anyhow::Result<Flow> {
+        let node = &mut self.node;
+        let received = ports.gyro.drain(|s| node.on_gyro(&s))?
+            + ports.tilt.drain(|s| node.on_inclinometer(&s))?
+            + ports.field.drain(|s| node.on_magnetometer(&s))?;
+        io.heartbeat.add_samples_in(received as u64);
+        for estimate in node.ready() {
+            io.heartbeat.set_time_ns(estimate.header.time_ns);
+            ports.estimate.publish(&estimate)?;
+            io.heartbeat.add_samples_out(1);
+        }
+        Ok(Flow::Continue)
+    }
+
+    fn stop(&mut self, _ports: &EstimatorPorts, _io: &Io, _exit: testbed_bus::LoopExit) -> anyhow::Result<()> {
+        let counters = self.node.counters();
+        tracing::info!(?counters, "estimator stopping");
+        Ok(())
+    }
+}

@@ -1,0 +1,223 @@
+//! The logger process: subscribes to every topic without loss and writes the run's MCAP log, with
+//! the run configuration attached. In lockstep it writes each tick's records sorted once the
+//! next tick shows the tick complete, so two runs with the same seed give identical bytes
+//! (heartbeats, which carry pids, are left out there). On SIGINT/SIGTERM it drains what is
+//! queued and finalises the file; killed outright, every record written so far stays readable.
+//!
+//! With `can.record_candump`, the software CAN bus's frames also go to `<log>.candump.log` as
+//! `candump -L` lines (can-utils reads them: `canplayer`, `log2asc`), time-stamped with the run
+//! clock and, in lockstep, ordered per tick by (time, sender, sender's sequence) so the file is
+//! as reproducible as the log. Frames whose frame check fails (corrupted on the bus) are left
+//! out, as `candump` never sees a frame that failed its CRC.
+
+use anyhow::Context as _;
+use ipc_types::*;
+use std::collections::BTreeMap;
+use std::io::BufWriter;
+use testbed_bus::{Bus, Flow, LoopExit, SubscriberOptions, TopicSubscriber, Wake};
+use testbed_can::CanFrame;
+use testbed_can::transport::CandumpWriter;
+use testbed_log::{LogEncode, LogRecord, RunInfo, RunLogWriter, WriterOptions};
+use testbed_runtime::{ClockMode, Context, Io, Node, WakeOn};
+
+/// A subscriber whose samples go to the log, whatever their type.
+pub trait LoggedTopic {
+    fn attach<'a>(&'a self, wake: &mut WakeOn<'_, '_, 'a>) -> anyhow::Result<()>;
+    fn drain(&self, sink: &mut dyn FnMut(LogRecord)) -> anyhow::Result<usize>;
+}
+
+struct Logged<T: Topic>(TopicSubscriber<T>);
+
+impl<T: Topic + LogEncode> LoggedTopic for Logged<T> {
+    fn attach<'a>(&'a self, wake: &mut WakeOn<'_, '_, 'a>) -> anyhow::Result<()> {
+        wake.data(&self.0)?;
+        Ok(())
+    }
+    fn drain(&self, sink: &mut dyn FnMut(LogRecord)) -> anyhow::Result<usize> {
+        Ok(self.0.drain(|s| sink(s.into_record()))?)
+    }
+}
+
+fn logged<T: Topic + LogEncode + 'static>(bus: &Bus) -> anyhow::Result<Box<dyn LoggedTopic>> {
+    // Deep buffers absorb bursts; in lockstep, publishers wait rather than drop when full.
+    Ok(Box::new(Logged(bus.subscriber_with::<T>(SubscriberOptions::buffer(256))?)))
+}
+
+/// The logger's ports: one subscriber per logged topic.
+pub struct LoggerPorts {
+    topics: Vec<Box<dyn LoggedTopic>>,
+}
+
+/// The logger process: the log writer and the CAN recording.
+pub struct LoggerProcess {
+    lockstep: bool,
+    path: std::path::PathBuf,
+    writer: Option<RunLogWriter>,
+    candump: Option<BusRecording>,
+}
+
+impl LoggerProcess {
+    pub fn open(cx: &Context) -> anyhow::Result<(Self, LoggerPorts)> {
+        let (config, bus) = (cx.config, cx.bus);
+        let lockstep = config.run.mode == ClockMode::Lockstep;
+        let mut topics: Vec<Box<dyn LoggedTopic>> = vec![
+            logged::<SimClockTick>(bus)?,
+            logged::<SimTruth>(bus)?,
+            logged::<GyroSample>(bus)?,
+            logged::<InclinometerSample>(bus)?,
+            logged::<MagnetometerSample>(bus)?,
+            logged::<WheelTelemetry>(bus)?,
+            logged::<CmgTelemetry>(bus)?,
+            logged::<AttitudeEstimate>(bus)?,
+            logged::<ControllerStatus>(bus)?,
+            logged::<WheelCommand>(bus)?,
+            logged::<CmgCommand>(bus)?,
+            logged::<CanBusFrame>(bus)?,
+            logged::<CanLinkStatus>(bus)?,
+            logged::<AppliedWheelCommand>(bus)?,
+            logged::<AppliedCmgCommand>(bus)?,
+        ];
+        if !lockstep {
+            topics.push(logged::<Heartbeat>(bus)?);
+        }
+        let info = RunInfo {
+            profile: config.run.profile.clone(),
+            seed: config.run.seed,
+            mode: if lockstep { "lockstep" } else { "paced" }.to_string(),
+            config_toml: config.to_toml_string(),
+            extra: Default::default(),
+        };
+        let path = config.run.log.clone();
+        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        }
+        let options = if lockstep { WriterOptions::lockstep() } else { WriterOptions::default() };
+        let writer = RunLogWriter::create_with(&path, &info, options)
+            .with_context(|| format!("creating the log {}", path.display()))?;
+        let candump = match config.can.record_candump {
+            true => Some(BusRecording::create(&path.with_extension("candump.log"), &config.can.interface)?),
+            false => None,
+        };
+        Ok((Self { lockstep, path, writer: Some(writer), candump }, LoggerPorts { topics }))
+    }
+
+    /// Writes every queued sample; the time of the newest clock tick among them, if any.
+    fn write_pass(&mut self, ports: &LoggerPorts, io: &Io) -> anyhow::Result<Option<u64>> {
+        let writer = self.writer.as_mut().context("the log is already finalised")?;
+        let candump = &mut self.candump;
+        let mut newest_tick = None;
+        let mut failure = None;
+        for topic in &ports.topics {
+            topic.drain(&mut |record| {
+                if let LogRecord::SimClock(tick) = &record {
+                    newest_tick = Some(tick.header.time_ns);
+                }
+                io.heartbeat.add_samples_in(1);
+                if let (LogRecord::CanBus(frame), Some(candump)) = (&record, candump.as_mut()) {
+                    candump.push(*frame);
+                }
+                if let Err(e) = writer.write_record(&record) {
+                    failure.get_or_insert(e);
+                }
+            })?;
+        }
+        failure.map_or(Ok(newest_tick), |e| Err(e.into()))
+    }
+}
+
+impl Node for LoggerProcess {
+    type Ports = LoggerPorts;
+
+    fn wake_on<'a>(&mut self, ports: &'a LoggerPorts, wake: &mut WakeOn<'_, '_, 'a>) -> anyhow::Result<()> {
+        for topic in &ports.topics {
+            topic.attach(wake)?;
+        }
+        Ok(())
+    }
+
+    fn on_wake(&mut self, ports: &LoggerPorts, _wake: Wake, io: &Io) -> anyhow::Result<Flow> {
+        match self.write_pass(ports, io)? {
+            // Everything published before tick k's clock sample is queued by now; one more pass
+            // collects what landed in subscribers drained before the clock's.
+            Some(t_ns) if self.lockstep && t_ns > 0 => {
+                self.write_pass(ports, io)?;
+                if let Some(writer) = self.writer.as_mut() {
+                    writer.complete_until(t_ns - 1)?;
+                }
+                if let Some(c) = self.candump.as_mut() {
+                    c.write_until(t_ns - 1)?;
+                }
+            }
+            _ => {
+                if !self.lockstep {
+                    if let Some(c) = self.candump.as_mut() {
+                        c.write_until(u64::MAX)?;
+                    }
+                }
+                if let Some(writer) = self.writer.as_mut() {
+                    writer.flush()?;
+                }
+            }
+        }
+        Ok(Flow::Continue)
+    }
+
+    fn stop(&mut self, ports: &LoggerPorts, io: &Io, _exit: LoopExit) -> anyhow::Result<()> {
+        let last = self.write_pass(ports, io);
+        let writer = self.writer.take().context("the log is already finalised")?;
+        let stats = writer.finish().with_context(|| format!("finalising the log {}", self.path.display()))?;
+        tracing::info!(log = %self.path.display(), ?stats, "log finalised");
+        if let Some(candump) = self.candump.take() {
+            candump.finish()?;
+        }
+        last.map(|_| ())
+    }
+}
+
+/// The software CAN bus written as a `candump -L` file.
+struct BusRecording {
+    path: std::path::PathBuf,
+    writer: CandumpWriter<BufWriter<std::fs::File>>,
+    /// Frames not yet written, by (time, sender, sender's sequence).
+    pending: BTreeMap<(u64, u32, u64), CanBusFrame>,
+    written: u64,
+    corrupted: u64,
+}
+
+impl BusRecording {
+    fn create(path: &std::path::Path, iface: &str) -> anyhow::Result<Self> {
+        let file = std::fs::File::create(path).with_context(|| format!("creating {}", path.display()))?;
+        let writer = CandumpWriter::new(BufWriter::new(file), iface).with_context(|| format!("can.interface for {}", path.display()))?;
+        Ok(Self { path: path.to_path_buf(), writer, pending: BTreeMap::new(), written: 0, corrupted: 0 })
+    }
+
+    fn push(&mut self, frame: CanBusFrame) {
+        let h = frame.header;
+        self.pending.insert((h.time_ns, h.source_id, h.sequence), frame);
+    }
+
+    /// Writes the frames sent at or before `t_ns`, in key order.
+    fn write_until(&mut self, t_ns: u64) -> anyhow::Result<()> {
+        while let Some(entry) = self.pending.first_entry() {
+            if entry.key().0 > t_ns {
+                break;
+            }
+            let sample = entry.remove();
+            match CanFrame::from_bus_frame(&sample) {
+                Ok(frame) => {
+                    self.writer.write(sample.header.time_ns, &frame).with_context(|| format!("writing {}", self.path.display()))?;
+                    self.written += 1;
+                }
+                Err(_) => self.corrupted += 1,
+            }
+        }
+        Ok(())
+    }
+
+    fn finish(mut self) -> anyhow::Result<()> {
+        self.write_until(u64::MAX)?;
+        self.writer.flush().with_context(|| format!("writing {}", self.path.display()))?;
+        tracing::info!(candump = %self.path.display(), frames = self.written, corrupted_left_out = self.corrupted, "bus recording finalised");
+        Ok(())
+    }
+}
