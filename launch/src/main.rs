@@ -6,7 +6,7 @@ use std::process::ExitCode;
 use anyhow::{Context as _, bail};
 use clap::Parser;
 use testbed_bus::BusConfig;
-use testbed_launch::profile::{Mode, Profile};
+use testbed_launch::profile::{ClockMode, Profile};
 use testbed_launch::sys::{self, SignalSet};
 use testbed_launch::{Plan, ProfileError, Supervisor};
 
@@ -67,9 +67,9 @@ fn plan(args: &Args) -> anyhow::Result<Result<Plan, ProfileError>> {
     let mut run = profile.run.clone();
     if let Some(mode) = &args.mode {
         run.mode = if mode == "lockstep" {
-            Mode::Lockstep
+            ClockMode::Lockstep
         } else {
-            Mode::Paced
+            ClockMode::Paced
         };
     }
     let mut supervision = profile.supervision;
@@ -124,7 +124,7 @@ fn plan(args: &Args) -> anyhow::Result<Result<Plan, ProfileError>> {
         bus,
         bin_dir,
     };
-    if plan.run.mode == Mode::Lockstep && plan.has_real_devices() {
+    if plan.run.mode == ClockMode::Lockstep && plan.has_real_devices() {
         bail!("--mode lockstep: the profile has real devices, which cannot run in lockstep");
     }
     Ok(Ok(plan))

@@ -37,6 +37,7 @@ use std::collections::{BTreeMap, HashMap};
 use std::fmt;
 use std::path::{Path, PathBuf};
 
+pub use ipc_types::{ClockMode, Device};
 use serde::Deserialize;
 
 /// Environment variables the launcher sets for every child; a profile may not set them.
@@ -77,32 +78,6 @@ pub enum ProfileError {
     },
 }
 
-/// How the simulation clock advances.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Mode {
-    /// The plant advances only when the pipeline has answered the current tick.
-    Lockstep,
-    /// 1× wall time.
-    Paced,
-}
-
-impl Mode {
-    /// The name used in profiles and in `TESTBED_RUN_MODE`.
-    pub const fn as_str(self) -> &'static str {
-        match self {
-            Self::Lockstep => "lockstep",
-            Self::Paced => "paced",
-        }
-    }
-}
-
-impl fmt::Display for Mode {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.as_str())
-    }
-}
-
 /// Whether a device is the real one (gateway) or simulated.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
 #[serde(rename_all = "lowercase")]
@@ -119,44 +94,6 @@ impl Source {
         match self {
             Self::Real => "real",
             Self::Simulated => "simulated",
-        }
-    }
-}
-
-/// The platform's devices.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Device {
-    /// Three-axis rate gyro.
-    Gyro,
-    /// Two-axis inclinometer.
-    Inclinometer,
-    /// Three-axis magnetometer.
-    Magnetometer,
-    /// The three reaction wheels.
-    Wheels,
-    /// The four control moment gyros.
-    Cmg,
-}
-
-impl Device {
-    /// Every device.
-    pub const ALL: [Self; 5] = [
-        Self::Gyro,
-        Self::Inclinometer,
-        Self::Magnetometer,
-        Self::Wheels,
-        Self::Cmg,
-    ];
-
-    /// The name used in profiles.
-    pub const fn as_str(self) -> &'static str {
-        match self {
-            Self::Gyro => "gyro",
-            Self::Inclinometer => "inclinometer",
-            Self::Magnetometer => "magnetometer",
-            Self::Wheels => "wheels",
-            Self::Cmg => "cmg",
         }
     }
 }
@@ -190,7 +127,7 @@ impl OnExit {
 #[serde(deny_unknown_fields)]
 pub struct RunSettings {
     /// Clock mode.
-    pub mode: Mode,
+    pub mode: ClockMode,
     /// Simulated duration, s.
     pub duration_s: Option<f64>,
     /// Random seed.
@@ -379,7 +316,7 @@ impl Profile {
         self.check_seconds("supervision.stop_timeout_s", s.stop_timeout_s, true)?;
         self.check_seconds("supervision.term_timeout_s", s.term_timeout_s, true)?;
         self.check_seconds("supervision.restart_delay_s", s.restart_delay_s, true)?;
-        if self.run.mode == Mode::Lockstep
+        if self.run.mode == ClockMode::Lockstep
             && let Some((device, _)) = self.devices.iter().find(|(_, s)| **s == Source::Real)
         {
             return Err(self.invalid(
@@ -387,7 +324,7 @@ impl Profile {
                 "lockstep",
                 format!(
                     "lockstep needs every device simulated, but devices.{} = \"real\" (use \"paced\")",
-                    device.as_str()
+                    device.name()
                 ),
             ));
         }
@@ -493,21 +430,21 @@ impl Profile {
             let Some(chosen) = self.devices.get(&device) else {
                 return Err(self.invalid(
                     key,
-                    device.as_str(),
-                    format!("[devices] does not list {}", device.as_str()),
+                    device.name(),
+                    format!("[devices] does not list {}", device.name()),
                 ));
             };
             if *chosen != source {
                 return Err(self.invalid(
                     format!("process.{}.source", p.name),
                     source.as_str(),
-                    format!("devices.{} = \"{}\"", device.as_str(), chosen.as_str()),
+                    format!("devices.{} = \"{}\"", device.name(), chosen.as_str()),
                 ));
             }
             if let Some(other) = served.insert(device, &p.name) {
                 return Err(self.invalid(
                     key,
-                    device.as_str(),
+                    device.name(),
                     format!("process {other:?} already serves this device"),
                 ));
             }
@@ -515,7 +452,7 @@ impl Profile {
         for device in self.devices.keys() {
             if !served.contains_key(device) {
                 return Err(self.invalid(
-                    format!("devices.{}", device.as_str()),
+                    format!("devices.{}", device.name()),
                     self.devices[device].as_str(),
                     "no [[process]] serves this device (set its `device` and `source`)",
                 ));

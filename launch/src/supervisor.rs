@@ -9,7 +9,7 @@ use std::os::unix::process::CommandExt as _;
 use testbed_bus::{BusConfig, cleanup_dead_nodes};
 
 use crate::profile::{
-    Device, Mode, OnExit, ProcessSpec, Profile, RunSettings, Source, Supervision,
+    Device, ClockMode, OnExit, ProcessSpec, Profile, RunSettings, Source, Supervision,
 };
 use crate::sys::{self, ExitHow, SignalSet};
 
@@ -100,7 +100,7 @@ impl Plan {
         env.push((ENV_RUN_PROFILE.to_owned(), profile.display().to_string()));
         for device in Device::ALL {
             if let Some(source) = self.profile.devices.get(&device) {
-                let key = format!("{ENV_DEVICE_PREFIX}{}", device.as_str().to_uppercase());
+                let key = format!("{ENV_DEVICE_PREFIX}{}", device.name().to_uppercase());
                 env.push((key, source.as_str().to_owned()));
             }
         }
@@ -108,10 +108,10 @@ impl Plan {
     }
 
     /// Delivery mode for the run: lossless in lockstep, overflow when paced.
-    pub fn delivery_for(mode: Mode) -> testbed_bus::Delivery {
+    pub fn delivery_for(mode: ClockMode) -> testbed_bus::Delivery {
         match mode {
-            Mode::Lockstep => testbed_bus::Delivery::Lossless,
-            Mode::Paced => testbed_bus::Delivery::Overflow,
+            ClockMode::Lockstep => testbed_bus::Delivery::Lossless,
+            ClockMode::Paced => testbed_bus::Delivery::Overflow,
         }
     }
 

@@ -2,7 +2,7 @@
 
 use std::path::{Path, PathBuf};
 
-use testbed_launch::profile::{Device, Mode, Profile, Source};
+use testbed_launch::profile::{Device, ClockMode, Profile, Source};
 
 fn profiles_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("profiles")
@@ -67,7 +67,7 @@ fn shipped_profiles_are_valid() {
         );
     }
     let sim = Profile::load(&profiles_dir().join("simulation.toml")).expect("valid");
-    assert_eq!(sim.run.mode, Mode::Lockstep);
+    assert_eq!(sim.run.mode, ClockMode::Lockstep);
     assert!(sim.devices.values().all(|s| *s == Source::Simulated));
     assert!(
         sim.processes
@@ -84,7 +84,7 @@ fn shipped_profiles_are_valid() {
     );
     let mixed = Profile::load(&profiles_dir().join("mixed.toml")).expect("valid");
     assert_eq!(mixed.devices[&Device::Gyro], Source::Real);
-    assert_eq!(mixed.run.mode, Mode::Paced);
+    assert_eq!(mixed.run.mode, ClockMode::Paced);
     assert_eq!(
         mixed
             .devices

@@ -34,13 +34,13 @@ enum SamplePublisher {
 }
 
 impl SamplePublisher {
-    fn new(bus: &Bus, device: GatewayDevice) -> Result<Self, BusError> {
+    fn new(bus: &Bus, device: ipc_types::Device) -> Result<Self, BusError> {
         Ok(match device {
-            GatewayDevice::Gyro => Self::Gyro(bus.publisher()?),
-            GatewayDevice::Inclinometer => Self::Inclinometer(bus.publisher()?),
-            GatewayDevice::Magnetometer => Self::Magnetometer(bus.publisher()?),
-            GatewayDevice::Wheels => Self::Wheels(bus.publisher()?),
-            GatewayDevice::Cmg => Self::Cmg(bus.publisher()?),
+            ipc_types::Device::Gyro => Self::Gyro(bus.publisher()?),
+            ipc_types::Device::Inclinometer => Self::Inclinometer(bus.publisher()?),
+            ipc_types::Device::Magnetometer => Self::Magnetometer(bus.publisher()?),
+            ipc_types::Device::Wheels => Self::Wheels(bus.publisher()?),
+            ipc_types::Device::Cmg => Self::Cmg(bus.publisher()?),
         })
     }
 
@@ -84,7 +84,7 @@ pub struct CanGateway {
 }
 
 impl CanGateway {
-    pub fn open(cx: &Context, device: GatewayDevice) -> anyhow::Result<(Self, CanGatewayPorts)> {
+    pub fn open(cx: &Context, device: ipc_types::Device) -> anyhow::Result<(Self, CanGatewayPorts)> {
         let (config, bus, name) = (cx.config, cx.bus, cx.name);
         let schedule = config.schedule()?;
         let protocol = node::protocol(config).context("the CAN protocol of the model configuration")?;
@@ -106,8 +106,8 @@ impl CanGateway {
             bus_link,
             samples: SamplePublisher::new(bus, device)?,
             status: bus.publisher()?,
-            wheel_commands: (device == GatewayDevice::Wheels).then(|| bus.subscriber()).transpose()?,
-            cmg_commands: (device == GatewayDevice::Cmg).then(|| bus.subscriber()).transpose()?,
+            wheel_commands: (device == ipc_types::Device::Wheels).then(|| bus.subscriber()).transpose()?,
+            cmg_commands: (device == ipc_types::Device::Cmg).then(|| bus.subscriber()).transpose()?,
         };
         let node = Self {
             gateway,

@@ -31,12 +31,12 @@ pub enum Link {
 
 impl Link {
     /// Opens the link the run configuration gives `device`.
-    pub fn open(bus: &Bus, config: &RunConfig, device: GatewayDevice) -> anyhow::Result<Self> {
+    pub fn open(bus: &Bus, config: &RunConfig, device: ipc_types::Device) -> anyhow::Result<Self> {
         let can = &config.can;
-        if let Some(serial) = can.serial.get(device.config_name()) {
+        if let Some(serial) = can.serial.get(device.name()) {
             let path = serial.path.to_string_lossy().into_owned();
             let transport = SerialTransport::open(&SerialConfig { path: path.clone(), baud: serial.baud })
-                .with_context(|| format!("can.serial.{}: opening {path}", device.config_name()))?;
+                .with_context(|| format!("can.serial.{}: opening {path}", device.name()))?;
             return Ok(Link::Serial(transport));
         }
         Ok(match can.link {

@@ -8,7 +8,7 @@ use std::time::{Duration, Instant};
 use testbed_bus::{Bus, BusConfig, Delivery, remove_all};
 use testbed_can::transport::{SerialTransport, SocketCanSupport, probe_socketcan};
 use testbed_can::{CanFrame, CanTransport, DeviceStatus, Encoder, GyroMsg, Message, Sample};
-use testbed_gateways::gateway::{Gateway, GatewayDevice, node_stamp_us};
+use testbed_gateways::gateway::{Gateway, node_stamp_us};
 use testbed_gateways::node;
 use testbed_processes::can_link::Link;
 use testbed_gateways::SoftwareBusTransport;
@@ -32,7 +32,7 @@ fn paced_config() -> RunConfig {
 
 /// Polls `link` through a free-running gyro gateway until `n` samples came (or 5 s passed).
 fn gyro_samples(link: &mut Link, config: &RunConfig, n: usize) -> Vec<Sample> {
-    let mut gateway = Gateway::new(GatewayDevice::Gyro, node::protocol(config).unwrap(), config.schedule().unwrap(), false);
+    let mut gateway = Gateway::new(ipc_types::Device::Gyro, node::protocol(config).unwrap(), config.schedule().unwrap(), false);
     let mut out = Vec::new();
     let start = Instant::now();
     while out.len() < n && start.elapsed() < Duration::from_secs(5) {
@@ -82,7 +82,7 @@ fn a_directly_wired_sensor_on_a_serial_line() {
     let bus_config = BusConfig::isolated();
     {
         let bus = Bus::open("gyro-gateway", &bus_config).unwrap();
-        let mut link = Link::open(&bus, &config, GatewayDevice::Gyro).unwrap();
+        let mut link = Link::open(&bus, &config, ipc_types::Device::Gyro).unwrap();
         assert!(matches!(link, Link::Serial(_)));
         let mut device = SerialTransport::from_port(Box::new(master), "sensor");
         let mut encoder = Encoder::new(node::protocol(&config).unwrap());
@@ -125,7 +125,7 @@ fn a_candump_file_replayed_as_fast_as_possible_then_closed() {
     let bus_config = BusConfig::isolated();
     {
         let bus = Bus::open("gyro-gateway", &bus_config).unwrap();
-        let mut link = Link::open(&bus, &config, GatewayDevice::Gyro).unwrap();
+        let mut link = Link::open(&bus, &config, ipc_types::Device::Gyro).unwrap();
         assert_eq!(gyro_samples(&mut link, &config, 4).len(), 4);
         assert!(matches!(link.poll(), Err(testbed_can::TransportError::Closed)));
         assert_eq!(link.rejected(), 4, "the malformed lines");
@@ -140,7 +140,7 @@ fn socketcan_is_opened_on_the_configured_interface_or_refused_clearly() {
     let bus_config = BusConfig::isolated();
     {
         let bus = Bus::open("gyro-gateway", &bus_config).unwrap();
-        let result = Link::open(&bus, &config, GatewayDevice::Gyro);
+        let result = Link::open(&bus, &config, ipc_types::Device::Gyro);
         match probe_socketcan(&config.can.interface) {
             SocketCanSupport::Available => assert!(matches!(result, Ok(Link::SocketCan(_)))),
             why => {

@@ -33,33 +33,30 @@ use ipc_types::{
     CanLinkStatus, CmgCommand, CmgTelemetry, GyroSample, InclinometerSample, MagnetometerSample, SampleHeader,
     WheelCommand, WheelTelemetry, can_source,
 };
+use ipc_types::Device;
 use testbed_can::{
-    CanFrame, CmgCommandMsg, Decoder, Device, DeviceSet, EncodeError, Encoder, FrameBatch, FrameClass, Message,
+    CanFrame, CmgCommandMsg, Decoder, Device as CanDevice, DeviceSet, EncodeError, Encoder, FrameBatch, FrameClass, Message,
     MessageKind, NodeClock, NodeState, Protocol, Sample, WheelCommandMsg,
 };
 use testbed_flight::schedule::Schedule;
 
-/// The devices that have a gateway.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum GatewayDevice {
-    /// Three fibre-optic gyros.
-    Gyro,
-    /// Two-axis inclinometer.
-    Inclinometer,
-    /// Three-axis magnetometer.
-    Magnetometer,
-    /// The three reaction wheels (telemetry in, torque commands out).
-    Wheels,
-    /// The four CMGs (telemetry in, gimbal rate commands out).
-    Cmg,
+/// What the gateways know about each platform device ([`Device`]).
+pub trait GatewayDevice: Copy {
+    /// The gateway process's name.
+    fn process_name(self) -> &'static str;
+    /// The device's identifier block in the node's protocol.
+    fn can_device(self) -> CanDevice;
+    /// The message the device sends.
+    fn telemetry(self) -> MessageKind;
+    /// `header.source_id` of the gateway's bus frames and status ([`can_source`]).
+    fn source_id(self) -> u32;
+    /// Whether the device samples at tick `k`.
+    fn due(self, schedule: &Schedule, k: u64) -> bool;
 }
 
-impl GatewayDevice {
-    /// Every gateway device.
-    pub const ALL: [GatewayDevice; 5] = [Self::Gyro, Self::Inclinometer, Self::Magnetometer, Self::Wheels, Self::Cmg];
-
+impl GatewayDevice for Device {
     /// The gateway process's name.
-    pub const fn process_name(self) -> &'static str {
+    fn process_name(self) -> &'static str {
         match self {
             Self::Gyro => "gyro-gateway",
             Self::Inclinometer => "inclinometer-gateway",
@@ -69,30 +66,19 @@ impl GatewayDevice {
         }
     }
 
-    /// The device's name in the run configuration (`[can.serial.<name>]`).
-    pub const fn config_name(self) -> &'static str {
-        match self {
-            Self::Gyro => "gyro",
-            Self::Inclinometer => "inclinometer",
-            Self::Magnetometer => "magnetometer",
-            Self::Wheels => "wheels",
-            Self::Cmg => "cmg",
-        }
-    }
-
     /// The device's identifier block in the node's protocol.
-    pub const fn can_device(self) -> Device {
+    fn can_device(self) -> CanDevice {
         match self {
-            Self::Gyro => Device::Gyro,
-            Self::Inclinometer => Device::Inclinometer,
-            Self::Magnetometer => Device::Magnetometer,
-            Self::Wheels => Device::Wheels,
-            Self::Cmg => Device::Cmg,
+            Self::Gyro => CanDevice::Gyro,
+            Self::Inclinometer => CanDevice::Inclinometer,
+            Self::Magnetometer => CanDevice::Magnetometer,
+            Self::Wheels => CanDevice::Wheels,
+            Self::Cmg => CanDevice::Cmg,
         }
     }
 
     /// The message the device sends.
-    pub const fn telemetry(self) -> MessageKind {
+    fn telemetry(self) -> MessageKind {
         match self {
             Self::Gyro => MessageKind::Gyro,
             Self::Inclinometer => MessageKind::Inclinometer,
@@ -103,7 +89,7 @@ impl GatewayDevice {
     }
 
     /// `header.source_id` of the gateway's bus frames and status ([`can_source`]).
-    pub const fn source_id(self) -> u32 {
+    fn source_id(self) -> u32 {
         match self {
             Self::Gyro => can_source::GYRO,
             Self::Inclinometer => can_source::INCLINOMETER,
@@ -114,7 +100,7 @@ impl GatewayDevice {
     }
 
     /// Whether the device samples at tick `k`.
-    pub fn due(self, schedule: &Schedule, k: u64) -> bool {
+    fn due(self, schedule: &Schedule, k: u64) -> bool {
         match self {
             Self::Inclinometer => schedule.tilt_due(k),
             Self::Magnetometer => schedule.field_due(k),
@@ -122,17 +108,17 @@ impl GatewayDevice {
         }
     }
 
+}
     /// A zero sample of the device (what a stale sample repeats before any good one).
-    fn zero_sample(self) -> Sample {
-        match self {
-            Self::Gyro => Sample::Gyro(GyroSample::default()),
-            Self::Inclinometer => Sample::Inclinometer(InclinometerSample::default()),
-            Self::Magnetometer => Sample::Magnetometer(MagnetometerSample::default()),
-            Self::Wheels => Sample::WheelTelemetry(WheelTelemetry::default()),
-            Self::Cmg => Sample::CmgTelemetry(CmgTelemetry::default()),
+fn zero_sample(device: Device) -> Sample {
+        match device {
+            Device::Gyro => Sample::Gyro(GyroSample::default()),
+            Device::Inclinometer => Sample::Inclinometer(InclinometerSample::default()),
+            Device::Magnetometer => Sample::Magnetometer(MagnetometerSample::default()),
+            Device::Wheels => Sample::WheelTelemetry(WheelTelemetry::default()),
+            Device::Cmg => Sample::CmgTelemetry(CmgTelemetry::default()),
         }
     }
-}
 
 /// The header of a sample.
 pub fn sample_header(sample: &Sample) -> &SampleHeader {
@@ -198,7 +184,7 @@ pub fn limit_command<const N: usize>(values: &[f64; N], limit: f64, valid: bool)
 /// One gateway's state; see the [module documentation](self).
 #[derive(Debug, Clone)]
 pub struct Gateway {
-    device: GatewayDevice,
+    device: Device,
     protocol: Protocol,
     decoder: Decoder,
     encoder: Encoder,
@@ -230,11 +216,11 @@ pub struct Gateway {
 impl Gateway {
     /// A gateway for `device` speaking `protocol`. `tick_sync`: publish at the node's tick sync
     /// (lockstep), else as samples complete.
-    pub fn new(device: GatewayDevice, protocol: Protocol, schedule: Schedule, tick_sync: bool) -> Self {
+    pub fn new(device: Device, protocol: Protocol, schedule: Schedule, tick_sync: bool) -> Self {
         Self {
             device,
             protocol,
-            decoder: Decoder::with_devices(protocol, DeviceSet::of(&[device.can_device(), Device::Node])),
+            decoder: Decoder::with_devices(protocol, DeviceSet::of(&[device.can_device(), CanDevice::Node])),
             encoder: Encoder::new(protocol),
             schedule,
             tick_sync,
@@ -260,7 +246,7 @@ impl Gateway {
     }
 
     /// The device.
-    pub fn device(&self) -> GatewayDevice {
+    pub fn device(&self) -> Device {
         self.device
     }
 
@@ -412,7 +398,7 @@ impl Gateway {
                     self.late_messages += 1;
                 }
                 if due {
-                    let mut stale = self.last_good.unwrap_or_else(|| self.device.zero_sample());
+                    let mut stale = self.last_good.unwrap_or_else(|| zero_sample(self.device));
                     let header = sample_header_mut(&mut stale);
                     header.flags = (header.flags & SampleHeader::SATURATED_ANY) | SampleHeader::STALE;
                     self.stale_samples += 1;
@@ -479,7 +465,7 @@ mod tests {
     fn tick_sync_publishes_complete_stale_and_drops_late_frames() {
         let p = Protocol::default();
         let mut node = Encoder::new(p);
-        let mut g = Gateway::new(GatewayDevice::Gyro, p, schedule(), true);
+        let mut g = Gateway::new(Device::Gyro, p, schedule(), true);
         // Tick 0 complete.
         let mut frames = gyro(&mut node, 0, 0.01);
         frames.push(sync(&mut node, 0));
@@ -514,7 +500,7 @@ mod tests {
     fn free_running_publishes_on_completion_in_time_order() {
         let p = Protocol::default();
         let mut node = Encoder::new(p);
-        let mut g = Gateway::new(GatewayDevice::Gyro, p, schedule(), false);
+        let mut g = Gateway::new(Device::Gyro, p, schedule(), false);
         let out = published(&mut g, &gyro(&mut node, 5, 0.1));
         assert!(matches!(out.as_slice(), [Sample::Gyro(s)] if s.header.time_ns == 500_000_000));
         assert!(published(&mut g, &[sync(&mut node, 5)]).is_empty());
@@ -523,7 +509,7 @@ mod tests {
     #[test]
     fn commands_are_clamped_or_refused_before_encoding() {
         let p = Protocol::default();
-        let mut g = Gateway::new(GatewayDevice::Wheels, p, schedule(), true);
+        let mut g = Gateway::new(Device::Wheels, p, schedule(), true);
         let limit = p.limits().wheel_torque_nm;
         let mut decoder = Decoder::new(p);
         let mut decode = |batch: FrameBatch| {

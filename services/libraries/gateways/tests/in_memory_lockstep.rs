@@ -6,7 +6,7 @@
 
 use ipc_types::{CanLinkStatus, CmgCommand, SampleHeader, WheelCommand};
 use testbed_can::Sample;
-use testbed_gateways::gateway::{Gateway, GatewayDevice};
+use testbed_gateways::gateway::Gateway;
 use testbed_gateways::node::{self, SimCanNode, TxFrame};
 use testbed_sim::metrics;
 use testbed_flight::tasks::ControllerTask;
@@ -22,7 +22,7 @@ struct Outcome {
     /// (t, attitude error per axis, degrees)
     errors: Vec<(f64, [f64; 3])>,
     estimates: Vec<ipc_types::AttitudeEstimate>,
-    gateways: Vec<(GatewayDevice, CanLinkStatus)>,
+    gateways: Vec<(ipc_types::Device, CanLinkStatus)>,
     node: CanLinkStatus,
     estimator: EstimatorCounters,
     stale_applied: u64,
@@ -34,7 +34,7 @@ fn run(config: &RunConfig) -> Outcome {
     let mut plant = PlantNode::new(config).unwrap();
     let mut can_node = SimCanNode::new(config).unwrap();
     let mut gateways: Vec<(Gateway, u64)> =
-        GatewayDevice::ALL.iter().map(|&d| (Gateway::new(d, protocol, schedule, true), 0)).collect();
+        ipc_types::Device::ALL.iter().map(|&d| (Gateway::new(d, protocol, schedule, true), 0)).collect();
     let mut estimator = EstimatorNode::new(config.estimator_config(), schedule);
     let task = ControllerTask::new(&config.controller, &config.model, config.manoeuvre.target()).unwrap();
     let mut controller = ControllerNode::new(task, config.controller.actuators, schedule);

@@ -2,6 +2,8 @@
 //! model, estimator, controller and manoeuvre. The launcher writes it once per run and passes its
 //! path in [`ENV_RUN_CONFIG`]; the logger stores it whole in the run's log.
 
+pub use ipc_types::ClockMode;
+use ipc_types::Device;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use testbed_flight::manoeuvre::Manoeuvre;
@@ -12,19 +14,6 @@ use testbed_model::ModelConfig;
 
 /// Environment variable holding the path of the run configuration.
 pub const ENV_RUN_CONFIG: &str = "TESTBED_RUN_CONFIG";
-
-/// Who owns time.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
-#[serde(rename_all = "snake_case")]
-pub enum ClockMode {
-    /// The plant advances only when the pipeline has answered the current tick: as fast as the
-    /// machine allows, and byte-identical logs for the same seed.
-    #[default]
-    Lockstep,
-    /// The plant advances at 1× wall time whether or not the pipeline answered (late answers are
-    /// deadline misses).
-    Paced,
-}
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -251,9 +240,6 @@ impl Default for CanSection {
     }
 }
 
-/// Device names accepted in `[can.serial]`.
-pub const CAN_DEVICES: [&str; 5] = ["gyro", "inclinometer", "magnetometer", "wheels", "cmg"];
-
 impl CanSection {
     /// `(key, value, reason)` of the first invalid setting.
     fn validate(&self) -> Result<(), (String, String, &'static str)> {
@@ -271,7 +257,7 @@ impl CanSection {
             return bad("interface", format!("{:?}", self.interface), "must name a CAN interface");
         }
         for (device, link) in &self.serial {
-            if !CAN_DEVICES.contains(&device.as_str()) {
+            if Device::from_name(device).is_none() {
                 return bad(&format!("serial.{device}"), device.clone(), "not a device (gyro, inclinometer, magnetometer, wheels, cmg)");
             }
             if link.baud == 0 {

@@ -5,6 +5,6 @@ use testbed_gateways::GatewayDevice;
 use testbed_processes::can_gateway::CanGateway;
 
 fn main() -> anyhow::Result<()> {
-    let device = GatewayDevice::Magnetometer;
+    let device = ipc_types::Device::Magnetometer;
     testbed_runtime::run(device.process_name(), |cx| CanGateway::open(cx, device))
 }

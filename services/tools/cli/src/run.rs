@@ -9,7 +9,7 @@ use anyhow::{Context, Result, bail};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use testbed_bus::BusConfig;
-use testbed_launch::profile::{Mode, Profile};
+use testbed_launch::profile::Profile;
 use crate::summary::{self, RunSeries, RunSummary};
 use testbed_runtime::{ClockMode, RunConfig};
 
@@ -75,10 +75,7 @@ pub fn run(args: &RunArgs) -> Result<()> {
         config.can.record_candump = false;
     }
     config.run.profile = profile_path.file_stem().map_or_else(|| args.profile.clone(), |s| s.to_string_lossy().into_owned());
-    config.run.mode = match (args.paced, profile.run.mode) {
-        (true, _) | (false, Mode::Paced) => ClockMode::Paced,
-        (false, Mode::Lockstep) => ClockMode::Lockstep,
-    };
+    config.run.mode = if args.paced { ClockMode::Paced } else { profile.run.mode };
     if recorded_log.is_none() {
         if let Some(d) = args.duration.or(profile.run.duration_s) {
             config.run.duration_s = d;
@@ -157,10 +154,7 @@ fn launch(profile: &Path, config: &RunConfig, config_path: &Path) -> Result<()> 
     // One bus per run: a unique prefix and a short root (Unix socket paths must stay < 108 bytes).
     let id = std::process::id();
     let bus = BusConfig::new(format!("tb{id}_"), format!("/tmp/tb{id}/"));
-    let mode = match config.run.mode {
-        ClockMode::Lockstep => "lockstep",
-        ClockMode::Paced => "paced",
-    };
+    let mode = config.run.mode.as_str();
     let mut command = Command::new(&launcher);
     if std::env::var_os("RUST_LOG").is_none() {
         // The summary is the output; the processes speak up only for warnings.

@@ -1,0 +1,76 @@
+//! Names every part of a run shares: the platform's devices and who owns time. Defined once
+//! here, used by the run configuration, the launch profiles, the gateways and the processes.
+
+use core::fmt;
+
+/// A device of the platform, as configurations and profiles name it (`"gyro"`, …, `"cmg"`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Device {
+    /// The three fibre-optic rate gyros.
+    Gyro,
+    /// The two-axis inclinometer.
+    Inclinometer,
+    /// The three-axis magnetometer.
+    Magnetometer,
+    /// The three reaction wheels (telemetry in, torque commands out).
+    Wheels,
+    /// The four control moment gyros (telemetry in, gimbal rate commands out).
+    Cmg,
+}
+
+impl Device {
+    /// Every device.
+    pub const ALL: [Device; 5] = [Self::Gyro, Self::Inclinometer, Self::Magnetometer, Self::Wheels, Self::Cmg];
+
+    /// The name used in configurations and profiles.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Self::Gyro => "gyro",
+            Self::Inclinometer => "inclinometer",
+            Self::Magnetometer => "magnetometer",
+            Self::Wheels => "wheels",
+            Self::Cmg => "cmg",
+        }
+    }
+
+    /// The device called `name`, if any.
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|d| d.name() == name)
+    }
+}
+
+impl fmt::Display for Device {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// Who owns time in a run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ClockMode {
+    /// The plant advances only when the pipeline has answered the current tick: as fast as the
+    /// machine allows, and byte-identical logs for the same seed.
+    #[default]
+    Lockstep,
+    /// The plant advances at 1× wall time whether or not the pipeline answered (late answers are
+    /// deadline misses).
+    Paced,
+}
+
+impl ClockMode {
+    /// The name used in profiles, configurations and `TESTBED_RUN_MODE`.
+    pub const fn as_str(self) -> &'static str {
+        match self {
+            Self::Lockstep => "lockstep",
+            Self::Paced => "paced",
+        }
+    }
+}
+
+impl fmt::Display for ClockMode {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
