@@ -8,6 +8,7 @@
 //!   closed loop and the pipeline.
 //! * [`estimator_node`], [`controller_node`]: those tasks fed with the pipeline's samples on the
 //!   tick [`schedule`], returning samples; the processes wrap them.
+//! * [`stats`]: the chi-square distribution (the MEKF's gate thresholds, consistency checks).
 //! * [`manoeuvre`]: the experiment programme (initial condition, target).
 //! * [`convert`]: sample arrays to and from nalgebra types.
 
@@ -19,4 +20,5 @@ pub mod estimator_node;
 pub mod manoeuvre;
 pub mod mekf;
 pub mod schedule;
+pub mod stats;
 pub mod tasks;

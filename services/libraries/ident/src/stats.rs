@@ -4,7 +4,7 @@
 use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
 
-pub use testbed_flight::mekf::{chi_square_cdf, chi_square_quantile};
+pub use testbed_flight::stats::{chi_square_cdf, chi_square_quantile};
 
 /// Accumulated normal equations of `y ≈ X θ` (rows added one at a time, already weighted).
 #[derive(Debug, Clone)]

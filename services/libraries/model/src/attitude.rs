@@ -22,9 +22,11 @@ pub fn gravity_l() -> Vector3<f64> {
     Vector3::new(0.0, 0.0, -1.0)
 }
 
-/// Skew-symmetric cross-product matrix: `skew(a) b = a × b`.
+/// Skew-symmetric cross-product matrix: `skew(a) b = a × b`. This is nalgebra's
+/// [`Vector3::cross_matrix`], element for element; new code calls that directly. Kept only for
+/// users outside this crate that still name it (`testbed-ident`'s reconstruction).
 pub fn skew(a: &Vector3<f64>) -> Matrix3<f64> {
-    Matrix3::new(0.0, -a.z, a.y, a.z, 0.0, -a.x, -a.y, a.x, 0.0)
+    a.cross_matrix()
 }
 
 /// Propagate the attitude over `dt_s` seconds at a constant body rate `rate_b` (rad/s).
@@ -97,15 +99,35 @@ mod tests {
         assert!((heading(&q) - FRAC_PI_2).abs() < 1e-12);
     }
 
+    /// `cross_matrix` (which replaced a hand-written skew matrix here) is bit for bit the matrix
+    /// `[[0, −a_z, a_y], [a_z, 0, −a_x], [−a_y, a_x, 0]]`, and `cross_matrix(a) b = a × b`.
     #[test]
-    fn propagation_follows_a_dot_equals_minus_skew_w_a() {
+    fn cross_matrix_is_the_skew_matrix_bit_for_bit() {
+        for a in [
+            Vector3::new(0.01, -0.02, 0.03),
+            Vector3::new(-1.5e-300, 2.0, f64::MAX),
+            Vector3::new(0.0, -0.0, 1.0 / 3.0),
+        ] {
+            let by_hand = Matrix3::new(0.0, -a.z, a.y, a.z, 0.0, -a.x, -a.y, a.x, 0.0);
+            let m = a.cross_matrix();
+            for (x, y) in m.iter().zip(by_hand.iter()) {
+                assert_eq!(x.to_bits(), y.to_bits());
+            }
+            assert_eq!(skew(&a), m);
+        }
+        let (a, b) = (Vector3::new(0.3, -0.5, 0.8), Vector3::new(-0.1, 0.2, 0.7));
+        assert!((a.cross_matrix() * b - a.cross(&b)).norm() < 1e-15);
+    }
+
+    #[test]
+    fn propagation_follows_a_dot_equals_minus_cross_matrix_w_a() {
         let q = from_heading_pitch_roll(0.3, 0.1, -0.2);
         let w = Vector3::new(0.01, -0.02, 0.03);
         let dt = 1e-6;
         let a0 = q.to_rotation_matrix().into_inner();
         let a1 = propagate(&q, &w, dt).to_rotation_matrix().into_inner();
         let derivative = (a1 - a0) / dt;
-        assert!((derivative + skew(&w) * a0).abs().max() < 1e-6);
+        assert!((derivative + w.cross_matrix() * a0).abs().max() < 1e-6);
     }
 
     #[test]
@@ -114,7 +136,7 @@ mod tests {
         let dtheta = Vector3::new(1e-5, -2e-5, 3e-5);
         let q_true = apply_error(&q_est, &dtheta);
         let r = Vector3::new(0.3, -0.5, 0.8);
-        let predicted = q_est * r + skew(&(q_est * r)) * dtheta;
+        let predicted = q_est * r + (q_est * r).cross_matrix() * dtheta;
         assert!((q_true * r - predicted).norm() < 1e-9);
         assert!((attitude_error(&q_true, &q_est) - dtheta).norm() < 1e-15);
     }

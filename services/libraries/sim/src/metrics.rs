@@ -1,7 +1,7 @@
 //! Figures of merit of closed-loop runs, as the paper reports them.
 
 use crate::closed_loop::Trace;
-use testbed_flight::mekf::chi_square_quantile;
+use testbed_flight::stats::chi_square_quantile;
 use testbed_model::config::DEG;
 
 /// First time after which every component of `error` stays within `band` to the end of the

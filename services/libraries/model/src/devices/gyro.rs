@@ -2,7 +2,7 @@
 //! `w_meas = w + b + eta_v`, `b' = eta_u`.
 
 use super::{DeviceError, DeviceId, device_rng, quantise, saturate};
-use crate::attitude::{Attitude, skew};
+use crate::attitude::Attitude;
 use crate::config::{DEG, EARTH_RATE_RAD_S, ModelConfig};
 use nalgebra::{Matrix3, Vector3};
 use rand::Rng;
@@ -70,7 +70,7 @@ impl Gyro {
             .gyro_misalignment
             .as_ref()
             .map_or_else(Matrix3::identity, |m| {
-                Matrix3::identity() - skew(&Vector3::from(m.angles_rad))
+                Matrix3::identity() - Vector3::from(m.angles_rad).cross_matrix()
             });
         Self {
             period_s: g.period_s(),
