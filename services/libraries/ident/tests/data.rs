@@ -48,7 +48,7 @@ fn edit_line(path: &Path, line: usize, f: impl Fn(&str) -> String) {
 #[test]
 fn csv_directory_round_trips_and_identifies_like_memory() {
     let (dir, data) = clean_dir("roundtrip");
-    let back = csv::read_dir(&dir).expect("read back");
+    let back: Dataset = csv::read_dir(&dir).expect("read back");
     assert_eq!(back.gyro, data.gyro);
     assert_eq!(back.inclinometer, data.inclinometer);
     assert_eq!(back.magnetometer, data.magnetometer);
@@ -208,7 +208,7 @@ fn bad_data_is_refused_naming_the_file_and_row() {
         std::fs::remove_dir_all(dir).ok();
     }
     // Not data at all.
-    let e = csv::read_dir(Path::new("/nonexistent/testbed"))
+    let e = csv::read_dir::<Dataset>(Path::new("/nonexistent/testbed"))
         .unwrap_err()
         .to_string();
     assert!(e.contains("/nonexistent/testbed"), "{e}");
