@@ -179,15 +179,23 @@ pub fn read_file<R: Record>(path: &Path) -> Result<Vec<R>, DataError> {
 /// number, and the time order.
 pub fn read_records<R: Record>(
     file: &Path,
-    input: impl std::io::Read,
+    mut input: impl std::io::Read,
 ) -> Result<Vec<R>, DataError> {
+    let mut text = String::new();
+    input
+        .read_to_string(&mut text)
+        .map_err(|source| DataError::Read {
+            file: file.to_path_buf(),
+            source,
+        })?;
+    let mut lines = LineCounter::new(&text);
     let contract = R::COLUMNS;
     let expected = contract.join(",");
     let mut reader = ::csv::ReaderBuilder::new()
         .has_headers(true)
         .flexible(true)
         .trim(::csv::Trim::All)
-        .from_reader(input);
+        .from_reader(text.as_bytes());
     let io_error = |e: ::csv::Error| match e.kind() {
         ::csv::ErrorKind::Io(_) => DataError::Read {
             file: file.to_path_buf(),
@@ -235,7 +243,7 @@ pub fn read_records<R: Record>(
     let mut record = ::csv::StringRecord::new();
     loop {
         let more = reader.read_record(&mut record).map_err(|e| {
-            let line = e.position().map(|p| p.line() as usize);
+            let line = e.position().map(|p| lines.line_of(p.byte() as usize));
             match line {
                 Some(line) => DataError::Row {
                     file: file.to_path_buf(),
@@ -250,7 +258,9 @@ pub fn read_records<R: Record>(
             break;
         }
         let row = rows.len() + 1;
-        let line = record.position().map_or(row + 1, |p| p.line() as usize);
+        let line = record
+            .position()
+            .map_or(row + 1, |p| lines.line_of(p.byte() as usize));
         let at = |message: String| DataError::Row {
             file: file.to_path_buf(),
             row,
@@ -298,6 +308,48 @@ pub fn read_records<R: Record>(
         rows.push(value);
     }
     Ok(rows)
+}
+
+/// Line numbers (from 1) of records by their byte offset, counted incrementally; a record
+/// starting at a blank line is on the next line that is not blank (the reader skips blank
+/// lines).
+struct LineCounter<'t> {
+    text: &'t str,
+    at: usize,
+    line: usize,
+}
+
+impl<'t> LineCounter<'t> {
+    fn new(text: &'t str) -> Self {
+        Self {
+            text,
+            at: 0,
+            line: 1,
+        }
+    }
+
+    fn line_of(&mut self, byte: usize) -> usize {
+        let byte = byte.min(self.text.len());
+        if byte > self.at {
+            self.line += self.text.as_bytes()[self.at..byte]
+                .iter()
+                .filter(|&&b| b == b'\n')
+                .count();
+            self.at = byte;
+        }
+        let (mut pos, mut line) = (self.at, self.line);
+        while let Some(end) = self.text.as_bytes()[pos..].iter().position(|&b| b == b'\n') {
+            if !self.text.as_bytes()[pos..pos + end]
+                .iter()
+                .all(u8::is_ascii_whitespace)
+            {
+                break;
+            }
+            pos += end + 1;
+            line += 1;
+        }
+        line
+    }
 }
 
 /// Write one contract file (header in the contract's order); no file without rows. Whether a

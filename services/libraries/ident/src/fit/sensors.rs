@@ -12,6 +12,8 @@ use std::collections::HashMap;
 use testbed_model::ModelConfig;
 
 impl Problem<'_> {
+    /// Fit the sensor causes `set` jointly (see [`Problem::fit_screened`] for `warm` and
+    /// `screen`): the configuration with the fitted values, and the fitted causes.
     pub(super) fn fit_sensors(
         &self,
         set: &[Cause],
@@ -66,6 +68,10 @@ impl Problem<'_> {
             })
             .collect();
         let p = theta.len();
+        // Innovations at a finite-difference step (a filter run not worth caching).
+        let perturbed = |t: &[f64]| -> Result<Vec<f64>, IdentError> {
+            Ok(self.fit_innovations(&self.run_filter(&build(t))?))
+        };
         let mut r0 = self.fit_innovations(&*self.recon(&build(&theta))?);
         let rss = |r: &[f64]| r.iter().map(|x| x * x).sum::<f64>();
         let mut last: Option<LsFit> = None;
@@ -83,7 +89,7 @@ impl Problem<'_> {
                 &idx,
                 &steps,
                 |j| bound_of(&layout, j),
-                |t| Ok::<_, IdentError>(self.fit_innovations(&self.run_filter(&build(t))?)),
+                perturbed,
             )?;
             let ne = normal_equations(&cols, &r0);
             let predicted = ne
@@ -102,7 +108,7 @@ impl Problem<'_> {
                 &all,
                 &steps,
                 |j| bound_of(&layout, j),
-                |t| Ok::<_, IdentError>(self.fit_innovations(&self.run_filter(&build(t))?)),
+                perturbed,
             )?;
             let ne = normal_equations(&columns, &r0);
             let Some(fit) = ne.solve() else {
