@@ -17,11 +17,11 @@
 //! fit reports the whitened residual sum of squares of each channel on the fit data and on the
 //! held-out data.
 //!
-//! * [`sensors`]: Gauss–Newton of the sensor causes through the filter;
-//! * [`hard_iron`]: the hard iron's starting value (sphere fit of the field readings);
-//! * [`torque`]: weighted least squares of the torque causes;
-//! * [`wheels`]: per-wheel least squares, delay and Stribeck-speed searches, [`WheelModel`];
-//! * [`jacobian`]: the one finite-difference Jacobian (and its normal equations) the fits use.
+//! * `sensors`: Gauss–Newton of the sensor causes through the filter;
+//! * `hard_iron`: the hard iron's starting value (sphere fit of the field readings);
+//! * `torque`: weighted least squares of the torque causes;
+//! * `wheels`: per-wheel least squares, delay and Stribeck-speed searches, [`WheelModel`];
+//! * `jacobian`: the one finite-difference Jacobian (and its normal equations) the fits use.
 
 mod hard_iron;
 mod jacobian;

@@ -23,8 +23,8 @@
 //! the noise the model expects, whiteness) and, if something remains, correlated with the
 //! signals the candidate effects would produce.
 //!
-//! The report's types and its tables of curves are in [`report`]; the residual series after a
-//! fit, what remains and what it correlates with in [`residuals`].
+//! The report's types and its tables of curves are in `report`; the residual series after a
+//! fit, what remains and what it correlates with in `residuals`.
 
 mod report;
 mod residuals;
