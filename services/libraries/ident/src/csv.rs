@@ -8,7 +8,7 @@
 //! SI units, body axes, one header row, comma-separated, `t_s` seconds from any origin, rows in
 //! time order; files may be missing where a device was absent. Columns may come in any order
 //! but must be exactly the contract's (an unknown, duplicate or missing column is refused,
-//! naming it). Blank lines are skipped, spaces around fields ignored. Numbers must be complete
+//! naming it). Empty lines are skipped, spaces around fields ignored. Numbers must be complete
 //! decimal numbers (`-1.5`, `2e-3`, `.5`): a truncated or malformed one (`1e`, `1.`, `-`,
 //! `1.2.3`) is refused, as is a non-finite one (`NaN`, `inf`). Every error names the file and,
 //! for content, the data row, its line in the file and the column.
@@ -311,7 +311,7 @@ pub fn read_records<R: Record>(
 }
 
 /// Line numbers (from 1) of records by their byte offset, counted incrementally; a record
-/// starting at a blank line is on the next line that is not blank (the reader skips blank
+/// starting at an empty line is on the next line that is not empty (the reader skips empty
 /// lines).
 struct LineCounter<'t> {
     text: &'t str,
@@ -339,10 +339,7 @@ impl<'t> LineCounter<'t> {
         }
         let (mut pos, mut line) = (self.at, self.line);
         while let Some(end) = self.text.as_bytes()[pos..].iter().position(|&b| b == b'\n') {
-            if !self.text.as_bytes()[pos..pos + end]
-                .iter()
-                .all(u8::is_ascii_whitespace)
-            {
+            if !matches!(&self.text.as_bytes()[pos..pos + end], b"" | b"\r") {
                 break;
             }
             pos += end + 1;
