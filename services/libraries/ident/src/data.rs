@@ -1,6 +1,7 @@
 //! Measured data in memory: one time series per device, SI units, body axes, as the
-//! measured-data CSV contract (`shared/DESIGN.md`) defines them; and the same data aligned on
-//! the gyro's clock for the fits.
+//! measured-data CSV contract (`docs/measured-data.md`) defines them; the conversion from and to
+//! the CSV files' plain records ([`crate::csv`]); and the same data aligned on the gyro's clock
+//! for the fits.
 //!
 //! Interpretation of the contract used throughout identification:
 //! * every file's `t_s` is on one common clock (any origin);
@@ -10,8 +11,8 @@
 //!   tachometer reading at `t_s`;
 //! * a `cmg.csv` row's `rate_cmd_*` is likewise held until the next row.
 
+use crate::csv::{CmgRecord, FieldRecord, GyroRecord, Records, TiltRecord, WheelRecord, columns};
 use crate::error::DataError;
-use crate::csv::columns;
 use nalgebra::{Vector3, Vector4};
 use std::path::PathBuf;
 
@@ -75,12 +76,136 @@ pub struct Dataset {
 }
 
 /// File names of the CSV contract.
-pub mod files {
-    pub const GYRO: &str = "gyro.csv";
-    pub const INCLINOMETER: &str = "inclinometer.csv";
-    pub const MAGNETOMETER: &str = "magnetometer.csv";
-    pub const WHEELS: &str = "wheels.csv";
-    pub const CMG: &str = "cmg.csv";
+pub use crate::csv::files;
+
+/// Read a measured-data CSV directory (see [`crate::csv`]).
+pub fn read_dir(dir: &std::path::Path) -> Result<Dataset, DataError> {
+    crate::csv::read_dir(dir)
+}
+
+/// Write `data` as a measured-data CSV directory (see [`crate::csv::write_dir`]).
+pub fn write_dir(dir: &std::path::Path, data: &Dataset) -> Result<Vec<PathBuf>, DataError> {
+    crate::csv::write_dir(dir, data)
+}
+
+impl From<Records> for Dataset {
+    fn from(r: Records) -> Self {
+        Self {
+            source: r.dir,
+            gyro: r
+                .gyro
+                .iter()
+                .map(|v| GyroRow {
+                    t_s: v.t_s,
+                    rate_rad_s: Vector3::new(v.wx, v.wy, v.wz),
+                })
+                .collect(),
+            inclinometer: r
+                .inclinometer
+                .iter()
+                .map(|v| TiltRow {
+                    t_s: v.t_s,
+                    tilt_rad: [v.tilt_x, v.tilt_y],
+                })
+                .collect(),
+            magnetometer: r
+                .magnetometer
+                .iter()
+                .map(|v| FieldRow {
+                    t_s: v.t_s,
+                    field_t: Vector3::new(v.bx, v.by, v.bz),
+                })
+                .collect(),
+            wheels: r
+                .wheels
+                .iter()
+                .map(|v| WheelRow {
+                    t_s: v.t_s,
+                    speed_rad_s: Vector3::new(v.speed_x, v.speed_y, v.speed_z),
+                    torque_nm: Vector3::new(v.torque_x, v.torque_y, v.torque_z),
+                })
+                .collect(),
+            cmg: r
+                .cmg
+                .iter()
+                .map(|v| CmgRow {
+                    t_s: v.t_s,
+                    gimbal_rad: Vector4::new(v.gimbal_1, v.gimbal_2, v.gimbal_3, v.gimbal_4),
+                    rate_cmd_rad_s: Vector4::new(
+                        v.rate_cmd_1,
+                        v.rate_cmd_2,
+                        v.rate_cmd_3,
+                        v.rate_cmd_4,
+                    ),
+                })
+                .collect(),
+        }
+    }
+}
+
+impl From<&Dataset> for Records {
+    fn from(d: &Dataset) -> Self {
+        Self {
+            dir: d.source.clone(),
+            gyro: d
+                .gyro
+                .iter()
+                .map(|r| GyroRecord {
+                    t_s: r.t_s,
+                    wx: r.rate_rad_s.x,
+                    wy: r.rate_rad_s.y,
+                    wz: r.rate_rad_s.z,
+                })
+                .collect(),
+            inclinometer: d
+                .inclinometer
+                .iter()
+                .map(|r| TiltRecord {
+                    t_s: r.t_s,
+                    tilt_x: r.tilt_rad[0],
+                    tilt_y: r.tilt_rad[1],
+                })
+                .collect(),
+            magnetometer: d
+                .magnetometer
+                .iter()
+                .map(|r| FieldRecord {
+                    t_s: r.t_s,
+                    bx: r.field_t.x,
+                    by: r.field_t.y,
+                    bz: r.field_t.z,
+                })
+                .collect(),
+            wheels: d
+                .wheels
+                .iter()
+                .map(|r| WheelRecord {
+                    t_s: r.t_s,
+                    speed_x: r.speed_rad_s.x,
+                    speed_y: r.speed_rad_s.y,
+                    speed_z: r.speed_rad_s.z,
+                    torque_x: r.torque_nm.x,
+                    torque_y: r.torque_nm.y,
+                    torque_z: r.torque_nm.z,
+                })
+                .collect(),
+            cmg: d
+                .cmg
+                .iter()
+                .map(|r| CmgRecord {
+                    t_s: r.t_s,
+                    gimbal_1: r.gimbal_rad[0],
+                    gimbal_2: r.gimbal_rad[1],
+                    gimbal_3: r.gimbal_rad[2],
+                    gimbal_4: r.gimbal_rad[3],
+                    rate_cmd_1: r.rate_cmd_rad_s[0],
+                    rate_cmd_2: r.rate_cmd_rad_s[1],
+                    rate_cmd_3: r.rate_cmd_rad_s[2],
+                    rate_cmd_4: r.rate_cmd_rad_s[3],
+                })
+                .collect(),
+        }
+    }
 }
 
 impl Dataset {
@@ -242,7 +367,9 @@ fn check_series<R>(
             message,
         };
         if !t.is_finite() {
-            return Err(at(format!("column `{time_column}`: {t} is not a finite number")));
+            return Err(at(format!(
+                "column `{time_column}`: {t} is not a finite number"
+            )));
         }
         for (x, name) in xs.iter().zip(value_columns) {
             if !x.is_finite() {

@@ -18,14 +18,12 @@ use crate::error::IdentError;
 use nalgebra::Vector4;
 use serde::Serialize;
 use std::path::PathBuf;
-use testbed_sim::closed_loop::{
-    self, Feedback, MeasurementRecord, Scenario, TargetChange, Trace,
-};
 use testbed_flight::manoeuvre::Manoeuvre;
 use testbed_flight::mekf::MekfConfig;
 use testbed_flight::tasks::ControllerConfig;
 use testbed_model::ModelConfig;
 use testbed_model::config::RPM;
+use testbed_sim::closed_loop::{self, Feedback, MeasurementRecord, Scenario, TargetChange, Trace};
 
 /// Parameters of the excitation schedule.
 #[derive(Debug, Clone, PartialEq, Serialize)]

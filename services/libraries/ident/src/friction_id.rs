@@ -602,9 +602,9 @@ fn normal_equations(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use nalgebra::Vector3;
     use testbed_model::config::{ModelConfig, RPM};
     use testbed_model::devices::WheelTachometer;
-    use nalgebra::Vector3;
 
     /// A spin-down as the tachometer reports it: the analytic coast of eq. 3 from `n0`, sampled
     /// at the telemetry rate for `duration_s`, through the configured tachometer noise and

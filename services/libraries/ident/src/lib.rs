@@ -2,7 +2,8 @@
 //! it, the extended model, and how much better it predicts.
 //!
 //! * [`data`], [`csv`], [`runlog`]: measured data (the CSV directory contract of
-//!   `shared/DESIGN.md`, or an MCAP run log) and its alignment on the gyro's clock.
+//!   `docs/measured-data.md`, or an MCAP run log) and its alignment on the gyro's clock; `csv`
+//!   reads and writes the files' plain records, `data` builds the [`Dataset`] from them.
 //! * [`reconstruct`]: the estimated state (the project's MEKF over the data).
 //! * [`channels`]: equation-error channels (platform momentum, wheels) and their regressors.
 //! * [`effects`]: the library of candidate causes (the model's effect tables).

@@ -48,7 +48,7 @@ fn edit_line(path: &Path, line: usize, f: impl Fn(&str) -> String) {
 #[test]
 fn csv_directory_round_trips_and_identifies_like_memory() {
     let (dir, data) = clean_dir("roundtrip");
-    let back = csv::read_dir(&dir).expect("read back");
+    let back: Dataset = csv::read_dir(&dir).expect("read back");
     assert_eq!(back.gyro, data.gyro);
     assert_eq!(back.inclinometer, data.inclinometer);
     assert_eq!(back.magnetometer, data.magnetometer);
@@ -62,6 +62,73 @@ fn csv_directory_round_trips_and_identifies_like_memory() {
     assert_eq!(a.report.verdict, "none");
     assert_eq!(b.report.verdict, a.report.verdict);
     assert_eq!(b.report.gain, a.report.gain);
+    std::fs::remove_dir_all(dir).ok();
+}
+
+#[test]
+fn columns_in_another_order_give_the_same_dataset() {
+    let (dir, _) = clean_dir("reordered");
+    let before: Dataset = csv::read_dir(&dir).expect("read");
+    // Reverse the column order of every file, header and rows alike.
+    for name in [
+        "gyro.csv",
+        "inclinometer.csv",
+        "magnetometer.csv",
+        "wheels.csv",
+    ] {
+        let p = dir.join(name);
+        let text = std::fs::read_to_string(&p).expect("read");
+        let out: Vec<String> = text
+            .lines()
+            .map(|l| l.split(',').rev().collect::<Vec<_>>().join(","))
+            .collect();
+        std::fs::write(&p, out.join("\n") + "\n").expect("write");
+    }
+    let header = std::fs::read_to_string(dir.join("wheels.csv")).expect("read");
+    assert!(
+        header.starts_with("torque_z,torque_y,torque_x,speed_z,"),
+        "{header}"
+    );
+    let after: Dataset = csv::read_dir(&dir).expect("read reordered");
+    assert_eq!(after, before);
+    std::fs::remove_dir_all(dir).ok();
+}
+
+#[test]
+fn a_number_truncated_at_the_end_of_a_file_is_refused() {
+    let (dir, _) = clean_dir("truncated");
+    // The file ends in the middle of the last row's last number, as an interrupted copy would.
+    let p = dir.join("inclinometer.csv");
+    let text = std::fs::read_to_string(&p).expect("read");
+    let lines: Vec<&str> = text.lines().collect();
+    let last = lines.len();
+    let mut keep = lines[..last - 1].join("\n");
+    keep.push_str("\n0.12,3.4,1e");
+    std::fs::write(&p, &keep).expect("write");
+    let e = csv::read_dir::<Dataset>(&dir).unwrap_err().to_string();
+    println!("truncated: {e}");
+    for part in [
+        "inclinometer.csv",
+        &format!("row {}", last - 1),
+        &format!("line {last}"),
+        "`tilt_y`",
+        "`1e`",
+        "truncated or malformed",
+    ] {
+        assert!(e.contains(part), "`{part}` not in: {e}");
+    }
+    // A number cut before its exponent's digits or after its decimal point, anywhere in a row.
+    for cut in ["2.5e-", "2."] {
+        let mut keep = lines[..last - 1].join("\n");
+        keep.push_str(&format!("\n{cut},0.001,0.002"));
+        std::fs::write(&p, &keep).expect("write");
+        let e = csv::read_dir::<Dataset>(&dir).unwrap_err().to_string();
+        println!("truncated: {e}");
+        assert!(
+            e.contains(&format!("line {last}")) && e.contains("`t_s`") && e.contains(cut),
+            "{e}"
+        );
+    }
     std::fs::remove_dir_all(dir).ok();
 }
 
@@ -208,7 +275,7 @@ fn bad_data_is_refused_naming_the_file_and_row() {
         std::fs::remove_dir_all(dir).ok();
     }
     // Not data at all.
-    let e = csv::read_dir(Path::new("/nonexistent/testbed"))
+    let e = csv::read_dir::<Dataset>(Path::new("/nonexistent/testbed"))
         .unwrap_err()
         .to_string();
     assert!(e.contains("/nonexistent/testbed"), "{e}");

@@ -13,8 +13,8 @@ use testbed_model::config::{DEG, RPM};
 
 #[derive(Debug, clap::Args)]
 pub struct IdentifyArgs {
-    /// Measured data: a directory of CSV files (the contract of shared/DESIGN.md) or an MCAP run
-    /// log of the pipeline.
+    /// Measured data: a directory of CSV files (the contract of docs/measured-data.md) or an MCAP
+    /// run log of the pipeline.
     data: PathBuf,
     /// The nominal model configuration (TOML) to test against the data.
     #[arg(long)]
@@ -32,8 +32,8 @@ pub struct ExperimentArgs {
     /// Directory to write the measured-data CSV files to.
     #[arg(long)]
     out: PathBuf,
-    /// The simulated test bed's configuration (TOML), hidden effects included; the digest's
-    /// defaults when absent.
+    /// The simulated test bed's configuration (TOML), hidden effects included; the defaults of
+    /// docs/parameters.md when absent.
     #[arg(long)]
     model: Option<PathBuf>,
     /// Simulated duration, s.

@@ -1,0 +1,417 @@
+//! Fitting a set of candidate causes to the data, jointly, with standard errors: the shared
+//! problem (data, held-out ticks, the cache of filter runs keyed by [`SensorKey`]) and the joint
+//! fit of a set; each kind of cause has its own module.
+//!
+//! Each cause acts on one channel directly ([`Kind`]):
+//! * **sensor** causes (gyro scale and misalignment, Earth rate, hard iron) change the readings
+//!   the attitude filter sees; they are fitted by Gauss–Newton on the filter's whitened
+//!   innovations (the prediction-error method), with Jacobians by finite differences through
+//!   the filter, started for the hard iron from a sphere fit of the field readings;
+//! * **torque** causes (centre-of-mass offset, constant torque, drag, inertia error) are linear
+//!   in the torque channel: weighted least squares, with `aero_drag`'s coefficients kept ≥ 0;
+//! * **wheel** causes are linear in the wheel channel for a given delay and Stribeck speed
+//!   (`wheel_torque_scale`, `wheel_friction` levels); the delay and each wheel's Stribeck speed
+//!   are found by 1-D search, their standard errors from the curvature of the residual sum.
+//!
+//! The sensor fit comes first (it changes the state the other channels are computed from). Every
+//! fit reports the whitened residual sum of squares of each channel on the fit data and on the
+//! held-out data.
+//!
+//! * `sensors`: Gauss–Newton of the sensor causes through the filter;
+//! * `hard_iron`: the hard iron's starting value (sphere fit of the field readings);
+//! * `torque`: weighted least squares of the torque causes;
+//! * `wheels`: per-wheel least squares, delay and Stribeck-speed searches, [`WheelModel`];
+//! * `jacobian`: the one finite-difference Jacobian (and its normal equations) the fits use.
+
+mod hard_iron;
+mod jacobian;
+mod sensors;
+mod torque;
+mod wheels;
+
+pub use hard_iron::sphere_fit;
+pub use wheels::WheelModel;
+
+use crate::channels::{TORQUE_COLUMNS, TorqueChannel, WheelChannel};
+use crate::data::Aligned;
+use crate::effects::{Cause, Kind};
+use crate::error::IdentError;
+use crate::reconstruct::{Reconstruction, reconstruct};
+use crate::stats::NormalEquations;
+use serde::Serialize;
+use std::cell::{Cell, RefCell};
+use std::collections::HashMap;
+use std::rc::Rc;
+use testbed_model::ModelConfig;
+
+/// The residual channels.
+pub const CHANNELS: [&str; 3] = ["attitude", "torque", "wheel"];
+
+/// Whitened residual sum of squares per channel ([`CHANNELS`] order) and the number of scalar
+/// residuals in it.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize)]
+pub struct ChannelRss {
+    pub rss: [f64; 3],
+    pub n: [usize; 3],
+}
+
+impl ChannelRss {
+    /// Likelihood-ratio statistic of `better` against `self` (Gaussian, each channel's variance
+    /// estimated): `Σ n_c ln(RSS_c / RSS_c')`, positive when `better` fits better.
+    pub fn log_ratio(&self, better: &ChannelRss) -> f64 {
+        (0..3)
+            .filter(|&c| self.n[c] > 0 && self.rss[c] > 0.0 && better.rss[c] > 0.0)
+            .map(|c| self.n[c] as f64 * (self.rss[c] / better.rss[c]).ln())
+            .sum()
+    }
+    /// Scalar residuals in all channels.
+    pub fn total(&self) -> usize {
+        self.n.iter().sum()
+    }
+    /// Root mean square of the whitened residuals of channel `c` (1 for noise as modelled).
+    pub fn normalised_rms(&self, c: usize) -> f64 {
+        if self.n[c] == 0 {
+            f64::NAN
+        } else {
+            (self.rss[c] / self.n[c] as f64).sqrt()
+        }
+    }
+}
+
+/// Fit and held-out residual sums of one fitted configuration.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize)]
+pub struct Evaluation {
+    pub fit: ChannelRss,
+    pub held_out: ChannelRss,
+}
+
+/// One fitted cause.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FittedCause {
+    pub cause: Cause,
+    /// Values in [`Cause::values`] order (the configuration's units).
+    pub values: Vec<f64>,
+    /// Standard errors, same order; NaN where not estimated (held at a bound or not
+    /// determined by the data).
+    pub stderr: Vec<f64>,
+    /// Parameters actually estimated (counted in the information criterion).
+    pub free: usize,
+    /// What the fit had to decide (e.g. friction model per wheel).
+    pub note: String,
+}
+
+/// The estimated state and the channels built on it, for one sensor configuration.
+#[derive(Debug)]
+pub struct State {
+    pub recon: Reconstruction,
+    pub torque: TorqueChannel,
+    pub wheel: WheelChannel,
+}
+
+/// A fitted set of causes.
+#[derive(Debug, Clone)]
+pub struct SetFit {
+    /// Base configuration with the fitted effects.
+    pub config: ModelConfig,
+    pub causes: Vec<FittedCause>,
+    pub evaluation: Evaluation,
+    pub state: Rc<State>,
+    /// Torque-channel parameter change from the base, per column.
+    pub torque_delta: [f64; TORQUE_COLUMNS],
+}
+
+impl SetFit {
+    /// Estimated parameters in the whole set.
+    pub fn free(&self) -> usize {
+        self.causes.iter().map(|c| c.free).sum()
+    }
+}
+
+/// Settings of the fits.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct FitOptions {
+    /// Longest segment of the torque channel's integral form, s.
+    pub torque_segment_s: f64,
+    /// Largest actuator delay searched, s.
+    pub max_delay_s: f64,
+    /// Significance level of the tests inside the fits (Stribeck term per wheel), and the
+    /// linearised screen of sensor causes.
+    pub alpha: f64,
+}
+
+impl Default for FitOptions {
+    fn default() -> Self {
+        Self {
+            torque_segment_s: 15.0,
+            max_delay_s: 1.0,
+            alpha: 1e-6,
+        }
+    }
+}
+
+/// Everything the fits share: the data, the base configuration, which ticks are held out, and
+/// the estimated states already computed.
+pub struct Problem<'a> {
+    pub data: &'a Aligned,
+    pub base: ModelConfig,
+    /// Per tick: held out from the fits.
+    pub held_out: Vec<bool>,
+    pub options: FitOptions,
+    cache: RefCell<HashMap<SensorKey, Rc<State>>>,
+    recons: RefCell<HashMap<SensorKey, Rc<Reconstruction>>>,
+    /// Filter runs so far (for the benchmark and the report).
+    pub filter_runs: Cell<usize>,
+    sphere: RefCell<Option<Option<[f64; 3]>>>,
+}
+
+/// Cache key of a filter run: the sensor causes present in a configuration and their values,
+/// exactly (bit patterns), in [`Cause::ALL`] order. Configurations with equal keys give the same
+/// filter run.
+#[derive(Debug, Clone, PartialEq, Eq, Hash, Default)]
+pub struct SensorKey(Vec<(Cause, Vec<u64>)>);
+
+impl SensorKey {
+    pub fn of(config: &ModelConfig) -> Self {
+        Self(
+            Cause::ALL
+                .into_iter()
+                .filter(|c| c.kind() == Kind::Sensor && c.present(config))
+                .map(|c| (c, c.values(config).iter().map(|x| x.to_bits()).collect()))
+                .collect(),
+        )
+    }
+
+    /// No sensor cause present (the nominal filter run).
+    pub fn is_nominal(&self) -> bool {
+        self.0.is_empty()
+    }
+}
+
+impl<'a> Problem<'a> {
+    pub fn new(
+        data: &'a Aligned,
+        base: ModelConfig,
+        held_out: Vec<bool>,
+        options: FitOptions,
+    ) -> Self {
+        Self {
+            data,
+            base,
+            held_out,
+            options,
+            cache: RefCell::new(HashMap::new()),
+            recons: RefCell::new(HashMap::new()),
+            filter_runs: Cell::new(0),
+            sphere: RefCell::new(None),
+        }
+    }
+
+    /// The filter run for the sensor effects of `config` (cached).
+    pub(crate) fn recon(&self, config: &ModelConfig) -> Result<Rc<Reconstruction>, IdentError> {
+        let key = SensorKey::of(config);
+        if let Some(r) = self.recons.borrow().get(&key) {
+            return Ok(r.clone());
+        }
+        self.filter_runs.set(self.filter_runs.get() + 1);
+        let r = Rc::new(reconstruct(self.data, config)?);
+        self.recons.borrow_mut().insert(key, r.clone());
+        Ok(r)
+    }
+
+    /// A filter run that is not worth keeping (finite-difference steps).
+    pub(crate) fn run_filter(&self, config: &ModelConfig) -> Result<Reconstruction, IdentError> {
+        if let Some(r) = self.recons.borrow().get(&SensorKey::of(config)) {
+            return Ok((**r).clone());
+        }
+        self.filter_runs.set(self.filter_runs.get() + 1);
+        reconstruct(self.data, config)
+    }
+
+    /// The state and channels for the sensor effects of `config` (cached).
+    pub fn state(&self, config: &ModelConfig) -> Result<Rc<State>, IdentError> {
+        let key = SensorKey::of(config);
+        if let Some(s) = self.cache.borrow().get(&key) {
+            return Ok(s.clone());
+        }
+        let recon = (*self.recon(config)?).clone();
+        let torque = TorqueChannel::new(
+            self.data,
+            &recon,
+            &self.base,
+            self.options.torque_segment_s,
+            &self.held_out,
+        );
+        let wheel = WheelChannel::new(self.data, &recon, &self.base);
+        let state = Rc::new(State {
+            recon,
+            torque,
+            wheel,
+        });
+        self.cache.borrow_mut().insert(key, state.clone());
+        Ok(state)
+    }
+
+    /// Forget cached states and filter runs (memory) except the base's and those of `keep`.
+    pub fn trim_cache(&self, keep: &[&ModelConfig]) {
+        let keys: Vec<SensorKey> = keep.iter().map(|c| SensorKey::of(c)).collect();
+        self.cache
+            .borrow_mut()
+            .retain(|k, _| k.is_nominal() || keys.contains(k));
+        self.recons
+            .borrow_mut()
+            .retain(|k, _| k.is_nominal() || keys.contains(k));
+    }
+
+    /// Innovation rows on the fit ticks.
+    pub(crate) fn fit_innovations(&self, recon: &Reconstruction) -> Vec<f64> {
+        recon.innovation_vector(|k| !self.held_out[k])
+    }
+
+    /// Fit the causes `set` jointly. Sensor causes in `warm` (fitted before) start from those
+    /// values; when every sensor cause of the set is in `warm`, they are kept as they are (the
+    /// other channels do not inform them).
+    pub fn fit(
+        &self,
+        set: &[Cause],
+        warm: &HashMap<Cause, FittedCause>,
+    ) -> Result<SetFit, IdentError> {
+        self.fit_screened(set, warm, None)
+    }
+
+    /// [`Problem::fit`], but the sensor fit stops after its first linearisation when that
+    /// predicts an attitude-channel residual (whitened, fit data) above `screen.1` minus half
+    /// of `screen.0` (the candidate cannot be significant; saves filter runs). `screen.1` is
+    /// the residual of the model the candidate is compared with.
+    pub fn fit_screened(
+        &self,
+        set: &[Cause],
+        warm: &HashMap<Cause, FittedCause>,
+        screen: Option<(f64, f64)>,
+    ) -> Result<SetFit, IdentError> {
+        let mut config = self.base.clone();
+        let mut fitted: Vec<FittedCause> = Vec::new();
+
+        let sensor: Vec<Cause> = set
+            .iter()
+            .copied()
+            .filter(|c| c.kind() == Kind::Sensor)
+            .collect();
+        if !sensor.is_empty() {
+            let (c, f) = self.fit_sensors(&sensor, warm, screen)?;
+            config = c;
+            fitted.extend(f);
+        }
+        let state = self.state(&config)?;
+
+        let torque: Vec<Cause> = set
+            .iter()
+            .copied()
+            .filter(|c| c.kind() == Kind::Torque)
+            .collect();
+        let mut torque_delta = [0.0; TORQUE_COLUMNS];
+        if !torque.is_empty() {
+            let (delta, f) = self.fit_torque(&state, &torque)?;
+            torque_delta = delta;
+            for fc in &f {
+                fc.cause.apply(&mut config, &fc.values);
+            }
+            fitted.extend(f);
+        }
+
+        let wheel: Vec<Cause> = set
+            .iter()
+            .copied()
+            .filter(|c| c.kind() == Kind::Wheel)
+            .collect();
+        if !wheel.is_empty() {
+            let f = self.fit_wheels(&state, &wheel)?;
+            for fc in &f {
+                fc.cause.apply(&mut config, &fc.values);
+            }
+            fitted.extend(f);
+        }
+        config.validate()?;
+        let evaluation = self.evaluate(&state, &config, &torque_delta);
+        // Order as the set was given.
+        fitted.sort_by_key(|f| set.iter().position(|c| *c == f.cause));
+        Ok(SetFit {
+            config,
+            causes: fitted,
+            evaluation,
+            state,
+            torque_delta,
+        })
+    }
+
+    /// Residual sums of every channel for a fitted configuration on `state`.
+    pub fn evaluate(
+        &self,
+        state: &State,
+        config: &ModelConfig,
+        torque_delta: &[f64; TORQUE_COLUMNS],
+    ) -> Evaluation {
+        let mut e = Evaluation::default();
+        for i in state.recon.innovations.iter() {
+            let target = if self.held_out[i.tick] {
+                &mut e.held_out
+            } else {
+                &mut e.fit
+            };
+            for c in 0..crate::reconstruct::INNOVATION_LEN {
+                if i.mask & (1 << c) != 0 {
+                    target.rss[0] += i.values[c] * i.values[c];
+                    target.n[0] += 1;
+                }
+            }
+        }
+        for (i, &a) in state.torque.ticks.iter().enumerate() {
+            let r = state.torque.whitened(i, torque_delta);
+            let target = if self.held_out[a] {
+                &mut e.held_out
+            } else {
+                &mut e.fit
+            };
+            target.rss[1] += r.norm_squared();
+            target.n[1] += 3;
+        }
+        let wheel = WheelModel::from_config(config);
+        for (w, rows) in state.wheel.rows.iter().enumerate() {
+            for row in rows {
+                let r = wheel.residual(self.data, &state.wheel, w, row) / state.wheel.sigma;
+                let target = if self.held_out[row.k] {
+                    &mut e.held_out
+                } else {
+                    &mut e.fit
+                };
+                target.rss[2] += r * r;
+                target.n[2] += 1;
+            }
+        }
+        e
+    }
+}
+
+/// Solve with some unknowns held at given values; returns the full vector and standard errors
+/// (NaN for the held ones).
+fn solve_fixed(ne: &NormalEquations, fixed: &[(usize, f64)]) -> Option<(Vec<f64>, Vec<f64>)> {
+    let p = ne.params();
+    let free: Vec<usize> = (0..p)
+        .filter(|j| !fixed.iter().any(|(f, _)| f == j))
+        .collect();
+    let mut values = vec![0.0; p];
+    for (j, v) in fixed {
+        values[*j] = *v;
+    }
+    if free.is_empty() {
+        return Some((values, vec![f64::NAN; p]));
+    }
+    let reduced = ne.reduce(&free, &values)?;
+    let fit = reduced.solve()?;
+    let se_free = fit.stderr();
+    let mut se = vec![f64::NAN; p];
+    for (i, &j) in free.iter().enumerate() {
+        values[j] = fit.theta[i];
+        se[j] = se_free[i];
+    }
+    Some((values, se))
+}

@@ -1,0 +1,399 @@
+//! The analysis of `testbed identify`.
+//!
+//! 1. **What the simulation gets wrong.** The nominal model (the configuration given) predicts
+//!    every measurement channel — rates, tilt, field, wheel speeds — from the estimated state,
+//!    re-initialised every `horizon_s` and driven by the recorded commands
+//!    ([`crate::predict`]); and the data are checked against its equations of motion
+//!    ([`crate::channels`]: the platform's momentum equation, the wheels' equation) and its
+//!    sensor models (the attitude filter's innovations). Each residual is described by its RMS,
+//!    bias, trend and whiteness.
+//! 2. **Name the cause.** The data are split in time blocks; every `held_out_every`-th block is
+//!    held out of the fits. Forward selection over the candidate library: at each step every
+//!    remaining cause is fitted jointly with those already chosen ([`crate::fit`]); a candidate
+//!    is significant when its likelihood ratio on the fit data beats both the information
+//!    criterion (BIC, `k ln N`) and the χ² quantile at `1 − alpha`; among the significant ones
+//!    whose held-out residuals improve, the one that improves them most is chosen. No candidate
+//!    chosen: the cause is `none`.
+//! 3. **Extend the model**: the configuration given plus the chosen effects with their fitted
+//!    values (loadable by `ModelConfig::load`).
+//! 4. **Measure the gain** on the held-out blocks: multi-step prediction error of the nominal and
+//!    extended model per component and overall; gain = nominal / extended.
+//!
+//! What remains after the chosen causes is checked on the equation-error channels (RMS against
+//! the noise the model expects, whiteness) and, if something remains, correlated with the
+//! signals the candidate effects would produce.
+//!
+//! The report's types and its tables of curves are in `report`; the residual series after a
+//! fit, what remains and what it correlates with in `residuals`.
+
+mod report;
+mod residuals;
+
+pub use report::{
+    CandidateRow, CauseReport, ComponentReport, Correlation, Curve, DataSummary, FigureData,
+    Identification, Remaining, Report, ResidualReport, RmsReport,
+};
+
+use report::{prediction_curves, rms_report, window_curves};
+use residuals::{equation_error, remaining};
+
+use crate::data::{Aligned, Dataset};
+use crate::effects::{Cause, Kind};
+use crate::error::IdentError;
+use crate::fit::{FitOptions, Problem, SetFit};
+use crate::predict::{self, COMPONENTS};
+use crate::stats::chi_square_quantile;
+use serde::Serialize;
+use std::collections::{BTreeMap, HashMap};
+use testbed_model::ModelConfig;
+
+/// Settings of the analysis.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Options {
+    pub fit: FitOptions,
+    /// Prediction window: re-initialisation period of the multi-step predictions, s.
+    pub horizon_s: f64,
+    /// Length of the time blocks of the fit / held-out split, s.
+    pub block_s: f64,
+    /// Every this-many-th block is held out (3: a third of the data).
+    pub held_out_every: usize,
+    /// Most causes named.
+    pub max_causes: usize,
+    /// Significance level of a cause (per candidate and step).
+    pub alpha: f64,
+    /// Candidates considered (default: the whole library).
+    pub candidates: Vec<Cause>,
+    /// Normalised RMS of an equation-error channel above which residual is said to remain.
+    pub remaining_rms: f64,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Self {
+            fit: FitOptions::default(),
+            horizon_s: 10.0,
+            block_s: 30.0,
+            held_out_every: 3,
+            max_causes: 4,
+            alpha: 1e-6,
+            candidates: Cause::ALL.to_vec(),
+            remaining_rms: 1.3,
+        }
+    }
+}
+
+impl Options {
+    fn validate(&self) -> Result<(), IdentError> {
+        let bad = |key: &str, value: String, reason: &str| {
+            Err(IdentError::Options {
+                key: key.into(),
+                value,
+                reason: reason.into(),
+            })
+        };
+        if !(self.horizon_s.is_finite() && self.horizon_s > 0.0) {
+            return bad("horizon_s", self.horizon_s.to_string(), "must be > 0");
+        }
+        if !(self.block_s.is_finite() && self.block_s >= self.horizon_s) {
+            return bad(
+                "block_s",
+                self.block_s.to_string(),
+                "must be at least the prediction horizon",
+            );
+        }
+        if self.held_out_every < 2 {
+            return bad(
+                "held_out_every",
+                self.held_out_every.to_string(),
+                "must be >= 2",
+            );
+        }
+        if !(self.alpha > 0.0 && self.alpha < 0.5) {
+            return bad("alpha", self.alpha.to_string(), "must be within (0, 0.5)");
+        }
+        if !(self.fit.torque_segment_s > 0.0 && self.fit.max_delay_s > 0.0) {
+            return bad("fit", format!("{:?}", self.fit), "intervals must be > 0");
+        }
+        Ok(())
+    }
+}
+
+/// Identify what the model gets wrong in `data` (see the module documentation).
+pub fn identify(
+    data: &Dataset,
+    model: &ModelConfig,
+    options: &Options,
+) -> Result<Identification, IdentError> {
+    options.validate()?;
+    model.validate()?;
+    data.check()?;
+    let aligned = Aligned::new(data);
+    let block = |t: f64| (t / options.block_s).floor() as usize;
+    let held_out: Vec<bool> = aligned
+        .t
+        .iter()
+        .map(|&t| block(t) % options.held_out_every == options.held_out_every - 1)
+        .collect();
+    let held_fraction =
+        held_out.iter().filter(|h| **h).count() as f64 / held_out.len().max(1) as f64;
+    let problem = Problem::new(
+        &aligned,
+        model.clone(),
+        held_out.clone(),
+        options.fit.clone(),
+    );
+
+    // Baseline.
+    let empty = HashMap::new();
+    let nominal = problem.fit(&[], &empty)?;
+    if nominal.state.recon.start >= aligned.len() {
+        return Err(IdentError::Failed(format!(
+            "{}: the attitude filter never started (no usable inclinometer/magnetometer sample pair)",
+            data.source.display()
+        )));
+    }
+    let n_fit = nominal.evaluation.fit.total().max(2) as f64;
+
+    // Forward selection.
+    let available: Vec<Cause> = options
+        .candidates
+        .iter()
+        .copied()
+        .filter(|c| available(*c, &problem, &nominal))
+        .collect();
+    let mut selected: Vec<Cause> = Vec::new();
+    let mut current = nominal.clone();
+    let mut steps = Vec::new();
+    let mut chosen_rows: Vec<CandidateRow> = Vec::new();
+    let mut warm: HashMap<Cause, crate::fit::FittedCause> = HashMap::new();
+    for _ in 0..options.max_causes {
+        let mut rows = Vec::new();
+        let mut best: Option<(usize, SetFit)> = None;
+        for &cause in available.iter().filter(|c| !selected.contains(c)) {
+            let mut set = selected.clone();
+            set.push(cause);
+            let threshold_for = |k: usize| {
+                (k as f64 * n_fit.ln()).max(
+                    chi_square_quantile(1.0 - options.alpha, k.max(1) as f64)
+                        .unwrap_or(f64::INFINITY),
+                )
+            };
+            let screen = (cause.kind() == Kind::Sensor)
+                .then(|| (threshold_for(cause.len()), current.evaluation.fit.rss[0]));
+            match problem.fit_screened(&set, &warm, screen) {
+                Ok(fit) => {
+                    let lr = current.evaluation.fit.log_ratio(&fit.evaluation.fit);
+                    let k = fit.free().saturating_sub(current.free());
+                    let threshold = threshold_for(k);
+                    let lr_held = current
+                        .evaluation
+                        .held_out
+                        .log_ratio(&fit.evaluation.held_out);
+                    let significant = k > 0 && lr > threshold;
+                    let note = fit
+                        .causes
+                        .iter()
+                        .find(|c| c.cause == cause)
+                        .map(|c| c.note.clone())
+                        .unwrap_or_default();
+                    rows.push(CandidateRow {
+                        name: cause.name(),
+                        k,
+                        lr_fit: lr,
+                        threshold,
+                        delta_bic: -lr + k as f64 * n_fit.ln(),
+                        lr_held_out: lr_held,
+                        significant,
+                        chosen: false,
+                        note,
+                    });
+                    if significant
+                        && lr_held > 0.0
+                        && best
+                            .as_ref()
+                            .is_none_or(|(i, _)| lr_held > rows[*i].lr_held_out)
+                    {
+                        best = Some((rows.len() - 1, fit));
+                    }
+                }
+                Err(e) => rows.push(CandidateRow {
+                    name: cause.name(),
+                    k: 0,
+                    lr_fit: 0.0,
+                    threshold: f64::NAN,
+                    delta_bic: f64::NAN,
+                    lr_held_out: 0.0,
+                    significant: false,
+                    chosen: false,
+                    note: e.to_string(),
+                }),
+            }
+        }
+        let Some((i, fit)) = best else {
+            steps.push(rows);
+            break;
+        };
+        rows[i].chosen = true;
+        let cause = Cause::from_name(rows[i].name).unwrap_or(Cause::ComOffset);
+        chosen_rows.push(rows[i].clone());
+        steps.push(rows);
+        selected.push(cause);
+        warm = fit
+            .causes
+            .iter()
+            .filter(|c| c.cause.kind() == Kind::Sensor)
+            .map(|c| (c.cause, c.clone()))
+            .collect();
+        current = fit;
+        problem.trim_cache(&[&current.config]);
+    }
+
+    let causes: Vec<CauseReport> = selected
+        .iter()
+        .zip(&chosen_rows)
+        .filter_map(|(cause, row)| {
+            let f = current.causes.iter().find(|c| c.cause == *cause)?;
+            Some(CauseReport {
+                name: cause.name(),
+                description: cause.description(),
+                parameters: cause.to_json(&f.values),
+                stderr: cause.to_json(&f.stderr),
+                units: cause.units_json(),
+                lr_fit: row.lr_fit,
+                delta_bic: row.delta_bic,
+                lr_held_out: row.lr_held_out,
+                note: f.note.clone(),
+            })
+        })
+        .collect();
+    let verdict = if causes.is_empty() {
+        "none".to_string()
+    } else {
+        causes
+            .iter()
+            .map(|c| c.name)
+            .collect::<Vec<_>>()
+            .join(" + ")
+    };
+    let extended = current.config.clone();
+    // The extended model must load as it is written.
+    ModelConfig::from_toml_str(&extended.to_toml_string(), "extended model")?;
+
+    // Residual reports, nominal and extended.
+    let all_spans = [(nominal.state.recon.start, aligned.len())];
+    let all_windows = predict::windows(&aligned, &all_spans, options.horizon_s);
+    let nominal_prediction = predict::predict(&aligned, &nominal.state.recon, model, &all_windows)?;
+    let (nominal_equation, nominal_report) =
+        equation_error(&problem, &nominal, &nominal_prediction);
+    let extended_prediction = if selected.is_empty() {
+        nominal_prediction.clone()
+    } else {
+        predict::predict(&aligned, &current.state.recon, &extended, &all_windows)?
+    };
+    let (extended_equation, extended_report) =
+        equation_error(&problem, &current, &extended_prediction);
+
+    // Gain on the held-out blocks.
+    let spans = held_out_spans(&held_out, nominal.state.recon.start);
+    let windows = predict::windows(&aligned, &spans, options.horizon_s);
+    let base_held = predict::predict(&aligned, &nominal.state.recon, model, &windows)?;
+    let ext_held = if selected.is_empty() {
+        base_held.clone()
+    } else {
+        predict::predict(&aligned, &current.state.recon, &extended, &windows)?
+    };
+    let base_rms = base_held.rms(|_| true);
+    let ext_rms = ext_held.rms(|_| true);
+    let baseline_rms = rms_report(&base_rms);
+    let extended_rms = rms_report(&ext_rms);
+    let gain = baseline_rms.overall / extended_rms.overall;
+    let mut gain_by_component = BTreeMap::new();
+    for c in 0..COMPONENTS.len() {
+        if let (Some(a), Some(b)) = (base_rms[c], ext_rms[c]) {
+            gain_by_component.insert(COMPONENTS[c], a.rms / b.rms);
+        }
+    }
+    let gain_by_group = baseline_rms
+        .groups
+        .iter()
+        .filter_map(|(g, a)| extended_rms.groups.get(g).map(|b| (*g, a / b)))
+        .collect();
+
+    let remaining = remaining(&problem, &current, options);
+    let figures = FigureData {
+        nominal_prediction: prediction_curves(&nominal_prediction),
+        nominal_equation,
+        extended_equation,
+        held_out_nominal: window_curves(&base_held, &aligned),
+        held_out_extended: window_curves(&ext_held, &aligned),
+    };
+    let devices = [
+        (!data.gyro.is_empty(), "gyro"),
+        (!data.inclinometer.is_empty(), "inclinometer"),
+        (!data.magnetometer.is_empty(), "magnetometer"),
+        (!data.wheels.is_empty(), "wheels"),
+        (!data.cmg.is_empty(), "cmg"),
+    ]
+    .into_iter()
+    .filter_map(|(p, n)| p.then_some(n))
+    .collect();
+    let report = Report {
+        data: DataSummary {
+            source: data.source.display().to_string(),
+            duration_s: data.duration_s(),
+            gyro_rows: data.gyro.len(),
+            period_s: aligned.period_s,
+            devices,
+            held_out_fraction: held_fraction,
+        },
+        options: options.clone(),
+        nominal_residuals: nominal_report,
+        steps,
+        causes,
+        verdict,
+        remaining,
+        extended_residuals: extended_report,
+        baseline_rms,
+        extended_rms,
+        gain,
+        gain_by_component,
+        gain_by_group,
+        filter_runs: problem.filter_runs.get(),
+    };
+    Ok(Identification {
+        report,
+        extended,
+        figures,
+    })
+}
+
+/// Whether the data can say anything about a cause.
+fn available(cause: Cause, problem: &Problem, nominal: &SetFit) -> bool {
+    let s = &nominal.state;
+    match cause.kind() {
+        Kind::Sensor => {
+            !s.recon.innovations.is_empty()
+                && (cause != Cause::MagneticDisturbance || !problem.data.field.is_empty())
+        }
+        Kind::Torque => s.torque.len() >= 30,
+        Kind::Wheel => s.wheel.len() >= 10,
+    }
+}
+
+/// Contiguous runs of held-out ticks after `start`.
+fn held_out_spans(held: &[bool], start: usize) -> Vec<(usize, usize)> {
+    let mut out = Vec::new();
+    let mut k = start;
+    while k < held.len() {
+        if held[k] {
+            let a = k;
+            while k < held.len() && held[k] {
+                k += 1;
+            }
+            out.push((a, k));
+        } else {
+            k += 1;
+        }
+    }
+    out
+}

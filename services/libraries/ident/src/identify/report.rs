@@ -1,0 +1,229 @@
+//! The report of `identify` (residuals, selection steps, causes, what remains, gain) and the
+//! curves the figures draw.
+
+use super::Options;
+use crate::data::Aligned;
+use crate::predict::{self, COMPONENTS, ComponentRms, Predictions};
+use crate::stats::SeriesStats;
+use serde::Serialize;
+use std::collections::BTreeMap;
+use testbed_model::ModelConfig;
+
+/// Summary of the data analysed.
+#[derive(Debug, Clone, Serialize)]
+pub struct DataSummary {
+    pub source: String,
+    pub duration_s: f64,
+    pub gyro_rows: usize,
+    pub period_s: f64,
+    pub devices: Vec<&'static str>,
+    /// Fraction of the ticks held out of the fits.
+    pub held_out_fraction: f64,
+}
+
+/// Statistics of one residual component.
+#[derive(Debug, Clone, Serialize)]
+pub struct ComponentReport {
+    pub name: String,
+    pub unit: &'static str,
+    /// RMS divided by the noise the model expects (1 = as noisy as the sensors).
+    pub normalised_rms: f64,
+    #[serde(flatten)]
+    pub stats: SeriesStats,
+}
+
+/// Residual report of one model.
+#[derive(Debug, Clone, Serialize)]
+pub struct ResidualReport {
+    /// Multi-step prediction residuals (measured − predicted) over the whole record.
+    pub prediction: Vec<ComponentReport>,
+    /// Equation-error residuals: platform momentum (the integral of the torque residual over each
+    /// segment, Nms), wheel torque (Nm), filter innovations (whitened).
+    pub equation_error: Vec<ComponentReport>,
+    /// Whitened RMS of each equation-error channel (1 = noise as modelled), fit / held out.
+    pub channel_rms_fit: BTreeMap<&'static str, f64>,
+    pub channel_rms_held_out: BTreeMap<&'static str, f64>,
+}
+
+/// One candidate's evaluation in a selection step.
+#[derive(Debug, Clone, Serialize)]
+pub struct CandidateRow {
+    pub name: &'static str,
+    /// Parameters estimated.
+    pub k: usize,
+    /// Likelihood ratio on the fit data, `Σ n ln(RSS/RSS')`.
+    pub lr_fit: f64,
+    /// Threshold it must beat: max(k ln N, χ²_k(1 − alpha)).
+    pub threshold: f64,
+    /// BIC change (negative: better).
+    pub delta_bic: f64,
+    /// Likelihood ratio on the held-out data (positive: predicts them better).
+    pub lr_held_out: f64,
+    pub significant: bool,
+    pub chosen: bool,
+    #[serde(skip_serializing_if = "String::is_empty")]
+    pub note: String,
+}
+
+/// One named cause.
+#[derive(Debug, Clone, Serialize)]
+pub struct CauseReport {
+    pub name: &'static str,
+    pub description: &'static str,
+    /// Fitted values under the configuration's keys (the `[effects.<name>]` table).
+    pub parameters: serde_json::Map<String, serde_json::Value>,
+    /// Standard errors, same keys (`null`: not estimated).
+    pub stderr: serde_json::Map<String, serde_json::Value>,
+    pub units: serde_json::Map<String, serde_json::Value>,
+    pub lr_fit: f64,
+    pub delta_bic: f64,
+    pub lr_held_out: f64,
+    #[serde(skip_serializing_if = "String::is_empty")]
+    pub note: String,
+}
+
+/// A residual's correlation with a signal a candidate effect would produce.
+#[derive(Debug, Clone, Serialize)]
+pub struct Correlation {
+    pub residual: String,
+    pub signal: String,
+    pub r: f64,
+}
+
+/// What is left after the chosen causes.
+#[derive(Debug, Clone, Serialize)]
+pub struct Remaining {
+    pub residual_remains: bool,
+    pub message: String,
+    /// Whitened RMS per equation-error channel on the held-out data.
+    pub channel_rms: BTreeMap<&'static str, f64>,
+    /// Strongest correlations of the remaining residuals (when residual remains).
+    pub correlations: Vec<Correlation>,
+}
+
+/// Prediction error of one model on the held-out data.
+#[derive(Debug, Clone, Serialize)]
+pub struct RmsReport {
+    /// Root mean square of the components' normalised RMS (1 = sensor noise).
+    pub overall: f64,
+    /// Per component: RMS (its unit), normalised RMS, samples.
+    pub components: BTreeMap<&'static str, ComponentRms>,
+    /// Per channel group (rates, tilt, field, wheel speeds): normalised.
+    pub groups: BTreeMap<&'static str, f64>,
+}
+
+/// The report of `identify`.
+#[derive(Debug, Clone, Serialize)]
+pub struct Report {
+    pub data: DataSummary,
+    pub options: Options,
+    /// Item 1: the nominal model's residuals.
+    pub nominal_residuals: ResidualReport,
+    /// Forward selection, one entry per step.
+    pub steps: Vec<Vec<CandidateRow>>,
+    /// Named causes, strongest first (empty: none).
+    pub causes: Vec<CauseReport>,
+    /// `none`, or the causes joined by ` + `.
+    pub verdict: String,
+    pub remaining: Remaining,
+    /// The extended model's residuals.
+    pub extended_residuals: ResidualReport,
+    pub baseline_rms: RmsReport,
+    pub extended_rms: RmsReport,
+    /// `baseline_rms.overall / extended_rms.overall`.
+    pub gain: f64,
+    pub gain_by_component: BTreeMap<&'static str, f64>,
+    pub gain_by_group: BTreeMap<&'static str, f64>,
+    /// Filter runs the analysis took.
+    pub filter_runs: usize,
+}
+
+/// A labelled time series for figures.
+#[derive(Debug, Clone)]
+pub struct Curve {
+    pub label: String,
+    pub points: Vec<(f64, f64)>,
+}
+
+/// What the figures need.
+#[derive(Debug, Clone, Default)]
+pub struct FigureData {
+    /// Nominal model, whole record: prediction residuals per component.
+    pub nominal_prediction: Vec<Curve>,
+    /// Equation-error residuals, nominal and extended: torque (Nm), wheel (Nm), innovations.
+    pub nominal_equation: Vec<Curve>,
+    pub extended_equation: Vec<Curve>,
+    /// Held-out windows: normalised RMS per window and group, nominal and extended.
+    pub held_out_nominal: Vec<Curve>,
+    pub held_out_extended: Vec<Curve>,
+}
+
+/// The result of `identify`.
+#[derive(Debug, Clone)]
+pub struct Identification {
+    pub report: Report,
+    /// The extended model (the configuration given plus the named effects).
+    pub extended: ModelConfig,
+    pub figures: FigureData,
+}
+
+pub(super) fn rms_report(rms: &[Option<ComponentRms>; 11]) -> RmsReport {
+    let mut components = BTreeMap::new();
+    let mut groups: BTreeMap<&'static str, (f64, usize)> = BTreeMap::new();
+    for (c, r) in rms.iter().enumerate() {
+        if let Some(r) = r {
+            components.insert(COMPONENTS[c], *r);
+            let g = groups.entry(predict::group(c)).or_insert((0.0, 0));
+            g.0 += r.normalised * r.normalised;
+            g.1 += 1;
+        }
+    }
+    RmsReport {
+        overall: Predictions::overall(rms),
+        components,
+        groups: groups
+            .into_iter()
+            .map(|(g, (s, n))| (g, (s / n as f64).sqrt()))
+            .collect(),
+    }
+}
+
+pub(super) fn prediction_curves(p: &Predictions) -> Vec<Curve> {
+    (0..COMPONENTS.len())
+        .filter(|&c| !p.residuals[c].is_empty())
+        .map(|c| Curve {
+            label: COMPONENTS[c].to_string(),
+            points: p.residuals[c].iter().map(|(t, r, _)| (*t, *r)).collect(),
+        })
+        .collect()
+}
+
+pub(super) fn window_curves(p: &Predictions, data: &Aligned) -> Vec<Curve> {
+    let per = p.per_window(data);
+    let mut groups: BTreeMap<&'static str, BTreeMap<u64, (f64, f64, usize)>> = BTreeMap::new();
+    for (c, series) in per.iter().enumerate() {
+        for &(t, v) in series {
+            let e = groups
+                .entry(predict::group(c))
+                .or_default()
+                .entry(t.to_bits())
+                .or_insert((t, 0.0, 0));
+            e.1 += v * v;
+            e.2 += 1;
+        }
+    }
+    groups
+        .into_iter()
+        .map(|(g, m)| {
+            let mut points: Vec<(f64, f64)> = m
+                .into_values()
+                .map(|(t, s, n)| (t, (s / n as f64).sqrt()))
+                .collect();
+            points.sort_by(|a, b| a.0.total_cmp(&b.0));
+            Curve {
+                label: g.to_string(),
+                points,
+            }
+        })
+        .collect()
+}
