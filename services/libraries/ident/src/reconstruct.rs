@@ -14,7 +14,7 @@ use crate::error::IdentError;
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 use testbed_flight::mekf::{Mekf, MekfConfig, VectorMeasurements};
 use testbed_model::ModelConfig;
-use testbed_model::attitude::{self, Attitude, skew};
+use testbed_model::attitude::{self, Attitude};
 use testbed_model::config::{DEG, EARTH_RATE_RAD_S, GAUSS};
 
 /// Components of one innovation row: gravity (2, tangent plane) then field (3).
@@ -45,7 +45,7 @@ impl SensorModel {
             .gyro_misalignment
             .as_ref()
             .map_or_else(Matrix3::identity, |m| {
-                Matrix3::identity() - skew(&Vector3::from(m.angles_rad))
+                Matrix3::identity() - Vector3::from(m.angles_rad).cross_matrix()
             });
         let gyro_matrix = scale * misalignment;
         let earth_rate_l = e.earth_rate.as_ref().map_or_else(Vector3::zeros, |x| {

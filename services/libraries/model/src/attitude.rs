@@ -12,7 +12,7 @@
 //!   sensitivity is `H = [A r ×]` as in the digest. [`apply_error`] and [`attitude_error`] are the
 //!   two directions of that definition.
 
-use nalgebra::{Matrix3, UnitQuaternion, Vector3};
+use nalgebra::{UnitQuaternion, Vector3};
 
 /// Attitude quaternion, level frame to body frame (see the module documentation).
 pub type Attitude = UnitQuaternion<f64>;
@@ -20,13 +20,6 @@ pub type Attitude = UnitQuaternion<f64>;
 /// Unit down vector (gravity direction) in the level frame, `G_L`.
 pub fn gravity_l() -> Vector3<f64> {
     Vector3::new(0.0, 0.0, -1.0)
-}
-
-/// Skew-symmetric cross-product matrix: `skew(a) b = a × b`. This is nalgebra's
-/// [`Vector3::cross_matrix`], element for element; new code calls that directly. Kept only for
-/// users outside this crate that still name it (`testbed-ident`'s reconstruction).
-pub fn skew(a: &Vector3<f64>) -> Matrix3<f64> {
-    a.cross_matrix()
 }
 
 /// Propagate the attitude over `dt_s` seconds at a constant body rate `rate_b` (rad/s).
@@ -108,12 +101,11 @@ mod tests {
             Vector3::new(-1.5e-300, 2.0, f64::MAX),
             Vector3::new(0.0, -0.0, 1.0 / 3.0),
         ] {
-            let by_hand = Matrix3::new(0.0, -a.z, a.y, a.z, 0.0, -a.x, -a.y, a.x, 0.0);
+            let by_hand = nalgebra::Matrix3::new(0.0, -a.z, a.y, a.z, 0.0, -a.x, -a.y, a.x, 0.0);
             let m = a.cross_matrix();
             for (x, y) in m.iter().zip(by_hand.iter()) {
                 assert_eq!(x.to_bits(), y.to_bits());
             }
-            assert_eq!(skew(&a), m);
         }
         let (a, b) = (Vector3::new(0.3, -0.5, 0.8), Vector3::new(-0.1, 0.2, 0.7));
         assert!((a.cross_matrix() * b - a.cross(&b)).norm() < 1e-15);

@@ -1,10 +1,11 @@
 //! Model configuration: every physical parameter of the platform, its devices and the effects the
 //! nominal model leaves out, loaded from TOML.
 //!
-//! Defaults are the values of `shared/paper/DIGEST.md` (the paper, "A 3-axis Simulator for
-//! Spacecraft Attitude Control Research", Dai & Jin, ICIA 2010), with the source of each noted on
-//! the field: **paper** (a number printed in the paper), **derived** (computed from paper numbers)
-//! or **assumed** (not in the paper; this project's default).
+//! Defaults are the values of the paper ("A 3-axis Simulator for Spacecraft Attitude Control
+//! Research", Dai & Jin, ICIA 2010) and this project's assumptions where it is silent, with the
+//! source of each noted on the field: **paper** (a number printed in the paper), **derived**
+//! (computed from paper numbers) or **assumed** (not in the paper; this project's default).
+//! `docs/parameters.md` lists them all.
 //!
 //! Units at this edge carry their name in the key (`_deg`, `_rpm`, `_gauss`, ...); the models work
 //! in SI and convert once, through the `*_si` accessors below.

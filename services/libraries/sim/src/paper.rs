@@ -12,7 +12,7 @@ use testbed_model::config::DEG;
 use testbed_model::physics::CmgPyramid;
 use testbed_model::ModelConfig;
 
-/// The paper's numbers (Dai & Jin 2010; `shared/paper/DIGEST.md`).
+/// The paper's numbers (Dai & Jin 2010; `docs/parameters.md` lists the model's).
 pub mod reference {
     /// Fig. 8: 3σ attitude estimation error about X and Y, degrees.
     pub const EKF_ERR3S_XY_DEG: f64 = 0.0012;

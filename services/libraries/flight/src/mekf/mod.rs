@@ -1,5 +1,5 @@
 //! Attitude determination: the multiplicative extended Kalman filter (MEKF) of Lefferts, Markley
-//! and Shuster (1982), as restated in `shared/paper/DIGEST.md`, "Attitude determination".
+//! and Shuster (1982), as the paper uses it for attitude determination.
 //!
 //! # State and conventions
 //!
