@@ -1,0 +1,42 @@
+//! Latency of the pipeline's process chain against the alternatives, on the same machine, in
+//! the same run: one hop and the gyro → estimator → controller → wheel-command chain over the
+//! bus (iceoryx2 + event service, with each `WaitStrategy`), over Unix datagram sockets and UDP
+//! on loopback (blocking reads), and over iceoryx2 with busy-polling (the floor); idle and with
+//! a CPU hog on the last core; across payload sizes from 64 B to 64 KiB; and the 10 Hz loop's
+//! period jitter and deadline misses in a paced `testbed run`.
+//!
+//! ```sh
+//! cargo build --release --workspace --bins      # the paced run needs `testbed` and the pipeline
+//! cargo run --release -p testbed-bench --bin latency -- --out bench/report
+//! cargo run --release -p testbed-bench --bin latency -- --quick --out /tmp/latency-smoke
+//! ```
+//!
+//! Writes `report.md` (tables, and the conclusions in `conclusions.md`), `latency.svg` (figure)
+//! and `report.json` (every number) to `--out`. Never use these numbers without their
+//! baselines: the machine is shared.
+//!
+//! Modules, each using only those listed after it:
+//! [`harness`] (this run's plan) → [`paced`] → [`measure`] → [`runner`] (the processes of a
+//! measurement) → [`report`] → [`figure`] → [`model`] (the rows) →
+//! [`worker`] (`latency worker`) → [`chain`] → [`transport`] → [`recording`] → [`payload`] →
+//! [`stats`] → [`system`] → [`protocol`] (harness ↔ worker: specs, roles, signals, results;
+//! a leaf).
+
+pub mod chain;
+pub mod figure;
+pub mod harness;
+pub mod measure;
+pub mod model;
+pub mod paced;
+pub mod payload;
+pub mod protocol;
+pub mod recording;
+pub mod report;
+pub mod runner;
+pub mod stats;
+pub mod system;
+pub mod tables;
+pub mod transport;
+pub mod worker;
+
+pub use harness::main;
