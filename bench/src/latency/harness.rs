@@ -295,7 +295,7 @@ fn progress(m: &Measurement) {
     match &m.error {
         None => eprintln!(
             "{:<6} {:>6} B {:<34} {load:<5} n={:<7} p50 {:>8.1} µs  p99 {:>8.1} µs  p99.9 {:>8.1} µs  max {:>9.1} µs  CPU {:>6.1} µs/msg",
-            format!("{:?}", m.kind),
+            format!("{:?}", m.kind).to_lowercase(),
             m.size,
             format!(
                 "{}{}",

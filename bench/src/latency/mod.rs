@@ -15,12 +15,18 @@
 //! and `report.json` (every number) to `--out`. Never use these numbers without their
 //! baselines: the machine is shared.
 //!
-//! Modules, each using only those listed after it:
-//! [`harness`] (this run's plan) → [`paced`] → [`measure`] → [`runner`] (the processes of a
-//! measurement) → [`report`] → [`figure`] → [`model`] (the rows) →
-//! [`worker`] (`latency worker`) → [`chain`] → [`transport`] → [`recording`] → [`payload`] →
-//! [`stats`] → [`system`] → [`protocol`] (harness ↔ worker: specs, roles, signals, results;
-//! a leaf).
+//! Modules and what each uses (no module uses one that uses it back):
+//!
+//! - leaves: [`protocol`] (harness ↔ worker: specs, roles, transports, signals, results),
+//!   [`stats`], [`system`], [`payload`] (sample types, their `Pod` twins), [`recording`];
+//! - the worker side: [`transport`] → protocol; [`chain`] → transport, payload, protocol,
+//!   recording, system; [`worker`] (`latency worker <spec>`) → chain, transport, payload,
+//!   protocol, system;
+//! - the harness side: [`runner`] → protocol, system; [`model`] → protocol, stats, system;
+//!   [`tables`] → model, protocol, stats; [`report`] → tables, model, stats; [`figure`] →
+//!   model, protocol, stats; [`measure`] → runner, model, protocol, recording, stats, system;
+//!   [`paced`] → measure, runner, model, protocol, recording, stats, system; [`harness`] (the
+//!   command line) → all of the harness side, and worker to run a worker.
 
 pub mod chain;
 pub mod figure;

@@ -215,7 +215,8 @@ pub fn markdown(r: &Report) -> String {
         rest = after;
     }
     out.push_str(rest);
-    out
+    // A table ends its own line; the template puts a blank line after it.
+    out.replace("|\n\n\n", "|\n\n")
 }
 
 /// The text of placeholder `key`: a table, a fact of the run, or one of its settings.
@@ -252,6 +253,7 @@ fn fill(out: &mut String, r: &Report, key: &str) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::latency::protocol::Transport;
     use testbed_bus::WaitStrategy;
 
     fn row(
