@@ -19,8 +19,8 @@
 //!
 //! - leaves: [`protocol`] (harness ↔ worker: specs, roles, transports, signals, results),
 //!   [`stats`], [`system`], [`payload`] (sample types, their `Pod` twins), [`recording`];
-//! - the worker side: [`transport`] → protocol; [`chain`] → transport, payload, protocol,
-//!   recording, system; [`worker`] (`latency worker <spec>`) → chain, transport, payload,
+//! - the worker side: [`transport`] → protocol; [`topics`] → transport, payload, system;
+//!   [`chain`] → topics, transport, protocol, recording, system; [`worker`] (`latency worker <spec>`) → chain, transport, payload,
 //!   protocol, system;
 //! - the harness side: [`runner`] → protocol, system; [`model`] → protocol, stats, system;
 //!   [`tables`] → model, protocol, stats; [`report`] → tables, model, stats; [`figure`] →
@@ -42,6 +42,7 @@ pub mod runner;
 pub mod stats;
 pub mod system;
 pub mod tables;
+pub mod topics;
 pub mod transport;
 pub mod worker;
 
