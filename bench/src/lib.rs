@@ -1,5 +1,8 @@
 //! Shared measurement helpers: repeat, take the median, compare ratios (these machines are
-//! shared and noisy, so absolute times only mean something next to a baseline of the same run).
+//! shared and noisy, so absolute times only mean something next to a baseline of the same run);
+//! and the latency harness of `latency` ([`latency`]).
+
+pub mod latency;
 
 use std::time::{Duration, Instant};
 

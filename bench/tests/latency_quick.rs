@@ -73,8 +73,9 @@ fn quick_mode_writes_a_well_formed_report() {
     }
     assert!(check_tables(&markdown) >= 6, "too few tables");
     assert!(markdown.contains("quick mode"), "a quick report says so");
-    // The conclusions are computed from the numbers: one verdict on the wait strategy, and the
-    // event chain explained against the Unix-socket chain.
+    // The conclusions are hand-written text (bench/src/latency/report.md) around the generated
+    // tables: one verdict on the wait strategy, and the event chain explained against the
+    // Unix-socket chain.
     assert!(
         markdown.contains("**Keep `block`**") ^ markdown.contains("**Adopt `"),
         "exactly one decision on the wait strategy"

@@ -3,13 +3,16 @@
 
 use serde::{Deserialize, Serialize};
 use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::thread::JoinHandle;
 
 /// CLOCK_MONOTONIC in ns: one clock for every process of the machine, so a time stamp taken in
 /// one process and one taken in another can be subtracted.
 pub fn now_ns() -> u64 {
-    let mut ts = libc::timespec { tv_sec: 0, tv_nsec: 0 };
+    let mut ts = libc::timespec {
+        tv_sec: 0,
+        tv_nsec: 0,
+    };
     // SAFETY: clock_gettime writes only the struct it is given.
     unsafe { libc::clock_gettime(libc::CLOCK_MONOTONIC, &mut ts) };
     ts.tv_sec as u64 * 1_000_000_000 + ts.tv_nsec as u64
@@ -31,7 +34,12 @@ pub fn sleep_until(deadline_ns: u64) {
     loop {
         // SAFETY: clock_nanosleep reads the request and writes nothing with a null remainder.
         let rc = unsafe {
-            libc::clock_nanosleep(libc::CLOCK_MONOTONIC, libc::TIMER_ABSTIME, &ts, std::ptr::null_mut())
+            libc::clock_nanosleep(
+                libc::CLOCK_MONOTONIC,
+                libc::TIMER_ABSTIME,
+                &ts,
+                std::ptr::null_mut(),
+            )
         };
         if rc != libc::EINTR {
             return;
@@ -55,8 +63,12 @@ impl CpuTime {
         let tasks = std::fs::read_dir(format!("/proc/{pid}/task")).ok()?;
         let mut total = Self::default();
         for task in tasks.flatten() {
-            let Ok(text) = std::fs::read_to_string(task.path().join("schedstat")) else { continue };
-            let mut fields = text.split_whitespace().map(|f| f.parse::<u64>().unwrap_or(0));
+            let Ok(text) = std::fs::read_to_string(task.path().join("schedstat")) else {
+                continue;
+            };
+            let mut fields = text
+                .split_whitespace()
+                .map(|f| f.parse::<u64>().unwrap_or(0));
             total.run_ns += fields.next().unwrap_or(0);
             total.wait_ns += fields.next().unwrap_or(0);
         }
@@ -65,11 +77,17 @@ impl CpuTime {
 
     /// The sum of several.
     pub fn sum(times: impl IntoIterator<Item = Self>) -> Self {
-        times.into_iter().fold(Self::default(), |a, b| Self { run_ns: a.run_ns + b.run_ns, wait_ns: a.wait_ns + b.wait_ns })
+        times.into_iter().fold(Self::default(), |a, b| Self {
+            run_ns: a.run_ns + b.run_ns,
+            wait_ns: a.wait_ns + b.wait_ns,
+        })
     }
 
     pub fn since(self, earlier: Self) -> Self {
-        Self { run_ns: self.run_ns.saturating_sub(earlier.run_ns), wait_ns: self.wait_ns.saturating_sub(earlier.wait_ns) }
+        Self {
+            run_ns: self.run_ns.saturating_sub(earlier.run_ns),
+            wait_ns: self.wait_ns.saturating_sub(earlier.wait_ns),
+        }
     }
 }
 
@@ -95,25 +113,37 @@ pub struct MachineCpu {
 impl MachineCpu {
     pub fn now() -> Self {
         let text = std::fs::read_to_string("/proc/stat").unwrap_or_default();
-        let Some(line) = text.lines().find(|l| l.starts_with("cpu ")) else { return Self::default() };
-        let v: Vec<u64> = line.split_whitespace().skip(1).filter_map(|f| f.parse().ok()).collect();
+        let Some(line) = text.lines().find(|l| l.starts_with("cpu ")) else {
+            return Self::default();
+        };
+        let v: Vec<u64> = line
+            .split_whitespace()
+            .skip(1)
+            .filter_map(|f| f.parse().ok())
+            .collect();
         // user nice system idle iowait irq softirq steal guest guest_nice; guests are in user.
         let total: u64 = v.iter().take(8).sum();
         let idle = v.get(3).copied().unwrap_or(0) + v.get(4).copied().unwrap_or(0);
-        Self { busy: total - idle, total }
+        Self {
+            busy: total - idle,
+            total,
+        }
     }
 
     /// Share of all CPUs' time that was busy since `earlier` (0 to 1), whoever was busy.
     pub fn busy_since(self, earlier: Self) -> f64 {
         let total = self.total.saturating_sub(earlier.total);
-        if total == 0 { 0.0 } else { self.busy.saturating_sub(earlier.busy) as f64 / total as f64 }
+        if total == 0 {
+            0.0
+        } else {
+            self.busy.saturating_sub(earlier.busy) as f64 / total as f64
+        }
     }
 }
 
 /// A thread spinning on one CPU until dropped: "the other core busy".
 pub struct Hog {
     stop: Arc<AtomicBool>,
-    spins: Arc<AtomicU64>,
     thread: Option<JoinHandle<()>>,
 }
 
@@ -121,9 +151,8 @@ impl Hog {
     /// Starts spinning, pinned to `cpu`.
     pub fn start(cpu: usize) -> Self {
         let stop = Arc::new(AtomicBool::new(false));
-        let spins = Arc::new(AtomicU64::new(0));
         let thread = {
-            let (stop, spins) = (stop.clone(), spins.clone());
+            let stop = stop.clone();
             std::thread::Builder::new()
                 .name("cpu-hog".into())
                 .spawn(move || {
@@ -136,13 +165,15 @@ impl Hog {
                             x ^= x >> 7;
                             x ^= x << 17;
                         }
-                        spins.fetch_add(1, Ordering::Relaxed);
                     }
                     std::hint::black_box(x);
                 })
                 .expect("spawning the CPU hog")
         };
-        Self { stop, spins, thread: Some(thread) }
+        Self {
+            stop,
+            thread: Some(thread),
+        }
     }
 }
 
@@ -152,7 +183,6 @@ impl Drop for Hog {
         if let Some(t) = self.thread.take() {
             let _ = t.join();
         }
-        let _ = self.spins.load(Ordering::Relaxed);
     }
 }
 
@@ -206,7 +236,11 @@ impl Machine {
         let flags = field("flags");
         let hypervisor = if flags.split_whitespace().any(|f| f == "hypervisor") {
             let vendor = read("/sys/class/dmi/id/sys_vendor").trim().to_string();
-            if vendor.is_empty() { "virtual machine".to_string() } else { format!("virtual machine ({vendor})") }
+            if vendor.is_empty() {
+                "virtual machine".to_string()
+            } else {
+                format!("virtual machine ({vendor})")
+            }
         } else {
             "none detected".to_string()
         };
@@ -216,11 +250,27 @@ impl Machine {
             .and_then(|l| l.split_whitespace().nth(1))
             .and_then(|v| v.parse().ok())
             .unwrap_or(0.0);
-        let uname = std::process::Command::new("uname").arg("-srvm").output().map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string()).unwrap_or_default();
-        let rustc = std::process::Command::new("rustc").arg("--version").output().map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string()).unwrap_or_default();
-        let started = std::process::Command::new("date").args(["-u", "+%Y-%m-%d %H:%M:%S UTC"]).output().map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string()).unwrap_or_default();
-        let driver = read("/sys/devices/system/cpu/cpuidle/current_driver").trim().to_string();
-        let halt_poll = read("/sys/module/haltpoll/parameters/guest_halt_poll_ns").trim().to_string();
+        let uname = std::process::Command::new("uname")
+            .arg("-srvm")
+            .output()
+            .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
+            .unwrap_or_default();
+        let rustc = std::process::Command::new("rustc")
+            .arg("--version")
+            .output()
+            .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
+            .unwrap_or_default();
+        let started = std::process::Command::new("date")
+            .args(["-u", "+%Y-%m-%d %H:%M:%S UTC"])
+            .output()
+            .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
+            .unwrap_or_default();
+        let driver = read("/sys/devices/system/cpu/cpuidle/current_driver")
+            .trim()
+            .to_string();
+        let halt_poll = read("/sys/module/haltpoll/parameters/guest_halt_poll_ns")
+            .trim()
+            .to_string();
         let cpuidle = match (driver.as_str(), halt_poll.as_str()) {
             ("", _) => "unknown".to_string(),
             (d, "") => d.to_string(),
@@ -232,7 +282,9 @@ impl Machine {
             cpus: cpu_count(),
             kernel: uname,
             hypervisor,
-            clocksource: read("/sys/devices/system/clocksource/clocksource0/current_clocksource").trim().to_string(),
+            clocksource: read("/sys/devices/system/clocksource/clocksource0/current_clocksource")
+                .trim()
+                .to_string(),
             memory_gib: mem_kib / 1024.0 / 1024.0,
             loadavg_start: loadavg(),
             loadavg_end: String::new(),
@@ -244,34 +296,49 @@ impl Machine {
 
 /// The 1, 5 and 15 minute load averages.
 pub fn loadavg() -> String {
-    std::fs::read_to_string("/proc/loadavg").unwrap_or_default().split_whitespace().take(3).collect::<Vec<_>>().join(" ")
+    std::fs::read_to_string("/proc/loadavg")
+        .unwrap_or_default()
+        .split_whitespace()
+        .take(3)
+        .collect::<Vec<_>>()
+        .join(" ")
 }
 
 /// The processes of one pipeline run (those whose environment names its bus prefix), with the
 /// latest CPU time seen of each.
 pub struct RunProcesses {
     needle: Vec<u8>,
-    seen: std::collections::BTreeMap<u32, (String, CpuTime, CpuTime)>,
+    seen: std::collections::BTreeMap<u32, (String, CpuTime)>,
 }
 
 impl RunProcesses {
     pub fn new(prefix: &str) -> Self {
-        Self { needle: format!("TESTBED_BUS_PREFIX={prefix}").into_bytes(), seen: Default::default() }
+        Self {
+            needle: format!("TESTBED_BUS_PREFIX={prefix}").into_bytes(),
+            seen: Default::default(),
+        }
     }
 
     /// Looks for new processes of the run and updates the CPU time of the known ones.
     pub fn sample(&mut self) {
-        let Ok(dir) = std::fs::read_dir("/proc") else { return };
+        let Ok(dir) = std::fs::read_dir("/proc") else {
+            return;
+        };
         for entry in dir.flatten() {
-            let Some(pid) = entry.file_name().to_str().and_then(|n| n.parse::<u32>().ok()) else { continue };
-            if let Some((_, first, last)) = self.seen.get_mut(&pid) {
-                if let Some(now) = CpuTime::of(pid) {
-                    *last = now;
-                    let _ = first;
-                }
+            let Some(pid) = entry
+                .file_name()
+                .to_str()
+                .and_then(|n| n.parse::<u32>().ok())
+            else {
+                continue;
+            };
+            if let Some((_, last)) = self.seen.get_mut(&pid) {
+                *last = CpuTime::of(pid).unwrap_or(*last);
                 continue;
             }
-            let Ok(env) = std::fs::read(format!("/proc/{pid}/environ")) else { continue };
+            let Ok(env) = std::fs::read(format!("/proc/{pid}/environ")) else {
+                continue;
+            };
             let vars: Vec<&[u8]> = env.split(|b| *b == 0).collect();
             if !vars.contains(&self.needle.as_slice()) {
                 continue;
@@ -280,24 +347,31 @@ impl RunProcesses {
                 .iter()
                 .find_map(|v| v.strip_prefix(b"TESTBED_PROCESS_NAME="))
                 .map(|n| String::from_utf8_lossy(n).into_owned())
-                .unwrap_or_else(|| std::fs::read_to_string(format!("/proc/{pid}/comm")).unwrap_or_default().trim().to_string());
+                .unwrap_or_else(|| {
+                    std::fs::read_to_string(format!("/proc/{pid}/comm"))
+                        .unwrap_or_default()
+                        .trim()
+                        .to_string()
+                });
+            // Over the process's whole life (schedstat counts from its start).
             if let Some(now) = CpuTime::of(pid) {
-                // From start-up on: the first sample is taken as zero.
-                self.seen.insert(pid, (name, CpuTime::default(), now));
+                self.seen.insert(pid, (name, now));
             }
         }
     }
 
     /// (name, pid) of every process seen.
     pub fn pids(&self) -> Vec<(String, u32)> {
-        self.seen.iter().map(|(pid, (name, _, _))| (name.clone(), *pid)).collect()
+        self.seen
+            .iter()
+            .map(|(pid, (name, _))| (name.clone(), *pid))
+            .collect()
     }
 
     /// CPU time of each process over its life (as last seen), by name.
     pub fn totals(&self) -> Vec<(String, CpuTime)> {
         let mut out: Vec<(String, CpuTime)> = Vec::new();
-        for (name, first, last) in self.seen.values() {
-            let cpu = last.since(*first);
+        for &(ref name, cpu) in self.seen.values() {
             match out.iter_mut().find(|(n, _)| n == name) {
                 Some((_, sum)) => *sum = CpuTime::sum([*sum, cpu]),
                 None => out.push((name.clone(), cpu)),
@@ -309,10 +383,20 @@ impl RunProcesses {
 
 /// SCHED_FIFO priority `priority` for every thread of `pid` (best effort; needs privileges).
 pub fn set_fifo(pid: u32, priority: i32) {
-    let Ok(tasks) = std::fs::read_dir(format!("/proc/{pid}/task")) else { return };
+    let Ok(tasks) = std::fs::read_dir(format!("/proc/{pid}/task")) else {
+        return;
+    };
     for task in tasks.flatten() {
-        let Some(tid) = task.file_name().to_str().and_then(|n| n.parse::<i32>().ok()) else { continue };
-        let param = libc::sched_param { sched_priority: priority };
+        let Some(tid) = task
+            .file_name()
+            .to_str()
+            .and_then(|n| n.parse::<i32>().ok())
+        else {
+            continue;
+        };
+        let param = libc::sched_param {
+            sched_priority: priority,
+        };
         // SAFETY: sched_setscheduler reads the parameter struct.
         unsafe { libc::sched_setscheduler(tid, libc::SCHED_FIFO, &param) };
     }

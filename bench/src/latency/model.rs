@@ -1,0 +1,233 @@
+//! What a run measured: the rows of the report and how the rounds of one configuration add up
+//! to a row.
+
+use crate::latency::protocol::{Transport, WaitCounts};
+use crate::latency::stats::{Percentiles, percentiles};
+use crate::latency::system::{CpuTime, Machine};
+use serde::{Deserialize, Serialize};
+use std::time::Duration;
+
+/// What a measurement measures.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Kind {
+    /// One hop of 48 B (the pipeline's samples), ping-pong with a pause before each exchange.
+    #[default]
+    Hop,
+    /// Gyro gateway → estimator → controller → wheel gateway.
+    Chain,
+    /// One hop, back to back, across sample sizes.
+    Sweep,
+}
+
+/// One measured configuration.
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+pub struct Measurement {
+    pub kind: Kind,
+    pub transport: Transport,
+    pub load: bool,
+    /// Sample size, bytes (hop and sweep).
+    pub size: usize,
+    /// The chain ran the real `estimator` and `controller` binaries.
+    pub real_binaries: bool,
+    pub latency: Percentiles,
+    /// Messages measured (hops or cycles).
+    pub messages: usize,
+    /// Samples that never arrived or whose time stamps were unusable.
+    pub incomplete: usize,
+    /// CPU time of all the measurement's processes per message, µs.
+    pub cpu_us_per_msg: f64,
+    /// Time those processes were runnable but waited for a CPU, per message, µs.
+    pub runqueue_us_per_msg: f64,
+    pub wall_s: f64,
+    /// Share of the machine's CPU time that was busy during the measurement (anyone's).
+    pub machine_busy: f64,
+    /// How the event loops' data wake-ups came about: (process, counts).
+    pub wait: Vec<(String, WaitCounts)>,
+    /// Chain: where the time goes, stage by stage (hops and compute).
+    pub stages: Vec<(String, Percentiles)>,
+    pub error: Option<String>,
+}
+
+impl Measurement {
+    /// The transport's name, and the binaries if they ran.
+    pub fn label(&self) -> String {
+        let label = self.transport.label();
+        if self.real_binaries {
+            format!("{label} — real `estimator` + `controller` binaries")
+        } else {
+            label
+        }
+    }
+}
+
+/// One paced `testbed run`.
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+pub struct PacedRun {
+    /// `TESTBED_BUS_WAIT` of the run (`+fifo`: real-time priority for the control chain).
+    pub wait: String,
+    pub load: bool,
+    pub duration_s: f64,
+    /// Ticks whose wheel command the observer saw.
+    pub ticks: usize,
+    /// Deadline misses the controller counted (ControllerStatus.deadline_misses, supervised
+    /// from the first estimate on): the run summary's, or the observer's last status if that
+    /// says more.
+    pub deadline_misses: u64,
+    /// Ticks whose wheel command arrived after the next tick's truth, or never.
+    pub late_commands: u64,
+    /// |period − 100 ms| of consecutive wheel-command arrivals, µs.
+    pub period_error: Percentiles,
+    pub period_min_ms: f64,
+    pub period_max_ms: f64,
+    /// |period − 100 ms| of the plant's truth samples (the clock that drives the loop), µs.
+    pub clock_error: Percentiles,
+    /// Truth published → wheel command seen (through gyro gateway, estimator, controller), µs.
+    pub truth_to_command: Percentiles,
+    /// CPU of the whole pipeline in % of one core.
+    pub pipeline_cpu_percent: f64,
+    /// Stages of truth → command: (name, distribution in µs).
+    pub stages: Vec<(String, Percentiles)>,
+    /// CPU and run-queue time of each process of the run, per tick.
+    pub processes: Vec<ProcessCost>,
+    pub summary: serde_json::Value,
+    pub error: Option<String>,
+}
+
+/// What one process of a paced run cost.
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+pub struct ProcessCost {
+    pub name: String,
+    pub cpu_us_per_tick: f64,
+    /// Time runnable but waiting for a CPU.
+    pub runqueue_us_per_tick: f64,
+}
+
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+pub struct Report {
+    pub machine: Machine,
+    pub command: String,
+    pub quick: bool,
+    pub settings: serde_json::Value,
+    pub measurements: Vec<Measurement>,
+    pub paced: Vec<PacedRun>,
+    pub wall_s: f64,
+    /// The run measured everything it planned (false in the reports saved along the way).
+    #[serde(default)]
+    pub complete: bool,
+}
+
+impl Report {
+    /// The successful row of this configuration.
+    pub fn find(
+        &self,
+        kind: Kind,
+        transport: Transport,
+        load: bool,
+        size: usize,
+        binaries: bool,
+    ) -> Option<&Measurement> {
+        self.measurements.iter().find(|m| {
+            m.kind == kind
+                && m.transport == transport
+                && m.load == load
+                && m.size == size
+                && m.real_binaries == binaries
+                && m.error.is_none()
+        })
+    }
+
+    /// The rows of one kind, in measurement order.
+    pub fn rows(&self, kind: Kind) -> impl Iterator<Item = &Measurement> {
+        self.measurements.iter().filter(move |m| m.kind == kind)
+    }
+}
+
+/// One configuration of the plan.
+#[derive(Debug, Clone)]
+pub struct Plan {
+    pub kind: Kind,
+    pub transport: Transport,
+    pub size: usize,
+    /// Hops or cycles over all rounds.
+    pub count: usize,
+    /// Hop: pause before each exchange; chain: period; µs.
+    pub interval_us: u64,
+    pub load: bool,
+    pub binaries: bool,
+}
+
+/// What one round of one configuration measured.
+#[derive(Debug, Clone, Default)]
+pub struct Part {
+    pub latencies: Vec<u64>,
+    pub incomplete: usize,
+    pub cpu: CpuTime,
+    pub busy: f64,
+    pub wall: Duration,
+    pub wait: Vec<(String, WaitCounts)>,
+    /// Chain: time of each stage (hops and compute), ns.
+    pub stages: Vec<(String, Vec<u64>)>,
+}
+
+impl Plan {
+    /// The measurement of all rounds together (a failed round is reported; the others count).
+    pub fn merge(&self, parts: Vec<Result<Part, String>>) -> Measurement {
+        let mut m = Measurement {
+            kind: self.kind,
+            transport: self.transport,
+            load: self.load,
+            size: self.size,
+            real_binaries: self.binaries,
+            ..Measurement::default()
+        };
+        let (mut all, mut stages) = (Vec::new(), Vec::<(String, Vec<u64>)>::new());
+        let (mut cpu, mut busy, mut wall) = (CpuTime::default(), 0.0, Duration::ZERO);
+        let errors: Vec<String> = parts
+            .iter()
+            .filter_map(|p| p.as_ref().err().cloned())
+            .collect();
+        for part in parts.into_iter().flatten() {
+            all.extend(part.latencies);
+            for (name, times) in part.stages {
+                match stages.iter_mut().find(|(n, _)| *n == name) {
+                    Some((_, all)) => all.extend(times),
+                    None => stages.push((name, times)),
+                }
+            }
+            m.incomplete += part.incomplete;
+            cpu = CpuTime::sum([cpu, part.cpu]);
+            busy += part.busy * part.wall.as_secs_f64();
+            wall += part.wall;
+            for (process, w) in part.wait {
+                match m.wait.iter_mut().find(|(p, _)| *p == process) {
+                    Some((_, sum)) => sum.add(w),
+                    None => m.wait.push((process, w)),
+                }
+            }
+        }
+        if !errors.is_empty() {
+            m.error = Some(format!(
+                "{} of the rounds failed: {}",
+                errors.len(),
+                errors.join("; ")
+            ));
+        }
+        if all.is_empty() {
+            m.error.get_or_insert_with(|| "nothing measured".into());
+            return m;
+        }
+        m.messages = all.len();
+        m.latency = percentiles(&mut all);
+        m.stages = stages
+            .into_iter()
+            .map(|(name, mut times)| (name, percentiles(&mut times)))
+            .collect();
+        let n = m.messages as f64;
+        m.cpu_us_per_msg = cpu.run_ns as f64 / 1e3 / n;
+        m.runqueue_us_per_msg = cpu.wait_ns as f64 / 1e3 / n;
+        m.wall_s = wall.as_secs_f64();
+        m.machine_busy = if m.wall_s > 0.0 { busy / m.wall_s } else { 0.0 };
+        m
+    }
+}
