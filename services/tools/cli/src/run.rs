@@ -239,7 +239,7 @@ pub fn run(args: &RunArgs) -> Result<()> {
         Err(e) => return Err(launched.err().unwrap_or(e)),
     };
     let title = format!(
-        "testbed run: profile {}, seed {}. Errors: rotation vector, body axes (target→truth; estimate→truth)",
+        "testbed run: profile {}, seed {}. errors are rotation vectors in body axes (truth vs target, estimate vs truth)",
         config.run.profile, config.run.seed
     );
     let figures =
