@@ -50,7 +50,10 @@ fn as_testbed_args(line: &str) -> Option<Vec<String>> {
         .next()
         .unwrap_or("")
         .replace(['[', ']'], " ");
-    let mut words: Vec<&str> = line.split_whitespace().filter(|w| *w != "...").collect();
+    let mut words: Vec<&str> = line
+        .split_whitespace()
+        .filter(|w| !matches!(*w, "..." | "options" | "OPTIONS"))
+        .collect();
     // Leading environment assignments (RUST_LOG=debug …).
     while words
         .first()
@@ -77,6 +80,9 @@ fn as_testbed_args(line: &str) -> Option<Vec<String>> {
         }
         "cargo" if rest.first().is_some_and(|w| w == "run") => {
             let split = rest.iter().position(|w| w == "--")?;
+            if split + 1 == rest.len() {
+                return None; // `cargo run -p testbed-cli --` in prose: no command line
+            }
             let package = rest
                 .windows(2)
                 .find(|w| w[0] == "-p" || w[0] == "--package")
