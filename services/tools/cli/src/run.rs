@@ -246,7 +246,8 @@ pub fn run(args: &RunArgs) -> Result<()> {
         figure::write_figure(&log.with_extension(""), &title, &panels(&series, &summary))?;
     if args.json {
         let mut value = serde_json::to_value(&summary)?;
-        value["figure"] = serde_json::json!(
+        value["figure"] = serde_json::json!(figures[0].display().to_string());
+        value["figures"] = serde_json::json!(
             figures
                 .iter()
                 .map(|p| p.display().to_string())
