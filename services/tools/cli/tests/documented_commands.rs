@@ -52,7 +52,7 @@ fn as_testbed_args(line: &str) -> Option<Vec<String>> {
         .replace(['[', ']'], " ");
     let mut words: Vec<&str> = line
         .split_whitespace()
-        .filter(|w| !matches!(*w, "..." | "options" | "OPTIONS"))
+        .filter(|w| !matches!(*w, "..." | "…" | "options" | "OPTIONS"))
         .collect();
     // Leading environment assignments (RUST_LOG=debug …).
     while words
