@@ -3,10 +3,12 @@
 #
 #   launch/launch.sh [PROFILE] [testbed run options...]
 #
-# PROFILE is a name from launch/profiles (simulation, platform, mixed, ...) or a path to a TOML
-# file; default: simulation. Options go to `testbed run` (see `testbed run --help`), e.g.
-# --duration 60, --seed 7, --log out/run.mcap, --paced, --json. Set TESTBED_NO_BUILD=1 to skip
-# the build. `testbed run` writes the run configuration beside the log and starts
+# PROFILE is a name from launch/profiles (simulation, can-sim, replay, can-replay, platform, mixed)
+# or a path to a TOML file; default: simulation. Options go to `testbed run` (see
+# `testbed run --help`), e.g. --duration 60, --seed 7, --log out/run.mcap, --paced (or
+# --mode paced), --max-wall 600, --check, --config FILE, --json. The build is only what a run
+# needs (the `testbed` CLI, the pipeline processes, the launcher), with cargo's progress shown;
+# set TESTBED_NO_BUILD=1 to skip it. `testbed run` writes the run configuration beside the log and starts
 # `testbed-launch`, which starts, supervises and stops the processes; Ctrl-C stops the run and
 # the summary of what was recorded is still printed.
 set -euo pipefail
@@ -21,7 +23,7 @@ if [[ $# -ge 1 && "$1" != -* ]]; then
 fi
 
 if [[ "${TESTBED_NO_BUILD:-0}" != "1" ]]; then
-    (cd "$root" && cargo build --quiet --release --workspace --bins)
+    (cd "$root" && cargo build --release -p testbed-cli -p testbed-processes -p testbed-launch)
 fi
 
 testbed="${CARGO_TARGET_DIR:-$root/target}/release/testbed"

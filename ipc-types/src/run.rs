@@ -69,6 +69,18 @@ impl ClockMode {
     }
 }
 
+impl core::str::FromStr for ClockMode {
+    type Err = String;
+    /// `"lockstep"` or `"paced"` (command lines).
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "lockstep" => Ok(Self::Lockstep),
+            "paced" => Ok(Self::Paced),
+            other => Err(format!("`{other}` is not a clock mode (lockstep or paced)")),
+        }
+    }
+}
+
 impl fmt::Display for ClockMode {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(self.as_str())

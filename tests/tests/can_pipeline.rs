@@ -26,8 +26,8 @@ fn can_sim_with_faults(dir: &Path, drop: f64, corrupt: f64, delay: f64, duplicat
     let shipped = profile("can-sim");
     let text = std::fs::read_to_string(&shipped).unwrap();
     let copy = dir.join("can-faults.toml");
-    std::fs::write(&copy, text.replace("config = \"can-sim.run.toml\"", "config = \"can-faults.run.toml\"")).unwrap();
-    let run = std::fs::read_to_string(shipped.with_file_name("can-sim.run.toml")).unwrap();
+    std::fs::write(&copy, text.replace("config = \"../run-configs/can-sim.run.toml\"", "config = \"can-faults.run.toml\"")).unwrap();
+    let run = std::fs::read_to_string(shipped.parent().unwrap().join("../run-configs/can-sim.run.toml")).unwrap();
     let run = run
         .replace("drop = 0.0\n", &format!("drop = {drop}\n"))
         .replace("corrupt = 0.0\n", &format!("corrupt = {corrupt}\n"))

@@ -174,21 +174,28 @@ pub enum BusError {
 }
 
 /// Installs the process's `tracing` subscriber: human-readable lines on stderr, filtered by
-/// `RUST_LOG` (EnvFilter syntax, default `info`), without colours unless stderr is a terminal.
-/// iceoryx2's own messages (routed through `tracing`) get the same maximum level. Does nothing
-/// if a subscriber is already installed.
+/// `RUST_LOG` (EnvFilter syntax, default `info,iceoryx2=warn`; see [`logging_directives`]),
+/// without colours unless stderr is a terminal. iceoryx2's own messages (routed through
+/// `tracing`) get the level of the `iceoryx2` directive: `warn` unless `RUST_LOG` names
+/// iceoryx2 (`RUST_LOG=debug,iceoryx2=debug` for its debug output). Does nothing if a subscriber
+/// is already installed.
 pub fn init_logging() {
     use std::io::IsTerminal;
     use tracing_subscriber::EnvFilter;
     use tracing_subscriber::filter::LevelFilter;
 
-    let filter = EnvFilter::try_from_default_env().unwrap_or_else(|_| EnvFilter::new("info"));
-    let iox_level = match filter.max_level_hint() {
-        Some(LevelFilter::TRACE) => LogLevel::Trace,
-        Some(LevelFilter::DEBUG) => LogLevel::Debug,
-        Some(LevelFilter::INFO) | None => LogLevel::Info,
-        Some(LevelFilter::WARN) => LogLevel::Warn,
-        Some(_) => LogLevel::Error,
+    let directives = logging_directives(std::env::var("RUST_LOG").ok().as_deref());
+    let filter =
+        EnvFilter::try_new(&directives).unwrap_or_else(|_| EnvFilter::new(DEFAULT_LOG_DIRECTIVES));
+    // iceoryx2's own logger follows its directive (`iceoryx2=…`), not the overall level: its
+    // debug output is every expected "Unable to open …" miss of a service lookup.
+    let iox_filter = logging_iceoryx2_level(&directives);
+    let iox_level = match iox_filter {
+        LevelFilter::TRACE => LogLevel::Trace,
+        LevelFilter::DEBUG => LogLevel::Debug,
+        LevelFilter::INFO => LogLevel::Info,
+        LevelFilter::WARN => LogLevel::Warn,
+        _ => LogLevel::Error,
     };
     set_log_level(iox_level);
     let _ = tracing_subscriber::fmt()
@@ -196,6 +203,65 @@ pub fn init_logging() {
         .with_writer(std::io::stderr)
         .with_ansi(std::io::stderr().is_terminal())
         .try_init();
+}
+
+/// The filter when `RUST_LOG` is not set: `info` for the test bed, only warnings from iceoryx2.
+pub const DEFAULT_LOG_DIRECTIVES: &str = "info,iceoryx2=warn";
+
+/// The filter directives for a `RUST_LOG` value: unset or empty gives
+/// [`DEFAULT_LOG_DIRECTIVES`]; a value that does not name iceoryx2 gets `iceoryx2=warn` appended
+/// (`RUST_LOG=debug` is `debug,iceoryx2=warn`), so its expected misses stay out of the debug
+/// output unless asked for (`RUST_LOG=debug,iceoryx2=debug`).
+pub fn logging_directives(rust_log: Option<&str>) -> String {
+    match rust_log.map(str::trim) {
+        None | Some("") => DEFAULT_LOG_DIRECTIVES.to_string(),
+        Some(value) if value.contains("iceoryx2") => value.to_string(),
+        Some(value) => format!("{value},iceoryx2=warn"),
+    }
+}
+
+#[cfg(test)]
+mod logging_tests {
+    use super::*;
+    use tracing_subscriber::filter::LevelFilter;
+
+    #[test]
+    fn iceoryx2_stays_at_warn_unless_named() {
+        assert_eq!(logging_directives(None), "info,iceoryx2=warn");
+        assert_eq!(logging_directives(Some("debug")), "debug,iceoryx2=warn");
+        assert_eq!(
+            logging_directives(Some("debug,iceoryx2=debug")),
+            "debug,iceoryx2=debug"
+        );
+        assert_eq!(
+            logging_iceoryx2_level("debug,iceoryx2=warn"),
+            LevelFilter::WARN
+        );
+        assert_eq!(
+            logging_iceoryx2_level("warn,iceoryx2=trace"),
+            LevelFilter::TRACE
+        );
+        assert_eq!(logging_iceoryx2_level("error"), LevelFilter::ERROR);
+    }
+}
+
+/// The level of the `iceoryx2` directive in `directives` (the last one naming it), else the
+/// overall level (the last bare level), else `info`.
+fn logging_iceoryx2_level(directives: &str) -> tracing_subscriber::filter::LevelFilter {
+    use tracing_subscriber::filter::LevelFilter;
+    let level = |text: &str| text.trim().parse::<LevelFilter>().ok();
+    let named = directives
+        .split(',')
+        .filter_map(|d| d.split_once('='))
+        .filter(|(target, _)| target.trim().starts_with("iceoryx2"))
+        .filter_map(|(_, l)| level(l))
+        .last();
+    let bare = directives
+        .split(',')
+        .filter(|d| !d.contains('='))
+        .filter_map(level)
+        .last();
+    named.or(bare).unwrap_or(LevelFilter::INFO)
 }
 
 /// One process's connection to the bus: an iceoryx2 node named after the process.

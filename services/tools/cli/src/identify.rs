@@ -348,6 +348,7 @@ fn panel_from<'a>(
             Series {
                 label: c.label.as_str(),
                 points: thin(&c.points, 3000, scale),
+                dashed: false,
             }
         })
         .collect();
@@ -355,6 +356,8 @@ fn panel_from<'a>(
         y_label: title,
         series,
         y_range: None,
+        band: None,
+        marker: None,
     })
 }
 
@@ -429,13 +432,17 @@ fn write_figures(out: &Path, f: &FigureData) -> Result<Vec<String>> {
                     Series {
                         label: "nominal",
                         points: a.points.clone(),
+                        dashed: false,
                     },
                     Series {
                         label: "extended",
                         points: b.points.clone(),
+                        dashed: false,
                     },
                 ],
                 y_range: None,
+                band: None,
+                marker: None,
             });
         }
     }

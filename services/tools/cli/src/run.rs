@@ -5,62 +5,120 @@
 //! and written beside the log; `testbed-launch` starts, supervises and stops the processes.
 
 use crate::figure::{self, Panel, Series};
+use crate::progress;
+use crate::summary::{self, RunSeries, RunSummary};
 use anyhow::{Context, Result, bail};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use testbed_bus::BusConfig;
 use testbed_launch::profile::Profile;
-use crate::summary::{self, RunSeries, RunSummary};
 use testbed_runtime::{ClockMode, RunConfig};
 
 #[derive(Debug, clap::Args)]
 pub struct RunArgs {
-    /// Launch profile: a name in launch/profiles (simulation, can-sim, platform, mixed) or a TOML path.
-    #[arg(long, default_value = "simulation")]
-    profile: String,
+    /// Launch profile: a name in launch/profiles (simulation, can-sim, replay, can-replay,
+    /// platform, mixed) or a path to a TOML file.
+    #[arg(long, default_value = "simulation", value_name = "NAME|FILE")]
+    pub profile: String,
     /// Simulated duration, s [default: the profile's].
+    #[arg(long, value_name = "S", allow_negative_numbers = true, value_parser = positive_seconds)]
+    pub duration: Option<f64>,
+    /// Seed of the simulated devices' noise, 0 to 2^64-1 [default: the profile's].
+    #[arg(long, value_name = "N", allow_negative_numbers = true, value_parser = seed)]
+    pub seed: Option<u64>,
+    /// MCAP log of the run [default: the profile's]; the run configuration (.run.toml) and the
+    /// figure (.svg, .png) are written beside it.
+    #[arg(long, value_name = "FILE")]
+    pub log: Option<PathBuf>,
+    /// Run configuration (TOML: model, estimator, controller, manoeuvre, CAN) instead of the
+    /// profile's `[run] config` [default: the profile's, else the built-in defaults].
+    #[arg(long, value_name = "FILE")]
+    pub config: Option<PathBuf>,
+    /// Clock mode: lockstep or paced [default: the profile's].
+    #[arg(long, value_name = "lockstep|paced", conflicts_with = "paced")]
+    pub mode: Option<ClockMode>,
+    /// Run at 1× wall time instead of lockstep (same as --mode paced).
     #[arg(long)]
-    duration: Option<f64>,
-    /// Seed of the simulated devices' noise [default: the profile's].
+    pub paced: bool,
+    /// Stop the run after this much wall time, s (the launcher's max_wall_s) [default: the
+    /// profile's, else none].
+    #[arg(long, value_name = "S", allow_negative_numbers = true, value_parser = positive_seconds)]
+    pub max_wall: Option<f64>,
+    /// Dry run: check the profile, the run configuration and the binaries, print the run's
+    /// settings and the processes in start order, and start nothing (writes no file).
     #[arg(long)]
-    seed: Option<u64>,
-    /// MCAP log of the run [default: the profile's].
-    #[arg(long)]
-    log: Option<PathBuf>,
-    /// Run at 1× wall time instead of lockstep.
-    #[arg(long)]
-    paced: bool,
+    pub check: bool,
     /// Feed this log's recorded inputs into the estimator and controller instead of simulating
     /// (with a profile that runs the `replay` process; default profile then: replay). The
     /// recorded run configuration is used, so the estimator and controller are set up as they were.
-    #[arg(long, conflicts_with = "replay_candump")]
-    replay: Option<PathBuf>,
+    #[arg(long, value_name = "LOG", conflicts_with = "replay_candump")]
+    pub replay: Option<PathBuf>,
     /// Put the CAN bus traffic this log's run recorded (the `.candump.log` file beside it) back
     /// through the real sensor gateways into the estimator (default profile then: can-replay),
     /// with the recorded run configuration; the summary compares the estimates with the log's.
-    #[arg(long)]
-    replay_candump: Option<PathBuf>,
+    #[arg(long, value_name = "LOG")]
+    pub replay_candump: Option<PathBuf>,
     /// Print the summary as one JSON object.
     #[arg(long)]
-    json: bool,
+    pub json: bool,
+    /// No progress display while the pipeline runs.
+    #[arg(long)]
+    pub no_progress: bool,
+}
+
+/// `--duration`, `--max-wall`: a positive, finite number of seconds.
+fn positive_seconds(text: &str) -> std::result::Result<f64, String> {
+    let value: f64 = text
+        .parse()
+        .map_err(|_| "not a number of seconds".to_string())?;
+    if value.is_finite() && value > 0.0 {
+        Ok(value)
+    } else {
+        Err("must be a positive number of seconds".to_string())
+    }
+}
+
+/// `--seed`: a whole number 0 ..= 2^64 - 1, said so when negative.
+fn seed(text: &str) -> std::result::Result<u64, String> {
+    text.parse().map_err(|_| {
+        if text.starts_with('-') {
+            "a seed is a whole number from 0 to 18446744073709551615, not negative".to_string()
+        } else {
+            "a seed is a whole number from 0 to 18446744073709551615".to_string()
+        }
+    })
+}
+
+impl RunArgs {
+    /// The profile this command line runs: `--profile`, or the replay profiles for `--replay`
+    /// and `--replay-candump` when no other profile is named.
+    pub fn profile_name(&self) -> &str {
+        match (&self.replay, &self.replay_candump, self.profile.as_str()) {
+            (Some(_), _, "simulation") => "replay",
+            (_, Some(_), "simulation") => "can-replay",
+            (_, _, name) => name,
+        }
+    }
 }
 
 pub fn run(args: &RunArgs) -> Result<()> {
-    let profile_name = match (&args.replay, &args.replay_candump, args.profile.as_str()) {
-        (Some(_), _, "simulation") => "replay",
-        (_, Some(_), "simulation") => "can-replay",
-        (_, _, name) => name,
-    };
-    let profile_path = find_profile(profile_name)?;
+    let profile_path = find_profile(args.profile_name())?;
     let profile = Profile::load(&profile_path)?;
     let recorded_log = args.replay.as_ref().or(args.replay_candump.as_ref());
-    let mut config = match (recorded_log, &profile.run.config) {
-        (Some(source), _) => recorded_config(source)?,
-        (None, Some(path)) => RunConfig::load(&profile.relative_to_profile(path))?,
-        (None, None) => RunConfig::default(),
+    let paced = args.paced || args.mode == Some(ClockMode::Paced);
+    let mut config = match (recorded_log, &args.config, &profile.run.config) {
+        (Some(source), _, _) => recorded_config(source)?,
+        (None, Some(path), _) => RunConfig::load(path)?,
+        (None, None, Some(path)) => RunConfig::load(&profile.relative_to_profile(path))?,
+        (None, None, None) => RunConfig::default(),
     };
-    if recorded_log.is_some() && args.paced {
-        bail!("--replay and --replay-candump run in lockstep (the replay owns the clock); drop --paced");
+    if recorded_log.is_some() && paced {
+        bail!(
+            "--replay and --replay-candump run in lockstep (the replay owns the clock); drop --paced / --mode paced"
+        );
+    }
+    if recorded_log.is_some() && args.config.is_some() {
+        bail!("--replay and --replay-candump use the recorded run configuration; drop --config");
     }
     if let Some(source) = &args.replay_candump {
         let candump = source.with_extension("candump.log");
@@ -74,8 +132,15 @@ pub fn run(args: &RunArgs) -> Result<()> {
         config.can.candump = Some(candump);
         config.can.record_candump = false;
     }
-    config.run.profile = profile_path.file_stem().map_or_else(|| args.profile.clone(), |s| s.to_string_lossy().into_owned());
-    config.run.mode = if args.paced { ClockMode::Paced } else { profile.run.mode };
+    config.run.profile = profile_path.file_stem().map_or_else(
+        || args.profile.clone(),
+        |s| s.to_string_lossy().into_owned(),
+    );
+    config.run.mode = match (args.mode, args.paced) {
+        (Some(mode), _) => mode,
+        (None, true) => ClockMode::Paced,
+        (None, false) => profile.run.mode,
+    };
     if recorded_log.is_none() {
         if let Some(d) = args.duration.or(profile.run.duration_s) {
             config.run.duration_s = d;
@@ -87,21 +152,58 @@ pub fn run(args: &RunArgs) -> Result<()> {
         config.run.log = log;
     }
     // The clock owner (plant or replay: the process that ends the run) waits for all the others.
-    config.run.participants =
-        profile.processes.iter().filter(|p| !p.ends_run).map(|p| p.name.clone()).collect();
+    config.run.participants = profile
+        .processes
+        .iter()
+        .filter(|p| !p.ends_run)
+        .map(|p| p.name.clone())
+        .collect();
     config.validate("command line")?;
+    let ends_by_duration = recorded_log.is_none() && profile.processes.iter().any(|p| p.ends_run);
+    let max_wall = args.max_wall.or(profile.run.max_wall_s);
 
     let log = config.run.log.clone();
+    let config_path = log.with_extension("run.toml");
+    if args.check {
+        println!(
+            "profile {} ({}): mode {}, seed {}, {}, log {}, configuration {}{}",
+            config.run.profile,
+            profile_path.display(),
+            config.run.mode.as_str(),
+            config.run.seed,
+            if ends_by_duration {
+                format!("{} simulated s", config.run.duration_s)
+            } else {
+                "until the source ends or Ctrl-C".to_string()
+            },
+            log.display(),
+            config_path.display(),
+            max_wall.map_or_else(String::new, |s| format!(", at most {s} s wall time")),
+        );
+        return launch(&profile_path, &config, None, max_wall, true, None);
+    }
     if let Some(dir) = log.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     }
-    let config_path = log.with_extension("run.toml");
     std::fs::write(&config_path, config.to_toml_string())
         .with_context(|| format!("writing the run configuration {}", config_path.display()))?;
 
-    launch(&profile_path, &config, &config_path)?;
+    let follow = (!args.no_progress).then(|| progress::Follow {
+        log: log.clone(),
+        duration_s: ends_by_duration.then_some(config.run.duration_s),
+        target: config.manoeuvre.target(),
+    });
+    let launched = launch(
+        &profile_path,
+        &config,
+        Some(&config_path),
+        max_wall,
+        false,
+        follow,
+    );
 
     if let Some(source) = &args.replay_candump {
+        launched?;
         let comparison = summary::compare_estimates(source, &log)?;
         if args.json {
             let mut value = serde_json::to_value(&comparison)?;
@@ -120,41 +222,69 @@ pub fn run(args: &RunArgs) -> Result<()> {
         return Ok(());
     }
 
-    let (summary, series, _) = summary::summarise(&log)?;
-    let figure_path = log.with_extension("svg");
-    figure::write_svg(&figure_path, &format!("testbed run: profile {}, seed {}", config.run.profile, config.run.seed), &panels(&series))?;
+    // A failed pipeline still leaves a readable log: summarise what was recorded, then fail.
+    let summarised = summary::summarise(&log, ends_by_duration.then_some(config.run.duration_s));
+    let (summary, series, _) = match summarised {
+        Ok(s) => s,
+        Err(e) => return Err(launched.err().unwrap_or(e)),
+    };
+    let title = format!(
+        "testbed run: profile {}, seed {}. errors are rotation vectors in body axes (truth vs target, estimate vs truth)",
+        config.run.profile, config.run.seed
+    );
+    let figures =
+        figure::write_figure(&log.with_extension(""), &title, &panels(&series, &summary))?;
     if args.json {
         let mut value = serde_json::to_value(&summary)?;
-        value["figure"] = serde_json::json!(figure_path.display().to_string());
+        value["figure"] = serde_json::json!(figures[0].display().to_string());
+        value["figures"] = serde_json::json!(
+            figures
+                .iter()
+                .map(|p| p.display().to_string())
+                .collect::<Vec<_>>()
+        );
         value["config"] = serde_json::json!(config_path.display().to_string());
         println!("{}", serde_json::to_string_pretty(&value)?);
     } else {
-        print_summary(&summary, &figure_path);
+        print_summary(&summary, &figures);
     }
-    Ok(())
+    launched
 }
 
 /// The run configuration a log was recorded with.
 fn recorded_config(log: &Path) -> Result<RunConfig> {
-    let recorded = testbed_log::RunLog::open(log).with_context(|| format!("opening the log to replay {}", log.display()))?;
-    Ok(RunConfig::from_toml_str(recorded.config_toml(), &format!("{} (config.toml attachment)", log.display()))?)
+    let recorded = testbed_log::RunLog::open(log)
+        .with_context(|| format!("opening the log to replay {}", log.display()))?;
+    Ok(RunConfig::from_toml_str(
+        recorded.config_toml(),
+        &format!("{} (config.toml attachment)", log.display()),
+    )?)
 }
 
-/// Start `testbed-launch` (next to this executable) on the profile and wait for it.
-fn launch(profile: &Path, config: &RunConfig, config_path: &Path) -> Result<()> {
+/// Start `testbed-launch` (next to this executable) on the profile and wait for it; with
+/// `check`, only its dry run (`--check`: profile, binaries, start order).
+fn launch(
+    profile: &Path,
+    config: &RunConfig,
+    config_path: Option<&Path>,
+    max_wall: Option<f64>,
+    check: bool,
+    follow: Option<progress::Follow>,
+) -> Result<()> {
     let exe = std::env::current_exe().context("locating the testbed executable")?;
-    let bin_dir = exe.parent().context("the testbed executable has no directory")?;
+    let bin_dir = exe
+        .parent()
+        .context("the testbed executable has no directory")?;
     let launcher = bin_dir.join("testbed-launch");
     if !launcher.exists() {
         bail!(
-            "{} not found: build the pipeline first (cargo build --release --workspace --bins)",
+            "{} not found: build the pipeline first (launch/launch.sh does; or cargo build --release -p testbed-cli -p testbed-processes -p testbed-launch)",
             launcher.display()
         );
     }
     // One bus per run: a unique prefix and a short root (Unix socket paths must stay < 108 bytes).
     let id = std::process::id();
     let bus = BusConfig::new(format!("tb{id}_"), format!("/tmp/tb{id}/"));
-    let mode = config.run.mode.as_str();
     let mut command = Command::new(&launcher);
     if std::env::var_os("RUST_LOG").is_none() {
         // The summary is the output; the processes speak up only for warnings.
@@ -162,28 +292,54 @@ fn launch(profile: &Path, config: &RunConfig, config_path: &Path) -> Result<()> 
     }
     command
         .arg(profile)
-        .args(["--mode", mode])
+        .args(["--mode", config.run.mode.as_str()])
         .args(["--duration-s", &config.run.duration_s.to_string()])
         .args(["--seed", &config.run.seed.to_string()])
         .arg("--log")
         .arg(&config.run.log)
-        .arg("--config")
-        .arg(config_path)
         .args(["--bus-prefix", &bus.prefix])
         .arg("--bus-root")
         .arg(&bus.root)
         .arg("--bin-dir")
         .arg(bin_dir);
+    if let Some(path) = config_path {
+        command.arg("--config").arg(path);
+    }
+    if let Some(s) = max_wall {
+        command.args(["--max-wall-s", &s.to_string()]);
+    }
+    if check {
+        command.arg("--check");
+        let status = command
+            .status()
+            .with_context(|| format!("starting {}", launcher.display()))?;
+        if !status.success() {
+            bail!("the check failed ({status}); the launcher's messages above say what is wrong");
+        }
+        return Ok(());
+    }
     // Ctrl-C reaches the whole foreground group: the launcher stops the pipeline and finalises
     // the log; this process waits for it and then summarises what was recorded.
     let _ignore_interrupt = IgnoreInterrupt::new();
-    let status = command.status().with_context(|| format!("starting {}", launcher.display()))?;
+    let mut child = command
+        .spawn()
+        .with_context(|| format!("starting {}", launcher.display()))?;
+    let progress = follow.map(progress::Progress::start);
+    let status = child
+        .wait()
+        .with_context(|| format!("waiting for {}", launcher.display()));
+    if let Some(progress) = progress {
+        progress.finish();
+    }
+    let status = status?;
     // Every process of the run has been reaped: leave no shared memory, socket or directory.
     if let Err(e) = testbed_bus::remove_all(&bus) {
         eprintln!("warning: removing the run's iceoryx2 resources: {e}");
     }
     if !status.success() {
-        bail!("the pipeline failed ({status}); the launcher's messages above say which process and how");
+        bail!(
+            "the pipeline failed ({status}); the launcher's messages above say which process and how"
+        );
     }
     Ok(())
 }
@@ -206,49 +362,227 @@ impl Drop for IgnoreInterrupt {
     }
 }
 
-/// A profile name (looked up in `$TESTBED_PROFILES`, then `launch/profiles` beside the build
-/// tree and in the working directory) or a path.
-fn find_profile(name: &str) -> Result<PathBuf> {
+/// Where profiles are looked up by name: `$TESTBED_PROFILES`, then `launch/profiles` of the
+/// source tree the executable was built in, then `launch/profiles` in the working directory.
+pub fn profile_dirs() -> Vec<PathBuf> {
+    let mut dirs: Vec<PathBuf> = std::env::var_os("TESTBED_PROFILES")
+        .map(PathBuf::from)
+        .into_iter()
+        .collect();
+    if let Some(root) = std::env::current_exe()
+        .ok()
+        .and_then(|e| e.ancestors().nth(3).map(Path::to_path_buf))
+    {
+        dirs.push(root.join("launch/profiles")); // <root>/target/<profile>/testbed
+    }
+    dirs.push(PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../launch/profiles"));
+    dirs.push(PathBuf::from("launch/profiles"));
+    dirs
+}
+
+/// The profile names (`*.toml` stems) in `dir`, sorted.
+pub fn profile_names(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .into_iter()
+        .flatten()
+        .flatten()
+        .map(|e| e.path())
+        .filter(|p| p.extension().is_some_and(|e| e == "toml"))
+        .filter_map(|p| p.file_stem().map(|s| s.to_string_lossy().into_owned()))
+        .collect();
+    names.sort();
+    names
+}
+
+/// A profile name (see [`profile_dirs`]) or a path.
+pub fn find_profile(name: &str) -> Result<PathBuf> {
     let as_path = PathBuf::from(name);
     if as_path.extension().is_some_and(|e| e == "toml") || as_path.components().count() > 1 {
         return Ok(as_path);
     }
     let file = format!("{name}.toml");
-    let mut dirs: Vec<PathBuf> = std::env::var_os("TESTBED_PROFILES").map(PathBuf::from).into_iter().collect();
-    if let Some(root) = std::env::current_exe().ok().and_then(|e| e.ancestors().nth(3).map(Path::to_path_buf)) {
-        dirs.push(root.join("launch/profiles")); // <root>/target/<profile>/testbed
+    let dirs = profile_dirs();
+    if let Some(found) = dirs.iter().map(|d| d.join(&file)).find(|p| p.is_file()) {
+        return Ok(found);
     }
-    dirs.push(PathBuf::from("launch/profiles"));
-    dirs.iter()
-        .map(|d| d.join(&file))
-        .find(|p| p.exists())
-        .with_context(|| format!("profile `{name}` not found in {dirs:?} (give a path to a .toml file instead)"))
+    match dirs.iter().find(|d| d.is_dir()) {
+        Some(dir) => bail!(
+            "no profile `{name}`; the profiles are {} (in {}), or give the path of a .toml file",
+            profile_names(dir).join(", "),
+            dir.display()
+        ),
+        None => bail!(
+            "no profile `{name}`: no launch/profiles directory found (set TESTBED_PROFILES or give the path of a .toml file)"
+        ),
+    }
 }
 
-fn print_summary(s: &RunSummary, figure: &Path) {
-    let settle = s.settle_s.map_or_else(|| "never".to_string(), |t| format!("{t:.1} s"));
-    println!("run: {:.1} simulated s, {} ticks, mode {}, seed {}", s.simulated_s, s.ticks, s.mode, s.seed);
-    println!("  settling time (within {}° per axis)   {settle}", summary::SETTLE_BAND_DEG);
+fn print_summary(s: &RunSummary, figures: &[PathBuf]) {
+    let settle = s
+        .settle_s
+        .map_or_else(|| "never".to_string(), |t| format!("{t:.1} s"));
+    let xyz = |v: [f64; 3], digits: usize| {
+        format!(
+            "X {:.*}  Y {:.*}  Z {:.*}",
+            digits, v[0], digits, v[1], digits, v[2]
+        )
+    };
+    let status = if s.interrupted {
+        "  INTERRUPTED: the run ended early; the numbers cover what was recorded"
+    } else {
+        ""
+    };
     println!(
-        "  steady error, last {} s (deg)         X {:.4}  Y {:.4}  Z {:.4}",
-        summary::STEADY_WINDOW_S, s.steady_deg[0], s.steady_deg[1], s.steady_deg[2]
+        "run: profile {}, {:.1} simulated s, {} ticks, mode {}, seed {}{status}",
+        s.profile, s.simulated_s, s.ticks, s.mode, s.seed
     );
-    println!("  deadline misses                       {}", s.deadline_misses);
-    println!("  log                                   {}{}", s.log, if s.log_complete { "" } else { " (not finalised; all complete records read)" });
-    println!("  figure                                {}", figure.display());
+    println!("  initial condition    {}", s.initial_condition);
+    println!("  controller           {}", s.controller);
+    println!("  attitude error = rotation vector from target to true attitude, body axes, degrees");
+    println!(
+        "  settling time        {settle}   (first time after which |error| stays within {}° on every axis)",
+        summary::SETTLE_BAND_DEG
+    );
+    println!(
+        "  steady error         {}   (max |error| per axis over the last {} s, deg)",
+        xyz(s.steady_deg, 4),
+        summary::STEADY_WINDOW_S
+    );
+    if s.simulated_s < summary::STEADY_WINDOW_S {
+        println!(
+            "  warning: the run is shorter ({:.1} s) than the steady window ({} s): the steady error covers the whole run, transient included",
+            s.simulated_s,
+            summary::STEADY_WINDOW_S
+        );
+    }
+    println!(
+        "  peak wheel speed     {}   (max |speed| per wheel, rpm)",
+        xyz(s.peak_wheel_rpm, 0)
+    );
+    if let Some(e) = &s.estimator {
+        println!(
+            "  estimator error      RMS {}   max {}   (estimate vs truth, deg, {} estimates)",
+            xyz(e.rms_deg, 4),
+            xyz(e.max_deg, 4),
+            e.compared
+        );
+        println!(
+            "  estimator 3σ         {}   (the filter's own attitude 3σ at the end, deg)",
+            xyz(e.final_3sigma_deg, 4)
+        );
+    }
+    println!("  deadline misses      {}", s.deadline_misses);
+    println!(
+        "  log                  {}{}",
+        s.log,
+        if s.log_complete {
+            ""
+        } else {
+            " (not finalised; all complete records read)"
+        }
+    );
+    for f in figures {
+        println!("  figure               {}", f.display());
+    }
 }
 
-fn panels(series: &RunSeries) -> Vec<Panel<'static>> {
-    const AXES: [&str; 3] = ["X", "Y", "Z"];
-    let per_axis = |values: &[[f64; 3]]| -> Vec<Series<'static>> {
+fn panels<'a>(series: &RunSeries, summary: &RunSummary) -> Vec<Panel<'a>> {
+    let per_axis = |t: &[f64],
+                    values: &[[f64; 3]],
+                    labels: [&'a str; 3],
+                    dashed: bool,
+                    sign: f64|
+     -> Vec<Series<'a>> {
         (0..3)
-            .map(|axis| Series { label: AXES[axis], points: series.t_s.iter().zip(values).map(|(t, v)| (*t, v[axis])).collect() })
+            .map(|axis| Series {
+                label: labels[axis],
+                points: t
+                    .iter()
+                    .zip(values)
+                    .map(|(t, v)| (*t, sign * v[axis]))
+                    .collect(),
+                dashed,
+            })
             .collect()
     };
+    const XYZ: [&str; 3] = ["X", "Y", "Z"];
+    let band = summary::SETTLE_BAND_DEG;
+    let error = || per_axis(&series.t_s, &series.error_deg, XYZ, false, 1.0);
+    let mut estimate_vs_truth = per_axis(
+        &series.estimate_t_s,
+        &series.estimate_error_deg,
+        ["error X", "error Y", "error Z"],
+        false,
+        1.0,
+    );
+    estimate_vs_truth.extend(per_axis(
+        &series.estimate_t_s,
+        &series.estimate_3sigma_deg,
+        ["±3σ X", "±3σ Y", "±3σ Z"],
+        true,
+        1.0,
+    ));
+    estimate_vs_truth.extend(per_axis(
+        &series.estimate_t_s,
+        &series.estimate_3sigma_deg,
+        ["", "", ""],
+        true,
+        -1.0,
+    ));
+    // The filter's error after its start-up transient sets the scale: the first estimates
+    // (initial covariance) would flatten everything else.
+    let settled_estimates = series
+        .estimate_t_s
+        .iter()
+        .zip(&series.estimate_3sigma_deg)
+        .filter(|(t, _)| **t >= 10.0);
+    let sigma_scale = settled_estimates
+        .map(|(_, s)| s[0].max(s[1]).max(s[2]))
+        .fold(0.0_f64, f64::max);
+    let error_scale = series
+        .estimate_t_s
+        .iter()
+        .zip(&series.estimate_error_deg)
+        .filter(|(t, _)| **t >= 10.0)
+        .map(|(_, e)| e[0].abs().max(e[1].abs()).max(e[2].abs()))
+        .fold(0.0_f64, f64::max);
+    let estimate_range = (sigma_scale.max(error_scale) > 0.0)
+        .then(|| 1.3 * sigma_scale.max(error_scale))
+        .map(|r| (-r, r));
     vec![
-        Panel { y_label: "attitude error (deg)", series: per_axis(&series.error_deg), y_range: None },
-        Panel { y_label: "error, steady scale (deg)", series: per_axis(&series.error_deg), y_range: Some((-0.05, 0.05)) },
-        Panel { y_label: "body rate (deg/s)", series: per_axis(&series.rate_deg_s), y_range: None },
-        Panel { y_label: "wheel speed (rpm)", series: per_axis(&series.wheel_speed_rpm), y_range: None },
+        Panel::new("attitude error (deg)", error()),
+        Panel {
+            band: Some(band),
+            marker: summary.settle_s.map(|t| {
+                (
+                    t,
+                    format!("settled at {t:.1} s (within ±{band}° from here on)"),
+                )
+            }),
+            y_range: Some((-5.0 * band, 5.0 * band)),
+            ..Panel::new("error, zoom; ±0.1° band (deg)", error())
+        },
+        Panel {
+            y_range: estimate_range,
+            ..Panel::new("estimate error, ±3σ (deg)", estimate_vs_truth)
+        },
+        Panel::new(
+            "wheel torque cmd (mNm)",
+            per_axis(
+                &series.command_t_s,
+                &series.wheel_torque_mnm,
+                XYZ,
+                false,
+                1.0,
+            ),
+        ),
+        Panel::new(
+            "wheel speed (rpm)",
+            per_axis(&series.t_s, &series.wheel_speed_rpm, XYZ, false, 1.0),
+        ),
+        Panel::new(
+            "body rate (deg/s)",
+            per_axis(&series.t_s, &series.rate_deg_s, XYZ, false, 1.0),
+        ),
     ]
 }

@@ -1,17 +1,24 @@
-//! What a run did, read back from its log: settling time, steady error per axis, deadline
-//! misses, and the series for a figure.
+//! What a run did, read back from its log: settling time, steady error per axis, peak wheel
+//! speed, the estimator's error against the truth, deadline misses, and the series for a figure.
+//!
+//! Attitude error: the rotation vector (axis × angle, ≈ 2 q_v for small angles) that takes the
+//! target attitude to the true one, body axes, degrees. Settling time: the first time after
+//! which that error stays within [`SETTLE_BAND_DEG`] on every axis. Steady error: the largest
+//! |error| per axis over the last [`STEADY_WINDOW_S`] of the run.
 
-use testbed_flight::convert::{quaternion_from_array, seconds};
-use testbed_runtime::run_config::RunConfig;
 use anyhow::Context;
-use ipc_types::{AttitudeEstimate, ControllerStatus, SimTruth};
+use ipc_types::{AttitudeEstimate, ControllerStatus, SimTruth, WheelCommand};
 use nalgebra::Vector3;
 use serde::Serialize;
+use std::collections::HashMap;
 use std::path::Path;
-use testbed_sim::metrics;
+use testbed_flight::convert::{quaternion_from_array, seconds};
+use testbed_flight::tasks::Actuators;
 use testbed_log::RunLog;
 use testbed_model::attitude;
 use testbed_model::config::{DEG, RPM};
+use testbed_runtime::run_config::RunConfig;
+use testbed_sim::metrics;
 
 /// Band that counts as settled, degrees per axis.
 pub const SETTLE_BAND_DEG: f64 = 0.1;
@@ -21,17 +28,35 @@ pub const STEADY_WINDOW_S: f64 = 50.0;
 /// The summary `testbed run` prints.
 #[derive(Debug, Clone, Serialize)]
 pub struct RunSummary {
-    /// Time after which every axis of the true error stays within [`SETTLE_BAND_DEG`], s.
+    /// First time after which the true attitude error (rotation vector from the target to the
+    /// true attitude, body axes) stays within [`SETTLE_BAND_DEG`] on every axis, s; `None`:
+    /// never settled.
     pub settle_s: Option<f64>,
-    /// Largest true error over the final [`STEADY_WINDOW_S`], X/Y (the larger) and Z, degrees.
+    /// Largest |true attitude error| per axis over the final [`STEADY_WINDOW_S`] (the whole run
+    /// if shorter), degrees: X/Y (the larger), Z, and per axis.
     pub steady_xy_deg: f64,
     pub steady_z_deg: f64,
     pub steady_deg: [f64; 3],
+    /// Settling band, degrees per axis, and steady window, s (the definitions above).
+    pub settle_band_deg: f64,
+    pub steady_window_s: f64,
+    /// Largest |wheel speed| per wheel over the run, rpm.
+    pub peak_wheel_rpm: [f64; 3],
+    /// The estimator's error against the truth, when the log has estimates.
+    pub estimator: Option<EstimatorError>,
+    /// Initial condition and controller of the run, from its configuration.
+    pub initial_condition: String,
+    pub controller: String,
     /// Missed control deadlines: the controller's count ([`ipc_types::ControllerStatus`]), the largest value logged.
     pub deadline_misses: u64,
     pub simulated_s: f64,
+    /// The simulated duration asked for (`None`: the run ends with its source or on request).
+    pub requested_s: Option<f64>,
+    /// The run ended before the requested duration (Ctrl-C, `--max-wall`, a failed process).
+    pub interrupted: bool,
     pub ticks: usize,
     pub estimates: usize,
+    pub profile: String,
     pub mode: String,
     pub seed: u64,
     pub log: String,
@@ -39,57 +64,189 @@ pub struct RunSummary {
     pub log_complete: bool,
 }
 
+/// The estimator's attitude error against the truth at the same time: the rotation vector from
+/// the estimate to the true attitude, body axes, degrees.
+#[derive(Debug, Clone, Serialize)]
+pub struct EstimatorError {
+    /// Estimates compared (those with a truth sample of the same time).
+    pub compared: usize,
+    pub rms_deg: [f64; 3],
+    pub max_deg: [f64; 3],
+    /// The filter's own 3σ of its attitude error (3 √P_ii), final estimate, degrees.
+    pub final_3sigma_deg: [f64; 3],
+}
+
 /// Per-tick series of a run, for figures and comparisons.
 #[derive(Debug, Clone, Default)]
 pub struct RunSeries {
     pub t_s: Vec<f64>,
-    /// True attitude error relative to the target, degrees, body axes.
+    /// True attitude error relative to the target (rotation vector, target to truth), degrees, body axes.
     pub error_deg: Vec<[f64; 3]>,
     pub rate_deg_s: Vec<[f64; 3]>,
     pub wheel_speed_rpm: Vec<[f64; 3]>,
     pub estimates: Vec<AttitudeEstimate>,
+    /// Times of the estimates compared with the truth, s; their error (rotation vector,
+    /// estimate to truth, body axes, degrees) and the filter's 3σ, degrees.
+    pub estimate_t_s: Vec<f64>,
+    pub estimate_error_deg: Vec<[f64; 3]>,
+    pub estimate_3sigma_deg: Vec<[f64; 3]>,
+    /// Wheel torque commands: times, s, and torques, mNm.
+    pub command_t_s: Vec<f64>,
+    pub wheel_torque_mnm: Vec<[f64; 3]>,
 }
 
-/// Read a run's log and summarise it.
-pub fn summarise(path: &Path) -> anyhow::Result<(RunSummary, RunSeries, RunConfig)> {
+/// Read a run's log and summarise it; `requested_s`: the simulated duration the run was asked
+/// for, if it ends by duration (a shorter log is marked interrupted).
+pub fn summarise(
+    path: &Path,
+    requested_s: Option<f64>,
+) -> anyhow::Result<(RunSummary, RunSeries, RunConfig)> {
     let log = RunLog::open(path).with_context(|| format!("opening the log {}", path.display()))?;
-    let config = RunConfig::from_toml_str(log.config_toml(), &format!("{} (config.toml attachment)", path.display()))?;
+    let config = RunConfig::from_toml_str(
+        log.config_toml(),
+        &format!("{} (config.toml attachment)", path.display()),
+    )?;
     let target = config.manoeuvre.target();
     let mut series = RunSeries::default();
+    let mut truth_at = HashMap::new();
     for truth in log.samples::<SimTruth>()? {
         let truth = truth.with_context(|| format!("reading {}", path.display()))?;
-        let Some(q) = quaternion_from_array(&truth.quaternion) else { continue };
+        let Some(q) = quaternion_from_array(&truth.quaternion) else {
+            continue;
+        };
+        truth_at.insert(truth.header.time_ns, q);
         let error = attitude::attitude_error(&q, &target) / DEG;
         series.t_s.push(seconds(truth.header.time_ns));
         series.error_deg.push([error.x, error.y, error.z]);
-        series.rate_deg_s.push((Vector3::from(truth.rate) / DEG).into());
-        series.wheel_speed_rpm.push((Vector3::from(truth.wheel_speed) / RPM).into());
+        series
+            .rate_deg_s
+            .push((Vector3::from(truth.rate) / DEG).into());
+        series
+            .wheel_speed_rpm
+            .push((Vector3::from(truth.wheel_speed) / RPM).into());
     }
     for estimate in log.samples::<AttitudeEstimate>()? {
-        series.estimates.push(estimate.with_context(|| format!("reading {}", path.display()))?);
+        let estimate = estimate.with_context(|| format!("reading {}", path.display()))?;
+        if let (Some(q_true), Some(q_est)) = (
+            truth_at.get(&estimate.header.time_ns),
+            quaternion_from_array(&estimate.quaternion),
+        ) {
+            let e = attitude::attitude_error(q_true, &q_est) / DEG;
+            let sigma3 = |i: usize| 3.0 * estimate.covariance[7 * i].max(0.0).sqrt() / DEG;
+            series.estimate_t_s.push(seconds(estimate.header.time_ns));
+            series.estimate_error_deg.push([e.x, e.y, e.z]);
+            series
+                .estimate_3sigma_deg
+                .push([sigma3(0), sigma3(1), sigma3(2)]);
+        }
+        series.estimates.push(estimate);
+    }
+    for command in log.samples::<WheelCommand>()? {
+        let command = command.with_context(|| format!("reading {}", path.display()))?;
+        series.command_t_s.push(seconds(command.header.time_ns));
+        series
+            .wheel_torque_mnm
+            .push((Vector3::from(command.torque) * 1e3).into());
     }
     let mut deadline_misses = 0;
     for status in log.samples::<ControllerStatus>()? {
-        deadline_misses = deadline_misses.max(status.with_context(|| format!("reading {}", path.display()))?.deadline_misses);
+        deadline_misses = deadline_misses.max(
+            status
+                .with_context(|| format!("reading {}", path.display()))?
+                .deadline_misses,
+        );
     }
-    anyhow::ensure!(!series.t_s.is_empty(), "{}: the log holds no simulation truth", path.display());
-    let errors: Vec<(f64, [f64; 3])> = series.t_s.iter().copied().zip(series.error_deg.iter().copied()).collect();
+    anyhow::ensure!(
+        !series.t_s.is_empty(),
+        "{}: the log holds no simulation truth",
+        path.display()
+    );
+    let errors: Vec<(f64, [f64; 3])> = series
+        .t_s
+        .iter()
+        .copied()
+        .zip(series.error_deg.iter().copied())
+        .collect();
+    let abs_max = |values: &[[f64; 3]]| {
+        values.iter().fold([0.0_f64; 3], |m, v| {
+            [
+                m[0].max(v[0].abs()),
+                m[1].max(v[1].abs()),
+                m[2].max(v[2].abs()),
+            ]
+        })
+    };
+    let estimator = (!series.estimate_error_deg.is_empty()).then(|| {
+        let n = series.estimate_error_deg.len() as f64;
+        let sum_sq = series.estimate_error_deg.iter().fold([0.0; 3], |s, e| {
+            [s[0] + e[0] * e[0], s[1] + e[1] * e[1], s[2] + e[2] * e[2]]
+        });
+        EstimatorError {
+            compared: series.estimate_error_deg.len(),
+            rms_deg: sum_sq.map(|s| (s / n).sqrt()),
+            max_deg: abs_max(&series.estimate_error_deg),
+            final_3sigma_deg: *series.estimate_3sigma_deg.last().unwrap_or(&[0.0; 3]),
+        }
+    });
+    let simulated_s = *series.t_s.last().unwrap_or(&0.0);
+    // The plant's last tick is one period short of the duration at most.
+    let period_s = series.t_s.windows(2).next().map_or(0.0, |w| w[1] - w[0]);
+    let interrupted = requested_s.is_some_and(|d| simulated_s + 2.0 * period_s + 1e-6 < d);
+    let steady_deg = metrics::steady_max(&errors, STEADY_WINDOW_S);
+    let m = &config.manoeuvre;
     let summary = RunSummary {
         settle_s: metrics::settling_time(&errors, SETTLE_BAND_DEG),
-        steady_deg: metrics::steady_max(&errors, STEADY_WINDOW_S),
-        steady_xy_deg: 0.0,
-        steady_z_deg: 0.0,
+        steady_xy_deg: steady_deg[0].max(steady_deg[1]),
+        steady_z_deg: steady_deg[2],
+        steady_deg,
+        settle_band_deg: SETTLE_BAND_DEG,
+        steady_window_s: STEADY_WINDOW_S,
+        peak_wheel_rpm: abs_max(&series.wheel_speed_rpm),
+        estimator,
+        initial_condition: format!(
+            "heading {}°, pitch {}°, roll {}°, rate {:?} °/s, wheels {:?} rpm; target heading {}°, pitch {}°, roll {}°",
+            m.initial_heading_deg,
+            m.initial_pitch_deg,
+            m.initial_roll_deg,
+            m.initial_rate_deg_s,
+            m.initial_wheel_speed_rpm,
+            m.target_heading_deg,
+            m.target_pitch_deg,
+            m.target_roll_deg
+        ),
+        controller: controller_description(&config),
         deadline_misses,
-        simulated_s: *series.t_s.last().unwrap_or(&0.0),
+        simulated_s,
+        requested_s,
+        interrupted,
         ticks: series.t_s.len(),
         estimates: series.estimates.len(),
+        profile: log.info().profile.clone(),
         mode: log.info().mode.clone(),
         seed: log.info().seed,
         log: path.display().to_string(),
         log_complete: log.is_complete(),
     };
-    let summary = RunSummary { steady_xy_deg: summary.steady_deg[0].max(summary.steady_deg[1]), steady_z_deg: summary.steady_deg[2], ..summary };
     Ok((summary, series, config))
+}
+
+/// The control law and its gains, in one line.
+fn controller_description(config: &RunConfig) -> String {
+    let c = &config.controller;
+    match c.actuators {
+        Actuators::Wheels => format!(
+            "reaction-wheel PD, P {:?} Nm per unit q_v, D {:?} Nm s, friction compensation {}, period {} s",
+            c.wheels.p_nm.map(|x| (x * 1000.0).round() / 1000.0),
+            c.wheels.d_nms.map(|x| (x * 1000.0).round() / 1000.0),
+            if c.wheels.friction_compensation {
+                "on"
+            } else {
+                "off"
+            },
+            c.wheels.control_period_s
+        ),
+        Actuators::Cmg => "four-CMG pyramid, rate-limited eigenaxis slew".to_string(),
+    }
 }
 
 /// A replayed run's estimates against the recorded run's.
@@ -106,12 +263,21 @@ pub struct EstimateComparison {
 /// Compares the estimates of `replayed` with those of `recorded`, in order.
 pub fn compare_estimates(recorded: &Path, replayed: &Path) -> anyhow::Result<EstimateComparison> {
     let read = |path: &Path| -> anyhow::Result<Vec<AttitudeEstimate>> {
-        let log = RunLog::open(path).with_context(|| format!("opening the log {}", path.display()))?;
+        let log =
+            RunLog::open(path).with_context(|| format!("opening the log {}", path.display()))?;
         log.samples::<AttitudeEstimate>()?
             .map(|e| e.with_context(|| format!("reading {}", path.display())))
             .collect()
     };
     let (recorded, replayed) = (read(recorded)?, read(replayed)?);
-    let identical = recorded.iter().zip(&replayed).filter(|(a, b)| a == b).count();
-    Ok(EstimateComparison { recorded: recorded.len(), replayed: replayed.len(), identical })
+    let identical = recorded
+        .iter()
+        .zip(&replayed)
+        .filter(|(a, b)| a == b)
+        .count();
+    Ok(EstimateComparison {
+        recorded: recorded.len(),
+        replayed: replayed.len(),
+        identical,
+    })
 }
