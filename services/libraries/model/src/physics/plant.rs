@@ -164,7 +164,11 @@ impl Plant {
             let acting = self.delay.in_effect(self.time_s);
             let segment_end = self.delay.next_change_after(self.time_s).map_or(t_end, |t| t.min(t_end));
             let (motor, gimbal_rate) = self.actuation(&acting);
-            let substeps = ((segment_end - self.time_s) / self.max_substep_s).ceil().max(1.0) as usize;
+            // A whole number of substeps often divides with a rounding error above it
+            // (0.1 / 0.01 = 10.000000000000002): allow the clock's tolerance before rounding up,
+            // or about half of the steps would take one substep more than they need.
+            let span = segment_end - self.time_s;
+            let substeps = ((span - TIME_TOLERANCE_S) / self.max_substep_s).ceil().max(1.0) as usize;
             let h = (segment_end - self.time_s) / substeps as f64;
             for _ in 0..substeps {
                 self.substep(&motor, &gimbal_rate, h, &mut report);

@@ -357,3 +357,16 @@ fn bad_inputs_are_refused() {
         Err(PhysicsError::InertiaNotPositiveDefinite { .. })
     ));
 }
+
+#[test]
+fn a_step_of_a_whole_number_of_substeps_takes_exactly_that_many() {
+    // 0.1 s steps of at most 0.01 s: 10 substeps each, however the clock's sum rounds.
+    let config = diagonal();
+    let mut p = plant(&config, PlatformState::default());
+    for k in 0..2000 {
+        let report = step(&mut p, &ActuatorCommand::default(), 0.1);
+        assert_eq!(report.substeps, 10, "step {k} at t = {} s", p.time_s());
+    }
+    // A step that is not a whole number of substeps rounds up.
+    assert_eq!(step(&mut p, &ActuatorCommand::default(), 0.105).substeps, 11);
+}
