@@ -7,7 +7,10 @@ use std::process::Command;
 /// `target/<profile>/` of this test.
 fn profile_dir() -> PathBuf {
     let exe = std::env::current_exe().expect("test path");
-    exe.parent().and_then(Path::parent).expect("target/<profile>/deps/<test>").to_path_buf()
+    exe.parent()
+        .and_then(Path::parent)
+        .expect("target/<profile>/deps/<test>")
+        .to_path_buf()
 }
 
 /// The paced part runs `testbed run`, which needs the workspace's binaries beside `latency`.
@@ -19,7 +22,10 @@ fn build_workspace_binaries() {
         cmd.arg("--release");
     }
     let status = cmd.status().expect("running cargo build");
-    assert!(status.success(), "cargo build --workspace --bins failed: {status}");
+    assert!(
+        status.success(),
+        "cargo build --workspace --bins failed: {status}"
+    );
 }
 
 /// Every Markdown table: header and rows have the same number of cells.
@@ -28,14 +34,23 @@ fn check_tables(markdown: &str) -> usize {
     let mut columns: Option<usize> = None;
     for (n, line) in markdown.lines().enumerate() {
         if line.starts_with('|') {
-            assert!(line.ends_with('|'), "line {}: table row not closed: {line}", n + 1);
+            assert!(
+                line.ends_with('|'),
+                "line {}: table row not closed: {line}",
+                n + 1
+            );
             let cells = line.matches('|').count() - 1;
             match columns {
                 None => {
                     columns = Some(cells);
                     tables += 1;
                 }
-                Some(c) => assert_eq!(cells, c, "line {}: {cells} cells in a table of {c}: {line}", n + 1),
+                Some(c) => assert_eq!(
+                    cells,
+                    c,
+                    "line {}: {cells} cells in a table of {c}: {line}",
+                    n + 1
+                ),
             }
         } else {
             columns = None;
@@ -85,18 +100,30 @@ fn quick_mode_writes_a_well_formed_report() {
             || markdown.contains("## The event chain against the Unix-socket chain"),
         "report.md lacks the event chain against the socket chain"
     );
-    assert!(!markdown.contains("at start-up"), "no special case for start-up deadline misses");
+    assert!(
+        !markdown.contains("at start-up"),
+        "no special case for start-up deadline misses"
+    );
 
-    let report: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).expect("report.json")).expect("JSON");
+    let report: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(out.join("report.json")).expect("report.json"),
+    )
+    .expect("JSON");
     assert!(report["machine"]["cpus"].as_u64().unwrap_or(0) >= 1);
-    assert!(!report["machine"]["kernel"].as_str().unwrap_or("").is_empty());
+    assert!(
+        !report["machine"]["kernel"]
+            .as_str()
+            .unwrap_or("")
+            .is_empty()
+    );
     let measurements = report["measurements"].as_array().expect("measurements");
     for kind in ["hop", "chain", "sweep"] {
         for transport in ["iox-event-block", "iox-poll", "uds", "udp"] {
             for load in [false, true] {
                 assert!(
-                    measurements.iter().any(|m| m["kind"] == kind && m["transport"] == transport && m["load"] == load),
+                    measurements.iter().any(|m| m["kind"] == kind
+                        && m["transport"] == transport
+                        && m["load"] == load),
                     "no {kind} row for {transport} (load {load})"
                 );
             }
@@ -105,9 +132,15 @@ fn quick_mode_writes_a_well_formed_report() {
     for m in measurements {
         assert!(m["error"].is_null(), "failed: {m}");
         let l = &m["latency"];
-        let q: Vec<f64> = ["p50", "p90", "p99", "p999", "max"].iter().map(|k| l[k].as_f64().expect(k)).collect();
+        let q: Vec<f64> = ["p50", "p90", "p99", "p999", "max"]
+            .iter()
+            .map(|k| l[k].as_f64().expect(k))
+            .collect();
         assert!(l["n"].as_u64().unwrap_or(0) > 0, "{m}");
-        assert!(q.windows(2).all(|w| w[0] <= w[1]), "percentiles out of order: {m}");
+        assert!(
+            q.windows(2).all(|w| w[0] <= w[1]),
+            "percentiles out of order: {m}"
+        );
         assert!(m["cpu_us_per_msg"].as_f64().unwrap_or(-1.0) >= 0.0);
     }
     let paced = report["paced"].as_array().expect("paced");
@@ -118,12 +151,24 @@ fn quick_mode_writes_a_well_formed_report() {
         assert!(p["deadline_misses"].is_u64());
         // Deadlines are supervised from the first estimate on: starting the pipeline is no
         // miss. (Misses later in a run would be the machine's, not counted here.)
-        println!("paced {}: {} deadline misses over {} ticks", p["wait"], p["deadline_misses"], p["ticks"]);
+        println!(
+            "paced {}: {} deadline misses over {} ticks",
+            p["wait"], p["deadline_misses"], p["ticks"]
+        );
     }
 
     let svg = std::fs::read_to_string(out.join("latency.svg")).expect("latency.svg");
-    assert!(svg.trim_start().starts_with("<svg") && svg.trim_end().ends_with("</svg>"), "not an SVG document");
-    assert!(svg.contains("<polyline") || svg.contains("<path"), "the figure has no curves");
-    assert!(svg.contains("payload sweep") && svg.contains("percentile"), "the figure lacks its panels");
+    assert!(
+        svg.trim_start().starts_with("<svg") && svg.trim_end().ends_with("</svg>"),
+        "not an SVG document"
+    );
+    assert!(
+        svg.contains("<polyline") || svg.contains("<path"),
+        "the figure has no curves"
+    );
+    assert!(
+        svg.contains("payload sweep") && svg.contains("percentile"),
+        "the figure lacks its panels"
+    );
     std::fs::remove_dir_all(&out).expect("removing the report");
 }

@@ -18,7 +18,11 @@ pub struct WheelTelemetry {
 impl WheelTelemetry {
     /// A sample from its parts.
     pub const fn new(header: SampleHeader, speed: [f64; 3], torque: [f64; 3]) -> Self {
-        Self { header, speed, torque }
+        Self {
+            header,
+            speed,
+            torque,
+        }
     }
 }
 
@@ -58,7 +62,11 @@ pub struct CmgTelemetry {
 impl CmgTelemetry {
     /// A sample from its parts.
     pub const fn new(header: SampleHeader, gimbal_angle: [f64; 4], gimbal_rate: [f64; 4]) -> Self {
-        Self { header, gimbal_angle, gimbal_rate }
+        Self {
+            header,
+            gimbal_angle,
+            gimbal_rate,
+        }
     }
 }
 
@@ -77,6 +85,9 @@ pub struct CmgCommand {
 impl CmgCommand {
     /// A command from its parts.
     pub const fn new(header: SampleHeader, gimbal_rate: [f64; 4]) -> Self {
-        Self { header, gimbal_rate }
+        Self {
+            header,
+            gimbal_rate,
+        }
     }
 }

@@ -47,7 +47,12 @@ impl SampleHeader {
 
     /// A header with `source_id` 0.
     pub const fn new(time_ns: u64, sequence: u64, flags: u32) -> Self {
-        Self { time_ns, sequence, flags, source_id: 0 }
+        Self {
+            time_ns,
+            sequence,
+            flags,
+            source_id: 0,
+        }
     }
 
     /// The same header with `source_id` replaced.

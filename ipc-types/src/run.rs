@@ -4,7 +4,9 @@
 use core::fmt;
 
 /// A device of the platform, as configurations and profiles name it (`"gyro"`, …, `"cmg"`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize, serde::Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize, serde::Deserialize,
+)]
 #[serde(rename_all = "lowercase")]
 pub enum Device {
     /// The three fibre-optic rate gyros.
@@ -21,7 +23,13 @@ pub enum Device {
 
 impl Device {
     /// Every device.
-    pub const ALL: [Device; 5] = [Self::Gyro, Self::Inclinometer, Self::Magnetometer, Self::Wheels, Self::Cmg];
+    pub const ALL: [Device; 5] = [
+        Self::Gyro,
+        Self::Inclinometer,
+        Self::Magnetometer,
+        Self::Wheels,
+        Self::Cmg,
+    ];
 
     /// The name used in configurations and profiles.
     pub const fn name(self) -> &'static str {
@@ -47,7 +55,9 @@ impl fmt::Display for Device {
 }
 
 /// Who owns time in a run.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, serde::Serialize, serde::Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Hash, Default, serde::Serialize, serde::Deserialize,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum ClockMode {
     /// The plant advances only when the pipeline has answered the current tick: as fast as the

@@ -67,7 +67,10 @@ impl Heartbeat {
 
     /// A zeroed heartbeat with `name` set (see [`set_name`](Self::set_name)) and `pid`.
     pub fn new(name: &str, pid: u32) -> Self {
-        let mut hb = Self { pid, ..Self::default() };
+        let mut hb = Self {
+            pid,
+            ..Self::default()
+        };
         hb.set_name(name);
         hb
     }
@@ -86,7 +89,11 @@ impl Heartbeat {
 
     /// The stored name: bytes up to the first NUL, cut at the first invalid UTF-8 byte.
     pub fn name(&self) -> &str {
-        let len = self.name.iter().position(|&b| b == 0).unwrap_or(Self::NAME_LEN);
+        let len = self
+            .name
+            .iter()
+            .position(|&b| b == 0)
+            .unwrap_or(Self::NAME_LEN);
         let bytes = &self.name[..len];
         match core::str::from_utf8(bytes) {
             Ok(s) => s,

@@ -77,7 +77,11 @@ fn layouts_are_pinned() {
 /// Type name, topic name and event name of a sample type.
 fn names<T: Topic>() -> (&'static str, &'static str, &'static str) {
     // SAFETY: `type_name` only returns the string given to `#[type_name]`.
-    (unsafe { <T as ZeroCopySend>::type_name() }, T::NAME, T::EVENT_NAME)
+    (
+        unsafe { <T as ZeroCopySend>::type_name() },
+        T::NAME,
+        T::EVENT_NAME,
+    )
 }
 
 fn all_names() -> Vec<(&'static str, &'static str, &'static str)> {
@@ -112,7 +116,10 @@ fn type_names_are_versioned_and_unique() {
     }
     assert_eq!(names::<GyroSample>().0, "testbed::GyroSample.v1");
     // SAFETY: as above.
-    assert_eq!(unsafe { <SampleHeader as ZeroCopySend>::type_name() }, "testbed::SampleHeader.v1");
+    assert_eq!(
+        unsafe { <SampleHeader as ZeroCopySend>::type_name() },
+        "testbed::SampleHeader.v1"
+    );
 }
 
 #[test]
@@ -143,7 +150,10 @@ fn defaults_are_zeroed() {
     let e = AttitudeEstimate::default();
     assert!(e.covariance.iter().chain(&e.quaternion).all(|&x| x == 0.0));
     assert_eq!(Heartbeat::default().name(), "");
-    assert_eq!(ControllerStatus::default().mode(), Some(ControllerMode::Idle));
+    assert_eq!(
+        ControllerStatus::default().mode(),
+        Some(ControllerMode::Idle)
+    );
 }
 
 #[test]
@@ -165,7 +175,10 @@ fn header_flags() {
         SampleHeader::SIMULATED,
         SampleHeader::REPLAYED,
     ];
-    assert_eq!(all.iter().fold(0, |acc, f| acc | f).count_ones() as usize, all.len());
+    assert_eq!(
+        all.iter().fold(0, |acc, f| acc | f).count_ones() as usize,
+        all.len()
+    );
 }
 
 #[test]
@@ -198,8 +211,14 @@ fn helpers() {
     assert_eq!((t.header.time_ns, t.header.sequence), (300, 3));
     assert!(t.header.has(SampleHeader::VALID | SampleHeader::SIMULATED));
     for v in 0..6 {
-        assert_eq!(ControllerMode::from_u32(v).map(|m| m as u32), (v < 5).then_some(v));
-        assert_eq!(ProcessState::from_u32(v).map(|s| s as u32), (v < 5).then_some(v));
+        assert_eq!(
+            ControllerMode::from_u32(v).map(|m| m as u32),
+            (v < 5).then_some(v)
+        );
+        assert_eq!(
+            ProcessState::from_u32(v).map(|s| s as u32),
+            (v < 5).then_some(v)
+        );
     }
 }
 

@@ -9,7 +9,7 @@ use std::os::unix::process::CommandExt as _;
 use testbed_bus::{BusConfig, cleanup_dead_nodes};
 
 use crate::profile::{
-    Device, ClockMode, OnExit, ProcessSpec, Profile, RunSettings, Source, Supervision,
+    ClockMode, Device, OnExit, ProcessSpec, Profile, RunSettings, Source, Supervision,
 };
 use crate::sys::{self, ExitHow, SignalSet};
 

@@ -216,8 +216,13 @@ args = [\"-c\", \"sleep 1000 & echo $! > {{dir}}/grandchild; wait\"]
     // loaded machine can stop the shell first and leave no file to check.
     let grandchild_file = launch.path("grandchild");
     let started = std::time::Instant::now();
-    while !std::fs::read_to_string(&grandchild_file).is_ok_and(|pid| pid.trim().parse::<i32>().is_ok()) {
-        assert!(started.elapsed() < std::time::Duration::from_secs(30), "the shell never started its grandchild");
+    while !std::fs::read_to_string(&grandchild_file)
+        .is_ok_and(|pid| pid.trim().parse::<i32>().is_ok())
+    {
+        assert!(
+            started.elapsed() < std::time::Duration::from_secs(30),
+            "the shell never started its grandchild"
+        );
         std::thread::sleep(std::time::Duration::from_millis(20));
     }
     launch.signal(libc::SIGINT);

@@ -2,7 +2,7 @@
 
 use std::path::{Path, PathBuf};
 
-use testbed_launch::profile::{Device, ClockMode, Profile, Source};
+use testbed_launch::profile::{ClockMode, Device, Profile, Source};
 
 fn profiles_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("profiles")
@@ -36,7 +36,14 @@ const RUN: &str = "[run]\nmode = \"paced\"\n";
 
 #[test]
 fn shipped_profiles_are_valid() {
-    for name in ["simulation", "platform", "mixed", "replay", "can-sim", "can-replay"] {
+    for name in [
+        "simulation",
+        "platform",
+        "mixed",
+        "replay",
+        "can-sim",
+        "can-replay",
+    ] {
         let profile = Profile::load(&profiles_dir().join(format!("{name}.toml")))
             .unwrap_or_else(|e| panic!("{e}"));
         // Every dependency starts before its dependent.

@@ -9,7 +9,10 @@ use std::sync::OnceLock;
 fn profile_dir() -> PathBuf {
     let exe = std::env::current_exe().expect("the test knows its own path");
     // target/<profile>/deps/<test binary>
-    exe.parent().and_then(Path::parent).expect("test binary lives in target/<profile>/deps").to_path_buf()
+    exe.parent()
+        .and_then(Path::parent)
+        .expect("test binary lives in target/<profile>/deps")
+        .to_path_buf()
 }
 
 /// Path of a workspace binary, built once per test process with `cargo build --bins` in the
@@ -24,8 +27,13 @@ pub fn binary(name: &str) -> PathBuf {
         if dir.file_name().is_some_and(|n| n == "release") {
             cmd.arg("--release");
         }
-        let status = cmd.status().map_err(|e| format!("running cargo build: {e}"))?;
-        status.success().then_some(()).ok_or_else(|| format!("cargo build --bins failed: {status}"))
+        let status = cmd
+            .status()
+            .map_err(|e| format!("running cargo build: {e}"))?;
+        status
+            .success()
+            .then_some(())
+            .ok_or_else(|| format!("cargo build --bins failed: {status}"))
     });
     if let Err(e) = built {
         panic!("{e}");
@@ -58,22 +66,37 @@ impl Drop for Scratch {
 
 /// The workspace root (where `launch/profiles` lives).
 pub fn workspace_root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).parent().expect("tests/ sits in the workspace").to_path_buf()
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .expect("tests/ sits in the workspace")
+        .to_path_buf()
 }
 
 /// Path of a shipped launch profile.
 pub fn profile(name: &str) -> PathBuf {
-    workspace_root().join("launch/profiles").join(format!("{name}.toml"))
+    workspace_root()
+        .join("launch/profiles")
+        .join(format!("{name}.toml"))
 }
 
 /// Run `testbed run --json` with `args` and return its summary.
 pub fn testbed_run(args: &[&str]) -> serde_json::Value {
-    let out = Command::new(binary("testbed")).arg("run").args(args).arg("--json").output().expect("running testbed run");
+    let out = Command::new(binary("testbed"))
+        .arg("run")
+        .args(args)
+        .arg("--json")
+        .output()
+        .expect("running testbed run");
     assert!(
         out.status.success(),
         "testbed run {args:?} failed ({}):\n{}",
         out.status,
         String::from_utf8_lossy(&out.stderr)
     );
-    serde_json::from_slice(&out.stdout).unwrap_or_else(|e| panic!("testbed run --json printed no JSON ({e}): {}", String::from_utf8_lossy(&out.stdout)))
+    serde_json::from_slice(&out.stdout).unwrap_or_else(|e| {
+        panic!(
+            "testbed run --json printed no JSON ({e}): {}",
+            String::from_utf8_lossy(&out.stdout)
+        )
+    })
 }

@@ -1,7 +1,7 @@
 //! `testbed paper` as a user runs it: a real process, its JSON and its figures.
 
 use std::process::Command;
-use testbed_e2e::{binary, Scratch};
+use testbed_e2e::{Scratch, binary};
 
 #[test]
 fn paper_json_holds_every_key_and_meets_the_papers_bounds() {
@@ -11,10 +11,17 @@ fn paper_json_holds_every_key_and_meets_the_papers_bounds() {
         .arg(scratch.path())
         .output()
         .expect("running testbed paper");
-    assert!(out.status.success(), "testbed paper failed: {}", String::from_utf8_lossy(&out.stderr));
-    let json: serde_json::Value = serde_json::from_slice(&out.stdout).expect("--json prints one JSON object");
+    assert!(
+        out.status.success(),
+        "testbed paper failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let json: serde_json::Value =
+        serde_json::from_slice(&out.stdout).expect("--json prints one JSON object");
     let number = |path: &str| -> f64 {
-        json.pointer(path).and_then(|v| v.as_f64()).unwrap_or_else(|| panic!("{path} missing in {json}"))
+        json.pointer(path)
+            .and_then(|v| v.as_f64())
+            .unwrap_or_else(|| panic!("{path} missing in {json}"))
     };
     // Bounds from the paper (DIGEST.md); the EKF's within 30 % of its 3σ with 6 runs.
     assert!((number("/ekf/err3s_xy_deg") / 0.0012 - 1.0).abs() < 0.3);
@@ -30,7 +37,10 @@ fn paper_json_holds_every_key_and_meets_the_papers_bounds() {
     for figure in json["figures"].as_array().expect("figures listed") {
         let path = figure.as_str().expect("figure path");
         let svg = std::fs::read_to_string(path).expect("figure written");
-        assert!(svg.starts_with("<svg") && svg.contains("time (s)"), "{path} is not a figure");
+        assert!(
+            svg.starts_with("<svg") && svg.contains("time (s)"),
+            "{path} is not a figure"
+        );
     }
 }
 
@@ -46,5 +56,8 @@ fn a_bad_model_file_is_refused_naming_key_and_value() {
         .expect("running testbed paper");
     assert!(!out.status.success());
     let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(stderr.contains("platform.mass_kg") && stderr.contains("-350"), "{stderr}");
+    assert!(
+        stderr.contains("platform.mass_kg") && stderr.contains("-350"),
+        "{stderr}"
+    );
 }

@@ -5,14 +5,16 @@ use ipc_types::AttitudeEstimate;
 use std::os::unix::process::CommandExt;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
-use testbed_e2e::{binary, profile, testbed_run, Scratch};
-use testbed_sim::closed_loop;
-use testbed_log::RunLog;
+use testbed_e2e::{Scratch, binary, profile, testbed_run};
 use testbed_flight::convert::quaternion_from_array;
+use testbed_log::RunLog;
 use testbed_runtime::RunConfig;
+use testbed_sim::closed_loop;
 
 fn number(json: &serde_json::Value, key: &str) -> f64 {
-    json[key].as_f64().unwrap_or_else(|| panic!("{key} missing in {json}"))
+    json[key]
+        .as_f64()
+        .unwrap_or_else(|| panic!("{key} missing in {json}"))
 }
 
 #[test]
@@ -20,7 +22,16 @@ fn simulation_profile_stabilises_and_its_estimates_equal_the_in_process_loop() {
     let scratch = Scratch::new("pipeline150");
     let log = scratch.path().join("sim.mcap");
     let sim = profile("simulation");
-    let summary = testbed_run(&["--profile", sim.to_str().unwrap(), "--duration", "150", "--seed", "3", "--log", log.to_str().unwrap()]);
+    let summary = testbed_run(&[
+        "--profile",
+        sim.to_str().unwrap(),
+        "--duration",
+        "150",
+        "--seed",
+        "3",
+        "--log",
+        log.to_str().unwrap(),
+    ]);
     // The paper's bounds, as for the in-process loop: level within about 100 s (0.1° band),
     // steady error below 0.02° on X/Y and 0.05° on Z.
     assert!(number(&summary, "settle_s") < 120.0, "{summary}");
@@ -33,14 +44,28 @@ fn simulation_profile_stabilises_and_its_estimates_equal_the_in_process_loop() {
     let run_log = RunLog::open(&log).unwrap();
     let config = RunConfig::from_toml_str(run_log.config_toml(), "log").unwrap();
     let trace = closed_loop::run(&closed_loop::Scenario::from_run(&config)).unwrap();
-    let estimates: Vec<AttitudeEstimate> = run_log.samples::<AttitudeEstimate>().unwrap().map(Result::unwrap).collect();
+    let estimates: Vec<AttitudeEstimate> = run_log
+        .samples::<AttitudeEstimate>()
+        .unwrap()
+        .map(Result::unwrap)
+        .collect();
     assert_eq!(estimates.len(), trace.ticks.len());
     for (sample, tick) in estimates.iter().zip(&trace.ticks) {
         let expected = tick.estimate.as_ref().expect("initialised at t = 0");
         // Same code, same inputs, same order: the processes compute bit for bit what the
         // in-process loop computes.
-        assert_eq!(quaternion_from_array(&sample.quaternion).unwrap(), expected.attitude, "t = {} s", tick.t_s);
-        assert_eq!(sample.gyro_bias, <[f64; 3]>::from(expected.bias_rad_s), "t = {} s", tick.t_s);
+        assert_eq!(
+            quaternion_from_array(&sample.quaternion).unwrap(),
+            expected.attitude,
+            "t = {} s",
+            tick.t_s
+        );
+        assert_eq!(
+            sample.gyro_bias,
+            <[f64; 3]>::from(expected.bias_rad_s),
+            "t = {} s",
+            tick.t_s
+        );
     }
 }
 
@@ -52,11 +77,25 @@ fn two_lockstep_runs_with_the_same_seed_give_byte_identical_logs() {
     let log = scratch.path().join("run.mcap");
     let mut bytes = Vec::new();
     for _ in 0..2 {
-        testbed_run(&["--profile", sim.to_str().unwrap(), "--duration", "40", "--seed", "11", "--log", log.to_str().unwrap()]);
+        testbed_run(&[
+            "--profile",
+            sim.to_str().unwrap(),
+            "--duration",
+            "40",
+            "--seed",
+            "11",
+            "--log",
+            log.to_str().unwrap(),
+        ]);
         bytes.push(std::fs::read(&log).unwrap());
     }
     assert!(bytes[0].len() > 10_000, "the log holds the run");
-    assert!(bytes[0] == bytes[1], "lockstep logs differ ({} vs {} bytes)", bytes[0].len(), bytes[1].len());
+    assert!(
+        bytes[0] == bytes[1],
+        "lockstep logs differ ({} vs {} bytes)",
+        bytes[0].len(),
+        bytes[1].len()
+    );
 }
 
 /// Processes whose environment names this bus prefix.
@@ -81,7 +120,17 @@ fn sigint_stops_every_process_removes_the_bus_and_finalises_the_log() {
     // Paced: the run would last 10 minutes; Ctrl-C (SIGINT to the foreground process group)
     // stops it after a few seconds.
     let child = Command::new(binary("testbed"))
-        .args(["run", "--paced", "--duration", "600", "--json", "--profile", sim.to_str().unwrap(), "--log", log.to_str().unwrap()])
+        .args([
+            "run",
+            "--paced",
+            "--duration",
+            "600",
+            "--json",
+            "--profile",
+            sim.to_str().unwrap(),
+            "--log",
+            log.to_str().unwrap(),
+        ])
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .process_group(0)
@@ -90,16 +139,27 @@ fn sigint_stops_every_process_removes_the_bus_and_finalises_the_log() {
     let prefix = format!("tb{}_", child.id());
     let start = Instant::now();
     while processes_on_bus(&prefix).len() < 9 {
-        assert!(start.elapsed() < Duration::from_secs(60), "the pipeline did not come up");
+        assert!(
+            start.elapsed() < Duration::from_secs(60),
+            "the pipeline did not come up"
+        );
         std::thread::sleep(Duration::from_millis(100));
     }
     std::thread::sleep(Duration::from_secs(3));
     // SAFETY: kill(2) on the process group we created.
     assert_eq!(unsafe { libc::kill(-(child.id() as i32), libc::SIGINT) }, 0);
     let out = child.wait_with_output().unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
 
-    assert_eq!(processes_on_bus(&prefix), Vec::<u32>::new(), "processes survived the stop");
+    assert_eq!(
+        processes_on_bus(&prefix),
+        Vec::<u32>::new(),
+        "processes survived the stop"
+    );
     let shm: Vec<_> = std::fs::read_dir("/dev/shm")
         .unwrap()
         .flatten()
@@ -108,11 +168,18 @@ fn sigint_stops_every_process_removes_the_bus_and_finalises_the_log() {
         .collect();
     assert!(shm.is_empty(), "stale shared memory: {shm:?}");
     let root = std::path::PathBuf::from(format!("/tmp/{}", prefix.trim_end_matches('_')));
-    assert!(!root.exists(), "the bus root {} was left behind", root.display());
+    assert!(
+        !root.exists(),
+        "the bus root {} was left behind",
+        root.display()
+    );
     let summary: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(summary["log_complete"], true, "{summary}");
     let simulated = number(&summary, "simulated_s");
-    assert!(simulated > 1.0 && simulated < 60.0, "a paced run of a few seconds: {summary}");
+    assert!(
+        simulated > 1.0 && simulated < 60.0,
+        "a paced run of a few seconds: {summary}"
+    );
     let run_log = RunLog::open(&log).unwrap();
     assert!(run_log.is_complete());
     assert!(run_log.samples::<AttitudeEstimate>().unwrap().count() > 10);
@@ -124,7 +191,16 @@ fn replaying_a_log_reproduces_its_estimates_and_commands() {
     let original = scratch.path().join("original.mcap");
     let replayed = scratch.path().join("replayed.mcap");
     let sim = profile("simulation");
-    testbed_run(&["--profile", sim.to_str().unwrap(), "--duration", "60", "--seed", "21", "--log", original.to_str().unwrap()]);
+    testbed_run(&[
+        "--profile",
+        sim.to_str().unwrap(),
+        "--duration",
+        "60",
+        "--seed",
+        "21",
+        "--log",
+        original.to_str().unwrap(),
+    ]);
     let replay = profile("replay");
     let summary = testbed_run(&[
         "--profile",
@@ -138,12 +214,19 @@ fn replaying_a_log_reproduces_its_estimates_and_commands() {
     let read = |path: &std::path::Path| {
         let log = RunLog::open(path).unwrap();
         let estimates: Vec<AttitudeEstimate> = log.samples().unwrap().map(Result::unwrap).collect();
-        let commands: Vec<ipc_types::WheelCommand> = log.samples().unwrap().map(Result::unwrap).collect();
+        let commands: Vec<ipc_types::WheelCommand> =
+            log.samples().unwrap().map(Result::unwrap).collect();
         (estimates, commands)
     };
     let (estimates, commands) = read(&original);
     let (estimates_again, commands_again) = read(&replayed);
     assert_eq!(estimates.len(), 601);
-    assert_eq!(estimates, estimates_again, "the replayed estimator computed something else");
-    assert_eq!(commands, commands_again, "the replayed controller computed something else");
+    assert_eq!(
+        estimates, estimates_again,
+        "the replayed estimator computed something else"
+    );
+    assert_eq!(
+        commands, commands_again,
+        "the replayed controller computed something else"
+    );
 }

@@ -13,15 +13,28 @@ use testbed_runtime::RunConfig;
 /// The example binary, built in the test's own profile.
 fn example_binary() -> std::path::PathBuf {
     let exe = std::env::current_exe().expect("the test knows its own path");
-    let profile_dir = exe.parent().and_then(|p| p.parent()).expect("target/<profile>/deps/<test>");
+    let profile_dir = exe
+        .parent()
+        .and_then(|p| p.parent())
+        .expect("target/<profile>/deps/<test>");
     let release = profile_dir.file_name().is_some_and(|n| n == "release");
     let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
     let mut build = Command::new(cargo);
-    build.current_dir(workspace_root()).args(["build", "--quiet", "-p", "testbed-processes", "--example", "estimate_watch"]);
+    build.current_dir(workspace_root()).args([
+        "build",
+        "--quiet",
+        "-p",
+        "testbed-processes",
+        "--example",
+        "estimate_watch",
+    ]);
     if release {
         build.arg("--release");
     }
-    assert!(build.status().expect("running cargo build").success(), "building the example failed");
+    assert!(
+        build.status().expect("running cargo build").success(),
+        "building the example failed"
+    );
     profile_dir.join("examples/estimate_watch")
 }
 
@@ -30,7 +43,8 @@ fn the_worked_example_counts_estimates_and_reports_them_when_stopped() {
     let scratch = Scratch::new("worked-example");
     let id = std::process::id();
     // Lossless, as in a lockstep run: the burst below waits for the example rather than dropping.
-    let bus_config = BusConfig::new(format!("twe{id}_"), format!("/tmp/twe{id}/")).with_delivery(Delivery::Lossless);
+    let bus_config = BusConfig::new(format!("twe{id}_"), format!("/tmp/twe{id}/"))
+        .with_delivery(Delivery::Lossless);
     let run_config = scratch.path().join("run.toml");
     std::fs::write(&run_config, RunConfig::default().to_toml_string()).unwrap();
 
@@ -53,7 +67,10 @@ fn the_worked_example_counts_estimates_and_reports_them_when_stopped() {
     // 20 estimates, every fourth not valid.
     for k in 0..20u64 {
         let flags = if k % 4 == 3 { 0 } else { SampleHeader::VALID };
-        let estimate = AttitudeEstimate { header: SampleHeader::new(k * 100_000_000, k, flags), ..Default::default() };
+        let estimate = AttitudeEstimate {
+            header: SampleHeader::new(k * 100_000_000, k, flags),
+            ..Default::default()
+        };
         estimates.publish(&estimate).unwrap();
     }
     std::thread::sleep(Duration::from_millis(500));
@@ -61,11 +78,22 @@ fn the_worked_example_counts_estimates_and_reports_them_when_stopped() {
     unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
     let status = child.wait().expect("waiting for the example");
     let mut log = String::new();
-    child.stderr.take().unwrap().read_to_string(&mut log).unwrap();
+    child
+        .stderr
+        .take()
+        .unwrap()
+        .read_to_string(&mut log)
+        .unwrap();
     drop(estimates);
     drop(bus);
     let _ = remove_all(&bus_config);
     assert!(status.success(), "the example failed ({status}):\n{log}");
-    let report = log.lines().find(|l| l.contains("estimate watch done")).unwrap_or_else(|| panic!("no report:\n{log}"));
-    assert!(report.contains("seen=20") && report.contains("invalid=5"), "wrong counts: {report}");
+    let report = log
+        .lines()
+        .find(|l| l.contains("estimate watch done"))
+        .unwrap_or_else(|| panic!("no report:\n{log}"));
+    assert!(
+        report.contains("seen=20") && report.contains("invalid=5"),
+        "wrong counts: {report}"
+    );
 }

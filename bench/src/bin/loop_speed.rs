@@ -6,9 +6,9 @@
 use clap::Parser;
 use std::time::Duration;
 use testbed_bench::median_time;
-use testbed_sim::closed_loop::{self, Scenario};
-use testbed_model::physics::{ActuatorCommand, Plant};
 use testbed_model::ModelConfig;
+use testbed_model::physics::{ActuatorCommand, Plant};
+use testbed_sim::closed_loop::{self, Scenario};
 
 #[derive(Parser)]
 struct Args {
@@ -37,7 +37,9 @@ fn main() -> anyhow::Result<()> {
         let mut plant = Plant::new(&model, initial.clone()).expect("plant");
         let command = ActuatorCommand::default();
         for _ in 0..steps {
-            plant.step(&command, 1.0 / model.gyro.rate_hz).expect("step");
+            plant
+                .step(&command, 1.0 / model.gyro.rate_hz)
+                .expect("step");
         }
     });
     let speed = |d: Duration| args.duration / d.as_secs_f64();
@@ -52,9 +54,22 @@ fn main() -> anyhow::Result<()> {
         println!("{}", serde_json::to_string_pretty(&report)?);
     } else {
         println!("{:<28} {:>14} {:>16}", "", "median wall (s)", "× real time");
-        println!("{:<28} {:>14.4} {:>16.0}", "in-process closed loop", full.as_secs_f64(), speed(full));
-        println!("{:<28} {:>14.4} {:>16.0}", "plant physics only (baseline)", plant_only.as_secs_f64(), speed(plant_only));
-        println!("the full loop costs {:.2}× the physics alone", full.as_secs_f64() / plant_only.as_secs_f64());
+        println!(
+            "{:<28} {:>14.4} {:>16.0}",
+            "in-process closed loop",
+            full.as_secs_f64(),
+            speed(full)
+        );
+        println!(
+            "{:<28} {:>14.4} {:>16.0}",
+            "plant physics only (baseline)",
+            plant_only.as_secs_f64(),
+            speed(plant_only)
+        );
+        println!(
+            "the full loop costs {:.2}× the physics alone",
+            full.as_secs_f64() / plant_only.as_secs_f64()
+        );
     }
     Ok(())
 }

@@ -15,8 +15,8 @@ use std::path::PathBuf;
 use std::process::Command;
 use std::time::{Duration, Instant};
 use testbed_bench::median_time;
-use testbed_sim::closed_loop::{self, Scenario};
 use testbed_model::ModelConfig;
+use testbed_sim::closed_loop::{self, Scenario};
 
 #[derive(Parser)]
 struct Args {
@@ -68,7 +68,10 @@ fn testbed_run(testbed: &PathBuf, log: &PathBuf, args: &[&str]) -> Result<Pipeli
         .nth(1)
         .and_then(|rest| rest.split_whitespace().next())
         .and_then(|n| n.parse().ok());
-    Ok(PipelineRun { wall, plant_x_real_time })
+    Ok(PipelineRun {
+        wall,
+        plant_x_real_time,
+    })
 }
 
 fn median(mut xs: Vec<f64>) -> f64 {
@@ -78,10 +81,16 @@ fn median(mut xs: Vec<f64>) -> f64 {
 
 fn main() -> Result<()> {
     let args = Args::parse();
-    let bin_dir = std::env::current_exe()?.parent().context("bench binary has a directory")?.to_path_buf();
+    let bin_dir = std::env::current_exe()?
+        .parent()
+        .context("bench binary has a directory")?
+        .to_path_buf();
     let testbed = bin_dir.join("testbed");
     if !testbed.exists() {
-        bail!("{} not found: cargo build --release --workspace --bins first", testbed.display());
+        bail!(
+            "{} not found: cargo build --release --workspace --bins first",
+            testbed.display()
+        );
     }
     let scratch = std::env::temp_dir().join(format!("pipeline-speed-{}", std::process::id()));
     std::fs::create_dir_all(&scratch)?;
@@ -104,8 +113,15 @@ fn main() -> Result<()> {
 
     let paced_cpu = |seconds: f64| -> Result<(f64, f64)> {
         let before = children_cpu();
-        let run = testbed_run(&testbed, &log, &["--paced", "--duration", &seconds.to_string()])?;
-        Ok((run.wall.as_secs_f64(), (children_cpu() - before).as_secs_f64()))
+        let run = testbed_run(
+            &testbed,
+            &log,
+            &["--paced", "--duration", &seconds.to_string()],
+        )?;
+        Ok((
+            run.wall.as_secs_f64(),
+            (children_cpu() - before).as_secs_f64(),
+        ))
     };
     let (short_wall, short_cpu) = paced_cpu(5.0)?;
     let (long_wall, long_cpu) = paced_cpu(args.paced_duration)?;
@@ -115,7 +131,11 @@ fn main() -> Result<()> {
     let _ = std::fs::remove_dir_all(&scratch);
 
     let whole_x = median(whole);
-    let ticking_x = if ticking.is_empty() { f64::NAN } else { median(ticking) };
+    let ticking_x = if ticking.is_empty() {
+        f64::NAN
+    } else {
+        median(ticking)
+    };
     let report = serde_json::json!({
         "simulated_s": args.duration,
         "repeats": args.repeats,
@@ -138,15 +158,30 @@ fn main() -> Result<()> {
         return Ok(());
     }
     println!("{:<58} {:>12}", "", "× real time");
-    println!("{:<58} {:>12.0}", "lockstep pipeline, 9 processes, clock start to end (median)", ticking_x);
-    println!("{:<58} {:>12.0}", "lockstep pipeline, whole `testbed run` incl. start-up", whole_x);
-    println!("{:<58} {:>12.0}", "in-process closed loop, same scenario (baseline)", in_process_x);
-    println!("the process split costs {:.0}× the in-process loop's time per tick", in_process_x / ticking_x);
+    println!(
+        "{:<58} {:>12.0}",
+        "lockstep pipeline, 9 processes, clock start to end (median)", ticking_x
+    );
+    println!(
+        "{:<58} {:>12.0}",
+        "lockstep pipeline, whole `testbed run` incl. start-up", whole_x
+    );
+    println!(
+        "{:<58} {:>12.0}",
+        "in-process closed loop, same scenario (baseline)", in_process_x
+    );
+    println!(
+        "the process split costs {:.0}× the in-process loop's time per tick",
+        in_process_x / ticking_x
+    );
     println!(
         "paced, all processes: {:.2} % of one core per second of run (marginal), {:.2} s CPU to start and stop;",
         100.0 * marginal,
         fixed
     );
-    println!("  a {long_wall:.1} s run used {long_cpu:.3} s CPU in all = {:.2} % of one core over its wall time", 100.0 * cpu_fraction);
+    println!(
+        "  a {long_wall:.1} s run used {long_cpu:.3} s CPU in all = {:.2} % of one core over its wall time",
+        100.0 * cpu_fraction
+    );
     Ok(())
 }

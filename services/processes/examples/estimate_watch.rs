@@ -16,19 +16,36 @@ pub struct EstimateWatchPorts {
 
 impl EstimateWatch {
     pub fn open(cx: &Context) -> anyhow::Result<(Self, EstimateWatchPorts)> {
-        Ok((Self { seen: 0, invalid: 0 }, EstimateWatchPorts { estimate: cx.bus.subscriber()? }))
+        Ok((
+            Self {
+                seen: 0,
+                invalid: 0,
+            },
+            EstimateWatchPorts {
+                estimate: cx.bus.subscriber()?,
+            },
+        ))
     }
 }
 
 impl Node for EstimateWatch {
     type Ports = EstimateWatchPorts;
 
-    fn wake_on<'a>(&mut self, ports: &'a EstimateWatchPorts, wake: &mut WakeOn<'_, '_, 'a>) -> anyhow::Result<()> {
+    fn wake_on<'a>(
+        &mut self,
+        ports: &'a EstimateWatchPorts,
+        wake: &mut WakeOn<'_, '_, 'a>,
+    ) -> anyhow::Result<()> {
         wake.data(&ports.estimate)?;
         Ok(())
     }
 
-    fn on_wake(&mut self, ports: &EstimateWatchPorts, _wake: Wake, io: &Io) -> anyhow::Result<Flow> {
+    fn on_wake(
+        &mut self,
+        ports: &EstimateWatchPorts,
+        _wake: Wake,
+        io: &Io,
+    ) -> anyhow::Result<Flow> {
         let n = ports.estimate.drain(|e| {
             self.seen += 1;
             self.invalid += u64::from(!e.header.is_valid());
@@ -37,8 +54,17 @@ impl Node for EstimateWatch {
         Ok(Flow::Continue)
     }
 
-    fn stop(&mut self, _ports: &EstimateWatchPorts, _io: &Io, _exit: LoopExit) -> anyhow::Result<()> {
-        tracing::info!(seen = self.seen, invalid = self.invalid, "estimate watch done");
+    fn stop(
+        &mut self,
+        _ports: &EstimateWatchPorts,
+        _io: &Io,
+        _exit: LoopExit,
+    ) -> anyhow::Result<()> {
+        tracing::info!(
+            seen = self.seen,
+            invalid = self.invalid,
+            "estimate watch done"
+        );
         Ok(())
     }
 }

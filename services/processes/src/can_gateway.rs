@@ -5,8 +5,8 @@
 use crate::can_link::Link;
 use anyhow::{Context as _, bail};
 use ipc_types::{
-    CanLinkStatus, CmgCommand, CmgTelemetry, GyroSample, InclinometerSample, MagnetometerSample, ProcessState,
-    WheelCommand, WheelTelemetry,
+    CanLinkStatus, CmgCommand, CmgTelemetry, GyroSample, InclinometerSample, MagnetometerSample,
+    ProcessState, WheelCommand, WheelTelemetry,
 };
 use std::time::{Duration, Instant};
 use testbed_bus::{Bus, BusError, Flow, LoopExit, SourceId, TopicPublisher, TopicSubscriber, Wake};
@@ -84,12 +84,17 @@ pub struct CanGateway {
 }
 
 impl CanGateway {
-    pub fn open(cx: &Context, device: ipc_types::Device) -> anyhow::Result<(Self, CanGatewayPorts)> {
+    pub fn open(
+        cx: &Context,
+        device: ipc_types::Device,
+    ) -> anyhow::Result<(Self, CanGatewayPorts)> {
         let (config, bus, name) = (cx.config, cx.bus, cx.name);
         let schedule = config.schedule()?;
-        let protocol = node::protocol(config).context("the CAN protocol of the model configuration")?;
+        let protocol =
+            node::protocol(config).context("the CAN protocol of the model configuration")?;
         let tick_sync = config.run.mode == ClockMode::Lockstep;
-        let link = Link::open(bus, config, device).with_context(|| format!("{name}: opening its link"))?;
+        let link =
+            Link::open(bus, config, device).with_context(|| format!("{name}: opening its link"))?;
         let describe = link.describe();
         if tick_sync && !matches!(link, Link::Bus(_)) {
             bail!(
@@ -106,8 +111,12 @@ impl CanGateway {
             bus_link,
             samples: SamplePublisher::new(bus, device)?,
             status: bus.publisher()?,
-            wheel_commands: (device == ipc_types::Device::Wheels).then(|| bus.subscriber()).transpose()?,
-            cmg_commands: (device == ipc_types::Device::Cmg).then(|| bus.subscriber()).transpose()?,
+            wheel_commands: (device == ipc_types::Device::Wheels)
+                .then(|| bus.subscriber())
+                .transpose()?,
+            cmg_commands: (device == ipc_types::Device::Cmg)
+                .then(|| bus.subscriber())
+                .transpose()?,
         };
         let node = Self {
             gateway,
@@ -124,7 +133,12 @@ impl CanGateway {
         Ok((node, ports))
     }
 
-    fn publish_status(&mut self, ports: &CanGatewayPorts, io: &Io, t_ns: u64) -> anyhow::Result<()> {
+    fn publish_status(
+        &mut self,
+        ports: &CanGatewayPorts,
+        io: &Io,
+        t_ns: u64,
+    ) -> anyhow::Result<()> {
         if let Some(s) = self.tracker.due(t_ns, self.gateway.status()) {
             ports.status.publish(&s)?;
         }
@@ -178,8 +192,12 @@ impl CanGateway {
         let gateway = &mut self.gateway;
         let mut batches = Vec::new();
         let drained = match (&ports.wheel_commands, &ports.cmg_commands) {
-            (Some(s), _) => s.drain(|c| batches.push((c.header.time_ns, gateway.wheel_command(&c))))?,
-            (_, Some(s)) => s.drain(|c| batches.push((c.header.time_ns, gateway.cmg_command(&c))))?,
+            (Some(s), _) => {
+                s.drain(|c| batches.push((c.header.time_ns, gateway.wheel_command(&c))))?
+            }
+            (_, Some(s)) => {
+                s.drain(|c| batches.push((c.header.time_ns, gateway.cmg_command(&c))))?
+            }
             _ => 0,
         };
         io.heartbeat.add_samples_in(drained as u64);
@@ -218,7 +236,11 @@ impl CanGateway {
 impl Node for CanGateway {
     type Ports = CanGatewayPorts;
 
-    fn wake_on<'a>(&mut self, ports: &'a CanGatewayPorts, wake: &mut WakeOn<'_, '_, 'a>) -> anyhow::Result<()> {
+    fn wake_on<'a>(
+        &mut self,
+        ports: &'a CanGatewayPorts,
+        wake: &mut WakeOn<'_, '_, 'a>,
+    ) -> anyhow::Result<()> {
         match &ports.bus_link {
             Some(t) => wake.data(t.subscriber())?,
             None => wake.interval(POLL_PERIOD)?,
@@ -229,12 +251,19 @@ impl Node for CanGateway {
         if let Some(s) = &ports.cmg_commands {
             wake.data(s)?;
         }
-        self.status_interval = (!self.tick_sync).then(|| wake.interval(Duration::from_secs(1))).transpose()?;
+        self.status_interval = (!self.tick_sync)
+            .then(|| wake.interval(Duration::from_secs(1)))
+            .transpose()?;
         Ok(())
     }
 
     fn start(&mut self, _ports: &CanGatewayPorts, io: &Io) -> anyhow::Result<Flow> {
-        tracing::info!(link = self.describe, tick_sync = self.tick_sync, "{} running", io.name);
+        tracing::info!(
+            link = self.describe,
+            tick_sync = self.tick_sync,
+            "{} running",
+            io.name
+        );
         Ok(Flow::Continue)
     }
 

@@ -7,7 +7,9 @@ use std::fs::File;
 use std::io::BufReader;
 use std::time::Duration;
 use testbed_bus::Bus;
-use testbed_can::transport::{CandumpReplay, Pacing, SerialConfig, SerialTransport, SocketCanTransport};
+use testbed_can::transport::{
+    CandumpReplay, Pacing, SerialConfig, SerialTransport, SocketCanTransport,
+};
 use testbed_can::{CanFrame, CanTransport, Device, TimestampedFrame, TransportError};
 use testbed_gateways::bus_transport::SoftwareBusTransport;
 use testbed_gateways::gateway::GatewayDevice;
@@ -35,14 +37,20 @@ impl Link {
         let can = &config.can;
         if let Some(serial) = can.serial.get(device.name()) {
             let path = serial.path.to_string_lossy().into_owned();
-            let transport = SerialTransport::open(&SerialConfig { path: path.clone(), baud: serial.baud })
-                .with_context(|| format!("can.serial.{}: opening {path}", device.name()))?;
+            let transport = SerialTransport::open(&SerialConfig {
+                path: path.clone(),
+                baud: serial.baud,
+            })
+            .with_context(|| format!("can.serial.{}: opening {path}", device.name()))?;
             return Ok(Link::Serial(transport));
         }
         Ok(match can.link {
-            CanLink::SoftwareBus => {
-                Link::Bus(Box::new(SoftwareBusTransport::open(bus, device.source_id(), SampleHeader::VALID, BUS_BUFFER)?))
-            }
+            CanLink::SoftwareBus => Link::Bus(Box::new(SoftwareBusTransport::open(
+                bus,
+                device.source_id(),
+                SampleHeader::VALID,
+                BUS_BUFFER,
+            )?)),
             CanLink::Socketcan => {
                 let mut transport = SocketCanTransport::open(&can.interface)
                     .with_context(|| format!("can.interface = {:?}", can.interface))?;
@@ -53,12 +61,18 @@ impl Link {
                 Link::SocketCan(transport)
             }
             CanLink::Candump => {
-                let path = can.candump.as_ref().context("can.link = \"candump\" needs can.candump (the file)")?;
+                let path = can
+                    .candump
+                    .as_ref()
+                    .context("can.link = \"candump\" needs can.candump (the file)")?;
                 let pacing = match can.replay_speed {
                     0.0 => Pacing::AsFastAsPossible,
                     speed => Pacing::Timed { speed },
                 };
-                Link::Candump(CandumpReplay::open(path, pacing).with_context(|| format!("can.candump = {}", path.display()))?)
+                Link::Candump(
+                    CandumpReplay::open(path, pacing)
+                        .with_context(|| format!("can.candump = {}", path.display()))?,
+                )
             }
         })
     }

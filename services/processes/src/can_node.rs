@@ -4,7 +4,9 @@
 
 use crate::can_link::BUS_BUFFER;
 use anyhow::Context as _;
-use ipc_types::{AppliedCmgCommand, AppliedWheelCommand, CanLinkStatus, SampleHeader, SimTruth, can_source};
+use ipc_types::{
+    AppliedCmgCommand, AppliedWheelCommand, CanLinkStatus, SampleHeader, SimTruth, can_source,
+};
 use testbed_bus::{Flow, LoopExit, TopicPublisher, TopicSubscriber, Wake};
 use testbed_gateways::bus_transport::SoftwareBusTransport;
 use testbed_gateways::node::{SimCanNode, TxFrame};
@@ -64,7 +66,11 @@ impl CanNodeProcess {
 impl Node for CanNodeProcess {
     type Ports = CanNodePorts;
 
-    fn wake_on<'a>(&mut self, ports: &'a CanNodePorts, wake: &mut WakeOn<'_, '_, 'a>) -> anyhow::Result<()> {
+    fn wake_on<'a>(
+        &mut self,
+        ports: &'a CanNodePorts,
+        wake: &mut WakeOn<'_, '_, 'a>,
+    ) -> anyhow::Result<()> {
         wake.data(&ports.truth)?;
         wake.data(ports.link.subscriber())?;
         Ok(())
@@ -91,7 +97,9 @@ impl Node for CanNodeProcess {
         }
         while let Some(frame) = link.poll().context("receiving from the software CAN bus")? {
             node.set_link_check_errors(link.stats().check_errors + link.stats().invalid);
-            let Some(applied) = node.on_frame(&frame.frame) else { continue };
+            let Some(applied) = node.on_frame(&frame.frame) else {
+                continue;
+            };
             let t_ns = applied.wheel.header.time_ns;
             if let Some(s) = self.tracker.due(t_ns, node.status()) {
                 ports.status.publish(&s)?;

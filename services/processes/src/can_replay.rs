@@ -49,11 +49,19 @@ pub struct CanReplayProcess {
 impl CanReplayProcess {
     pub fn open(cx: &Context) -> anyhow::Result<(Self, CanReplayPorts)> {
         let config = cx.config;
-        let path = config.can.candump.clone().context("can-replay: can.candump names no file to replay")?;
-        let file = File::open(&path).with_context(|| format!("can-replay: opening {}", path.display()))?;
+        let path = config
+            .can
+            .candump
+            .clone()
+            .context("can-replay: can.candump names no file to replay")?;
+        let file =
+            File::open(&path).with_context(|| format!("can-replay: opening {}", path.display()))?;
         let protocol = node::protocol(config)?;
         let lockstep = config.run.mode == ClockMode::Lockstep;
-        let answered_by_estimator = lockstep && Self::participants(config, cx.name).iter().any(|p| p == "estimator");
+        let answered_by_estimator = lockstep
+            && Self::participants(config, cx.name)
+                .iter()
+                .any(|p| p == "estimator");
         let ports = CanReplayPorts {
             link: SoftwareBusTransport::open(
                 cx.bus,
@@ -83,7 +91,13 @@ impl CanReplayProcess {
     }
 
     fn participants(config: &RunConfig, name: &str) -> Vec<String> {
-        config.run.participants.iter().filter(|p| p.as_str() != name).cloned().collect()
+        config
+            .run
+            .participants
+            .iter()
+            .filter(|p| p.as_str() != name)
+            .cloned()
+            .collect()
     }
 
     /// Releases frames until the next tick must wait for its estimate (or for the pacing).
@@ -91,15 +105,24 @@ impl CanReplayProcess {
         // Frames from others (gateways' commands) are not replayed; keep the buffer empty.
         while let Ok(Some(_)) = ports.link.poll() {}
         let newest = &mut self.newest_estimate;
-        ports.estimates.drain(|e| *newest = (*newest).max(Some(e.header.time_ns)))?;
-        if self.waiting_for.is_some_and(|t| self.newest_estimate.is_none_or(|n| n < t)) {
+        ports
+            .estimates
+            .drain(|e| *newest = (*newest).max(Some(e.header.time_ns)))?;
+        if self
+            .waiting_for
+            .is_some_and(|t| self.newest_estimate.is_none_or(|n| n < t))
+        {
             return Ok(Flow::Continue);
         }
         self.waiting_for = None;
         loop {
             let frame = match self.pending.take() {
                 Some(f) => f,
-                None => match self.reader.next_frame().with_context(|| format!("reading {}", self.path.display()))? {
+                None => match self
+                    .reader
+                    .next_frame()
+                    .with_context(|| format!("reading {}", self.path.display()))?
+                {
                     Some(f) => f,
                     None => {
                         self.finished = true;
@@ -118,10 +141,20 @@ impl CanReplayProcess {
                 }
             }
             ports.link.set_time_ns(frame.time_ns);
-            ports.link.send_frame(&frame.frame).context("sending on the software CAN bus")?;
+            ports
+                .link
+                .send_frame(&frame.frame)
+                .context("sending on the software CAN bus")?;
             io.heartbeat.add_samples_out(1);
-            let sync = match self.sync_decoder.decode(&frame.frame).message.map(|r| r.message) {
-                Some(Message::NodeHeartbeat(hb)) => run_time_ns(&mut self.clock, &self.schedule, hb.node_time_us),
+            let sync = match self
+                .sync_decoder
+                .decode(&frame.frame)
+                .message
+                .map(|r| r.message)
+            {
+                Some(Message::NodeHeartbeat(hb)) => {
+                    run_time_ns(&mut self.clock, &self.schedule, hb.node_time_us)
+                }
                 _ => None,
             };
             if let Some(t_ns) = sync {
@@ -147,7 +180,11 @@ impl Node for CanReplayProcess {
         Some(Self::participants(config, "can-replay"))
     }
 
-    fn wake_on<'a>(&mut self, ports: &'a CanReplayPorts, wake: &mut WakeOn<'_, '_, 'a>) -> anyhow::Result<()> {
+    fn wake_on<'a>(
+        &mut self,
+        ports: &'a CanReplayPorts,
+        wake: &mut WakeOn<'_, '_, 'a>,
+    ) -> anyhow::Result<()> {
         wake.data(&ports.estimates)?;
         wake.data(ports.link.subscriber())?;
         if !self.lockstep {

@@ -2,7 +2,9 @@
 //! command per tick from the estimate and the actuators' telemetry. In a paced run a tick whose
 //! estimate is later than its period plus the configured slack is a missed deadline.
 
-use ipc_types::{AttitudeEstimate, CmgCommand, CmgTelemetry, ControllerStatus, WheelCommand, WheelTelemetry};
+use ipc_types::{
+    AttitudeEstimate, CmgCommand, CmgTelemetry, ControllerStatus, WheelCommand, WheelTelemetry,
+};
 use std::time::Duration;
 use testbed_bus::{Flow, LoopExit, TopicPublisher, TopicSubscriber, Wake};
 use testbed_flight::controller_node::ControllerNode;
@@ -30,7 +32,8 @@ impl ControllerProcess {
     pub fn open(cx: &Context) -> anyhow::Result<(Self, ControllerPorts)> {
         let config = cx.config;
         let schedule = config.schedule()?;
-        let task = ControllerTask::new(&config.controller, &config.model, config.manoeuvre.target())?;
+        let task =
+            ControllerTask::new(&config.controller, &config.model, config.manoeuvre.target())?;
         let node = ControllerNode::new(task, config.controller.actuators, schedule);
         let deadline = Duration::from_secs_f64(schedule.period_s() + config.run.deadline_slack_s);
         let ports = ControllerPorts {
@@ -48,7 +51,11 @@ impl ControllerProcess {
 impl Node for ControllerProcess {
     type Ports = ControllerPorts;
 
-    fn wake_on<'a>(&mut self, ports: &'a ControllerPorts, wake: &mut WakeOn<'_, '_, 'a>) -> anyhow::Result<()> {
+    fn wake_on<'a>(
+        &mut self,
+        ports: &'a ControllerPorts,
+        wake: &mut WakeOn<'_, '_, 'a>,
+    ) -> anyhow::Result<()> {
         wake.data_within(&ports.estimate, self.deadline)?;
         wake.data(&ports.wheels)?;
         wake.data(&ports.cmg)?;
@@ -59,7 +66,10 @@ impl Node for ControllerProcess {
         let node = &mut self.node;
         if let Wake::DeadlineMissed(_) = wake {
             node.count_deadline_miss();
-            tracing::warn!(misses = node.deadline_misses(), "control cycle missed its deadline");
+            tracing::warn!(
+                misses = node.deadline_misses(),
+                "control cycle missed its deadline"
+            );
         }
         let received = ports.estimate.drain(|e| node.on_estimate(&e))?
             + ports.wheels.drain(|t| node.on_wheel_telemetry(&t))?
@@ -76,7 +86,11 @@ impl Node for ControllerProcess {
     }
 
     fn stop(&mut self, _ports: &ControllerPorts, _io: &Io, _exit: LoopExit) -> anyhow::Result<()> {
-        tracing::info!(deadline_misses = self.node.deadline_misses(), errors = self.node.errors(), "controller stopping");
+        tracing::info!(
+            deadline_misses = self.node.deadline_misses(),
+            errors = self.node.errors(),
+            "controller stopping"
+        );
         Ok(())
     }
 }

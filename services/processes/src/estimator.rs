@@ -35,7 +35,11 @@ impl EstimatorProcess {
 impl Node for EstimatorProcess {
     type Ports = EstimatorPorts;
 
-    fn wake_on<'a>(&mut self, ports: &'a EstimatorPorts, wake: &mut WakeOn<'_, '_, 'a>) -> anyhow::Result<()> {
+    fn wake_on<'a>(
+        &mut self,
+        ports: &'a EstimatorPorts,
+        wake: &mut WakeOn<'_, '_, 'a>,
+    ) -> anyhow::Result<()> {
         wake.data(&ports.gyro)?;
         wake.data(&ports.tilt)?;
         wake.data(&ports.field)?;
@@ -56,7 +60,12 @@ impl Node for EstimatorProcess {
         Ok(Flow::Continue)
     }
 
-    fn stop(&mut self, _ports: &EstimatorPorts, _io: &Io, _exit: testbed_bus::LoopExit) -> anyhow::Result<()> {
+    fn stop(
+        &mut self,
+        _ports: &EstimatorPorts,
+        _io: &Io,
+        _exit: testbed_bus::LoopExit,
+    ) -> anyhow::Result<()> {
         let counters = self.node.counters();
         tracing::info!(?counters, "estimator stopping");
         Ok(())

@@ -40,7 +40,9 @@ impl<T: Topic + LogEncode> LoggedTopic for Logged<T> {
 
 fn logged<T: Topic + LogEncode + 'static>(bus: &Bus) -> anyhow::Result<Box<dyn LoggedTopic>> {
     // Deep buffers absorb bursts; in lockstep, publishers wait rather than drop when full.
-    Ok(Box::new(Logged(bus.subscriber_with::<T>(SubscriberOptions::buffer(256))?)))
+    Ok(Box::new(Logged(
+        bus.subscriber_with::<T>(SubscriberOptions::buffer(256))?,
+    )))
 }
 
 /// The logger's ports: one subscriber per logged topic.
@@ -91,19 +93,37 @@ impl LoggerProcess {
         if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
             std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
         }
-        let options = if lockstep { WriterOptions::lockstep() } else { WriterOptions::default() };
+        let options = if lockstep {
+            WriterOptions::lockstep()
+        } else {
+            WriterOptions::default()
+        };
         let writer = RunLogWriter::create_with(&path, &info, options)
             .with_context(|| format!("creating the log {}", path.display()))?;
         let candump = match config.can.record_candump {
-            true => Some(BusRecording::create(&path.with_extension("candump.log"), &config.can.interface)?),
+            true => Some(BusRecording::create(
+                &path.with_extension("candump.log"),
+                &config.can.interface,
+            )?),
             false => None,
         };
-        Ok((Self { lockstep, path, writer: Some(writer), candump }, LoggerPorts { topics }))
+        Ok((
+            Self {
+                lockstep,
+                path,
+                writer: Some(writer),
+                candump,
+            },
+            LoggerPorts { topics },
+        ))
     }
 
     /// Writes every queued sample; the time of the newest clock tick among them, if any.
     fn write_pass(&mut self, ports: &LoggerPorts, io: &Io) -> anyhow::Result<Option<u64>> {
-        let writer = self.writer.as_mut().context("the log is already finalised")?;
+        let writer = self
+            .writer
+            .as_mut()
+            .context("the log is already finalised")?;
         let candump = &mut self.candump;
         let mut newest_tick = None;
         let mut failure = None;
@@ -128,7 +148,11 @@ impl LoggerProcess {
 impl Node for LoggerProcess {
     type Ports = LoggerPorts;
 
-    fn wake_on<'a>(&mut self, ports: &'a LoggerPorts, wake: &mut WakeOn<'_, '_, 'a>) -> anyhow::Result<()> {
+    fn wake_on<'a>(
+        &mut self,
+        ports: &'a LoggerPorts,
+        wake: &mut WakeOn<'_, '_, 'a>,
+    ) -> anyhow::Result<()> {
         for topic in &ports.topics {
             topic.attach(wake)?;
         }
@@ -165,7 +189,9 @@ impl Node for LoggerProcess {
     fn stop(&mut self, ports: &LoggerPorts, io: &Io, _exit: LoopExit) -> anyhow::Result<()> {
         let last = self.write_pass(ports, io);
         let writer = self.writer.take().context("the log is already finalised")?;
-        let stats = writer.finish().with_context(|| format!("finalising the log {}", self.path.display()))?;
+        let stats = writer
+            .finish()
+            .with_context(|| format!("finalising the log {}", self.path.display()))?;
         tracing::info!(log = %self.path.display(), ?stats, "log finalised");
         if let Some(candump) = self.candump.take() {
             candump.finish()?;
@@ -186,14 +212,23 @@ struct BusRecording {
 
 impl BusRecording {
     fn create(path: &std::path::Path, iface: &str) -> anyhow::Result<Self> {
-        let file = std::fs::File::create(path).with_context(|| format!("creating {}", path.display()))?;
-        let writer = CandumpWriter::new(BufWriter::new(file), iface).with_context(|| format!("can.interface for {}", path.display()))?;
-        Ok(Self { path: path.to_path_buf(), writer, pending: BTreeMap::new(), written: 0, corrupted: 0 })
+        let file =
+            std::fs::File::create(path).with_context(|| format!("creating {}", path.display()))?;
+        let writer = CandumpWriter::new(BufWriter::new(file), iface)
+            .with_context(|| format!("can.interface for {}", path.display()))?;
+        Ok(Self {
+            path: path.to_path_buf(),
+            writer,
+            pending: BTreeMap::new(),
+            written: 0,
+            corrupted: 0,
+        })
     }
 
     fn push(&mut self, frame: CanBusFrame) {
         let h = frame.header;
-        self.pending.insert((h.time_ns, h.source_id, h.sequence), frame);
+        self.pending
+            .insert((h.time_ns, h.source_id, h.sequence), frame);
     }
 
     /// Writes the frames sent at or before `t_ns`, in key order.
@@ -205,7 +240,9 @@ impl BusRecording {
             let sample = entry.remove();
             match CanFrame::from_bus_frame(&sample) {
                 Ok(frame) => {
-                    self.writer.write(sample.header.time_ns, &frame).with_context(|| format!("writing {}", self.path.display()))?;
+                    self.writer
+                        .write(sample.header.time_ns, &frame)
+                        .with_context(|| format!("writing {}", self.path.display()))?;
                     self.written += 1;
                 }
                 Err(_) => self.corrupted += 1,
@@ -216,7 +253,9 @@ impl BusRecording {
 
     fn finish(mut self) -> anyhow::Result<()> {
         self.write_until(u64::MAX)?;
-        self.writer.flush().with_context(|| format!("writing {}", self.path.display()))?;
+        self.writer
+            .flush()
+            .with_context(|| format!("writing {}", self.path.display()))?;
         tracing::info!(candump = %self.path.display(), frames = self.written, corrupted_left_out = self.corrupted, "bus recording finalised");
         Ok(())
     }

@@ -8,9 +8,13 @@
 //! `run.actuation = "can_node"`, the ones the smart CAN node applies after the wheel and CMG
 //! gateways and the CAN bus (`AppliedWheelCommand`, `AppliedCmgCommand`, same time stamps).
 
-use ipc_types::{AppliedCmgCommand, AppliedWheelCommand, CmgCommand, SimClockTick, SimTruth, WheelCommand};
+use ipc_types::{
+    AppliedCmgCommand, AppliedWheelCommand, CmgCommand, SimClockTick, SimTruth, WheelCommand,
+};
 use std::time::{Duration, Instant};
-use testbed_bus::{Flow, LoopExit, SourceId, SubscriberOptions, TopicPublisher, TopicSubscriber, Wake};
+use testbed_bus::{
+    Flow, LoopExit, SourceId, SubscriberOptions, TopicPublisher, TopicSubscriber, Wake,
+};
 use testbed_runtime::run_config::Actuation;
 use testbed_runtime::{ClockMode, Context, Io, Node, RunConfig, WakeOn};
 use testbed_sim::plant_node::PlantNode;
@@ -22,9 +26,15 @@ const COMMAND_BUFFER: usize = 64;
 /// Where the plant's commands come from.
 pub enum CommandPorts {
     /// The controller's commands (`run.actuation = "direct"`).
-    Direct { wheels: TopicSubscriber<WheelCommand>, cmg: TopicSubscriber<CmgCommand> },
+    Direct {
+        wheels: TopicSubscriber<WheelCommand>,
+        cmg: TopicSubscriber<CmgCommand>,
+    },
     /// What the smart CAN node applies (`run.actuation = "can_node"`).
-    Applied { wheels: TopicSubscriber<AppliedWheelCommand>, cmg: TopicSubscriber<AppliedCmgCommand> },
+    Applied {
+        wheels: TopicSubscriber<AppliedWheelCommand>,
+        cmg: TopicSubscriber<AppliedCmgCommand>,
+    },
 }
 
 /// The plant's ports: truth and clock out, commands in.
@@ -52,15 +62,29 @@ impl PlantProcess {
         let clock = bus.publisher()?;
         let options = SubscriberOptions::buffer(COMMAND_BUFFER);
         let commands = match cx.config.run.actuation {
-            Actuation::Direct => {
-                CommandPorts::Direct { wheels: bus.subscriber_with(options)?, cmg: bus.subscriber_with(options)? }
-            }
-            Actuation::CanNode => {
-                CommandPorts::Applied { wheels: bus.subscriber_with(options)?, cmg: bus.subscriber_with(options)? }
-            }
+            Actuation::Direct => CommandPorts::Direct {
+                wheels: bus.subscriber_with(options)?,
+                cmg: bus.subscriber_with(options)?,
+            },
+            Actuation::CanNode => CommandPorts::Applied {
+                wheels: bus.subscriber_with(options)?,
+                cmg: bus.subscriber_with(options)?,
+            },
         };
-        let process = Self { node, period, pace: None, started: Instant::now() };
-        Ok((process, PlantPorts { truth, clock, commands }))
+        let process = Self {
+            node,
+            period,
+            pace: None,
+            started: Instant::now(),
+        };
+        Ok((
+            process,
+            PlantPorts {
+                truth,
+                clock,
+                commands,
+            },
+        ))
     }
 
     fn publish(&mut self, ports: &PlantPorts) -> anyhow::Result<()> {
@@ -78,7 +102,11 @@ impl Node for PlantProcess {
         Some(config.run.participants.clone())
     }
 
-    fn wake_on<'a>(&mut self, ports: &'a PlantPorts, wake: &mut WakeOn<'_, '_, 'a>) -> anyhow::Result<()> {
+    fn wake_on<'a>(
+        &mut self,
+        ports: &'a PlantPorts,
+        wake: &mut WakeOn<'_, '_, 'a>,
+    ) -> anyhow::Result<()> {
         match &ports.commands {
             CommandPorts::Direct { wheels, cmg } => {
                 wake.data(wheels)?;

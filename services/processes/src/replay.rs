@@ -51,9 +51,19 @@ pub struct ReplayProcess {
 
 impl ReplayProcess {
     pub fn open(cx: &Context) -> anyhow::Result<(Self, ReplayPorts)> {
-        let source = cx.config.run.replay.clone().context("run.replay names no log to replay")?;
-        let ticks = replay_log::load(&source).with_context(|| format!("reading {}", source.display()))?;
-        anyhow::ensure!(!ticks.is_empty(), "{} holds no gyro samples to replay", source.display());
+        let source = cx
+            .config
+            .run
+            .replay
+            .clone()
+            .context("run.replay names no log to replay")?;
+        let ticks =
+            replay_log::load(&source).with_context(|| format!("reading {}", source.display()))?;
+        anyhow::ensure!(
+            !ticks.is_empty(),
+            "{} holds no gyro samples to replay",
+            source.display()
+        );
         tracing::info!(log = %source.display(), ticks = ticks.len(), "replaying");
         let bus = cx.bus;
         let ports = ReplayPorts {
@@ -67,7 +77,15 @@ impl ReplayProcess {
             wheel_command: bus.subscriber_with(SubscriberOptions::buffer(64))?,
             cmg_command: bus.subscriber_with(SubscriberOptions::buffer(64))?,
         };
-        Ok((Self { ticks, index: 0, wheel_answered: false, cmg_answered: false }, ports))
+        Ok((
+            Self {
+                ticks,
+                index: 0,
+                wheel_answered: false,
+                cmg_answered: false,
+            },
+            ports,
+        ))
     }
 }
 
@@ -78,7 +96,11 @@ impl Node for ReplayProcess {
         Some(config.run.participants.clone())
     }
 
-    fn wake_on<'a>(&mut self, ports: &'a ReplayPorts, wake: &mut WakeOn<'_, '_, 'a>) -> anyhow::Result<()> {
+    fn wake_on<'a>(
+        &mut self,
+        ports: &'a ReplayPorts,
+        wake: &mut WakeOn<'_, '_, 'a>,
+    ) -> anyhow::Result<()> {
         wake.data(&ports.wheel_command)?;
         wake.data(&ports.cmg_command)?;
         Ok(())
@@ -92,8 +114,12 @@ impl Node for ReplayProcess {
     fn on_wake(&mut self, ports: &ReplayPorts, _wake: Wake, io: &Io) -> anyhow::Result<Flow> {
         let now = self.ticks[self.index].time_ns;
         let (wheel, cmg) = (&mut self.wheel_answered, &mut self.cmg_answered);
-        ports.wheel_command.drain(|c| *wheel |= c.header.time_ns == now)?;
-        ports.cmg_command.drain(|c| *cmg |= c.header.time_ns == now)?;
+        ports
+            .wheel_command
+            .drain(|c| *wheel |= c.header.time_ns == now)?;
+        ports
+            .cmg_command
+            .drain(|c| *cmg |= c.header.time_ns == now)?;
         if !(self.wheel_answered && self.cmg_answered) {
             return Ok(Flow::Continue);
         }

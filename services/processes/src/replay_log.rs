@@ -8,8 +8,8 @@
 //! and commands exactly.
 
 use ipc_types::{
-    CmgTelemetry, GyroSample, InclinometerSample, MagnetometerSample, SampleHeader, SimClockTick, SimTruth,
-    WheelTelemetry,
+    CmgTelemetry, GyroSample, InclinometerSample, MagnetometerSample, SampleHeader, SimClockTick,
+    SimTruth, WheelTelemetry,
 };
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -41,7 +41,10 @@ pub fn load(path: &Path) -> Result<Vec<ReplayTick>, LogError> {
     for record in log.records()? {
         let record = record?;
         let time_ns = record.header().time_ns;
-        let tick = ticks.entry(time_ns).or_insert_with(|| ReplayTick { time_ns, ..ReplayTick::default() });
+        let tick = ticks.entry(time_ns).or_insert_with(|| ReplayTick {
+            time_ns,
+            ..ReplayTick::default()
+        });
         match record {
             LogRecord::SimTruth(mut s) => {
                 s.header = replayed(s.header);

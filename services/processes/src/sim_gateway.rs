@@ -93,15 +93,29 @@ impl<D: SimDevice> SimGateway<D> {
     pub fn open(cx: &Context) -> anyhow::Result<(Self, SimGatewayPorts<D>)> {
         let device = D::new(cx.config, cx.config.schedule()?);
         let commands = D::commands(cx.bus)?;
-        let ports = SimGatewayPorts { truth: cx.bus.subscriber()?, commands, output: cx.bus.publisher()? };
-        Ok((Self { device, truths: Vec::new() }, ports))
+        let ports = SimGatewayPorts {
+            truth: cx.bus.subscriber()?,
+            commands,
+            output: cx.bus.publisher()?,
+        };
+        Ok((
+            Self {
+                device,
+                truths: Vec::new(),
+            },
+            ports,
+        ))
     }
 }
 
 impl<D: SimDevice> Node for SimGateway<D> {
     type Ports = SimGatewayPorts<D>;
 
-    fn wake_on<'a>(&mut self, ports: &'a Self::Ports, wake: &mut WakeOn<'_, '_, 'a>) -> anyhow::Result<()> {
+    fn wake_on<'a>(
+        &mut self,
+        ports: &'a Self::Ports,
+        wake: &mut WakeOn<'_, '_, 'a>,
+    ) -> anyhow::Result<()> {
         wake.data(&ports.truth)?;
         Ok(())
     }

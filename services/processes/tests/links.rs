@@ -8,12 +8,12 @@ use std::time::{Duration, Instant};
 use testbed_bus::{Bus, BusConfig, Delivery, remove_all};
 use testbed_can::transport::{SerialTransport, SocketCanSupport, probe_socketcan};
 use testbed_can::{CanFrame, CanTransport, DeviceStatus, Encoder, GyroMsg, Message, Sample};
+use testbed_gateways::SoftwareBusTransport;
 use testbed_gateways::gateway::{Gateway, node_stamp_us};
 use testbed_gateways::node;
 use testbed_processes::can_link::Link;
-use testbed_gateways::SoftwareBusTransport;
-use testbed_runtime::run_config::{CanLink, RunConfig, SerialLinkConfig};
 use testbed_runtime::ClockMode;
+use testbed_runtime::run_config::{CanLink, RunConfig, SerialLinkConfig};
 
 fn gyro_frames(encoder: &mut Encoder, k: u64) -> Vec<CanFrame> {
     let m = Message::Gyro(GyroMsg {
@@ -32,7 +32,12 @@ fn paced_config() -> RunConfig {
 
 /// Polls `link` through a free-running gyro gateway until `n` samples came (or 5 s passed).
 fn gyro_samples(link: &mut Link, config: &RunConfig, n: usize) -> Vec<Sample> {
-    let mut gateway = Gateway::new(ipc_types::Device::Gyro, node::protocol(config).unwrap(), config.schedule().unwrap(), false);
+    let mut gateway = Gateway::new(
+        ipc_types::Device::Gyro,
+        node::protocol(config).unwrap(),
+        config.schedule().unwrap(),
+        false,
+    );
     let mut out = Vec::new();
     let start = Instant::now();
     while out.len() < n && start.elapsed() < Duration::from_secs(5) {
@@ -50,8 +55,10 @@ fn the_software_bus_skips_own_frames_and_drops_corrupted_ones() {
     let bus_config = BusConfig::isolated().with_delivery(Delivery::Lossless);
     {
         let bus = Bus::open("links-test", &bus_config).unwrap();
-        let node = SoftwareBusTransport::open(&bus, can_source::NODE, SampleHeader::VALID, 32).unwrap();
-        let gateway = SoftwareBusTransport::open(&bus, can_source::GYRO, SampleHeader::VALID, 32).unwrap();
+        let node =
+            SoftwareBusTransport::open(&bus, can_source::NODE, SampleHeader::VALID, 32).unwrap();
+        let gateway =
+            SoftwareBusTransport::open(&bus, can_source::GYRO, SampleHeader::VALID, 32).unwrap();
         let frame = CanFrame::standard(0x120, &[1, 2, 3, 4, 5, 6, 7, 8]).unwrap();
         node.set_time_ns(300_000_000);
         node.send_frame(&frame).unwrap();
@@ -60,7 +67,10 @@ fn the_software_bus_skips_own_frames_and_drops_corrupted_ones() {
         let mut rx = &gateway;
         let got = rx.recv(Duration::from_secs(2)).unwrap().unwrap();
         assert_eq!((got.frame, got.time_ns), (frame, 300_000_000));
-        assert_eq!(rx.recv(Duration::from_secs(2)).unwrap().unwrap().frame, frame);
+        assert_eq!(
+            rx.recv(Duration::from_secs(2)).unwrap().unwrap().frame,
+            frame
+        );
         assert!(rx.recv(Duration::from_millis(20)).unwrap().is_none());
         let s = gateway.stats();
         assert_eq!((s.received, s.check_errors), (2, 1));
@@ -78,7 +88,13 @@ fn a_directly_wired_sensor_on_a_serial_line() {
     let path = slave.name().expect("the slave's path");
     drop(slave);
     let mut config = paced_config();
-    config.can.serial.insert("gyro".into(), SerialLinkConfig { path: path.into(), baud: 115_200 });
+    config.can.serial.insert(
+        "gyro".into(),
+        SerialLinkConfig {
+            path: path.into(),
+            baud: 115_200,
+        },
+    );
     let bus_config = BusConfig::isolated();
     {
         let bus = Bus::open("gyro-gateway", &bus_config).unwrap();
@@ -113,7 +129,12 @@ fn a_candump_file_replayed_as_fast_as_possible_then_closed() {
     let mut text = std::fs::File::create(&file).unwrap();
     for k in 0..4 {
         for f in gyro_frames(&mut encoder, k) {
-            writeln!(text, "{}", testbed_can::transport::format_candump_line(k * 100_000_000, "can0", &f)).unwrap();
+            writeln!(
+                text,
+                "{}",
+                testbed_can::transport::format_candump_line(k * 100_000_000, "can0", &f)
+            )
+            .unwrap();
         }
         writeln!(text, "garbage line").unwrap();
     }
@@ -127,7 +148,10 @@ fn a_candump_file_replayed_as_fast_as_possible_then_closed() {
         let bus = Bus::open("gyro-gateway", &bus_config).unwrap();
         let mut link = Link::open(&bus, &config, ipc_types::Device::Gyro).unwrap();
         assert_eq!(gyro_samples(&mut link, &config, 4).len(), 4);
-        assert!(matches!(link.poll(), Err(testbed_can::TransportError::Closed)));
+        assert!(matches!(
+            link.poll(),
+            Err(testbed_can::TransportError::Closed)
+        ));
         assert_eq!(link.rejected(), 4, "the malformed lines");
     }
     remove_all(&bus_config).unwrap();

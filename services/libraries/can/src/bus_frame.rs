@@ -54,7 +54,11 @@ fn checked_bytes(can_id: u32, len: u8, data: &[u8; 8]) -> [u8; 16] {
 
 /// The frame check of a sample's frame fields (what `check` must hold).
 pub fn frame_check(sample: &CanBusFrame) -> u32 {
-    u32::from(crc15(&checked_bytes(sample.can_id, sample.len, &sample.data)))
+    u32::from(crc15(&checked_bytes(
+        sample.can_id,
+        sample.len,
+        &sample.data,
+    )))
 }
 
 impl CanFrame {
@@ -76,9 +80,16 @@ impl CanFrame {
     pub fn from_bus_frame(sample: &CanBusFrame) -> Result<Self, BusFrameError> {
         let computed = frame_check(sample);
         if computed != sample.check {
-            return Err(BusFrameError::Check { sent: sample.check, computed });
+            return Err(BusFrameError::Check {
+                sent: sample.check,
+                computed,
+            });
         }
-        Ok(CanFrame::from_linux_parts(sample.can_id, sample.len, sample.data)?)
+        Ok(CanFrame::from_linux_parts(
+            sample.can_id,
+            sample.len,
+            sample.data,
+        )?)
     }
 }
 
@@ -106,7 +117,10 @@ mod tests {
                     _ => bad.data[byte - 5] ^= 1 << bit,
                 }
                 assert!(
-                    matches!(CanFrame::from_bus_frame(&bad), Err(BusFrameError::Check { .. })),
+                    matches!(
+                        CanFrame::from_bus_frame(&bad),
+                        Err(BusFrameError::Check { .. })
+                    ),
                     "byte {byte} bit {bit}"
                 );
             }
@@ -114,6 +128,9 @@ mod tests {
         let mut invalid = sample;
         invalid.len = 9;
         invalid.check = frame_check(&invalid);
-        assert!(matches!(CanFrame::from_bus_frame(&invalid), Err(BusFrameError::Invalid(_))));
+        assert!(matches!(
+            CanFrame::from_bus_frame(&invalid),
+            Err(BusFrameError::Invalid(_))
+        ));
     }
 }

@@ -11,12 +11,23 @@ use crate::protocol::{
 pub enum EncodeError {
     /// A value is NaN or infinite.
     #[error("{kind:?} channel {channel} ({quantity}): value {value} is not finite")]
-    NonFinite { kind: MessageKind, channel: usize, quantity: &'static str, value: f64 },
+    NonFinite {
+        kind: MessageKind,
+        channel: usize,
+        quantity: &'static str,
+        value: f64,
+    },
     /// A value is beyond the device range or command limit.
     #[error(
         "{kind:?} channel {channel} ({quantity}): value {value} beyond the limit ±{limit} (SI units)"
     )]
-    OutOfRange { kind: MessageKind, channel: usize, quantity: &'static str, value: f64, limit: f64 },
+    OutOfRange {
+        kind: MessageKind,
+        channel: usize,
+        quantity: &'static str,
+        value: f64,
+        limit: f64,
+    },
     /// The heartbeat's node state is not one of the defined values.
     #[error("node state {0} is not a defined state (0 to 3)")]
     BadState(u8),
@@ -68,7 +79,12 @@ fn quantise(
     value: f64,
 ) -> Result<i32, EncodeError> {
     if !value.is_finite() {
-        return Err(EncodeError::NonFinite { kind, channel, quantity: q.name(), value });
+        return Err(EncodeError::NonFinite {
+            kind,
+            channel,
+            quantity: q.name(),
+            value,
+        });
     }
     if q.wraps() {
         // Fraction of a turn in [0, 1], then 2^24 counts per turn, two's complement mod 2^24.
@@ -79,7 +95,13 @@ fn quantise(
     }
     let limit = p.limits().range(q).unwrap_or(0.0);
     if value.abs() > limit {
-        return Err(EncodeError::OutOfRange { kind, channel, quantity: q.name(), value, limit });
+        return Err(EncodeError::OutOfRange {
+            kind,
+            channel,
+            quantity: q.name(),
+            value,
+            limit,
+        });
     }
     let raw_limit = p.raw_limit(q);
     Ok(((value / q.lsb_si()).round() as i32).clamp(-raw_limit, raw_limit))
@@ -100,7 +122,11 @@ fn dequantise(p: &Protocol, q: Quantity, raw: i32) -> (f64, bool) {
 }
 
 const fn mask(bits: u32) -> u32 {
-    if bits >= 32 { u32::MAX } else { (1u32 << bits) - 1 }
+    if bits >= 32 {
+        u32::MAX
+    } else {
+        (1u32 << bits) - 1
+    }
 }
 
 const fn sign_extend(v: u32, bits: u32) -> i32 {
@@ -142,7 +168,10 @@ pub struct Encoder {
 impl Encoder {
     /// An encoder whose counters all start at 0.
     pub fn new(protocol: Protocol) -> Self {
-        Self { protocol, counters: [0; MessageKind::ALL.len()] }
+        Self {
+            protocol,
+            counters: [0; MessageKind::ALL.len()],
+        }
     }
 
     /// The protocol.
@@ -173,8 +202,10 @@ impl Encoder {
         let kind = message.kind();
         let layout = kind.layout();
         let record = message.to_record();
-        if let Message::NodeHeartbeat(NodeHeartbeatMsg { state: NodeState::Unknown(v), .. }) =
-            message
+        if let Message::NodeHeartbeat(NodeHeartbeatMsg {
+            state: NodeState::Unknown(v),
+            ..
+        }) = message
         {
             return Err(EncodeError::BadState(*v));
         }
@@ -182,7 +213,10 @@ impl Encoder {
         for (i, ch) in layout.channels.iter().enumerate() {
             raw[i] = quantise(&self.protocol, kind, i, ch.quantity, record.values[i])?;
         }
-        let mut batch = FrameBatch { frames: [CanFrame::default(); MAX_PARTS], len: 0 };
+        let mut batch = FrameBatch {
+            frames: [CanFrame::default(); MAX_PARTS],
+            len: 0,
+        };
         for (part, pl) in layout.parts.iter().enumerate() {
             let mut data = [0u8; 8];
             data[0] = counter;
@@ -203,9 +237,10 @@ impl Encoder {
             let len = usize::from(pl.dlc).min(8);
             // The identifier map and layouts are validated, so this cannot fail; keep the
             // default frame rather than panic if it ever did.
-            if let (Ok(frame), Some(slot)) =
-                (CanFrame::standard(id, &data[..len]), batch.frames.get_mut(part))
-            {
+            if let (Ok(frame), Some(slot)) = (
+                CanFrame::standard(id, &data[..len]),
+                batch.frames.get_mut(part),
+            ) {
                 *slot = frame;
             }
             batch.len = part + 1;
@@ -437,11 +472,17 @@ impl Decoder {
     }
 
     fn classify(&mut self, frame: &CanFrame) -> Decoded {
-        let none = |class| Decoded { class, message: None, abandoned: None };
+        let none = |class| Decoded {
+            class,
+            message: None,
+            abandoned: None,
+        };
         if frame.is_remote() {
             return none(FrameClass::UnknownId);
         }
-        let Some(id) = frame.standard_id() else { return none(FrameClass::UnknownId) };
+        let Some(id) = frame.standard_id() else {
+            return none(FrameClass::UnknownId);
+        };
         let entry = self.lookup.get(usize::from(id)).copied().unwrap_or(NO_SLOT);
         if entry == NO_SLOT {
             return none(FrameClass::UnknownId);
@@ -454,9 +495,14 @@ impl Decoder {
         if !self.devices.contains(layout.device) {
             return none(FrameClass::Ignored);
         }
-        let Some(pl) = layout.parts.get(part) else { return none(FrameClass::UnknownId) };
+        let Some(pl) = layout.parts.get(part) else {
+            return none(FrameClass::UnknownId);
+        };
         if frame.dlc() != pl.dlc {
-            return none(FrameClass::WrongDlc { expected: pl.dlc, got: frame.dlc() });
+            return none(FrameClass::WrongDlc {
+                expected: pl.dlc,
+                got: frame.dlc(),
+            });
         }
         let data = frame.data_padded();
         let counter = data[0];
@@ -531,7 +577,11 @@ impl Decoder {
         } else {
             FrameClass::Ok
         };
-        Decoded { class, message, abandoned }
+        Decoded {
+            class,
+            message,
+            abandoned,
+        }
     }
 
     fn assemble(&mut self, kind: MessageKind, p: &Pending) -> Received {
@@ -539,7 +589,9 @@ impl Decoder {
         let mut record = Record::default();
         let mut clipped = 0u8;
         for (part, pl) in layout.parts.iter().enumerate() {
-            let Some(data) = p.data.get(part) else { continue };
+            let Some(data) = p.data.get(part) else {
+                continue;
+            };
             for field in pl.fields {
                 let offset = usize::from(field.offset);
                 let byte = data.get(offset).copied().unwrap_or(0);
@@ -550,7 +602,9 @@ impl Decoder {
                     FieldKind::Errors => record.errors = byte,
                     FieldKind::Time => record.time_us = read_uint(data, offset, 4),
                     FieldKind::Value(ch) => {
-                        let Some(c) = channel(layout.channels, ch) else { continue };
+                        let Some(c) = channel(layout.channels, ch) else {
+                            continue;
+                        };
                         let (value, clip) = dequantise(
                             &self.protocol,
                             c.quantity,
@@ -568,7 +622,11 @@ impl Decoder {
             }
         }
         self.stats.messages += 1;
-        Received { counter: p.counter, message: Message::from_record(kind, &record), clipped }
+        Received {
+            counter: p.counter,
+            message: Message::from_record(kind, &record),
+            clipped,
+        }
     }
 }
 
@@ -579,13 +637,23 @@ mod tests {
     use crate::protocol::{IdMap, Limits};
 
     fn gyro(rate: [f64; 3]) -> Message {
-        Message::Gyro(GyroMsg { node_time_us: 123_456, status: DeviceStatus(0), rate_rad_s: rate })
+        Message::Gyro(GyroMsg {
+            node_time_us: 123_456,
+            status: DeviceStatus(0),
+            rate_rad_s: rate,
+        })
     }
 
     #[test]
     fn counter_slots_cover_every_frame() {
-        assert_eq!(SLOTS, MessageKind::ALL.iter().map(|k| k.parts()).sum::<usize>());
-        assert!(MessageKind::ALL.len() <= 32 && MAX_PARTS <= 8, "lookup entry is kind << 3 | part");
+        assert_eq!(
+            SLOTS,
+            MessageKind::ALL.iter().map(|k| k.parts()).sum::<usize>()
+        );
+        assert!(
+            MessageKind::ALL.len() <= 32 && MAX_PARTS <= 8,
+            "lookup entry is kind << 3 | part"
+        );
     }
 
     #[test]
@@ -602,7 +670,9 @@ mod tests {
         assert!(first.message.is_none());
         let second = dec.decode(&batch.as_slice()[1]);
         let r = second.message.unwrap();
-        let Message::Gyro(g) = r.message else { panic!("not a gyro message") };
+        let Message::Gyro(g) = r.message else {
+            panic!("not a gyro message")
+        };
         assert_eq!(g.node_time_us, 123_456);
         for (a, b) in g.rate_rad_s.iter().zip([0.1, -0.2, 0.3]) {
             assert!((a - b).abs() <= Quantity::GyroRate.lsb_si() / 2.0);
@@ -615,7 +685,9 @@ mod tests {
         // 1 °/s on x = 100000 LSB = 0x0186A0, little-endian.
         let enc = Encoder::new(Protocol::default());
         let deg = testbed_model::config::DEG;
-        let batch = enc.encode_with_counter(&gyro([deg, -1e-5 * deg, 0.0]), 7).unwrap();
+        let batch = enc
+            .encode_with_counter(&gyro([deg, -1e-5 * deg, 0.0]), 7)
+            .unwrap();
         let f = batch.as_slice();
         assert_eq!(f[0].data(), &[7, 0, 0xA0, 0x86, 0x01, 0xFF, 0xFF, 0xFF]);
         assert_eq!(f[1].data(), &[7, 0, 0, 0, 0x40, 0xE2, 0x01, 0x00]);
@@ -625,18 +697,27 @@ mod tests {
     fn commands_out_of_range_are_refused() {
         let enc = Encoder::new(Protocol::default());
         let e = enc.encode_with_counter(
-            &Message::WheelCommand(WheelCommandMsg { torque_nm: [0.1, -0.1001, 0.0] }),
+            &Message::WheelCommand(WheelCommandMsg {
+                torque_nm: [0.1, -0.1001, 0.0],
+            }),
             0,
         );
-        assert!(matches!(e, Err(EncodeError::OutOfRange { channel: 1, .. })), "{e:?}");
+        assert!(
+            matches!(e, Err(EncodeError::OutOfRange { channel: 1, .. })),
+            "{e:?}"
+        );
         let e = enc.encode_with_counter(
-            &Message::WheelCommand(WheelCommandMsg { torque_nm: [f64::NAN, 0.0, 0.0] }),
+            &Message::WheelCommand(WheelCommandMsg {
+                torque_nm: [f64::NAN, 0.0, 0.0],
+            }),
             0,
         );
         assert!(matches!(e, Err(EncodeError::NonFinite { channel: 0, .. })));
         let big = 91.0 * testbed_model::config::DEG;
         let e = enc.encode_with_counter(
-            &Message::CmgCommand(CmgCommandMsg { gimbal_rate_rad_s: [0.0, 0.0, 0.0, big] }),
+            &Message::CmgCommand(CmgCommandMsg {
+                gimbal_rate_rad_s: [0.0, 0.0, 0.0, big],
+            }),
             0,
         );
         assert!(matches!(e, Err(EncodeError::OutOfRange { channel: 3, .. })));
@@ -673,7 +754,13 @@ mod tests {
         let s = dec.stats();
         assert_eq!((s.frames, s.classified()), (6, 6));
         assert_eq!(
-            (s.duplicate, s.counter_jump, s.lost_frames, s.incomplete_samples, s.messages),
+            (
+                s.duplicate,
+                s.counter_jump,
+                s.lost_frames,
+                s.incomplete_samples,
+                s.messages
+            ),
             (1, 2, 7, 1, 2)
         );
     }
@@ -688,15 +775,19 @@ mod tests {
         assert_eq!(dec.decode(&a).class, FrameClass::OutOfRange);
         let r = dec.decode(&b).message.unwrap();
         assert_eq!(r.clipped, 0b001);
-        let Message::Gyro(g) = r.message else { panic!("not gyro") };
+        let Message::Gyro(g) = r.message else {
+            panic!("not gyro")
+        };
         assert_eq!(g.rate_rad_s[0], p.limits().gyro_range_rad_s);
-        let Some(Sample::Gyro(s)) =
-            r.message.to_sample(ipc_types::SampleHeader::default(), r.clipped)
+        let Some(Sample::Gyro(s)) = r
+            .message
+            .to_sample(ipc_types::SampleHeader::default(), r.clipped)
         else {
             panic!("no sample")
         };
         assert!(
-            s.header.has(ipc_types::SampleHeader::SATURATED_X | ipc_types::SampleHeader::VALID)
+            s.header
+                .has(ipc_types::SampleHeader::SATURATED_X | ipc_types::SampleHeader::VALID)
         );
     }
 
@@ -705,21 +796,27 @@ mod tests {
         let p = Protocol::default();
         let mut dec = Decoder::with_devices(p, DeviceSet::of(&[crate::Device::Gyro]));
         assert_eq!(
-            dec.decode(&CanFrame::standard(0x120, &[0; 7]).unwrap()).class,
-            FrameClass::WrongDlc { expected: 8, got: 7 }
+            dec.decode(&CanFrame::standard(0x120, &[0; 7]).unwrap())
+                .class,
+            FrameClass::WrongDlc {
+                expected: 8,
+                got: 7
+            }
         );
         assert_eq!(
             dec.decode(&CanFrame::standard(0x0FF, &[]).unwrap()).class,
             FrameClass::UnknownId
         );
         assert_eq!(
-            dec.decode(&CanFrame::standard(0x12F, &[0; 8]).unwrap()).class,
+            dec.decode(&CanFrame::standard(0x12F, &[0; 8]).unwrap())
+                .class,
             FrameClass::UnknownId
         );
         let ext = CanFrame::new(crate::CanId::Extended(0x120), &[0; 8]).unwrap();
         assert_eq!(dec.decode(&ext).class, FrameClass::UnknownId);
         assert_eq!(
-            dec.decode(&CanFrame::standard(0x100, &[0; 7]).unwrap()).class,
+            dec.decode(&CanFrame::standard(0x100, &[0; 7]).unwrap())
+                .class,
             FrameClass::Ignored
         );
         assert_eq!(dec.stats().classified(), 5);
@@ -741,7 +838,11 @@ mod tests {
         for f in &batch {
             out = dec.decode(f).message.or(out);
         }
-        let Some(Received { message: Message::CmgTelemetry(t), .. }) = out else {
+        let Some(Received {
+            message: Message::CmgTelemetry(t),
+            ..
+        }) = out
+        else {
             panic!("no telemetry")
         };
         let lsb = Quantity::GimbalAngle.lsb_si();

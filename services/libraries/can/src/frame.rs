@@ -89,8 +89,17 @@ impl CanFrame {
         }
         let mut bytes = [0u8; 8];
         bytes[..data.len()].copy_from_slice(data);
-        let flag = if matches!(id, CanId::Extended(_)) { EXTENDED_FLAG } else { 0 };
-        Ok(Self { can_id: id.raw() | flag, len: data.len() as u8, reserved: [0; 3], data: bytes })
+        let flag = if matches!(id, CanId::Extended(_)) {
+            EXTENDED_FLAG
+        } else {
+            0
+        };
+        Ok(Self {
+            can_id: id.raw() | flag,
+            len: data.len() as u8,
+            reserved: [0; 3],
+            data: bytes,
+        })
     }
 
     /// A data frame with an 11-bit identifier.
@@ -171,7 +180,11 @@ impl CanFrame {
 
     /// The payload (empty for a remote frame).
     pub fn data(&self) -> &[u8] {
-        if self.is_remote() { &[] } else { &self.data[..usize::from(self.len).min(MAX_DATA_LEN)] }
+        if self.is_remote() {
+            &[]
+        } else {
+            &self.data[..usize::from(self.len).min(MAX_DATA_LEN)]
+        }
     }
 
     /// All 8 data bytes (zero past the payload).
@@ -251,7 +264,10 @@ mod tests {
     #[test]
     fn constructors_validate() {
         assert!(CanFrame::standard(0x7FF, &[1; 8]).is_ok());
-        assert_eq!(CanFrame::standard(0x800, &[]), Err(FrameError::BadId(CanId::Standard(0x800))));
+        assert_eq!(
+            CanFrame::standard(0x800, &[]),
+            Err(FrameError::BadId(CanId::Standard(0x800)))
+        );
         assert_eq!(CanFrame::standard(1, &[0; 9]), Err(FrameError::TooLong(9)));
         assert!(CanFrame::new(CanId::Extended(MAX_EXTENDED_ID), &[]).is_ok());
         assert!(CanFrame::new(CanId::Extended(MAX_EXTENDED_ID + 1), &[]).is_err());

@@ -316,27 +316,29 @@ impl Message {
         let status = DeviceStatus(r.status);
         let node_time_us = r.time_us;
         match kind {
-            MessageKind::WheelCommand => {
-                Message::WheelCommand(WheelCommandMsg { torque_nm: get(&r.values, 0) })
-            }
+            MessageKind::WheelCommand => Message::WheelCommand(WheelCommandMsg {
+                torque_nm: get(&r.values, 0),
+            }),
             MessageKind::WheelTelemetry => Message::WheelTelemetry(WheelTelemetryMsg {
                 node_time_us,
                 status,
                 speed_rad_s: get(&r.values, 0),
                 torque_nm: get(&r.values, 3),
             }),
-            MessageKind::CmgCommand => {
-                Message::CmgCommand(CmgCommandMsg { gimbal_rate_rad_s: get(&r.values, 0) })
-            }
+            MessageKind::CmgCommand => Message::CmgCommand(CmgCommandMsg {
+                gimbal_rate_rad_s: get(&r.values, 0),
+            }),
             MessageKind::CmgTelemetry => Message::CmgTelemetry(CmgTelemetryMsg {
                 node_time_us,
                 status,
                 gimbal_angle_rad: get(&r.values, 0),
                 gimbal_rate_rad_s: get(&r.values, 4),
             }),
-            MessageKind::Gyro => {
-                Message::Gyro(GyroMsg { node_time_us, status, rate_rad_s: get(&r.values, 0) })
-            }
+            MessageKind::Gyro => Message::Gyro(GyroMsg {
+                node_time_us,
+                status,
+                rate_rad_s: get(&r.values, 0),
+            }),
             MessageKind::Inclinometer => Message::Inclinometer(InclinometerMsg {
                 node_time_us,
                 status,
@@ -431,13 +433,17 @@ impl Message {
 
 impl From<&ipc_types::WheelCommand> for WheelCommandMsg {
     fn from(c: &ipc_types::WheelCommand) -> Self {
-        Self { torque_nm: c.torque }
+        Self {
+            torque_nm: c.torque,
+        }
     }
 }
 
 impl From<&ipc_types::CmgCommand> for CmgCommandMsg {
     fn from(c: &ipc_types::CmgCommand) -> Self {
-        Self { gimbal_rate_rad_s: c.gimbal_rate }
+        Self {
+            gimbal_rate_rad_s: c.gimbal_rate,
+        }
     }
 }
 
@@ -445,7 +451,11 @@ impl GyroMsg {
     /// The frames a node would send for `sample` stamped `node_time_us` (simulated node, tests).
     pub fn from_sample(sample: &ipc_types::GyroSample, node_time_us: u32) -> Self {
         let status = DeviceStatus::from_header_flags(sample.header.flags);
-        Self { node_time_us, status, rate_rad_s: sample.rate }
+        Self {
+            node_time_us,
+            status,
+            rate_rad_s: sample.rate,
+        }
     }
 }
 
@@ -453,7 +463,11 @@ impl InclinometerMsg {
     /// The message a node would send for `sample` stamped `node_time_us`.
     pub fn from_sample(sample: &ipc_types::InclinometerSample, node_time_us: u32) -> Self {
         let status = DeviceStatus::from_header_flags(sample.header.flags);
-        Self { node_time_us, status, tilt_rad: sample.tilt }
+        Self {
+            node_time_us,
+            status,
+            tilt_rad: sample.tilt,
+        }
     }
 }
 
@@ -461,7 +475,11 @@ impl MagnetometerMsg {
     /// The message a node would send for `sample` stamped `node_time_us`.
     pub fn from_sample(sample: &ipc_types::MagnetometerSample, node_time_us: u32) -> Self {
         let status = DeviceStatus::from_header_flags(sample.header.flags);
-        Self { node_time_us, status, field_t: sample.field }
+        Self {
+            node_time_us,
+            status,
+            field_t: sample.field,
+        }
     }
 }
 
@@ -469,7 +487,12 @@ impl WheelTelemetryMsg {
     /// The message a node would send for `sample` stamped `node_time_us`.
     pub fn from_sample(sample: &ipc_types::WheelTelemetry, node_time_us: u32) -> Self {
         let status = DeviceStatus::from_header_flags(sample.header.flags);
-        Self { node_time_us, status, speed_rad_s: sample.speed, torque_nm: sample.torque }
+        Self {
+            node_time_us,
+            status,
+            speed_rad_s: sample.speed,
+            torque_nm: sample.torque,
+        }
     }
 }
 

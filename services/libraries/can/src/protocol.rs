@@ -356,8 +356,14 @@ use FieldKind::{Errors, Links, State, Status, Time, Value};
 
 /// Two frames: `[ctr][status][ch0 i24][ch1 i24]`, `[ctr][ch2 i24][t_us u32]`.
 const THREE_AXIS_PARTS: &[PartLayout] = &[
-    PartLayout { dlc: 8, fields: &[f(1, Status), f(2, Value(0)), f(5, Value(1))] },
-    PartLayout { dlc: 8, fields: &[f(1, Value(2)), f(4, Time)] },
+    PartLayout {
+        dlc: 8,
+        fields: &[f(1, Status), f(2, Value(0)), f(5, Value(1))],
+    },
+    PartLayout {
+        dlc: 8,
+        fields: &[f(1, Value(2)), f(4, Time)],
+    },
 ];
 
 pub(crate) const LAYOUTS: [MessageLayout; 8] = [
@@ -366,7 +372,10 @@ pub(crate) const LAYOUTS: [MessageLayout; 8] = [
         device: Device::Wheels,
         direction: Direction::ToNode,
         first: 0x0,
-        parts: &[PartLayout { dlc: 7, fields: &[f(1, Value(0)), f(3, Value(1)), f(5, Value(2))] }],
+        parts: &[PartLayout {
+            dlc: 7,
+            fields: &[f(1, Value(0)), f(3, Value(1)), f(5, Value(2))],
+        }],
         channels: &[
             c(Quantity::WheelTorque, 0),
             c(Quantity::WheelTorque, 1),
@@ -379,9 +388,18 @@ pub(crate) const LAYOUTS: [MessageLayout; 8] = [
         direction: Direction::FromNode,
         first: 0x1,
         parts: &[
-            PartLayout { dlc: 8, fields: &[f(1, Status), f(2, Value(0)), f(5, Value(1))] },
-            PartLayout { dlc: 8, fields: &[f(1, Value(2)), f(4, Value(3)), f(6, Value(4))] },
-            PartLayout { dlc: 7, fields: &[f(1, Value(5)), f(3, Time)] },
+            PartLayout {
+                dlc: 8,
+                fields: &[f(1, Status), f(2, Value(0)), f(5, Value(1))],
+            },
+            PartLayout {
+                dlc: 8,
+                fields: &[f(1, Value(2)), f(4, Value(3)), f(6, Value(4))],
+            },
+            PartLayout {
+                dlc: 7,
+                fields: &[f(1, Value(5)), f(3, Time)],
+            },
         ],
         channels: &[
             c(Quantity::WheelSpeed, 0),
@@ -398,8 +416,14 @@ pub(crate) const LAYOUTS: [MessageLayout; 8] = [
         direction: Direction::ToNode,
         first: 0x0,
         parts: &[
-            PartLayout { dlc: 7, fields: &[f(1, Value(0)), f(4, Value(1))] },
-            PartLayout { dlc: 7, fields: &[f(1, Value(2)), f(4, Value(3))] },
+            PartLayout {
+                dlc: 7,
+                fields: &[f(1, Value(0)), f(4, Value(1))],
+            },
+            PartLayout {
+                dlc: 7,
+                fields: &[f(1, Value(2)), f(4, Value(3))],
+            },
         ],
         channels: &[
             c(Quantity::GimbalRate, 0),
@@ -414,11 +438,26 @@ pub(crate) const LAYOUTS: [MessageLayout; 8] = [
         direction: Direction::FromNode,
         first: 0x2,
         parts: &[
-            PartLayout { dlc: 7, fields: &[f(1, Value(0)), f(4, Value(4))] },
-            PartLayout { dlc: 7, fields: &[f(1, Value(1)), f(4, Value(5))] },
-            PartLayout { dlc: 7, fields: &[f(1, Value(2)), f(4, Value(6))] },
-            PartLayout { dlc: 7, fields: &[f(1, Value(3)), f(4, Value(7))] },
-            PartLayout { dlc: 6, fields: &[f(1, Status), f(2, Time)] },
+            PartLayout {
+                dlc: 7,
+                fields: &[f(1, Value(0)), f(4, Value(4))],
+            },
+            PartLayout {
+                dlc: 7,
+                fields: &[f(1, Value(1)), f(4, Value(5))],
+            },
+            PartLayout {
+                dlc: 7,
+                fields: &[f(1, Value(2)), f(4, Value(6))],
+            },
+            PartLayout {
+                dlc: 7,
+                fields: &[f(1, Value(3)), f(4, Value(7))],
+            },
+            PartLayout {
+                dlc: 6,
+                fields: &[f(1, Status), f(2, Time)],
+            },
         ],
         channels: &[
             c(Quantity::GimbalAngle, 0),
@@ -437,7 +476,11 @@ pub(crate) const LAYOUTS: [MessageLayout; 8] = [
         direction: Direction::FromNode,
         first: 0x0,
         parts: THREE_AXIS_PARTS,
-        channels: &[c(Quantity::GyroRate, 0), c(Quantity::GyroRate, 1), c(Quantity::GyroRate, 2)],
+        channels: &[
+            c(Quantity::GyroRate, 0),
+            c(Quantity::GyroRate, 1),
+            c(Quantity::GyroRate, 2),
+        ],
     },
     MessageLayout {
         kind: MessageKind::Inclinometer,
@@ -445,8 +488,14 @@ pub(crate) const LAYOUTS: [MessageLayout; 8] = [
         direction: Direction::FromNode,
         first: 0x0,
         parts: &[
-            PartLayout { dlc: 8, fields: &[f(1, Status), f(2, Value(0)), f(5, Value(1))] },
-            PartLayout { dlc: 5, fields: &[f(1, Time)] },
+            PartLayout {
+                dlc: 8,
+                fields: &[f(1, Status), f(2, Value(0)), f(5, Value(1))],
+            },
+            PartLayout {
+                dlc: 5,
+                fields: &[f(1, Time)],
+            },
         ],
         channels: &[c(Quantity::Tilt, 0), c(Quantity::Tilt, 1)],
     },
@@ -456,7 +505,11 @@ pub(crate) const LAYOUTS: [MessageLayout; 8] = [
         direction: Direction::FromNode,
         first: 0x0,
         parts: THREE_AXIS_PARTS,
-        channels: &[c(Quantity::Field, 0), c(Quantity::Field, 1), c(Quantity::Field, 2)],
+        channels: &[
+            c(Quantity::Field, 0),
+            c(Quantity::Field, 1),
+            c(Quantity::Field, 2),
+        ],
     },
     MessageLayout {
         kind: MessageKind::NodeHeartbeat,
@@ -482,7 +535,12 @@ pub enum ProtocolError {
     BadLimit { name: &'static str, value: f64 },
     /// A device range or command limit does not fit the wire field.
     #[error("{name} limit {value} exceeds what the {bits}-bit wire field holds ({span})")]
-    LimitTooWide { name: &'static str, value: f64, bits: u32, span: f64 },
+    LimitTooWide {
+        name: &'static str,
+        value: f64,
+        bits: u32,
+        span: f64,
+    },
 }
 
 /// The 11-bit identifier map: `id = base + 0x10 · device slot + message number`.
@@ -501,7 +559,10 @@ impl IdMap {
     /// A map with identifier base `base` (a multiple of 0x10, at most [`MAX_BASE`]).
     pub fn new(base: u16) -> Result<Self, ProtocolError> {
         if base % SLOT_STRIDE != 0 || base > MAX_BASE {
-            return Err(ProtocolError::BadBase { base, max: MAX_BASE });
+            return Err(ProtocolError::BadBase {
+                base,
+                max: MAX_BASE,
+            });
         }
         Ok(Self { base })
     }
@@ -602,7 +663,10 @@ impl Limits {
         for q in Quantity::ALL {
             let Some(value) = self.range(q) else { continue };
             if !(value.is_finite() && value > 0.0) {
-                return Err(ProtocolError::BadLimit { name: q.name(), value });
+                return Err(ProtocolError::BadLimit {
+                    name: q.name(),
+                    value,
+                });
             }
             let span = f64::from(q.raw_max()) * q.lsb_si();
             if value > span {
@@ -647,7 +711,11 @@ impl Protocol {
             Some(r) => ((r / q.lsb_si()).round() as i32).clamp(0, q.raw_max()),
             None => q.raw_max(),
         });
-        Ok(Self { ids, limits, raw_limit })
+        Ok(Self {
+            ids,
+            limits,
+            raw_limit,
+        })
     }
 
     /// The protocol of a model configuration with identifier base `base`.
@@ -690,7 +758,9 @@ pub fn id_table(ids: &IdMap) -> String {
     out.push_str("|---|---|---|---|---|---|---|\n");
     for kind in MessageKind::ALL {
         for part in 0..kind.parts() {
-            let Some(id) = ids.id(kind, part) else { continue };
+            let Some(id) = ids.id(kind, part) else {
+                continue;
+            };
             let dir = match kind.direction() {
                 Direction::FromNode => "node → computer",
                 Direction::ToNode => "computer → node",
@@ -745,7 +815,11 @@ fn fmt_num(x: f64) -> String {
     let t = format!("{x:.6e}");
     let (m, e) = t.split_once('e').unwrap_or((&t, "0"));
     let m = m.trim_end_matches('0').trim_end_matches('.');
-    if x != 0.0 && (x.abs() < 1e-3 || plain.len() > 12) { format!("{m}e{e}") } else { plain }
+    if x != 0.0 && (x.abs() < 1e-3 || plain.len() > 12) {
+        format!("{m}e{e}")
+    } else {
+        plain
+    }
 }
 
 #[cfg(test)]
@@ -805,7 +879,11 @@ mod tests {
                 for fld in p.fields {
                     let w = fld.kind.width(l.channels);
                     let start = usize::from(fld.offset);
-                    assert!(start + w <= usize::from(p.dlc), "{:?}: field past DLC", l.kind);
+                    assert!(
+                        start + w <= usize::from(p.dlc),
+                        "{:?}: field past DLC",
+                        l.kind
+                    );
                     for u in &mut used[start..start + w] {
                         assert!(!*u, "{:?}: overlapping fields", l.kind);
                         *u = true;
@@ -842,10 +920,16 @@ mod tests {
         assert!((l.wheel_speed_rad_s - 6000.0 * RPM).abs() < 1e-12);
         let mut bad = l;
         bad.gyro_range_rad_s = 90.0 * DEG; // beyond the 24-bit field at 1e-5 °/s
-        assert!(matches!(bad.validate(), Err(ProtocolError::LimitTooWide { .. })));
+        assert!(matches!(
+            bad.validate(),
+            Err(ProtocolError::LimitTooWide { .. })
+        ));
         bad = l;
         bad.wheel_torque_nm = f64::NAN;
-        assert!(matches!(bad.validate(), Err(ProtocolError::BadLimit { .. })));
+        assert!(matches!(
+            bad.validate(),
+            Err(ProtocolError::BadLimit { .. })
+        ));
     }
 
     /// `cargo test -p testbed-can --lib print_tables -- --ignored --nocapture` prints the tables
@@ -861,7 +945,10 @@ mod tests {
     fn protocol_md_tables_match_the_code() {
         let doc = include_str!("../PROTOCOL.md");
         let ids = id_table(&IdMap::default());
-        assert!(doc.contains(&ids), "PROTOCOL.md ID table is out of date; expected:\n{ids}");
+        assert!(
+            doc.contains(&ids),
+            "PROTOCOL.md ID table is out of date; expected:\n{ids}"
+        );
         let scales = scaling_table(&Limits::default());
         assert!(
             doc.contains(&scales),

@@ -46,26 +46,48 @@ fn any_message() -> impl Strategy<Value = Message> {
                 speed_rad_s: w,
                 torque_nm: q
             })),
-        values::<4>(l.gimbal_rate_rad_s)
-            .prop_map(|r| Message::CmgCommand(CmgCommandMsg { gimbal_rate_rad_s: r })),
-        (any::<u32>(), status.clone(), angles(), values::<4>(l.gimbal_rate_rad_s)).prop_map(
-            |(t, s, a, r)| {
+        values::<4>(l.gimbal_rate_rad_s).prop_map(|r| Message::CmgCommand(CmgCommandMsg {
+            gimbal_rate_rad_s: r
+        })),
+        (
+            any::<u32>(),
+            status.clone(),
+            angles(),
+            values::<4>(l.gimbal_rate_rad_s)
+        )
+            .prop_map(|(t, s, a, r)| {
                 Message::CmgTelemetry(CmgTelemetryMsg {
                     node_time_us: t,
                     status: s,
                     gimbal_angle_rad: a,
                     gimbal_rate_rad_s: r,
                 })
-            }
-        ),
-        (any::<u32>(), status.clone(), values::<3>(l.gyro_range_rad_s)).prop_map(|(t, s, w)| {
-            Message::Gyro(GyroMsg { node_time_us: t, status: s, rate_rad_s: w })
-        }),
+            }),
+        (
+            any::<u32>(),
+            status.clone(),
+            values::<3>(l.gyro_range_rad_s)
+        )
+            .prop_map(|(t, s, w)| {
+                Message::Gyro(GyroMsg {
+                    node_time_us: t,
+                    status: s,
+                    rate_rad_s: w,
+                })
+            }),
         (any::<u32>(), status.clone(), values::<2>(l.tilt_range_rad)).prop_map(|(t, s, a)| {
-            Message::Inclinometer(InclinometerMsg { node_time_us: t, status: s, tilt_rad: a })
+            Message::Inclinometer(InclinometerMsg {
+                node_time_us: t,
+                status: s,
+                tilt_rad: a,
+            })
         }),
         (any::<u32>(), status, values::<3>(l.field_range_t)).prop_map(|(t, s, b)| {
-            Message::Magnetometer(MagnetometerMsg { node_time_us: t, status: s, field_t: b })
+            Message::Magnetometer(MagnetometerMsg {
+                node_time_us: t,
+                status: s,
+                field_t: b,
+            })
         }),
         (any::<u32>(), 0u8..4, any::<u8>(), any::<u8>()).prop_map(|(t, st, links, e)| {
             Message::NodeHeartbeat(NodeHeartbeatMsg {
@@ -83,10 +105,11 @@ fn channels(m: &Message) -> Vec<(f64, Quantity)> {
     let tag = |v: &[f64], q| v.iter().map(move |&x| (x, q)).collect::<Vec<_>>();
     match m {
         Message::WheelCommand(c) => tag(&c.torque_nm, Quantity::WheelTorque),
-        Message::WheelTelemetry(t) => {
-            [tag(&t.speed_rad_s, Quantity::WheelSpeed), tag(&t.torque_nm, Quantity::WheelTorque)]
-                .concat()
-        }
+        Message::WheelTelemetry(t) => [
+            tag(&t.speed_rad_s, Quantity::WheelSpeed),
+            tag(&t.torque_nm, Quantity::WheelTorque),
+        ]
+        .concat(),
         Message::CmgCommand(c) => tag(&c.gimbal_rate_rad_s, Quantity::GimbalRate),
         Message::CmgTelemetry(t) => [
             tag(&t.gimbal_angle_rad, Quantity::GimbalAngle),
@@ -102,17 +125,26 @@ fn channels(m: &Message) -> Vec<(f64, Quantity)> {
 
 fn arbitrary_frame() -> impl Strategy<Value = CanFrame> {
     let id = prop_oneof![3 => 0x100u32..0x160, 1 => 0u32..0x800, 1 => 0u32..0x2000_0000];
-    (id, any::<bool>(), any::<bool>(), 0usize..=8, any::<[u8; 8]>()).prop_map(
-        |(id, ext, remote, len, data)| {
-            let id = if ext { CanId::Extended(id) } else { CanId::Standard((id & 0x7FF) as u16) };
+    (
+        id,
+        any::<bool>(),
+        any::<bool>(),
+        0usize..=8,
+        any::<[u8; 8]>(),
+    )
+        .prop_map(|(id, ext, remote, len, data)| {
+            let id = if ext {
+                CanId::Extended(id)
+            } else {
+                CanId::Standard((id & 0x7FF) as u16)
+            };
             let frame = if remote {
                 CanFrame::remote(id, len as u8)
             } else {
                 CanFrame::new(id, &data[..len])
             };
             frame.unwrap_or_default()
-        },
-    )
+        })
 }
 
 proptest! {

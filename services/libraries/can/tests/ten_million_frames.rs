@@ -43,7 +43,9 @@ fn random_message(rng: &mut Rng, l: &Limits) -> Message {
             for x in &mut v[..3] {
                 *x = rng.sym(l.wheel_torque_nm);
             }
-            Message::WheelCommand(WheelCommandMsg { torque_nm: [v[0], v[1], v[2]] })
+            Message::WheelCommand(WheelCommandMsg {
+                torque_nm: [v[0], v[1], v[2]],
+            })
         }
         1 => Message::WheelTelemetry(WheelTelemetryMsg {
             node_time_us: t,
@@ -127,7 +129,11 @@ fn mutate(rng: &mut Rng, f: &CanFrame) -> CanFrame {
         // Saturate a value field: 0x7FFFFF / 0x800000 at a random offset.
         4 => {
             let at = 1 + rng.below(5) as usize;
-            let v: [u8; 3] = if rng.below(2) == 0 { [0xFF, 0xFF, 0x7F] } else { [0, 0, 0x80] };
+            let v: [u8; 3] = if rng.below(2) == 0 {
+                [0xFF, 0xFF, 0x7F]
+            } else {
+                [0, 0, 0x80]
+            };
             data[at..at + 3].copy_from_slice(&v);
         }
         _ => id = CanId::Extended(id.raw()),
@@ -231,7 +237,11 @@ fn ten_million_arbitrary_frames() {
                 }
             }
         };
-        last_valid = if frame.is_extended() { last_valid } else { frame };
+        last_valid = if frame.is_extended() {
+            last_valid
+        } else {
+            frame
+        };
         let d = all.decode(&frame);
         tally_all.add(d.class);
         messages += u64::from(d.message.is_some());
@@ -247,7 +257,11 @@ fn ten_million_arbitrary_frames() {
     );
     for (stats, tally) in [(&s, &tally_all), (gyro_and_wheels.stats(), &tally_some)] {
         assert_eq!(stats.frames, FRAMES);
-        assert_eq!(stats.classified(), FRAMES, "every frame in exactly one class");
+        assert_eq!(
+            stats.classified(),
+            FRAMES,
+            "every frame in exactly one class"
+        );
         assert!(
             tally.matches(stats),
             "returned classes {tally:?} disagree with the counts {stats:?}"

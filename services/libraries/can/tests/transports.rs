@@ -47,14 +47,20 @@ fn gateway_loop_over_memory_transport() {
     let p = Protocol::default();
     let mut node_enc = Encoder::new(p);
     for i in 0..50u32 {
-        for f in &node_enc.encode(&gyro(i * 100_000, 1e-3 * f64::from(i))).unwrap() {
+        for f in &node_enc
+            .encode(&gyro(i * 100_000, 1e-3 * f64::from(i)))
+            .unwrap()
+        {
             node.send(f).unwrap();
         }
     }
     // Commands go the other way.
     let mut gw_enc = Encoder::new(p);
     let cmd = ipc_types::WheelCommand::new(ipc_types::SampleHeader::default(), [0.01, -0.02, 0.1]);
-    for f in &gw_enc.encode(&Message::WheelCommand(WheelCommandMsg::from(&cmd))).unwrap() {
+    for f in &gw_enc
+        .encode(&Message::WheelCommand(WheelCommandMsg::from(&cmd)))
+        .unwrap()
+    {
         gateway.send(f).unwrap();
     }
 
@@ -76,7 +82,9 @@ fn gateway_loop_over_memory_transport() {
 
     let mut node_dec = Decoder::new(p);
     let cmds = receive_messages(&mut node, &mut node_dec, 1, Duration::from_secs(1));
-    let Message::WheelCommand(c) = cmds[0].message else { panic!("not a wheel command") };
+    let Message::WheelCommand(c) = cmds[0].message else {
+        panic!("not a wheel command")
+    };
     assert!((c.torque_nm[2] - 0.1).abs() < 1e-9);
 }
 
@@ -107,14 +115,22 @@ fn candump_record_and_replay_as_fast_as_possible() {
         }
     }
     let mut live = Decoder::new(p);
-    assert_eq!(receive_messages(&mut rec, &mut live, 20, Duration::from_secs(2)).len(), 20);
-    rec.send(&CanFrame::standard(0x100, &[0, 0, 0, 0, 0, 0, 0]).unwrap()).unwrap();
+    assert_eq!(
+        receive_messages(&mut rec, &mut live, 20, Duration::from_secs(2)).len(),
+        20
+    );
+    rec.send(&CanFrame::standard(0x100, &[0, 0, 0, 0, 0, 0, 0]).unwrap())
+        .unwrap();
     let (_, writer) = rec.into_parts();
     drop(writer);
 
     // Append a malformed line and a blank line: replay reports them and goes on.
-    let mut f = std::fs::OpenOptions::new().append(true).open(&log_path).unwrap();
-    f.write_all(b"\nthis is not a frame\n(1.0) can0 121#00\n").unwrap();
+    let mut f = std::fs::OpenOptions::new()
+        .append(true)
+        .open(&log_path)
+        .unwrap();
+    f.write_all(b"\nthis is not a frame\n(1.0) can0 121#00\n")
+        .unwrap();
     drop(f);
 
     let mut replay = CandumpReplay::open(&log_path, Pacing::AsFastAsPossible).unwrap();
@@ -123,9 +139,22 @@ fn candump_record_and_replay_as_fast_as_possible() {
     let got = receive_messages(&mut replay, &mut dec, usize::MAX, Duration::from_secs(5));
     assert!(start.elapsed() < Duration::from_secs(1));
     // 20 gyro samples and the wheel command that was sent.
-    assert_eq!(got.iter().filter(|r| r.message.kind() == MessageKind::Gyro).count(), 20);
-    assert_eq!(got.iter().filter(|r| r.message.kind() == MessageKind::WheelCommand).count(), 1);
-    assert!(matches!(replay.recv(Duration::ZERO), Err(TransportError::Closed)));
+    assert_eq!(
+        got.iter()
+            .filter(|r| r.message.kind() == MessageKind::Gyro)
+            .count(),
+        20
+    );
+    assert_eq!(
+        got.iter()
+            .filter(|r| r.message.kind() == MessageKind::WheelCommand)
+            .count(),
+        1
+    );
+    assert!(matches!(
+        replay.recv(Duration::ZERO),
+        Err(TransportError::Closed)
+    ));
     let s = replay.stats();
     assert_eq!((s.frames, s.blank, s.malformed), (42, 1, 1));
     assert_eq!(s.first_malformed[0].line, 43);
@@ -141,8 +170,13 @@ fn candump_replay_is_paced_by_time_stamps() {
     // Six single-frame commands 40 ms apart: 200 ms of log.
     let frames: Vec<(u64, CanFrame)> = (0..6u8)
         .map(|i| {
-            let m = Message::WheelCommand(WheelCommandMsg { torque_nm: [0.0; 3] });
-            (t0 + u64::from(i) * 40_000_000, enc.encode_with_counter(&m, i).unwrap().as_slice()[0])
+            let m = Message::WheelCommand(WheelCommandMsg {
+                torque_nm: [0.0; 3],
+            });
+            (
+                t0 + u64::from(i) * 40_000_000,
+                enc.encode_with_counter(&m, i).unwrap().as_slice()[0],
+            )
         })
         .collect();
     let path = temp_path("paced.log");
@@ -217,7 +251,10 @@ fn serial_over_a_pseudo_terminal_pair() {
     }
     let got = receive_messages(&mut computer, &mut dec, 10, Duration::from_secs(3));
     assert_eq!(got.len(), 10);
-    assert_eq!(got.iter().map(|r| r.counter).collect::<Vec<_>>(), (0..10).collect::<Vec<u8>>());
+    assert_eq!(
+        got.iter().map(|r| r.counter).collect::<Vec<_>>(),
+        (0..10).collect::<Vec<u8>>()
+    );
     let s = *computer.stats();
     assert_eq!(s.frames, 20);
     assert!(s.dropped() >= 2, "{s:?}");
@@ -229,7 +266,9 @@ fn serial_over_a_pseudo_terminal_pair() {
     assert_eq!(dec.stats().ok, 20);
 
     // And back: a command from the computer to the device.
-    let cmd = Message::CmgCommand(CmgCommandMsg { gimbal_rate_rad_s: [0.1, -0.1, 0.2, 0.0] });
+    let cmd = Message::CmgCommand(CmgCommandMsg {
+        gimbal_rate_rad_s: [0.1, -0.1, 0.2, 0.0],
+    });
     for f in &Encoder::new(p).encode(&cmd).unwrap() {
         computer.send(f).unwrap();
     }
@@ -239,7 +278,9 @@ fn serial_over_a_pseudo_terminal_pair() {
     assert_eq!(back[0].message.kind(), MessageKind::CmgCommand);
 
     // A time-out beyond what `Instant` holds waits without limit instead of panicking.
-    device.send(&CanFrame::standard(0x150, &[0; 8]).unwrap()).unwrap();
+    device
+        .send(&CanFrame::standard(0x150, &[0; 8]).unwrap())
+        .unwrap();
     assert!(computer.recv(Duration::MAX).unwrap().is_some());
 
     // Nothing pending: recv times out.
@@ -267,7 +308,10 @@ fn serial_open_by_path() {
     let mut device = SerialTransport::from_port(Box::new(master), "pty master");
     let f = CanFrame::standard(0x150, &[1, 1, 0b111, 0, 0, 0, 0, 0]).unwrap();
     device.send(&f).unwrap();
-    let got = computer.recv(Duration::from_secs(2)).unwrap().expect("frame");
+    let got = computer
+        .recv(Duration::from_secs(2))
+        .unwrap()
+        .expect("frame");
     assert_eq!(got.frame, f);
     assert_eq!(got.source, TimeSource::Host);
 }
@@ -287,7 +331,10 @@ fn socketcan_or_a_clear_skip() {
             eprintln!(
                 "SKIPPED SocketCAN test: no interface {name} (create one: ip link add dev vcan0 type vcan && ip link set up vcan0)"
             );
-            assert!(matches!(SocketCanTransport::open(&iface), Err(TransportError::NotFound(_))));
+            assert!(matches!(
+                SocketCanTransport::open(&iface),
+                Err(TransportError::NotFound(_))
+            ));
         }
         SocketCanSupport::Available => socketcan_loopback(&iface),
     }

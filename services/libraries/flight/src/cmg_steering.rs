@@ -38,8 +38,8 @@
 //! [`SlewController::slew_time_estimate_s`] predicts the manoeuvre time from these limits.
 
 use crate::control::{
-    ControlError, check_finite_quaternion, check_finite_vector, check_positive, error_vector, invalid,
-    rotation_vector,
+    ControlError, check_finite_quaternion, check_finite_vector, check_positive, error_vector,
+    invalid, rotation_vector,
 };
 use nalgebra::{Matrix3, Vector3, Vector4};
 use serde::{Deserialize, Serialize};
@@ -82,17 +82,29 @@ impl Default for CmgSteeringConfig {
 impl CmgSteeringConfig {
     /// Refuse what makes the inverse ill-defined, naming the key and value.
     pub fn validate(&self) -> Result<(), ControlError> {
-        for (key, x) in [("lambda0", self.lambda0), ("mu", self.mu), ("dither_frequency_rad_s", self.dither_frequency_rad_s)] {
+        for (key, x) in [
+            ("lambda0", self.lambda0),
+            ("mu", self.mu),
+            ("dither_frequency_rad_s", self.dither_frequency_rad_s),
+        ] {
             if !(x.is_finite() && x >= 0.0) {
                 return Err(invalid(key, x, "must be a finite number >= 0"));
             }
         }
         let e = self.dither_amplitude;
         if !(e.is_finite() && (0.0..0.5).contains(&e)) {
-            return Err(invalid("dither_amplitude", e, "must be within [0, 0.5) (E positive definite)"));
+            return Err(invalid(
+                "dither_amplitude",
+                e,
+                "must be within [0, 0.5) (E positive definite)",
+            ));
         }
         if !self.dither_phase_rad.iter().all(|x| x.is_finite()) {
-            return Err(invalid("dither_phase_rad", format!("{:?}", self.dither_phase_rad), "must be finite"));
+            return Err(invalid(
+                "dither_phase_rad",
+                format!("{:?}", self.dither_phase_rad),
+                "must be finite",
+            ));
         }
         Ok(())
     }
@@ -127,9 +139,15 @@ pub fn singularity_measure(pyramid: &CmgPyramid, gimbal_rad: &Vector4<f64>) -> f
 /// X or Y it equals [`CmgPyramid::envelope_xy_nms`], along Z [`CmgPyramid::envelope_z_nms`].
 /// Returns 0 for a zero or non-finite direction.
 pub fn envelope_along(pyramid: &CmgPyramid, direction_b: &Vector3<f64>) -> f64 {
-    let Some(e) = direction_b.try_normalize(1e-300) else { return 0.0 };
+    let Some(e) = direction_b.try_normalize(1e-300) else {
+        return 0.0;
+    };
     (0..4)
-        .map(|i| (1.0 - pyramid.gimbal_axis(i).dot(&e).powi(2)).max(0.0).sqrt())
+        .map(|i| {
+            (1.0 - pyramid.gimbal_axis(i).dot(&e).powi(2))
+                .max(0.0)
+                .sqrt()
+        })
         .sum::<f64>()
         * pyramid.rotor_momentum_nms
 }
@@ -137,11 +155,22 @@ pub fn envelope_along(pyramid: &CmgPyramid, direction_b: &Vector3<f64>) -> f64 {
 /// Largest eigenaxis slew rate (rad/s) about the unit body axis `axis_b` that keeps the cluster
 /// momentum `h = −I ω` (zero total momentum) within the fraction `fraction` of its envelope:
 /// `fraction · h_env(I ê) / |I ê|`, `inertia` in kg m².
-pub fn max_slew_rate_rad_s(pyramid: &CmgPyramid, inertia: &Matrix3<f64>, axis_b: &Vector3<f64>, fraction: f64) -> f64 {
-    let Some(e) = axis_b.try_normalize(1e-300) else { return 0.0 };
+pub fn max_slew_rate_rad_s(
+    pyramid: &CmgPyramid,
+    inertia: &Matrix3<f64>,
+    axis_b: &Vector3<f64>,
+    fraction: f64,
+) -> f64 {
+    let Some(e) = axis_b.try_normalize(1e-300) else {
+        return 0.0;
+    };
     let ie = inertia * e;
     let norm = ie.norm();
-    if norm > 0.0 { fraction * envelope_along(pyramid, &ie) / norm } else { 0.0 }
+    if norm > 0.0 {
+        fraction * envelope_along(pyramid, &ie) / norm
+    } else {
+        0.0
+    }
 }
 
 /// Singularity-robust steering of the CMG pyramid.
@@ -160,7 +189,11 @@ impl CmgSteering {
         check_positive("cmg.rotor_momentum_nms", cmg.rotor_momentum_nms)?;
         check_positive("cmg.max_gimbal_rate_deg_s", cmg.max_gimbal_rate_deg_s)?;
         if !(cmg.skew_deg.is_finite() && cmg.skew_deg > 0.0 && cmg.skew_deg < 90.0) {
-            return Err(invalid("cmg.skew_deg", cmg.skew_deg, "must be within (0, 90)"));
+            return Err(invalid(
+                "cmg.skew_deg",
+                cmg.skew_deg,
+                "must be within (0, 90)",
+            ));
         }
         Ok(Self {
             pyramid: CmgPyramid::from_config(cmg),
@@ -185,7 +218,9 @@ impl CmgSteering {
         let eps: [f64; 3] = std::array::from_fn(|i| {
             c.dither_amplitude * (c.dither_frequency_rad_s * time_s + c.dither_phase_rad[i]).sin()
         });
-        Matrix3::new(1.0, eps[2], eps[1], eps[2], 1.0, eps[0], eps[1], eps[0], 1.0)
+        Matrix3::new(
+            1.0, eps[2], eps[1], eps[2], 1.0, eps[0], eps[1], eps[0], 1.0,
+        )
     }
 
     /// Gimbal rates for the desired body torque `torque_b` (Nm, body axes) at gimbal angles
@@ -219,12 +254,16 @@ impl CmgSteering {
         let y = match a.cholesky() {
             Some(chol) => chol.solve(&h_dot),
             None => a.lu().solve(&h_dot).ok_or_else(|| {
-                ControlError::Steering(format!("J Jᵀ + λE singular (det(J Jᵀ) = {det:e}, λ = {lambda:e})"))
+                ControlError::Steering(format!(
+                    "J Jᵀ + λE singular (det(J Jᵀ) = {det:e}, λ = {lambda:e})"
+                ))
             })?,
         };
         let mut rate = j_hat.transpose() * y;
         if !rate.iter().all(|x| x.is_finite()) {
-            return Err(ControlError::Steering(format!("non-finite gimbal rate (λ = {lambda:e})")));
+            return Err(ControlError::Steering(format!(
+                "non-finite gimbal rate (λ = {lambda:e})"
+            )));
         }
         let peak = rate.amax();
         let saturated = peak > self.max_gimbal_rate_rad_s;
@@ -257,7 +296,12 @@ pub struct SlewConfig {
 
 impl Default for SlewConfig {
     fn default() -> Self {
-        Self { attitude_gain_per_s: 0.2, rate_gain_per_s: 1.0, max_rate_rad_s: 0.03, max_torque_nm: 1.0 }
+        Self {
+            attitude_gain_per_s: 0.2,
+            rate_gain_per_s: 1.0,
+            max_rate_rad_s: 0.03,
+            max_torque_nm: 1.0,
+        }
     }
 }
 
@@ -297,9 +341,16 @@ impl SlewController {
     pub fn new(config: &SlewConfig, inertia: Matrix3<f64>) -> Result<Self, ControlError> {
         config.validate()?;
         if !testbed_model::config::is_symmetric_positive_definite(&inertia) {
-            return Err(invalid("inertia", format!("{inertia:?}"), "must be symmetric positive definite"));
+            return Err(invalid(
+                "inertia",
+                format!("{inertia:?}"),
+                "must be symmetric positive definite",
+            ));
         }
-        Ok(Self { config: config.clone(), inertia })
+        Ok(Self {
+            config: config.clone(),
+            inertia,
+        })
     }
 
     /// The controller's gains and limits.
@@ -309,7 +360,12 @@ impl SlewController {
 
     /// Desired body torque towards `q_target` (L→target) from the estimate `q_est` (L→B) and
     /// body rate `rate_b` (rad/s, body axes).
-    pub fn torque(&self, q_est: &Attitude, rate_b: &Vector3<f64>, q_target: &Attitude) -> Result<SlewCommand, ControlError> {
+    pub fn torque(
+        &self,
+        q_est: &Attitude,
+        rate_b: &Vector3<f64>,
+        q_target: &Attitude,
+    ) -> Result<SlewCommand, ControlError> {
         check_finite_quaternion(q_est, "q_est")?;
         check_finite_quaternion(q_target, "q_target")?;
         check_finite_vector(rate_b, "rate_b")?;
@@ -327,7 +383,12 @@ impl SlewController {
         if saturated {
             torque *= c.max_torque_nm / n;
         }
-        Ok(SlewCommand { torque_nm: torque, rate_command_rad_s: rate_cmd, error_rad: phi, saturated })
+        Ok(SlewCommand {
+            torque_nm: torque,
+            rate_command_rad_s: rate_cmd,
+            error_rad: phi,
+            saturated,
+        })
     }
 
     /// Predicted time (s) of a rest-to-rest slew by `angle_rad` about the unit body axis `axis_b`
@@ -337,12 +398,22 @@ impl SlewController {
     /// `p = (k_r − sqrt(k_r² − 4 k_r k_a)) / 2` (or `k_r / 2` if complex), from `ω_max / k_a`
     /// down to the settle angle. For short slews that never reach `ω_max` only the linear phase
     /// counts.
-    pub fn slew_time_estimate_s(&self, angle_rad: f64, axis_b: &Vector3<f64>, settle_angle_rad: f64) -> f64 {
+    pub fn slew_time_estimate_s(
+        &self,
+        angle_rad: f64,
+        axis_b: &Vector3<f64>,
+        settle_angle_rad: f64,
+    ) -> f64 {
         let c = &self.config;
         let e = axis_b.try_normalize(1e-300).unwrap_or_else(Vector3::z);
         let i_e = e.dot(&(self.inertia * e));
-        let disc = c.rate_gain_per_s * c.rate_gain_per_s - 4.0 * c.rate_gain_per_s * c.attitude_gain_per_s;
-        let pole = if disc >= 0.0 { (c.rate_gain_per_s - disc.sqrt()) / 2.0 } else { c.rate_gain_per_s / 2.0 };
+        let disc =
+            c.rate_gain_per_s * c.rate_gain_per_s - 4.0 * c.rate_gain_per_s * c.attitude_gain_per_s;
+        let pole = if disc >= 0.0 {
+            (c.rate_gain_per_s - disc.sqrt()) / 2.0
+        } else {
+            c.rate_gain_per_s / 2.0
+        };
         let linear_start = c.max_rate_rad_s / c.attitude_gain_per_s;
         let angle = angle_rad.abs();
         let settle = settle_angle_rad.abs().max(1e-12);
@@ -374,7 +445,10 @@ mod tests {
     struct Lcg(u64);
     impl Lcg {
         fn next(&mut self) -> f64 {
-            self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            self.0 = self
+                .0
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             ((self.0 >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
         }
     }
@@ -396,7 +470,10 @@ mod tests {
             // J δ' = −u − ω × h, i.e. the produced torque equals the request.
             let h = s.pyramid().momentum(&d);
             let residual = s.pyramid().jacobian(&d) * cmd.gimbal_rate_rad_s + u + w.cross(&h);
-            assert!(residual.norm() < 1e-3 * u.norm(), "residual {residual} for {u}");
+            assert!(
+                residual.norm() < 1e-3 * u.norm(),
+                "residual {residual} for {u}"
+            );
             assert!((cmd.torque_nm - u).norm() < 1e-3 * u.norm());
             checked += 1;
         }
@@ -435,7 +512,9 @@ mod tests {
         let cb = p.skew_rad.cos();
         let null = nalgebra::Matrix4x2::new(1.0, cb, 0.0, 1.0, -1.0, cb, 0.0, -1.0);
         assert!((jac * null).norm() < 1e-12);
-        let q = nalgebra::Matrix4::from_diagonal(&Vector4::from_fn(|i, _| p.rotor_direction(i, ds[i]).x));
+        let q = nalgebra::Matrix4::from_diagonal(&Vector4::from_fn(|i, _| {
+            p.rotor_direction(i, ds[i]).x
+        }));
         let pm = null.transpose() * q * null;
         let eig = pm.symmetric_eigenvalues();
         assert!(eig.iter().all(|&x| x > 1e-3), "P eigenvalues {eig}");
@@ -445,7 +524,9 @@ mod tests {
         for _ in 0..200 {
             let d = ds + Vector4::from_fn(|_, _| rng.next() * 1.0 * DEG);
             let u = Vector3::from_fn(|_, _| rng.next() * 1.5);
-            let cmd = s.steer(&u, &d, &Vector3::zeros(), rng.next() * 10.0).unwrap();
+            let cmd = s
+                .steer(&u, &d, &Vector3::zeros(), rng.next() * 10.0)
+                .unwrap();
             assert!(cmd.gimbal_rate_rad_s.iter().all(|x| x.is_finite()));
             assert!(cmd.gimbal_rate_rad_s.amax() <= s.max_gimbal_rate_rad_s() + 1e-12);
         }
@@ -454,14 +535,21 @@ mod tests {
         // not move the gimbals; the dithered inverse does and leaves the singularity.
         let u = Vector3::new(-0.5, 0.0, 0.0); // h' = +0.5 X
         let plain = CmgSteering::new(
-            &CmgSteeringConfig { dither_amplitude: 0.0, ..CmgSteeringConfig::default() },
+            &CmgSteeringConfig {
+                dither_amplitude: 0.0,
+                ..CmgSteeringConfig::default()
+            },
             &CmgConfig::default(),
         )
         .unwrap();
         let stuck = plain.steer(&u, &ds, &Vector3::zeros(), 0.0).unwrap();
         assert!(stuck.gimbal_rate_rad_s.amax() < 1e-12);
         let moving = s.steer(&u, &ds, &Vector3::zeros(), 0.0).unwrap();
-        assert!(moving.gimbal_rate_rad_s.amax() > 1e-3, "{}", moving.gimbal_rate_rad_s);
+        assert!(
+            moving.gimbal_rate_rad_s.amax() > 1e-3,
+            "{}",
+            moving.gimbal_rate_rad_s
+        );
         let (mut d, mut t, dt) = (ds, 0.0, 0.01);
         let mut best: f64 = 0.0;
         let mut last = moving;
@@ -473,7 +561,9 @@ mod tests {
         }
         eprintln!(
             "escape: measure {:.3} after 3 s (max {best:.3}); torque {:.4?} vs request {:?}",
-            singularity_measure(&p, &d), last.torque_nm.as_slice(), u.as_slice()
+            singularity_measure(&p, &d),
+            last.torque_nm.as_slice(),
+            u.as_slice()
         );
         assert!(singularity_measure(&p, &d) > 0.2);
         assert!((last.torque_nm - u).norm() < 0.05 * u.norm());
@@ -537,7 +627,10 @@ mod tests {
             (-Vector3::z(), z),
         ] {
             let (refined, grid) = numerical_max(&p, &e);
-            eprintln!("envelope along {:?}: numerical {refined:.9}, analytic {analytic:.9}", e.as_slice());
+            eprintln!(
+                "envelope along {:?}: numerical {refined:.9}, analytic {analytic:.9}",
+                e.as_slice()
+            );
             assert!((refined - analytic).abs() < 1e-9, "{refined} vs {analytic}");
             assert!(grid <= analytic + 1e-12);
             assert!((envelope_along(&p, &e) - analytic).abs() < 1e-12);
@@ -561,7 +654,10 @@ mod tests {
         let inertia = config.platform.inertia().unwrap();
         for axis in [Vector3::x(), Vector3::y(), Vector3::z()] {
             let limit = max_slew_rate_rad_s(&p, &inertia, &axis, 0.6);
-            assert!(SlewConfig::default().max_rate_rad_s <= limit, "{axis:?}: {limit}");
+            assert!(
+                SlewConfig::default().max_rate_rad_s <= limit,
+                "{axis:?}: {limit}"
+            );
         }
         let z = max_slew_rate_rad_s(&p, &inertia, &Vector3::z(), 0.6);
         assert!((z - 0.03125).abs() < 2e-4, "{z}");
@@ -569,7 +665,11 @@ mod tests {
 
     #[test]
     fn slew_torque_signs_and_limits() {
-        let c = SlewController::new(&SlewConfig::default(), Matrix3::from_diagonal(&Vector3::new(45.2, 46.1, 62.7))).unwrap();
+        let c = SlewController::new(
+            &SlewConfig::default(),
+            Matrix3::from_diagonal(&Vector3::new(45.2, 46.1, 62.7)),
+        )
+        .unwrap();
         let target = Attitude::identity();
         // Body 90° positive about Z from the target: turn back, negative rate and torque about Z.
         let q = attitude::apply_error(&target, &(Vector3::z() * 90.0 * DEG));
@@ -577,7 +677,10 @@ mod tests {
         assert!(cmd.rate_command_rad_s.z < 0.0 && cmd.torque_nm.z < 0.0);
         assert!((cmd.rate_command_rad_s.norm() - 0.03).abs() < 1e-12);
         assert!(cmd.saturated && (cmd.torque_nm.norm() - 1.0).abs() < 1e-12);
-        assert!(c.torque(&q, &Vector3::new(0.0, f64::NAN, 0.0), &target).is_err());
+        assert!(
+            c.torque(&q, &Vector3::new(0.0, f64::NAN, 0.0), &target)
+                .is_err()
+        );
     }
 
     /// What the slew runs need from a truth model.
@@ -628,7 +731,10 @@ mod tests {
             (s.q, s.rate_b, s.gimbal)
         }
         fn advance(&mut self, rate: &Vector4<f64>, dt: f64) {
-            let command = ActuatorCommand { wheel_torque_nm: Vector3::zeros(), gimbal_rate_rad_s: *rate };
+            let command = ActuatorCommand {
+                wheel_torque_nm: Vector3::zeros(),
+                gimbal_rate_rad_s: *rate,
+            };
             self.step(&command, dt).unwrap();
         }
     }
@@ -645,7 +751,9 @@ mod tests {
         let slew = SlewController::new(&SlewConfig::default(), inertia).unwrap();
         let (q_start, _, _) = truth.truth();
         let q_target = attitude::apply_error(&q_start, &(Vector3::z() * 90.0 * DEG));
-        assert!((attitude::heading(&q_target) - attitude::heading(&q_start) - 90.0 * DEG).abs() < 1e-9);
+        assert!(
+            (attitude::heading(&q_target) - attitude::heading(&q_start) - 90.0 * DEG).abs() < 1e-9
+        );
         let period = 0.1;
         let mut t = 0.0;
         let (mut max_rate, mut min_measure, mut max_h): (f64, f64, f64) = (0.0, f64::INFINITY, 0.0);
@@ -676,7 +784,10 @@ mod tests {
             (d / DEG).as_slice()
         );
         assert!(done <= 1.1 * estimate, "done {done} vs estimate {estimate}");
-        assert!(done >= 0.7 * estimate, "estimate too pessimistic: {done} vs {estimate}");
+        assert!(
+            done >= 0.7 * estimate,
+            "estimate too pessimistic: {done} vs {estimate}"
+        );
         assert!(max_rate <= 90.0 * DEG + 1e-12);
         assert!(min_measure > 0.3, "{min_measure}");
         assert!(max_h < 0.7 * p.envelope_z_nms());

@@ -66,7 +66,11 @@ use testbed_model::config::WheelConfig;
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum ControlError {
     #[error("control configuration: `{key}` = {value}: {reason}")]
-    InvalidConfig { key: String, value: String, reason: String },
+    InvalidConfig {
+        key: String,
+        value: String,
+        reason: String,
+    },
     #[error("control input `{0}` is not finite")]
     NonFiniteInput(&'static str),
     #[error("CMG steering: the singularity-robust inverse is not defined ({0})")]
@@ -82,15 +86,33 @@ pub(crate) fn invalid(key: &str, value: impl std::fmt::Display, reason: &str) ->
 }
 
 pub(crate) fn check_positive(key: &str, x: f64) -> Result<(), ControlError> {
-    if x.is_finite() && x > 0.0 { Ok(()) } else { Err(invalid(key, x, "must be a finite number > 0")) }
+    if x.is_finite() && x > 0.0 {
+        Ok(())
+    } else {
+        Err(invalid(key, x, "must be a finite number > 0"))
+    }
 }
 
-pub(crate) fn check_finite_quaternion(q: &Attitude, what: &'static str) -> Result<(), ControlError> {
-    if q.coords.iter().all(|x| x.is_finite()) { Ok(()) } else { Err(ControlError::NonFiniteInput(what)) }
+pub(crate) fn check_finite_quaternion(
+    q: &Attitude,
+    what: &'static str,
+) -> Result<(), ControlError> {
+    if q.coords.iter().all(|x| x.is_finite()) {
+        Ok(())
+    } else {
+        Err(ControlError::NonFiniteInput(what))
+    }
 }
 
-pub(crate) fn check_finite_vector(v: &Vector3<f64>, what: &'static str) -> Result<(), ControlError> {
-    if v.iter().all(|x| x.is_finite()) { Ok(()) } else { Err(ControlError::NonFiniteInput(what)) }
+pub(crate) fn check_finite_vector(
+    v: &Vector3<f64>,
+    what: &'static str,
+) -> Result<(), ControlError> {
+    if v.iter().all(|x| x.is_finite()) {
+        Ok(())
+    } else {
+        Err(ControlError::NonFiniteInput(what))
+    }
 }
 
 /// Gains and options of the wheel PD controller.
@@ -123,7 +145,11 @@ impl WheelControlConfig {
     /// `damping_ratio` on every axis, for principal moments `inertia_kgm2` (kg m²) of the linearised
     /// loop `I φ'' + D φ' + (P/2) φ = 0`: `P = 2 I ω_n²`, `D = 2 ζ ω_n I`. Friction compensation
     /// on, `n_s = 0.2 rad/s`, `T = 0.1 s`.
-    pub fn design(inertia_kgm2: [f64; 3], natural_frequency_rad_s: f64, damping_ratio: f64) -> Self {
+    pub fn design(
+        inertia_kgm2: [f64; 3],
+        natural_frequency_rad_s: f64,
+        damping_ratio: f64,
+    ) -> Self {
         let w = natural_frequency_rad_s;
         Self {
             p_nm: inertia_kgm2.map(|i| 2.0 * i * w * w),
@@ -140,10 +166,17 @@ impl WheelControlConfig {
             check_positive(&format!("p_nm[{i}]"), self.p_nm[i])?;
             let d = self.d_nms[i];
             if !(d.is_finite() && d >= 0.0) {
-                return Err(invalid(&format!("d_nms[{i}]"), d, "must be a finite number >= 0"));
+                return Err(invalid(
+                    &format!("d_nms[{i}]"),
+                    d,
+                    "must be a finite number >= 0",
+                ));
             }
         }
-        check_positive("friction_speed_scale_rad_s", self.friction_speed_scale_rad_s)?;
+        check_positive(
+            "friction_speed_scale_rad_s",
+            self.friction_speed_scale_rad_s,
+        )?;
         check_positive("control_period_s", self.control_period_s)
     }
 }
@@ -160,10 +193,17 @@ pub struct AxisMode {
 /// Closed-form natural frequency and damping per axis of the linearised loop
 /// `I φ'' + D φ' + (P/2) φ = 0` (small angles, `q_v ≈ φ/2`, rigid body, principal moments
 /// `inertia_kgm2` in kg m², `P` in Nm, `D` in Nms): `ω_n = sqrt(P / (2 I))`, `ζ = D / (2 I ω_n)`.
-pub fn closed_loop_modes(p_nm: &[f64; 3], d_nms: &[f64; 3], inertia_kgm2: &[f64; 3]) -> [AxisMode; 3] {
+pub fn closed_loop_modes(
+    p_nm: &[f64; 3],
+    d_nms: &[f64; 3],
+    inertia_kgm2: &[f64; 3],
+) -> [AxisMode; 3] {
     std::array::from_fn(|i| {
         let w = (p_nm[i] / (2.0 * inertia_kgm2[i])).sqrt();
-        AxisMode { natural_frequency_rad_s: w, damping_ratio: d_nms[i] / (2.0 * inertia_kgm2[i] * w) }
+        AxisMode {
+            natural_frequency_rad_s: w,
+            damping_ratio: d_nms[i] / (2.0 * inertia_kgm2[i] * w),
+        }
     })
 }
 
@@ -181,7 +221,11 @@ pub fn error_vector(q_est: &Attitude, q_target: &Attitude) -> Vector3<f64> {
 /// `2 asin(|q_v|) q̂_v`.
 pub fn rotation_vector(q_v: &Vector3<f64>) -> Vector3<f64> {
     let s = q_v.norm();
-    if s < 1e-12 { 2.0 * q_v } else { q_v * (2.0 * s.min(1.0).asin() / s) }
+    if s < 1e-12 {
+        2.0 * q_v
+    } else {
+        q_v * (2.0 * s.min(1.0).asin() / s)
+    }
 }
 
 /// One wheel command.
@@ -227,10 +271,17 @@ impl WheelController {
         for i in 0..3 {
             for (key, x) in [
                 ("wheels.coulomb_nm", wheels.coulomb_nm[i]),
-                ("wheels.viscous_nm_per_rad_s", wheels.viscous_nm_per_rad_s[i]),
+                (
+                    "wheels.viscous_nm_per_rad_s",
+                    wheels.viscous_nm_per_rad_s[i],
+                ),
             ] {
                 if !(x.is_finite() && x >= 0.0) {
-                    return Err(invalid(&format!("{key}[{i}]"), x, "must be a finite number >= 0"));
+                    return Err(invalid(
+                        &format!("{key}[{i}]"),
+                        x,
+                        "must be a finite number >= 0",
+                    ));
                 }
             }
         }
@@ -283,7 +334,8 @@ impl WheelController {
         let u_body = -p.component_mul(&q_v) - d.component_mul(rate_b);
         let t_max = self.wheels.max_torque_nm;
         let friction = if self.config.friction_compensation {
-            self.friction_model(wheel_speed_rad_s).map(|f| f.clamp(-t_max, t_max))
+            self.friction_model(wheel_speed_rad_s)
+                .map(|f| f.clamp(-t_max, t_max))
         } else {
             Vector3::zeros()
         };
@@ -303,8 +355,11 @@ impl WheelController {
         let mut torque = -u_body * scale + friction;
 
         // Momentum limit (per wheel) and a final per-wheel torque clip.
-        let (j, n_max, period) =
-            (self.wheels.inertia_kgm2, self.wheels.max_speed_rad_s, self.config.control_period_s);
+        let (j, n_max, period) = (
+            self.wheels.inertia_kgm2,
+            self.wheels.max_speed_rad_s,
+            self.config.control_period_s,
+        );
         for i in 0..3 {
             let n = wheel_speed_rad_s[i];
             let hi = j * (n_max - n) / period;
@@ -329,11 +384,14 @@ impl WheelController {
 mod tests {
     use super::*;
     use nalgebra::{Matrix3, UnitQuaternion};
-    use testbed_model::config::DEG;
     use testbed_model::attitude;
+    use testbed_model::config::DEG;
 
     fn controller(compensation: bool) -> WheelController {
-        let config = WheelControlConfig { friction_compensation: compensation, ..WheelControlConfig::default() };
+        let config = WheelControlConfig {
+            friction_compensation: compensation,
+            ..WheelControlConfig::default()
+        };
         WheelController::new(&config, &WheelConfig::default()).unwrap()
     }
 
@@ -374,13 +432,22 @@ mod tests {
         let c = controller(false);
         let target = attitude::from_heading_pitch_roll(0.3, 0.0, 0.0);
         let q = rotated(&target, Vector3::x(), 2.0 * DEG);
-        let cmd = c.command(&q, &Vector3::zeros(), &target, &Vector3::zeros()).unwrap();
+        let cmd = c
+            .command(&q, &Vector3::zeros(), &target, &Vector3::zeros())
+            .unwrap();
         assert!(cmd.demanded_body_torque_nm.x < 0.0);
         assert!(cmd.motor_torque_nm.x > 0.0);
         assert!(cmd.motor_torque_nm.yz().norm() < 1e-12 * cmd.motor_torque_nm.x.abs().max(1.0));
         assert!((cmd.error_rad - Vector3::x() * 2.0 * DEG).norm() < 1e-12);
         // A positive body rate about X is damped the same way.
-        let cmd = c.command(&target, &Vector3::new(0.01, 0.0, 0.0), &target, &Vector3::zeros()).unwrap();
+        let cmd = c
+            .command(
+                &target,
+                &Vector3::new(0.01, 0.0, 0.0),
+                &target,
+                &Vector3::zeros(),
+            )
+            .unwrap();
         assert!(cmd.motor_torque_nm.x > 0.0);
         // And the physics agrees: the body feels −τ_m, which turns it back (negative rate).
         let rate_change = -cmd.motor_torque_nm.x / 45.2;
@@ -403,7 +470,10 @@ mod tests {
             let tf = wheels.coulomb_nm[i] * n[i].signum() + wheels.viscous_nm_per_rad_s[i] * n[i];
             // Body torque = −τ_m + T_f(n) must equal the PD demand with compensation.
             let body_on = -a.motor_torque_nm[i] + tf;
-            assert!((body_on - a.demanded_body_torque_nm[i]).abs() < 1e-12, "axis {i}");
+            assert!(
+                (body_on - a.demanded_body_torque_nm[i]).abs() < 1e-12,
+                "axis {i}"
+            );
             // Without compensation the body is off by exactly the friction.
             let body_off = -b.motor_torque_nm[i] + tf;
             assert!((body_off - b.demanded_body_torque_nm[i] - tf).abs() < 1e-15);
@@ -421,7 +491,9 @@ mod tests {
         let target = Attitude::identity();
         let q = rotated(&target, Vector3::new(3.0, -1.0, 2.0), 40.0 * DEG);
         let n = Vector3::new(200.0, -300.0, 0.0);
-        let cmd = c.command(&q, &Vector3::new(0.01, 0.0, -0.02), &target, &n).unwrap();
+        let cmd = c
+            .command(&q, &Vector3::new(0.01, 0.0, -0.02), &target, &n)
+            .unwrap();
         assert!(cmd.saturated);
         let max = cmd.motor_torque_nm.abs().max();
         assert!(max <= 0.1 + 1e-15 && max > 0.1 - 1e-12, "max {max}");
@@ -442,10 +514,24 @@ mod tests {
         let target = Attitude::identity();
         // +X error wants a positive X motor torque: the X wheel speeds up.
         let q = rotated(&target, Vector3::x(), 5.0 * DEG);
-        let free = c.command(&q, &Vector3::zeros(), &target, &Vector3::new(100.0, 0.0, 0.0)).unwrap();
+        let free = c
+            .command(
+                &q,
+                &Vector3::zeros(),
+                &target,
+                &Vector3::new(100.0, 0.0, 0.0),
+            )
+            .unwrap();
         // Within this distance of the limit the unconstrained command would overshoot it.
         let reach = free.motor_torque_nm.x * period / j;
-        for n in [n_max - 10.0, n_max - 3.0, n_max - 0.5, n_max - 0.01, n_max, n_max + 2.0] {
+        for n in [
+            n_max - 10.0,
+            n_max - 3.0,
+            n_max - 0.5,
+            n_max - 0.01,
+            n_max,
+            n_max + 2.0,
+        ] {
             let speed = Vector3::new(n, 0.0, 0.0);
             let cmd = c.command(&q, &Vector3::zeros(), &target, &speed).unwrap();
             let next = n + cmd.motor_torque_nm.x * period / j;
@@ -470,8 +556,22 @@ mod tests {
         let c = controller(false);
         let target = attitude::from_heading_pitch_roll(0.2, 0.0, 0.0);
         let z = Vector3::zeros();
-        let before = c.command(&rotated(&target, Vector3::z(), 179.0 * DEG), &z, &target, &z).unwrap();
-        let after = c.command(&rotated(&target, Vector3::z(), 181.0 * DEG), &z, &target, &z).unwrap();
+        let before = c
+            .command(
+                &rotated(&target, Vector3::z(), 179.0 * DEG),
+                &z,
+                &target,
+                &z,
+            )
+            .unwrap();
+        let after = c
+            .command(
+                &rotated(&target, Vector3::z(), 181.0 * DEG),
+                &z,
+                &target,
+                &z,
+            )
+            .unwrap();
         // At +179° turn back by −179° (negative body torque); at +181° = −179°, turn on (positive).
         assert!(before.demanded_body_torque_nm.z < 0.0 && after.demanded_body_torque_nm.z > 0.0);
         assert!((before.error_rad.z - 179.0 * DEG).abs() < 1e-9);
@@ -493,12 +593,19 @@ mod tests {
         let c = controller(true);
         let q = Attitude::identity();
         let z = Vector3::zeros();
-        let err = c.command(&q, &Vector3::new(f64::NAN, 0.0, 0.0), &q, &z).unwrap_err();
+        let err = c
+            .command(&q, &Vector3::new(f64::NAN, 0.0, 0.0), &q, &z)
+            .unwrap_err();
         assert_eq!(err, ControlError::NonFiniteInput("rate_b"));
-        assert!(c.command(&q, &z, &q, &Vector3::repeat(f64::INFINITY)).is_err());
+        assert!(
+            c.command(&q, &z, &q, &Vector3::repeat(f64::INFINITY))
+                .is_err()
+        );
         let mut config = WheelControlConfig::default();
         config.p_nm[1] = -1.0;
-        let msg = WheelController::new(&config, &WheelConfig::default()).unwrap_err().to_string();
+        let msg = WheelController::new(&config, &WheelConfig::default())
+            .unwrap_err()
+            .to_string();
         assert!(msg.contains("p_nm[1]") && msg.contains("-1"), "{msg}");
     }
 
@@ -553,7 +660,11 @@ mod tests {
                     friction[i] = motor[i]; // static friction holds the wheel
                     stuck[i] = true;
                 } else {
-                    let dir = if n != 0.0 { n.signum() } else { motor[i].signum() };
+                    let dir = if n != 0.0 {
+                        n.signum()
+                    } else {
+                        motor[i].signum()
+                    };
                     friction[i] = tf0 * dir + self.wheels.viscous_nm_per_rad_s[i] * n;
                 }
             }
@@ -569,7 +680,11 @@ mod tests {
                 let n_dot = net[i] / j - rate_dot[i];
                 let next = self.speed[i] + n_dot * dt;
                 // Crossing zero under friction: stop there (stiction decides next step).
-                self.speed[i] = if self.speed[i] != 0.0 && next * self.speed[i] < 0.0 { 0.0 } else { next };
+                self.speed[i] = if self.speed[i] != 0.0 && next * self.speed[i] < 0.0 {
+                    0.0
+                } else {
+                    next
+                };
             }
             let new_rate = self.rate + rate_dot * dt;
             self.q = attitude::propagate(&self.q, &(0.5 * (self.rate + new_rate)), dt);
@@ -595,14 +710,17 @@ mod tests {
             (s.q, s.rate_b, s.wheel_speed)
         }
         fn advance(&mut self, motor: &Vector3<f64>, dt: f64) {
-            let command = ActuatorCommand { wheel_torque_nm: *motor, gimbal_rate_rad_s: Vector4::zeros() };
+            let command = ActuatorCommand {
+                wheel_torque_nm: *motor,
+                gimbal_rate_rad_s: Vector4::zeros(),
+            };
             self.step(&command, dt).unwrap();
         }
     }
 
+    use nalgebra::Vector4;
     use testbed_model::ModelConfig;
     use testbed_model::physics::{ActuatorCommand, Plant, PlatformState};
-    use nalgebra::Vector4;
 
     struct Run {
         settle_time_s: f64,
@@ -621,7 +739,10 @@ mod tests {
     }
 
     fn plant() -> Plant {
-        let state = PlatformState { q: initial_attitude(), ..PlatformState::default() };
+        let state = PlatformState {
+            q: initial_attitude(),
+            ..PlatformState::default()
+        };
         Plant::new(&ModelConfig::default(), state).unwrap()
     }
 
@@ -646,26 +767,41 @@ mod tests {
         }
         let (q, _, _) = truth.truth();
         let err = attitude::attitude_error(&q, &target) / DEG;
-        Run { settle_time_s: settle, final_error_deg: err, max_motor_torque_nm: max_tau, max_wheel_momentum_nms: max_h }
+        Run {
+            settle_time_s: settle,
+            final_error_deg: err,
+            max_motor_torque_nm: max_tau,
+            max_wheel_momentum_nms: max_h,
+        }
     }
 
     fn check_settling(name: &str, r: &Run) {
         eprintln!(
             "{name}, with compensation: settle (< 0.1°) {:.1} s, error at 300 s {:.5?} deg, max |τ_m| {:.4} Nm, max |h_w| {:.3} Nms",
-            r.settle_time_s, r.final_error_deg.as_slice(), r.max_motor_torque_nm, r.max_wheel_momentum_nms
+            r.settle_time_s,
+            r.final_error_deg.as_slice(),
+            r.max_motor_torque_nm,
+            r.max_wheel_momentum_nms
         );
         assert!(r.settle_time_s < 110.0, "settle {}", r.settle_time_s);
         assert!(r.max_motor_torque_nm <= 0.1 + 1e-12);
         assert!(r.max_wheel_momentum_nms < 1.0);
         // Paper (physical test): below 0.02° about X/Y, 0.05° about Z.
-        assert!(r.final_error_deg.xy().abs().max() < 0.02, "{:?}", r.final_error_deg);
+        assert!(
+            r.final_error_deg.xy().abs().max() < 0.02,
+            "{:?}",
+            r.final_error_deg
+        );
         assert!(r.final_error_deg.z.abs() < 0.05, "{:?}", r.final_error_deg);
     }
 
     fn check_compensation_gain(name: &str, on: &Run, off: &Run) {
         eprintln!(
             "{name}: steady error with compensation {:.5?} deg, without {:.5?} deg (settle {:.1} s / {:.1} s)",
-            on.final_error_deg.as_slice(), off.final_error_deg.as_slice(), on.settle_time_s, off.settle_time_s
+            on.final_error_deg.as_slice(),
+            off.final_error_deg.as_slice(),
+            on.settle_time_s,
+            off.settle_time_s
         );
         let c = WheelControlConfig::default();
         // Without compensation the wheel's Coulomb friction holds the platform inside the dead

@@ -1,14 +1,14 @@
 //! The controller process's logic: one command per tick from the estimate and the actuators'
 //! telemetry of that tick.
 
-use crate::convert::{a3, a4, quaternion_from_array, seconds, v3, v4, Sequence};
-use ipc_types::{
-    AttitudeEstimate, CmgCommand, CmgTelemetry, ControllerMode, ControllerStatus, SampleHeader, WheelCommand,
-    WheelTelemetry,
-};
-use std::collections::BTreeMap;
+use crate::convert::{Sequence, a3, a4, quaternion_from_array, seconds, v3, v4};
 use crate::schedule::Schedule;
 use crate::tasks::{ActuatorTelemetry, Actuators, ControllerTask};
+use ipc_types::{
+    AttitudeEstimate, CmgCommand, CmgTelemetry, ControllerMode, ControllerStatus, SampleHeader,
+    WheelCommand, WheelTelemetry,
+};
+use std::collections::BTreeMap;
 use testbed_model::physics::ActuatorCommand;
 
 #[derive(Debug, Default, Clone, Copy)]
@@ -70,7 +70,8 @@ impl ControllerNode {
 
     fn slot(&mut self, t_ns: u64) -> Option<&mut Pending> {
         let fresh = self.last_cycle_ns.is_none_or(|last| t_ns > last);
-        (fresh && self.schedule.tick_at(t_ns).is_some()).then(|| self.pending.entry(t_ns).or_default())
+        (fresh && self.schedule.tick_at(t_ns).is_some())
+            .then(|| self.pending.entry(t_ns).or_default())
     }
 
     pub fn on_estimate(&mut self, e: &AttitudeEstimate) {
@@ -94,7 +95,12 @@ impl ControllerNode {
     /// Cycles for every tick whose estimate and telemetry are all in, oldest first. A tick
     /// overtaken by a later estimate runs with what it has (missing telemetry reads as zero).
     pub fn ready(&mut self) -> Vec<ControlCycle> {
-        let newest_estimate = self.pending.iter().rev().find(|(_, p)| p.estimate.is_some()).map(|(t, _)| *t);
+        let newest_estimate = self
+            .pending
+            .iter()
+            .rev()
+            .find(|(_, p)| p.estimate.is_some())
+            .map(|(t, _)| *t);
         let mut out = Vec::new();
         while let Some((&t_ns, p)) = self.pending.first_key_value() {
             let complete = p.estimate.is_some() && p.wheels.is_some() && p.cmg.is_some();
@@ -119,7 +125,8 @@ impl ControllerNode {
             gimbal_rad: v4(&p.cmg.map_or([0.0; 4], |c| c.gimbal_angle)),
         };
         let estimate = p.estimate.filter(|e| e.header.is_valid());
-        let attitude = estimate.and_then(|e| quaternion_from_array(&e.quaternion).map(|q| (q, v3(&e.rate))));
+        let attitude =
+            estimate.and_then(|e| quaternion_from_array(&e.quaternion).map(|q| (q, v3(&e.rate))));
         let (command, error, mode, saturated) = match attitude {
             Some((q, rate)) => match self.task.command(seconds(t_ns), &q, &rate, &telemetry) {
                 Ok(o) => {
@@ -130,15 +137,36 @@ impl ControllerNode {
                     (o.command, o.error_rad, mode, o.saturated)
                 }
                 Err(e) => {
-                    tracing::warn!("control law refused its inputs at t = {} s: {e}", seconds(t_ns));
+                    tracing::warn!(
+                        "control law refused its inputs at t = {} s: {e}",
+                        seconds(t_ns)
+                    );
                     self.errors += 1;
-                    (ActuatorCommand::default(), Default::default(), ControllerMode::Fault, false)
+                    (
+                        ActuatorCommand::default(),
+                        Default::default(),
+                        ControllerMode::Fault,
+                        false,
+                    )
                 }
             },
-            None => (ActuatorCommand::default(), Default::default(), ControllerMode::Idle, false),
+            None => (
+                ActuatorCommand::default(),
+                Default::default(),
+                ControllerMode::Idle,
+                false,
+            ),
         };
         let mut status = ControllerStatus {
-            header: self.status_seq.header(t_ns, SampleHeader::VALID | if saturated { SampleHeader::SATURATED_ANY } else { 0 }),
+            header: self.status_seq.header(
+                t_ns,
+                SampleHeader::VALID
+                    | if saturated {
+                        SampleHeader::SATURATED_ANY
+                    } else {
+                        0
+                    },
+            ),
             attitude_error: a3(&error),
             // The platform feels the opposite of the wheels' motor torque.
             torque_command: a3(&(-command.wheel_torque_nm)),
@@ -149,8 +177,14 @@ impl ControllerNode {
         status.set_mode(mode);
         ControlCycle {
             status,
-            wheels: WheelCommand { header: self.wheel_seq.header(t_ns, SampleHeader::VALID), torque: a3(&command.wheel_torque_nm) },
-            cmg: CmgCommand { header: self.cmg_seq.header(t_ns, SampleHeader::VALID), gimbal_rate: a4(&command.gimbal_rate_rad_s) },
+            wheels: WheelCommand {
+                header: self.wheel_seq.header(t_ns, SampleHeader::VALID),
+                torque: a3(&command.wheel_torque_nm),
+            },
+            cmg: CmgCommand {
+                header: self.cmg_seq.header(t_ns, SampleHeader::VALID),
+                gimbal_rate: a4(&command.gimbal_rate_rad_s),
+            },
         }
     }
 }

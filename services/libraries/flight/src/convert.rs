@@ -19,7 +19,11 @@ pub fn quaternion_from_array(q: &[f64; 4]) -> Option<Attitude> {
     if !(raw.coords.iter().all(|x| x.is_finite()) && norm > 0.5) {
         return None;
     }
-    Some(if (norm - 1.0).abs() < 1e-12 { UnitQuaternion::new_unchecked(raw) } else { UnitQuaternion::new_normalize(raw) })
+    Some(if (norm - 1.0).abs() < 1e-12 {
+        UnitQuaternion::new_unchecked(raw)
+    } else {
+        UnitQuaternion::new_normalize(raw)
+    })
 }
 
 pub fn v3(a: &[f64; 3]) -> Vector3<f64> {

@@ -12,13 +12,15 @@
 //! propagates with the last valid rate (zero before the first), counted in
 //! [`EstimatorCounters::gyro_held`]. Invalid vector samples skip their update.
 
-use crate::convert::{a3, quaternion_to_array, v3, Sequence};
-use ipc_types::{AttitudeEstimate, GyroSample, InclinometerSample, MagnetometerSample, SampleHeader};
+use crate::convert::{Sequence, a3, quaternion_to_array, v3};
+use crate::mekf::{MekfConfig, VectorMeasurements};
+use crate::schedule::Schedule;
+use crate::tasks::EstimatorTask;
+use ipc_types::{
+    AttitudeEstimate, GyroSample, InclinometerSample, MagnetometerSample, SampleHeader,
+};
 use nalgebra::Vector3;
 use std::collections::BTreeMap;
-use crate::schedule::Schedule;
-use crate::mekf::{MekfConfig, VectorMeasurements};
-use crate::tasks::EstimatorTask;
 
 #[derive(Debug, Default, Clone, Copy)]
 struct Pending {
@@ -103,13 +105,22 @@ impl EstimatorNode {
     }
 
     fn complete(&self, t_ns: u64, p: &Pending) -> bool {
-        let Some(k) = self.schedule.tick_at(t_ns) else { return false };
-        p.gyro.is_some() && (!self.schedule.tilt_due(k) || p.tilt.is_some()) && (!self.schedule.field_due(k) || p.field.is_some())
+        let Some(k) = self.schedule.tick_at(t_ns) else {
+            return false;
+        };
+        p.gyro.is_some()
+            && (!self.schedule.tilt_due(k) || p.tilt.is_some())
+            && (!self.schedule.field_due(k) || p.field.is_some())
     }
 
     /// Process every tick that is complete or overtaken, oldest first; one estimate each.
     pub fn ready(&mut self) -> Vec<AttitudeEstimate> {
-        let newest_gyro = self.pending.iter().rev().find(|(_, p)| p.gyro.is_some()).map(|(t, _)| *t);
+        let newest_gyro = self
+            .pending
+            .iter()
+            .rev()
+            .find(|(_, p)| p.gyro.is_some())
+            .map(|(t, _)| *t);
         let mut out = Vec::new();
         while let Some((&t_ns, pending)) = self.pending.first_key_value() {
             let overtaken = newest_gyro.is_some_and(|newest| newest > t_ns);
@@ -153,7 +164,9 @@ impl EstimatorNode {
             tilt_rad: p.tilt.flatten(),
             field_b_t: p.field.flatten().map(|f| v3(&f)),
         };
-        if (vectors.tilt_rad.is_some() || vectors.field_b_t.is_some()) && self.task.on_vectors(t_ns, &vectors).is_err() {
+        if (vectors.tilt_rad.is_some() || vectors.field_b_t.is_some())
+            && self.task.on_vectors(t_ns, &vectors).is_err()
+        {
             self.counters.filter_errors += 1;
         }
         Some(self.sample(t_ns))

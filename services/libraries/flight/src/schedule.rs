@@ -34,7 +34,11 @@ impl Schedule {
         Ok(Self {
             period_ns: (1e9 / gyro).round() as u64,
             tilt_every: ticks_per_sample(gyro, model.inclinometer.rate_hz, "inclinometer.rate_hz")?,
-            field_every: ticks_per_sample(gyro, model.magnetometer.rate_hz, "magnetometer.rate_hz")?,
+            field_every: ticks_per_sample(
+                gyro,
+                model.magnetometer.rate_hz,
+                "magnetometer.rate_hz",
+            )?,
         })
     }
     /// Time of tick `k`, ns.
@@ -65,8 +69,11 @@ fn ticks_per_sample(gyro_rate_hz: f64, rate_hz: f64, key: &str) -> Result<u64, S
     let ratio = gyro_rate_hz / rate_hz;
     let whole = ratio.round();
     if whole < 1.0 || (ratio - whole).abs() > 1e-9 {
-        return Err(ScheduleError { key: key.to_string(), rate_hz, gyro_rate_hz });
+        return Err(ScheduleError {
+            key: key.to_string(),
+            rate_hz,
+            gyro_rate_hz,
+        });
     }
     Ok(whole as u64)
 }
-

@@ -24,8 +24,12 @@ use ipc_types::{CanBusFrame, SampleHeader};
 use std::cell::{Cell, RefCell};
 use std::collections::VecDeque;
 use std::time::Duration;
-use testbed_bus::{Bus, BusError, EventLoop, Flow, SubscriberOptions, TopicPublisher, TopicSubscriber, Waiter};
-use testbed_can::{BusFrameError, CanFrame, CanTransport, TimeSource, TimestampedFrame, TransportError};
+use testbed_bus::{
+    Bus, BusError, EventLoop, Flow, SubscriberOptions, TopicPublisher, TopicSubscriber, Waiter,
+};
+use testbed_can::{
+    BusFrameError, CanFrame, CanTransport, TimeSource, TimestampedFrame, TransportError,
+};
 
 /// Counts of a [`SoftwareBusTransport`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -56,12 +60,18 @@ pub struct SoftwareBusTransport {
 
 impl std::fmt::Debug for SoftwareBusTransport {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("SoftwareBusTransport").field("source", &self.source).field("stats", &self.stats.get()).finish()
+        f.debug_struct("SoftwareBusTransport")
+            .field("source", &self.source)
+            .field("stats", &self.stats.get())
+            .finish()
     }
 }
 
 fn bus_error(context: &str, e: BusError) -> TransportError {
-    TransportError::Io { context: context.to_string(), source: std::io::Error::other(e) }
+    TransportError::Io {
+        context: context.to_string(),
+        source: std::io::Error::other(e),
+    }
 }
 
 impl SoftwareBusTransport {
@@ -110,7 +120,9 @@ impl SoftwareBusTransport {
     /// Sends `frame`.
     pub fn send_frame(&self, frame: &CanFrame) -> Result<(), TransportError> {
         let sample = frame.to_bus_frame(self.header());
-        self.publisher.publish(&sample).map_err(|e| bus_error("sending on the software CAN bus", e))?;
+        self.publisher
+            .publish(&sample)
+            .map_err(|e| bus_error("sending on the software CAN bus", e))?;
         self.update(|s| s.sent += 1);
         Ok(())
     }
@@ -120,7 +132,9 @@ impl SoftwareBusTransport {
     pub fn send_corrupted(&self, frame: &CanFrame, bit: u32) -> Result<(), TransportError> {
         let mut sample = frame.to_bus_frame(self.header());
         corrupt(&mut sample, bit);
-        self.publisher.publish(&sample).map_err(|e| bus_error("sending on the software CAN bus", e))?;
+        self.publisher
+            .publish(&sample)
+            .map_err(|e| bus_error("sending on the software CAN bus", e))?;
         self.update(|s| s.sent += 1);
         Ok(())
     }
@@ -138,7 +152,11 @@ impl SoftwareBusTransport {
                 match CanFrame::from_bus_frame(&sample) {
                     Ok(frame) => {
                         stats.received += 1;
-                        queue.push_back(TimestampedFrame { frame, time_ns: sample.header.time_ns, source: TimeSource::Host });
+                        queue.push_back(TimestampedFrame {
+                            frame,
+                            time_ns: sample.header.time_ns,
+                            source: TimeSource::Host,
+                        });
                     }
                     Err(BusFrameError::Check { .. }) => stats.check_errors += 1,
                     Err(BusFrameError::Invalid(_)) => stats.invalid += 1,
@@ -167,13 +185,17 @@ impl SoftwareBusTransport {
         }
         let waiter = Waiter::new().map_err(|e| bus_error("waiting on the software CAN bus", e))?;
         let mut events = EventLoop::new(&waiter);
-        events.on_data(&self.subscriber).map_err(|e| bus_error("waiting on the software CAN bus", e))?;
+        events
+            .on_data(&self.subscriber)
+            .map_err(|e| bus_error("waiting on the software CAN bus", e))?;
         let deadline = std::time::Instant::now().checked_add(timeout);
         loop {
             if let Some(frame) = self.poll()? {
                 return Ok(Some(frame));
             }
-            let left = deadline.map_or(Duration::MAX, |d| d.saturating_duration_since(std::time::Instant::now()));
+            let left = deadline.map_or(Duration::MAX, |d| {
+                d.saturating_duration_since(std::time::Instant::now())
+            });
             if left.is_zero() {
                 return Ok(None);
             }

@@ -38,7 +38,10 @@ const FAULT_STREAM: u64 = 0xC4A7_F417_5EED_0001;
 impl FaultInjector {
     /// An injector with `rates` (validated by the run configuration) seeded by `seed`.
     pub fn new(rates: CanFaults, seed: u64) -> Self {
-        Self { rates, rng: ChaCha8Rng::seed_from_u64(seed ^ FAULT_STREAM) }
+        Self {
+            rates,
+            rng: ChaCha8Rng::seed_from_u64(seed ^ FAULT_STREAM),
+        }
     }
 
     /// Whether any fault has a non-zero probability.
@@ -56,7 +59,9 @@ impl FaultInjector {
         if u < r.drop {
             Fault::Drop
         } else if u < r.drop + r.corrupt {
-            Fault::Corrupt { bit: self.rng.random_range(0..128) }
+            Fault::Corrupt {
+                bit: self.rng.random_range(0..128),
+            }
         } else if u < r.drop + r.corrupt + r.delay {
             Fault::Delay
         } else if u < r.drop + r.corrupt + r.delay + r.duplicate {
@@ -73,7 +78,12 @@ mod tests {
 
     #[test]
     fn rates_are_honoured_and_the_sequence_is_seeded() {
-        let rates = CanFaults { drop: 0.02, corrupt: 0.01, delay: 0.005, duplicate: 0.005 };
+        let rates = CanFaults {
+            drop: 0.02,
+            corrupt: 0.01,
+            delay: 0.005,
+            duplicate: 0.005,
+        };
         let draw = |seed| {
             let mut f = FaultInjector::new(rates, seed);
             (0..200_000).map(|_| f.draw()).collect::<Vec<_>>()
@@ -81,7 +91,8 @@ mod tests {
         let a = draw(3);
         assert_eq!(a, draw(3));
         assert_ne!(a, draw(4));
-        let count = |pred: fn(&Fault) -> bool| a.iter().filter(|f| pred(f)).count() as f64 / a.len() as f64;
+        let count =
+            |pred: fn(&Fault) -> bool| a.iter().filter(|f| pred(f)).count() as f64 / a.len() as f64;
         assert!((count(|f| *f == Fault::Drop) - 0.02).abs() < 0.002);
         assert!((count(|f| matches!(f, Fault::Corrupt { .. })) - 0.01).abs() < 0.0015);
         assert!((count(|f| *f == Fault::Delay) - 0.005).abs() < 0.001);

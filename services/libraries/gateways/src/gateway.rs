@@ -29,14 +29,15 @@
 //! decoder (so its counter does not read as a loss later), but a sample it completes is thrown
 //! away.
 
-use ipc_types::{
-    CanLinkStatus, CmgCommand, CmgTelemetry, GyroSample, InclinometerSample, MagnetometerSample, SampleHeader,
-    WheelCommand, WheelTelemetry, can_source,
-};
 use ipc_types::Device;
+use ipc_types::{
+    CanLinkStatus, CmgCommand, CmgTelemetry, GyroSample, InclinometerSample, MagnetometerSample,
+    SampleHeader, WheelCommand, WheelTelemetry, can_source,
+};
 use testbed_can::{
-    CanFrame, CmgCommandMsg, Decoder, Device as CanDevice, DeviceSet, EncodeError, Encoder, FrameBatch, FrameClass, Message,
-    MessageKind, NodeClock, NodeState, Protocol, Sample, WheelCommandMsg,
+    CanFrame, CmgCommandMsg, Decoder, Device as CanDevice, DeviceSet, EncodeError, Encoder,
+    FrameBatch, FrameClass, Message, MessageKind, NodeClock, NodeState, Protocol, Sample,
+    WheelCommandMsg,
 };
 use testbed_flight::schedule::Schedule;
 
@@ -107,18 +108,17 @@ impl GatewayDevice for Device {
             Self::Gyro | Self::Wheels | Self::Cmg => true,
         }
     }
-
 }
-    /// A zero sample of the device (what a stale sample repeats before any good one).
+/// A zero sample of the device (what a stale sample repeats before any good one).
 fn zero_sample(device: Device) -> Sample {
-        match device {
-            Device::Gyro => Sample::Gyro(GyroSample::default()),
-            Device::Inclinometer => Sample::Inclinometer(InclinometerSample::default()),
-            Device::Magnetometer => Sample::Magnetometer(MagnetometerSample::default()),
-            Device::Wheels => Sample::WheelTelemetry(WheelTelemetry::default()),
-            Device::Cmg => Sample::CmgTelemetry(CmgTelemetry::default()),
-        }
+    match device {
+        Device::Gyro => Sample::Gyro(GyroSample::default()),
+        Device::Inclinometer => Sample::Inclinometer(InclinometerSample::default()),
+        Device::Magnetometer => Sample::Magnetometer(MagnetometerSample::default()),
+        Device::Wheels => Sample::WheelTelemetry(WheelTelemetry::default()),
+        Device::Cmg => Sample::CmgTelemetry(CmgTelemetry::default()),
     }
+}
 
 /// The header of a sample.
 pub fn sample_header(sample: &Sample) -> &SampleHeader {
@@ -162,7 +162,11 @@ pub fn run_time_ns(clock: &mut NodeClock, schedule: &Schedule, stamp_us: u32) ->
     let period = schedule.period_ns.max(1);
     let k = (t_ns + period / 2) / period;
     let tick = k.checked_mul(period)?;
-    Some(if tick.abs_diff(t_ns) < 1000 { tick } else { t_ns })
+    Some(if tick.abs_diff(t_ns) < 1000 {
+        tick
+    } else {
+        t_ns
+    })
 }
 
 /// The node's µs stamp for run-clock time `t_ns` (wraps every 2³² µs, as the node's clock).
@@ -173,7 +177,11 @@ pub fn node_stamp_us(t_ns: u64) -> u32 {
 /// Limits a command: refused (all zero) if not valid or any channel is not finite, otherwise
 /// each channel clamped to ±`limit`. Returns the values and whether they were refused or
 /// clamped.
-pub fn limit_command<const N: usize>(values: &[f64; N], limit: f64, valid: bool) -> ([f64; N], bool, bool) {
+pub fn limit_command<const N: usize>(
+    values: &[f64; N],
+    limit: f64,
+    valid: bool,
+) -> ([f64; N], bool, bool) {
     if !valid || values.iter().any(|v| !v.is_finite()) {
         return ([0.0; N], true, false);
     }
@@ -220,7 +228,10 @@ impl Gateway {
         Self {
             device,
             protocol,
-            decoder: Decoder::with_devices(protocol, DeviceSet::of(&[device.can_device(), CanDevice::Node])),
+            decoder: Decoder::with_devices(
+                protocol,
+                DeviceSet::of(&[device.can_device(), CanDevice::Node]),
+            ),
             encoder: Encoder::new(protocol),
             schedule,
             tick_sync,
@@ -288,7 +299,11 @@ impl Gateway {
         let used = s.ok + s.counter_jump + s.incomplete + s.out_of_range;
         CanLinkStatus {
             frames_ok: used.saturating_sub(self.late_frames),
-            frames_bad: self.link_check_errors + s.wrong_dlc + s.unknown_id + s.duplicate + self.late_frames,
+            frames_bad: self.link_check_errors
+                + s.wrong_dlc
+                + s.unknown_id
+                + s.duplicate
+                + self.late_frames,
             crc_errors: self.link_check_errors,
             wrong_dlc: s.wrong_dlc,
             unknown_id: s.unknown_id,
@@ -309,25 +324,38 @@ impl Gateway {
     /// Takes one received frame; returns what to publish.
     pub fn on_frame(&mut self, frame: &CanFrame) -> FrameOutcome {
         let decoded = self.decoder.decode(frame);
-        let kind = frame.standard_id().and_then(|id| self.protocol.ids().lookup(id)).map(|(kind, _)| kind);
+        let kind = frame
+            .standard_id()
+            .and_then(|id| self.protocol.ids().lookup(id))
+            .map(|(kind, _)| kind);
         let used = matches!(
             decoded.class,
-            FrameClass::Ok | FrameClass::CounterJump { .. } | FrameClass::IncompleteSample | FrameClass::OutOfRange
+            FrameClass::Ok
+                | FrameClass::CounterJump { .. }
+                | FrameClass::IncompleteSample
+                | FrameClass::OutOfRange
         );
         let mut late = false;
         if self.tick_sync && used && kind == Some(self.device.telemetry()) {
             let counter = frame.data().first().copied().unwrap_or(0);
-            if self.closed_counter.is_some_and(|closed| closed.wrapping_sub(counter) < 128) {
+            if self
+                .closed_counter
+                .is_some_and(|closed| closed.wrapping_sub(counter) < 128)
+            {
                 late = true;
                 self.late_frames += 1;
             } else {
                 self.current_counter = Some(counter);
             }
         }
-        let Some(received) = decoded.message else { return FrameOutcome::default() };
+        let Some(received) = decoded.message else {
+            return FrameOutcome::default();
+        };
         match received.message {
             Message::NodeHeartbeat(hb) => {
-                if hb.state == NodeState::Booting && self.node_state.is_some_and(|s| s != NodeState::Booting) {
+                if hb.state == NodeState::Booting
+                    && self.node_state.is_some_and(|s| s != NodeState::Booting)
+                {
                     // The node restarted: its counters and clock start again.
                     self.decoder.reset();
                     self.clock.reset();
@@ -342,7 +370,9 @@ impl Gateway {
                 }
             }
             message if message.kind() == self.device.telemetry() => {
-                let Some(t_ns) = message.node_time_us().and_then(|us| run_time_ns(&mut self.clock, &self.schedule, us))
+                let Some(t_ns) = message
+                    .node_time_us()
+                    .and_then(|us| run_time_ns(&mut self.clock, &self.schedule, us))
                 else {
                     return FrameOutcome::default();
                 };
@@ -350,14 +380,19 @@ impl Gateway {
                     self.late_messages += 1;
                     return FrameOutcome::default();
                 }
-                let Some(sample) = message.to_sample(SampleHeader::new(t_ns, 0, 0), received.clipped) else {
+                let Some(sample) =
+                    message.to_sample(SampleHeader::new(t_ns, 0, 0), received.clipped)
+                else {
                     return FrameOutcome::default();
                 };
                 if self.tick_sync {
                     self.completed = Some((t_ns, sample));
                     FrameOutcome::default()
                 } else {
-                    FrameOutcome { tick: None, samples: vec![self.publish(t_ns, sample)] }
+                    FrameOutcome {
+                        tick: None,
+                        samples: vec![self.publish(t_ns, sample)],
+                    }
                 }
             }
             _ => {
@@ -382,15 +417,24 @@ impl Gateway {
 
     /// The node's tick sync for `t_ns`: close the tick.
     fn on_sync(&mut self, t_ns: u64) -> FrameOutcome {
-        let mut out = FrameOutcome { tick: Some(t_ns), samples: Vec::new() };
+        let mut out = FrameOutcome {
+            tick: Some(t_ns),
+            samples: Vec::new(),
+        };
         if self.published_until.is_some_and(|p| t_ns <= p) {
             return out;
         }
-        let due = self.schedule.tick_at(t_ns).is_some_and(|k| self.device.due(&self.schedule, k));
+        let due = self
+            .schedule
+            .tick_at(t_ns)
+            .is_some_and(|k| self.device.due(&self.schedule, k));
         match self.completed.take() {
             Some((t, sample)) if t == t_ns => {
                 out.samples.push(self.publish(t_ns, sample));
-                self.closed_counter = self.current_counter.take().or(self.closed_counter.map(|c| c.wrapping_add(1)));
+                self.closed_counter = self
+                    .current_counter
+                    .take()
+                    .or(self.closed_counter.map(|c| c.wrapping_add(1)));
             }
             other => {
                 if other.is_some() {
@@ -400,12 +444,15 @@ impl Gateway {
                 if due {
                     let mut stale = self.last_good.unwrap_or_else(|| zero_sample(self.device));
                     let header = sample_header_mut(&mut stale);
-                    header.flags = (header.flags & SampleHeader::SATURATED_ANY) | SampleHeader::STALE;
+                    header.flags =
+                        (header.flags & SampleHeader::SATURATED_ANY) | SampleHeader::STALE;
                     self.stale_samples += 1;
                     let sample = self.publish(t_ns, stale);
                     out.samples.push(sample);
-                    self.closed_counter =
-                        self.current_counter.take().or(self.closed_counter.map(|c| c.wrapping_add(1)));
+                    self.closed_counter = self
+                        .current_counter
+                        .take()
+                        .or(self.closed_counter.map(|c| c.wrapping_add(1)));
                 }
             }
         }
@@ -415,10 +462,12 @@ impl Gateway {
     /// Limits and encodes a wheel torque command (wheel gateway).
     pub fn wheel_command(&mut self, command: &WheelCommand) -> Result<FrameBatch, EncodeError> {
         let limit = self.protocol.limits().wheel_torque_nm;
-        let (torque_nm, refused, clamped) = limit_command(&command.torque, limit, command.header.is_valid());
+        let (torque_nm, refused, clamped) =
+            limit_command(&command.torque, limit, command.header.is_valid());
         self.commands_refused += u64::from(refused);
         self.commands_clamped += u64::from(clamped);
-        self.encoder.encode(&Message::WheelCommand(WheelCommandMsg { torque_nm }))
+        self.encoder
+            .encode(&Message::WheelCommand(WheelCommandMsg { torque_nm }))
     }
 
     /// Limits and encodes a gimbal rate command (CMG gateway).
@@ -428,7 +477,8 @@ impl Gateway {
             limit_command(&command.gimbal_rate, limit, command.header.is_valid());
         self.commands_refused += u64::from(refused);
         self.commands_clamped += u64::from(clamped);
-        self.encoder.encode(&Message::CmgCommand(CmgCommandMsg { gimbal_rate_rad_s }))
+        self.encoder
+            .encode(&Message::CmgCommand(CmgCommandMsg { gimbal_rate_rad_s }))
     }
 }
 
@@ -438,12 +488,20 @@ mod tests {
     use testbed_can::{DeviceStatus, GyroMsg, NodeHeartbeatMsg};
 
     fn schedule() -> Schedule {
-        Schedule { period_ns: 100_000_000, tilt_every: 4, field_every: 4 }
+        Schedule {
+            period_ns: 100_000_000,
+            tilt_every: 4,
+            field_every: 4,
+        }
     }
 
     fn gyro(encoder: &mut Encoder, k: u64, rate: f64) -> Vec<CanFrame> {
         let t_us = node_stamp_us(k * 100_000_000);
-        let m = Message::Gyro(GyroMsg { node_time_us: t_us, status: DeviceStatus::default(), rate_rad_s: [rate; 3] });
+        let m = Message::Gyro(GyroMsg {
+            node_time_us: t_us,
+            status: DeviceStatus::default(),
+            rate_rad_s: [rate; 3],
+        });
         encoder.encode(&m).unwrap().iter().copied().collect()
     }
 
@@ -470,14 +528,21 @@ mod tests {
         let mut frames = gyro(&mut node, 0, 0.01);
         frames.push(sync(&mut node, 0));
         let out = published(&mut g, &frames);
-        let [Sample::Gyro(s)] = out.as_slice() else { panic!("{out:?}") };
-        assert_eq!((s.header.time_ns, s.header.sequence, s.header.is_valid()), (0, 0, true));
+        let [Sample::Gyro(s)] = out.as_slice() else {
+            panic!("{out:?}")
+        };
+        assert_eq!(
+            (s.header.time_ns, s.header.sequence, s.header.is_valid()),
+            (0, 0, true)
+        );
         let good = s.rate;
         assert!((good[0] - 0.01).abs() <= testbed_can::Quantity::GyroRate.lsb_si());
         // Tick 1: frame B delayed past the sync → stale, then the late frame is dropped.
         let t1 = gyro(&mut node, 1, 0.02);
         let out = published(&mut g, &[t1[0], sync(&mut node, 1), t1[1]]);
-        let [Sample::Gyro(s)] = out.as_slice() else { panic!("{out:?}") };
+        let [Sample::Gyro(s)] = out.as_slice() else {
+            panic!("{out:?}")
+        };
         assert_eq!(s.header.time_ns, 100_000_000);
         assert!(!s.header.is_valid() && s.header.has(SampleHeader::STALE));
         assert_eq!(s.rate, good, "stale repeats the last good values");
@@ -488,9 +553,19 @@ mod tests {
         // Tick 3 complete, and a duplicate.
         let t3 = gyro(&mut node, 3, 0.04);
         let out = published(&mut g, &[t3[0], t3[0], t3[1], sync(&mut node, 3)]);
-        assert!(matches!(out.as_slice(), [Sample::Gyro(s)] if s.header.is_valid() && (s.rate[2] - 0.04).abs() < 1e-6));
+        assert!(
+            matches!(out.as_slice(), [Sample::Gyro(s)] if s.header.is_valid() && (s.rate[2] - 0.04).abs() < 1e-6)
+        );
         let st = g.status();
-        assert_eq!((st.late_frames, st.stale_samples, st.duplicates, st.lost_frames), (1, 2, 1, 2));
+        assert_eq!(
+            (
+                st.late_frames,
+                st.stale_samples,
+                st.duplicates,
+                st.lost_frames
+            ),
+            (1, 2, 1, 2)
+        );
         assert_eq!(st.frames_bad, 2);
         // 4 sync frames + 2 + 1 + 2 gyro frames used, the late one not.
         assert_eq!(st.frames_ok, 4 + 2 + 1 + 2);
@@ -522,11 +597,20 @@ mod tests {
                 other => panic!("{other:?}"),
             }
         };
-        let ok = WheelCommand::new(SampleHeader::new(0, 0, SampleHeader::VALID), [0.01, -0.02, 0.0]);
+        let ok = WheelCommand::new(
+            SampleHeader::new(0, 0, SampleHeader::VALID),
+            [0.01, -0.02, 0.0],
+        );
         assert_eq!(decode(g.wheel_command(&ok).unwrap()), [0.01, -0.02, 0.0]);
-        let big = WheelCommand::new(SampleHeader::new(1, 1, SampleHeader::VALID), [1.0, -1.0, 0.0]);
+        let big = WheelCommand::new(
+            SampleHeader::new(1, 1, SampleHeader::VALID),
+            [1.0, -1.0, 0.0],
+        );
         assert_eq!(decode(g.wheel_command(&big).unwrap()), [limit, -limit, 0.0]);
-        let nan = WheelCommand::new(SampleHeader::new(2, 2, SampleHeader::VALID), [f64::NAN, 0.01, 0.0]);
+        let nan = WheelCommand::new(
+            SampleHeader::new(2, 2, SampleHeader::VALID),
+            [f64::NAN, 0.01, 0.0],
+        );
         assert_eq!(decode(g.wheel_command(&nan).unwrap()), [0.0; 3]);
         let invalid = WheelCommand::new(SampleHeader::new(3, 3, 0), [0.01; 3]);
         assert_eq!(decode(g.wheel_command(&invalid).unwrap()), [0.0; 3]);
@@ -536,15 +620,31 @@ mod tests {
 
     #[test]
     fn run_time_snaps_to_the_tick_and_extends_the_node_clock() {
-        let s = Schedule { period_ns: 33_333_333, tilt_every: 1, field_every: 1 };
+        let s = Schedule {
+            period_ns: 33_333_333,
+            tilt_every: 1,
+            field_every: 1,
+        };
         let mut clock = NodeClock::new();
-        assert_eq!(run_time_ns(&mut clock, &s, node_stamp_us(3 * 33_333_333)), Some(99_999_999));
-        assert_eq!(run_time_ns(&mut clock, &s, 100_000_500), Some(100_000_500_000));
+        assert_eq!(
+            run_time_ns(&mut clock, &s, node_stamp_us(3 * 33_333_333)),
+            Some(99_999_999)
+        );
+        assert_eq!(
+            run_time_ns(&mut clock, &s, 100_000_500),
+            Some(100_000_500_000)
+        );
         let mut clock = NodeClock::new();
         let s = schedule();
         let before_wrap = u32::MAX - 99_999;
-        assert_eq!(run_time_ns(&mut clock, &s, before_wrap), Some(u64::from(before_wrap) * 1000));
+        assert_eq!(
+            run_time_ns(&mut clock, &s, before_wrap),
+            Some(u64::from(before_wrap) * 1000)
+        );
         // 100 ms later the node's 32-bit µs clock has wrapped; the run clock goes on.
-        assert_eq!(run_time_ns(&mut clock, &s, 0), Some((u64::from(u32::MAX) + 1) * 1000));
+        assert_eq!(
+            run_time_ns(&mut clock, &s, 0),
+            Some((u64::from(u32::MAX) + 1) * 1000)
+        );
     }
 }

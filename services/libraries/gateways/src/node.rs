@@ -25,14 +25,18 @@
 
 use crate::faults::{Fault, FaultInjector};
 use crate::gateway::node_stamp_us;
-use ipc_types::{AppliedCmgCommand, AppliedWheelCommand, CanLinkStatus, CmgCommand, SampleHeader, SimTruth, WheelCommand};
+use ipc_types::{
+    AppliedCmgCommand, AppliedWheelCommand, CanLinkStatus, CmgCommand, SampleHeader, SimTruth,
+    WheelCommand,
+};
 use std::ops::RangeInclusive;
 use testbed_can::{
-    CanFrame, CmgTelemetryMsg, Decoder, Device, DeviceSet, DeviceStatus, Encoder, GyroMsg, InclinometerMsg, Limits,
-    MagnetometerMsg, Message, MessageKind, NodeHeartbeatMsg, NodeState, Protocol, ProtocolError, WheelTelemetryMsg,
+    CanFrame, CmgTelemetryMsg, Decoder, Device, DeviceSet, DeviceStatus, Encoder, GyroMsg,
+    InclinometerMsg, Limits, MagnetometerMsg, Message, MessageKind, NodeHeartbeatMsg, NodeState,
+    Protocol, ProtocolError, WheelTelemetryMsg,
 };
-use testbed_flight::schedule::Schedule;
 use testbed_flight::convert::Sequence;
+use testbed_flight::schedule::Schedule;
 use testbed_runtime::run_config::RunConfig;
 use testbed_sim::sim_devices::{SimCmg, SimGyro, SimInclinometer, SimMagnetometer, SimWheels};
 
@@ -111,7 +115,9 @@ impl SimCanNode {
         let id = |kind, part| ids.id(kind, part).unwrap_or(0);
         let last = schedule.tick_count(config.run.duration_s);
         let guard = schedule.tilt_every.max(schedule.field_every).max(1);
-        let timeout_ticks = (config.can.command_timeout_s / schedule.period_s()).ceil().max(1.0) as u64;
+        let timeout_ticks = (config.can.command_timeout_s / schedule.period_s())
+            .ceil()
+            .max(1.0) as u64;
         Ok(Self {
             protocol,
             encoder: Encoder::new(protocol),
@@ -193,7 +199,12 @@ impl SimCanNode {
     /// beyond its range: clipped and flagged saturated; a non-finite value is zero and the
     /// sample flagged faulty.
     fn sanitised(limits: &Limits, message: Message) -> Message {
-        fn limit(values: &mut [f64], range: Option<f64>, status: &mut DeviceStatus, axis: impl Fn(usize) -> u8) {
+        fn limit(
+            values: &mut [f64],
+            range: Option<f64>,
+            status: &mut DeviceStatus,
+            axis: impl Fn(usize) -> u8,
+        ) {
             for (i, v) in values.iter_mut().enumerate() {
                 if !v.is_finite() {
                     *v = 0.0;
@@ -207,25 +218,55 @@ impl SimCanNode {
         let axis = |i: usize| i as u8;
         match message {
             Message::Gyro(mut m) => {
-                limit(&mut m.rate_rad_s, Some(limits.gyro_range_rad_s), &mut m.status, axis);
+                limit(
+                    &mut m.rate_rad_s,
+                    Some(limits.gyro_range_rad_s),
+                    &mut m.status,
+                    axis,
+                );
                 Message::Gyro(m)
             }
             Message::Inclinometer(mut m) => {
-                limit(&mut m.tilt_rad, Some(limits.tilt_range_rad), &mut m.status, axis);
+                limit(
+                    &mut m.tilt_rad,
+                    Some(limits.tilt_range_rad),
+                    &mut m.status,
+                    axis,
+                );
                 Message::Inclinometer(m)
             }
             Message::Magnetometer(mut m) => {
-                limit(&mut m.field_t, Some(limits.field_range_t), &mut m.status, axis);
+                limit(
+                    &mut m.field_t,
+                    Some(limits.field_range_t),
+                    &mut m.status,
+                    axis,
+                );
                 Message::Magnetometer(m)
             }
             Message::WheelTelemetry(mut m) => {
-                limit(&mut m.speed_rad_s, Some(limits.wheel_speed_rad_s), &mut m.status, axis);
-                limit(&mut m.torque_nm, Some(limits.wheel_torque_nm), &mut m.status, axis);
+                limit(
+                    &mut m.speed_rad_s,
+                    Some(limits.wheel_speed_rad_s),
+                    &mut m.status,
+                    axis,
+                );
+                limit(
+                    &mut m.torque_nm,
+                    Some(limits.wheel_torque_nm),
+                    &mut m.status,
+                    axis,
+                );
                 Message::WheelTelemetry(m)
             }
             Message::CmgTelemetry(mut m) => {
                 limit(&mut m.gimbal_angle_rad, None, &mut m.status, axis);
-                limit(&mut m.gimbal_rate_rad_s, Some(limits.gimbal_rate_rad_s), &mut m.status, axis);
+                limit(
+                    &mut m.gimbal_rate_rad_s,
+                    Some(limits.gimbal_rate_rad_s),
+                    &mut m.status,
+                    axis,
+                );
                 Message::CmgTelemetry(m)
             }
             other => other,
@@ -236,7 +277,9 @@ impl SimCanNode {
     /// documentation). Empty for a truth off the schedule.
     pub fn on_truth(&mut self, truth: &SimTruth) -> Vec<TxFrame> {
         let t_ns = truth.header.time_ns;
-        let Some(k) = self.schedule.tick_at(t_ns) else { return Vec::new() };
+        let Some(k) = self.schedule.tick_at(t_ns) else {
+            return Vec::new();
+        };
         if self.open {
             // Paced run: the previous tick's commands did not all come; close it with what did.
             self.overdue_ticks += 1;
@@ -244,11 +287,31 @@ impl SimCanNode {
         }
         let t_us = node_stamp_us(t_ns);
         let mut messages = Vec::with_capacity(5);
-        messages.extend(self.wheels.on_truth(truth).map(|s| Message::WheelTelemetry(WheelTelemetryMsg::from_sample(&s, t_us))));
-        messages.extend(self.cmg.on_truth(truth).map(|s| Message::CmgTelemetry(CmgTelemetryMsg::from_sample(&s, t_us))));
-        messages.extend(self.gyro.on_truth(truth).map(|s| Message::Gyro(GyroMsg::from_sample(&s, t_us))));
-        messages.extend(self.tilt.on_truth(truth).map(|s| Message::Inclinometer(InclinometerMsg::from_sample(&s, t_us))));
-        messages.extend(self.field.on_truth(truth).map(|s| Message::Magnetometer(MagnetometerMsg::from_sample(&s, t_us))));
+        messages.extend(
+            self.wheels
+                .on_truth(truth)
+                .map(|s| Message::WheelTelemetry(WheelTelemetryMsg::from_sample(&s, t_us))),
+        );
+        messages.extend(
+            self.cmg
+                .on_truth(truth)
+                .map(|s| Message::CmgTelemetry(CmgTelemetryMsg::from_sample(&s, t_us))),
+        );
+        messages.extend(
+            self.gyro
+                .on_truth(truth)
+                .map(|s| Message::Gyro(GyroMsg::from_sample(&s, t_us))),
+        );
+        messages.extend(
+            self.tilt
+                .on_truth(truth)
+                .map(|s| Message::Inclinometer(InclinometerMsg::from_sample(&s, t_us))),
+        );
+        messages.extend(
+            self.field
+                .on_truth(truth)
+                .map(|s| Message::Magnetometer(MagnetometerMsg::from_sample(&s, t_us))),
+        );
         let in_window = self.tx_window.contains(&k);
         let mut out = Vec::with_capacity(24);
         let mut delayed = Vec::new();
@@ -263,7 +326,11 @@ impl SimCanNode {
                 }
             };
             for &frame in &batch {
-                match if in_window { self.faults.draw() } else { Fault::None } {
+                match if in_window {
+                    self.faults.draw()
+                } else {
+                    Fault::None
+                } {
                     Fault::None => out.push(TxFrame::Send(frame)),
                     Fault::Drop => self.counters.injected_tx_drop += 1,
                     Fault::Corrupt { bit } => {
@@ -284,7 +351,13 @@ impl SimCanNode {
         let sync = Message::NodeHeartbeat(NodeHeartbeatMsg {
             node_time_us: t_us,
             state: NodeState::Running,
-            links: DeviceSet::of(&[Device::Wheels, Device::Cmg, Device::Gyro, Device::Inclinometer, Device::Magnetometer]),
+            links: DeviceSet::of(&[
+                Device::Wheels,
+                Device::Cmg,
+                Device::Gyro,
+                Device::Inclinometer,
+                Device::Magnetometer,
+            ]),
             serial_errors: 0,
         });
         match self.encoder.encode(&sync) {
@@ -304,13 +377,22 @@ impl SimCanNode {
     /// A frame received from the bus (not the node's own). Returns the commands to apply when
     /// it completes the current tick's command frames.
     pub fn on_frame(&mut self, frame: &CanFrame) -> Option<Applied> {
-        if !frame.standard_id().is_some_and(|id| self.command_ids.contains(&id)) {
-            let known = frame.standard_id().and_then(|id| self.protocol.ids().lookup(id)).is_some();
+        if !frame
+            .standard_id()
+            .is_some_and(|id| self.command_ids.contains(&id))
+        {
+            let known = frame
+                .standard_id()
+                .and_then(|id| self.protocol.ids().lookup(id))
+                .is_some();
             self.counters.unknown_id += u64::from(!known);
             return None;
         }
         self.rx.push(*frame);
-        let complete = self.command_ids.iter().all(|want| self.rx.iter().any(|f| f.standard_id() == Some(*want)));
+        let complete = self
+            .command_ids
+            .iter()
+            .all(|want| self.rx.iter().any(|f| f.standard_id() == Some(*want)));
         (self.open && complete).then(|| self.close())
     }
 
@@ -329,7 +411,11 @@ impl SimCanNode {
             let _ = self.decoder.decode(&late); // keeps the counters; its message is not used
         }
         for frame in batch {
-            let copies = match if in_window { self.faults.draw() } else { Fault::None } {
+            let copies = match if in_window {
+                self.faults.draw()
+            } else {
+                Fault::None
+            } {
                 Fault::None => 1,
                 Fault::Drop => {
                     self.counters.injected_rx_drop += 1;
@@ -351,16 +437,23 @@ impl SimCanNode {
                 }
             };
             for _ in 0..copies {
-                let Some(received) = self.decoder.decode(&frame).message else { continue };
+                let Some(received) = self.decoder.decode(&frame).message else {
+                    continue;
+                };
                 // Out of range (clipped by the decoder): ignored, as the protocol says.
                 match received.message {
-                    Message::WheelCommand(m) if received.clipped == 0 => new_wheel = Some(m.torque_nm),
-                    Message::CmgCommand(m) if received.clipped == 0 => new_cmg = Some(m.gimbal_rate_rad_s),
+                    Message::WheelCommand(m) if received.clipped == 0 => {
+                        new_wheel = Some(m.torque_nm)
+                    }
+                    Message::CmgCommand(m) if received.clipped == 0 => {
+                        new_cmg = Some(m.gimbal_rate_rad_s)
+                    }
                     _ => {}
                 }
             }
         }
-        let timed_out = |last: Option<u64>| last.is_none_or(|l| k.saturating_sub(l) >= self.timeout_ticks);
+        let timed_out =
+            |last: Option<u64>| last.is_none_or(|l| k.saturating_sub(l) >= self.timeout_ticks);
         let wheel_flags = match new_wheel {
             Some(torque) => {
                 self.wheel = torque;
@@ -388,11 +481,19 @@ impl SimCanNode {
             }
         };
         self.open = false;
-        let wheel = AppliedWheelCommand { header: self.wheel_seq.header(t_ns, wheel_flags), torque: self.wheel };
-        let cmg = AppliedCmgCommand { header: self.cmg_seq.header(t_ns, cmg_flags), gimbal_rate: self.cmg_rate };
+        let wheel = AppliedWheelCommand {
+            header: self.wheel_seq.header(t_ns, wheel_flags),
+            torque: self.wheel,
+        };
+        let cmg = AppliedCmgCommand {
+            header: self.cmg_seq.header(t_ns, cmg_flags),
+            gimbal_rate: self.cmg_rate,
+        };
         // The telemetry of the next tick reports the commands in effect.
-        self.wheels.on_command(&WheelCommand::new(wheel.header, wheel.torque));
-        self.cmg.on_command(&CmgCommand::new(cmg.header, cmg.gimbal_rate));
+        self.wheels
+            .on_command(&WheelCommand::new(wheel.header, wheel.torque));
+        self.cmg
+            .on_command(&CmgCommand::new(cmg.header, cmg.gimbal_rate));
         Applied { wheel, cmg }
     }
 }

@@ -19,22 +19,37 @@ pub struct StatusTracker {
 impl StatusTracker {
     /// A tracker for the link `source` (`ipc_types::can_source`).
     pub fn new(source: u32) -> Self {
-        Self { source, sequence: 0, last: None }
+        Self {
+            source,
+            sequence: 0,
+            last: None,
+        }
     }
 
     /// The status sample to publish at `t_ns` for `counts` (header ignored), if one is due.
     pub fn due(&mut self, t_ns: u64, counts: CanLinkStatus) -> Option<CanLinkStatus> {
-        let counts = CanLinkStatus { header: SampleHeader::default(), ..counts };
-        let troubles = |s: &CanLinkStatus| CanLinkStatus { frames_ok: 0, frames_sent: 0, ..*s };
+        let counts = CanLinkStatus {
+            header: SampleHeader::default(),
+            ..counts
+        };
+        let troubles = |s: &CanLinkStatus| CanLinkStatus {
+            frames_ok: 0,
+            frames_sent: 0,
+            ..*s
+        };
         let due = match self.last {
             None => true,
-            Some((t, previous)) => troubles(&previous) != troubles(&counts) || t_ns >= t.saturating_add(STATUS_PERIOD_NS),
+            Some((t, previous)) => {
+                troubles(&previous) != troubles(&counts)
+                    || t_ns >= t.saturating_add(STATUS_PERIOD_NS)
+            }
         };
         if !due {
             return None;
         }
         self.last = Some((t_ns, counts));
-        let header = SampleHeader::new(t_ns, self.sequence, SampleHeader::VALID).with_source(self.source);
+        let header =
+            SampleHeader::new(t_ns, self.sequence, SampleHeader::VALID).with_source(self.source);
         self.sequence += 1;
         Some(CanLinkStatus { header, ..counts })
     }
@@ -56,7 +71,11 @@ impl HeartbeatCounters {
         heartbeat.add_frames_ok(s.frames_ok.saturating_sub(self.ok));
         heartbeat.add_frames_bad(s.frames_bad.saturating_sub(self.bad));
         heartbeat.add_errors(errors.saturating_sub(self.errors));
-        *self = Self { ok: s.frames_ok, bad: s.frames_bad, errors };
+        *self = Self {
+            ok: s.frames_ok,
+            bad: s.frames_bad,
+            errors,
+        };
     }
 }
 
@@ -74,8 +93,14 @@ mod tests {
         counts.frames_ok = 10;
         assert!(t.due(150_000_000, counts).is_none());
         counts.lost_frames = 1;
-        assert_eq!(t.due(200_000_000, counts).map(|s| s.header.time_ns), Some(200_000_000));
+        assert_eq!(
+            t.due(200_000_000, counts).map(|s| s.header.time_ns),
+            Some(200_000_000)
+        );
         assert!(t.due(1_100_000_000, counts).is_none());
-        assert_eq!(t.due(1_200_000_000, counts).map(|s| s.header.sequence), Some(2));
+        assert_eq!(
+            t.due(1_200_000_000, counts).map(|s| s.header.sequence),
+            Some(2)
+        );
     }
 }

@@ -6,17 +6,17 @@
 
 use ipc_types::{CanLinkStatus, CmgCommand, SampleHeader, WheelCommand};
 use testbed_can::Sample;
-use testbed_gateways::gateway::Gateway;
-use testbed_gateways::node::{self, SimCanNode, TxFrame};
-use testbed_sim::metrics;
-use testbed_flight::tasks::ControllerTask;
-use testbed_model::attitude;
-use testbed_model::config::DEG;
 use testbed_flight::controller_node::ControllerNode;
 use testbed_flight::convert::quaternion_from_array;
 use testbed_flight::estimator_node::{EstimatorCounters, EstimatorNode};
-use testbed_sim::plant_node::PlantNode;
+use testbed_flight::tasks::ControllerTask;
+use testbed_gateways::gateway::Gateway;
+use testbed_gateways::node::{self, SimCanNode, TxFrame};
+use testbed_model::attitude;
+use testbed_model::config::DEG;
 use testbed_runtime::run_config::{Actuation, CanFaults, RunConfig};
+use testbed_sim::metrics;
+use testbed_sim::plant_node::PlantNode;
 
 struct Outcome {
     /// (t, attitude error per axis, degrees)
@@ -33,10 +33,13 @@ fn run(config: &RunConfig) -> Outcome {
     let protocol = node::protocol(config).unwrap();
     let mut plant = PlantNode::new(config).unwrap();
     let mut can_node = SimCanNode::new(config).unwrap();
-    let mut gateways: Vec<(Gateway, u64)> =
-        ipc_types::Device::ALL.iter().map(|&d| (Gateway::new(d, protocol, schedule, true), 0)).collect();
+    let mut gateways: Vec<(Gateway, u64)> = ipc_types::Device::ALL
+        .iter()
+        .map(|&d| (Gateway::new(d, protocol, schedule, true), 0))
+        .collect();
     let mut estimator = EstimatorNode::new(config.estimator_config(), schedule);
-    let task = ControllerTask::new(&config.controller, &config.model, config.manoeuvre.target()).unwrap();
+    let task =
+        ControllerTask::new(&config.controller, &config.model, config.manoeuvre.target()).unwrap();
     let mut controller = ControllerNode::new(task, config.controller.actuators, schedule);
     let target = config.manoeuvre.target();
     let mut out = Outcome {
@@ -51,7 +54,8 @@ fn run(config: &RunConfig) -> Outcome {
         let (truth, _) = plant.outputs();
         let q = quaternion_from_array(&truth.quaternion).unwrap();
         let e = attitude::attitude_error(&q, &target) / DEG;
-        out.errors.push((truth.header.time_ns as f64 * 1e-9, [e.x, e.y, e.z]));
+        out.errors
+            .push((truth.header.time_ns as f64 * 1e-9, [e.x, e.y, e.z]));
         // The node's frames reach every gateway in sending order.
         let frames = can_node.on_truth(&truth);
         let mut samples = Vec::new();
@@ -89,18 +93,28 @@ fn run(config: &RunConfig) -> Outcome {
                 applied = can_node.on_frame(f).or(applied);
             }
         }
-        let applied = applied.unwrap_or_else(|| panic!("tick {} not answered by the node", plant.tick()));
+        let applied =
+            applied.unwrap_or_else(|| panic!("tick {} not answered by the node", plant.tick()));
         assert_eq!(applied.wheel.header.time_ns, truth.header.time_ns);
         out.stale_applied += u64::from(applied.wheel.header.has(SampleHeader::STALE));
-        plant.on_wheel_command(&WheelCommand::new(applied.wheel.header, applied.wheel.torque));
-        plant.on_cmg_command(&CmgCommand::new(applied.cmg.header, applied.cmg.gimbal_rate));
+        plant.on_wheel_command(&WheelCommand::new(
+            applied.wheel.header,
+            applied.wheel.torque,
+        ));
+        plant.on_cmg_command(&CmgCommand::new(
+            applied.cmg.header,
+            applied.cmg.gimbal_rate,
+        ));
         assert!(plant.answered(), "tick {} not answered", plant.tick());
         if plant.at_end() {
             break;
         }
         plant.advance().unwrap();
     }
-    out.gateways = gateways.iter().map(|(g, _)| (g.device(), g.status())).collect();
+    out.gateways = gateways
+        .iter()
+        .map(|(g, _)| (g.device(), g.status()))
+        .collect();
     out.node = can_node.status();
     out.estimator = estimator.counters();
     out
@@ -119,20 +133,35 @@ fn config(duration_s: f64, faults: CanFaults) -> RunConfig {
 fn without_faults_every_frame_is_good_and_the_platform_levels() {
     let out = run(&config(150.0, CanFaults::default()));
     for (device, s) in &out.gateways {
-        assert_eq!((s.frames_bad, s.lost_frames, s.stale_samples, s.late_frames), (0, 0, 0, 0), "{device:?}: {s:?}");
+        assert_eq!(
+            (s.frames_bad, s.lost_frames, s.stale_samples, s.late_frames),
+            (0, 0, 0, 0),
+            "{device:?}: {s:?}"
+        );
         assert!(s.frames_ok > 1500, "{device:?}: {s:?}");
     }
-    assert_eq!((out.node.frames_bad, out.node.lost_frames, out.stale_applied), (0, 0, 0));
+    assert_eq!(
+        (out.node.frames_bad, out.node.lost_frames, out.stale_applied),
+        (0, 0, 0)
+    );
     assert_eq!(out.estimator.gyro_held, 0);
     let settle = metrics::settling_time(&out.errors, 0.1).expect("settles");
     let steady = metrics::steady_max(&out.errors, 50.0);
     assert!(settle < 120.0, "settling {settle} s");
-    assert!(steady[0].max(steady[1]) < 0.02 && steady[2] < 0.05, "steady {steady:?}");
+    assert!(
+        steady[0].max(steady[1]) < 0.02 && steady[2] < 0.05,
+        "steady {steady:?}"
+    );
 }
 
 #[test]
 fn with_faults_every_tick_is_answered_every_fault_counted_and_the_platform_levels() {
-    let faults = CanFaults { drop: 0.005, corrupt: 0.005, delay: 0.003, duplicate: 0.003 };
+    let faults = CanFaults {
+        drop: 0.005,
+        corrupt: 0.005,
+        delay: 0.003,
+        duplicate: 0.003,
+    };
     let config = config(150.0, faults);
     let out = run(&config);
     let n = &out.node;
@@ -141,15 +170,28 @@ fn with_faults_every_tick_is_answered_every_fault_counted_and_the_platform_level
     for (d, s) in &out.gateways {
         println!("{d:?}: {s:?}");
     }
-    assert!(n.injected_tx_drop > 20 && n.injected_tx_corrupt > 20 && n.injected_tx_delay > 10 && n.injected_tx_duplicate > 10, "{n:?}");
+    assert!(
+        n.injected_tx_drop > 20
+            && n.injected_tx_corrupt > 20
+            && n.injected_tx_delay > 10
+            && n.injected_tx_duplicate > 10,
+        "{n:?}"
+    );
     // Sensor direction: every gateway sees every corrupted frame fail its check; a dropped or
     // corrupted frame is missed by the gateway of its device (a counter jump); duplicates and
     // late frames are seen by the gateway of their device.
     for (device, s) in &out.gateways {
         assert_eq!(s.crc_errors, n.injected_tx_corrupt, "{device:?}");
-        assert_eq!(s.frames_bad, s.crc_errors + s.duplicates + s.late_frames, "{device:?}");
+        assert_eq!(
+            s.frames_bad,
+            s.crc_errors + s.duplicates + s.late_frames,
+            "{device:?}"
+        );
     }
-    assert_eq!(sum(|s| s.lost_frames), n.injected_tx_drop + n.injected_tx_corrupt);
+    assert_eq!(
+        sum(|s| s.lost_frames),
+        n.injected_tx_drop + n.injected_tx_corrupt
+    );
     assert_eq!(sum(|s| s.duplicates), n.injected_tx_duplicate);
     assert_eq!(sum(|s| s.late_frames), n.injected_tx_delay);
     assert!(sum(|s| s.stale_samples) > 0);
@@ -161,11 +203,18 @@ fn with_faults_every_tick_is_answered_every_fault_counted_and_the_platform_level
     assert!(out.stale_applied > 0);
     let gyro_stale = out.gateways[0].1.stale_samples;
     assert_eq!(out.estimator.gyro_held, gyro_stale);
-    assert_eq!(out.estimates.len(), out.errors.len(), "one estimate per tick");
+    assert_eq!(
+        out.estimates.len(),
+        out.errors.len(),
+        "one estimate per tick"
+    );
     let settle = metrics::settling_time(&out.errors, 0.1).expect("settles");
     let steady = metrics::steady_max(&out.errors, 50.0);
     assert!(settle < 120.0, "settling {settle} s");
-    assert!(steady[0].max(steady[1]) < 0.02 && steady[2] < 0.05, "steady {steady:?}");
+    assert!(
+        steady[0].max(steady[1]) < 0.02 && steady[2] < 0.05,
+        "steady {steady:?}"
+    );
     // Seeded: the same run again gives the same estimates.
     assert_eq!(run(&config).estimates, out.estimates);
 }

@@ -47,7 +47,11 @@ pub enum DecodeError {
 }
 
 fn path(parent: &str, field: &str) -> String {
-    if parent.is_empty() { field.to_owned() } else { format!("{parent}.{field}") }
+    if parent.is_empty() {
+        field.to_owned()
+    } else {
+        format!("{parent}.{field}")
+    }
 }
 
 /// A field type with a JSON encoding, a decoding and a schema.
@@ -135,10 +139,13 @@ impl Field for u32 {
     }
 
     fn read(value: &Value, field: &str) -> Result<Self, DecodeError> {
-        value.as_u64().and_then(|v| u32::try_from(v).ok()).ok_or_else(|| DecodeError::Type {
-            field: field.to_owned(),
-            expected: "an integer from 0 to 2^32 - 1",
-        })
+        value
+            .as_u64()
+            .and_then(|v| u32::try_from(v).ok())
+            .ok_or_else(|| DecodeError::Type {
+                field: field.to_owned(),
+                expected: "an integer from 0 to 2^32 - 1",
+            })
     }
 
     fn schema(description: &str) -> Value {
@@ -157,10 +164,13 @@ impl Field for u8 {
     }
 
     fn read(value: &Value, field: &str) -> Result<Self, DecodeError> {
-        value.as_u64().and_then(|v| u8::try_from(v).ok()).ok_or_else(|| DecodeError::Type {
-            field: field.to_owned(),
-            expected: "an integer from 0 to 255",
-        })
+        value
+            .as_u64()
+            .and_then(|v| u8::try_from(v).ok())
+            .ok_or_else(|| DecodeError::Type {
+                field: field.to_owned(),
+                expected: "an integer from 0 to 255",
+            })
     }
 
     fn schema(description: &str) -> Value {
@@ -291,12 +301,13 @@ impl Field for [u8; 32] {
                     });
                 }
                 for (i, (slot, item)) in out.iter_mut().zip(items).enumerate() {
-                    *slot = item.as_u64().and_then(|v| u8::try_from(v).ok()).ok_or_else(|| {
-                        DecodeError::Type {
+                    *slot = item
+                        .as_u64()
+                        .and_then(|v| u8::try_from(v).ok())
+                        .ok_or_else(|| DecodeError::Type {
                             field: format!("{field}[{i}]"),
                             expected: "an integer from 0 to 255",
-                        }
-                    })?;
+                        })?;
                 }
                 Ok(out)
             }
@@ -388,7 +399,11 @@ pub(crate) fn as_object<'a>(
     field: &str,
 ) -> Result<&'a Map<String, Value>, DecodeError> {
     value.as_object().ok_or_else(|| DecodeError::Type {
-        field: if field.is_empty() { "(message)".to_owned() } else { field.to_owned() },
+        field: if field.is_empty() {
+            "(message)".to_owned()
+        } else {
+            field.to_owned()
+        },
         expected: "an object",
     })
 }
@@ -413,15 +428,19 @@ pub(crate) fn check_no_extra(
     known: &[&str],
 ) -> Result<(), DecodeError> {
     match obj.keys().find(|k| !known.contains(&k.as_str())) {
-        Some(extra) => Err(DecodeError::Unknown { field: path(parent, extra) }),
+        Some(extra) => Err(DecodeError::Unknown {
+            field: path(parent, extra),
+        }),
         None => Ok(()),
     }
 }
 
 /// JSON Schema of an object with exactly the given properties, all required.
 pub(crate) fn object_schema(title: &str, description: &str, properties: &[(&str, Value)]) -> Value {
-    let props: Map<String, Value> =
-        properties.iter().map(|(name, schema)| ((*name).to_owned(), schema.clone())).collect();
+    let props: Map<String, Value> = properties
+        .iter()
+        .map(|(name, schema)| ((*name).to_owned(), schema.clone()))
+        .collect();
     let required: Vec<&str> = properties.iter().map(|(name, _)| *name).collect();
     json!({
         "title": title,
@@ -446,7 +465,17 @@ mod tests {
 
     #[test]
     fn floats_round_trip_exactly() {
-        for v in [0.0, -0.0, 1.0, 0.1, 1e-300, f64::MIN_POSITIVE, 5e-324, f64::MAX, -1.2345e17] {
+        for v in [
+            0.0,
+            -0.0,
+            1.0,
+            0.1,
+            1e-300,
+            f64::MIN_POSITIVE,
+            5e-324,
+            f64::MAX,
+            -1.2345e17,
+        ] {
             assert_eq!(round(&v).to_bits(), v.to_bits(), "{v:e}");
         }
         assert!(round(&f64::NAN).is_nan());
@@ -488,7 +517,11 @@ mod tests {
         let v: Value = serde_json::from_str("[1, 2]").expect("json");
         assert!(matches!(
             <[f64; 3]>::read(&v, "rate"),
-            Err(DecodeError::Length { expected: 3, found: 2, .. })
+            Err(DecodeError::Length {
+                expected: 3,
+                found: 2,
+                ..
+            })
         ));
     }
 }

@@ -190,6 +190,9 @@ pub enum LogError {
 
 impl LogError {
     pub(crate) fn io(path: &Path, source: std::io::Error) -> Self {
-        Self::File { path: path.to_owned(), source }
+        Self::File {
+            path: path.to_owned(),
+            source,
+        }
     }
 }

@@ -32,7 +32,10 @@ impl std::fmt::Display for LogEnd {
         match self {
             Self::Complete => write!(f, "file complete"),
             Self::Truncated { offset, file_len } => {
-                write!(f, "file cut: complete records end at byte {offset} of {file_len}")
+                write!(
+                    f,
+                    "file cut: complete records end at byte {offset} of {file_len}"
+                )
             }
         }
     }
@@ -96,7 +99,11 @@ impl Framing {
         if file_len < magic_len {
             return Ok(Err(file_len));
         }
-        Ok(Ok(Self { reader, pos: magic_len, file_len }))
+        Ok(Ok(Self {
+            reader,
+            pos: magic_len,
+            file_len,
+        }))
     }
 
     fn next(&mut self) -> Result<Next, LogError> {
@@ -114,13 +121,20 @@ impl Framing {
             return Ok(Next::Cut { offset });
         }
         self.pos = offset + 9 + len;
-        Ok(Next::Record { opcode, offset, len })
+        Ok(Next::Record {
+            opcode,
+            offset,
+            len,
+        })
     }
 
     fn body(&mut self, len: u64, buf: &mut Vec<u8>) -> Result<(), LogError> {
         buf.clear();
         // `len` fits the file (checked in `next`), so it fits memory as a file read would.
-        buf.resize(usize::try_from(len).map_err(|_| std::io::Error::other("record too large"))?, 0);
+        buf.resize(
+            usize::try_from(len).map_err(|_| std::io::Error::other("record too large"))?,
+            0,
+        );
         self.reader.read_exact(buf)?;
         Ok(())
     }
@@ -151,7 +165,10 @@ impl RunLog {
             Err(file_len) => {
                 return Err(LogError::MissingRunInfo {
                     missing: "header",
-                    end: LogEnd::Truncated { offset: 0, file_len },
+                    end: LogEnd::Truncated {
+                        offset: 0,
+                        file_len,
+                    },
                 });
             }
         };
@@ -168,7 +185,11 @@ impl RunLog {
 
         while end.is_none() {
             let (opcode, offset, len) = match framing.next()? {
-                Next::Record { opcode, offset, len } => (opcode, offset, len),
+                Next::Record {
+                    opcode,
+                    offset,
+                    len,
+                } => (opcode, offset, len),
                 Next::Cut { offset } => {
                     end = Some(LogEnd::Truncated { offset, file_len });
                     break;
@@ -181,7 +202,10 @@ impl RunLog {
                     framing.skip(len)?;
                 }
                 op::CHUNK => {
-                    return Err(LogError::Unsupported { offset, what: "a chunked MCAP file" });
+                    return Err(LogError::Unsupported {
+                        offset,
+                        what: "a chunked MCAP file",
+                    });
                 }
                 op::HEADER | op::SCHEMA | op::CHANNEL | op::ATTACHMENT | op::METADATA
                     if in_data =>
@@ -194,7 +218,13 @@ impl RunLog {
                         }
                         Record::Channel(c) => {
                             let kind = channel_kind(&c, &schemas);
-                            channels.insert(c.id, ChannelEntry { topic: c.topic, kind });
+                            channels.insert(
+                                c.id,
+                                ChannelEntry {
+                                    topic: c.topic,
+                                    kind,
+                                },
+                            );
                         }
                         Record::Attachment { header, data, .. }
                             if header.name == CONFIG_ATTACHMENT =>
@@ -227,13 +257,19 @@ impl RunLog {
                     end = Some(if n == 8 && *tail == *mcap::MAGIC {
                         LogEnd::Complete
                     } else {
-                        LogEnd::Truncated { offset: framing.pos, file_len }
+                        LogEnd::Truncated {
+                            offset: framing.pos,
+                            file_len,
+                        }
                     });
                 }
                 _ => framing.skip(len)?,
             }
         }
-        let end = end.unwrap_or(LogEnd::Truncated { offset: framing.pos, file_len });
+        let end = end.unwrap_or(LogEnd::Truncated {
+            offset: framing.pos,
+            file_len,
+        });
         let data_end = match (data_end, end) {
             (Some(d), _) => d,
             (None, LogEnd::Truncated { offset, .. }) => offset,
@@ -249,7 +285,15 @@ impl RunLog {
             end,
         })?;
         let info = run_info(metadata, config_toml)?;
-        Ok(Self { path: path.to_owned(), info, library, channels, data_end, end, message_count })
+        Ok(Self {
+            path: path.to_owned(),
+            info,
+            library,
+            channels,
+            data_end,
+            end,
+            message_count,
+        })
     }
 
     /// The run information: profile, seed, mode, configuration text, further entries.
@@ -295,18 +339,30 @@ impl RunLog {
     /// The records on the given topics (`ipc_types::topic` names), in file order. Names of
     /// topics the log does not have are ignored.
     pub fn records_on(&self, topics: &[&str]) -> Result<Records<'_>, LogError> {
-        let kinds = topics.iter().filter_map(|t| TopicKind::from_topic(t)).collect();
+        let kinds = topics
+            .iter()
+            .filter_map(|t| TopicKind::from_topic(t))
+            .collect();
         self.records_filtered(Some(kinds))
     }
 
     /// The samples of type `T` (its topic), in file order.
     pub fn samples<T: LogEncode>(&self) -> Result<Samples<'_, T>, LogError> {
-        Ok(Samples { records: self.records_on(&[T::NAME])?, _type: PhantomData })
+        Ok(Samples {
+            records: self.records_on(&[T::NAME])?,
+            _type: PhantomData,
+        })
     }
 
     fn records_filtered(&self, filter: Option<Vec<TopicKind>>) -> Result<Records<'_>, LogError> {
         let framing = Framing::open(&self.path)?.map_err(|_| LogError::NotMcap)?;
-        Ok(Records { log: self, framing, filter, body: Vec::new(), stopped: false })
+        Ok(Records {
+            log: self,
+            framing,
+            filter,
+            body: Vec::new(),
+            stopped: false,
+        })
     }
 }
 
@@ -318,7 +374,10 @@ fn channel_kind(
     let kind =
         TopicKind::from_topic(&channel.topic).ok_or_else(|| "not an ipc-types topic".to_owned())?;
     if channel.message_encoding != MESSAGE_ENCODING {
-        return Err(format!("message encoding {:?}, expected json", channel.message_encoding));
+        return Err(format!(
+            "message encoding {:?}, expected json",
+            channel.message_encoding
+        ));
     }
     match schemas.get(&channel.schema_id) {
         Some((name, encoding)) if name == kind.schema_name() && encoding == SCHEMA_ENCODING => {
@@ -337,7 +396,10 @@ fn run_info(
     config_toml: String,
 ) -> Result<RunInfo, LogError> {
     let mut take = |key: &'static str| {
-        metadata.remove(key).ok_or(LogError::BadRunInfo { key, problem: "missing".to_owned() })
+        metadata.remove(key).ok_or(LogError::BadRunInfo {
+            key,
+            problem: "missing".to_owned(),
+        })
     };
     let _format = take(keys::FORMAT)?;
     let profile = take(keys::PROFILE)?;
@@ -347,7 +409,13 @@ fn run_info(
         key: keys::SEED,
         problem: format!("{seed_text:?} is not a u64: {e}"),
     })?;
-    Ok(RunInfo { profile, seed, mode, config_toml, extra: metadata })
+    Ok(RunInfo {
+        profile,
+        seed,
+        mode,
+        config_toml,
+        extra: metadata,
+    })
 }
 
 /// Iterator over a log's records, in file order (see [`RunLog::records`]).
@@ -370,7 +438,11 @@ impl Records<'_> {
                 return Ok(None);
             }
             let (opcode, offset, len) = match self.framing.next()? {
-                Next::Record { opcode, offset, len } => (opcode, offset, len),
+                Next::Record {
+                    opcode,
+                    offset,
+                    len,
+                } => (opcode, offset, len),
                 Next::Cut { .. } => return Ok(None),
             };
             if opcode != op::MESSAGE {
@@ -381,11 +453,14 @@ impl Records<'_> {
             let Record::Message { header, data } = parse(opcode, offset, &self.body)? else {
                 continue;
             };
-            let channel = self
-                .log
-                .channels
-                .get(&header.channel_id)
-                .ok_or(LogError::UnknownChannel { offset, channel: header.channel_id })?;
+            let channel =
+                self.log
+                    .channels
+                    .get(&header.channel_id)
+                    .ok_or(LogError::UnknownChannel {
+                        offset,
+                        channel: header.channel_id,
+                    })?;
             let kind = match &channel.kind {
                 Ok(kind) => *kind,
                 Err(problem) => {
@@ -402,11 +477,14 @@ impl Records<'_> {
             if self.filter.as_ref().is_some_and(|f| !f.contains(&kind)) {
                 continue;
             }
-            return kind.decode(&data).map(Some).map_err(|source| LogError::Decode {
-                offset,
-                topic: kind.name(),
-                source,
-            });
+            return kind
+                .decode(&data)
+                .map(Some)
+                .map_err(|source| LogError::Decode {
+                    offset,
+                    topic: kind.name(),
+                    source,
+                });
         }
     }
 }

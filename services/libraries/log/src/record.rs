@@ -4,8 +4,7 @@ use crate::json::{DecodeError, Field, as_object, check_no_extra, member, object_
 use ipc_types::{
     AppliedCmgCommand, AppliedWheelCommand, AttitudeEstimate, CanBusFrame, CanLinkStatus,
     CmgCommand, CmgTelemetry, ControllerStatus, GyroSample, Heartbeat, InclinometerSample,
-    MagnetometerSample, SampleHeader, SimClockTick, SimTruth, Topic, WheelCommand,
-    WheelTelemetry,
+    MagnetometerSample, SampleHeader, SimClockTick, SimTruth, Topic, WheelCommand, WheelTelemetry,
 };
 use serde_json::Value;
 
@@ -547,7 +546,13 @@ mod tests {
             ),
             Err(DecodeError::Unknown { .. })
         ));
-        assert!(matches!(GyroSample::decode_json(b"[1]"), Err(DecodeError::Type { .. })));
-        assert!(matches!(GyroSample::decode_json(b"{"), Err(DecodeError::Json(_))));
+        assert!(matches!(
+            GyroSample::decode_json(b"[1]"),
+            Err(DecodeError::Type { .. })
+        ));
+        assert!(matches!(
+            GyroSample::decode_json(b"{"),
+            Err(DecodeError::Json(_))
+        ));
     }
 }

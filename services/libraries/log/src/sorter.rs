@@ -166,7 +166,10 @@ mod tests {
             sorter.push(EncodedRecord::new(r)).expect("not late");
         }
         let out = sorter.complete_until(10);
-        let keys: Vec<_> = out.iter().map(|r| (r.time_ns(), r.topic(), r.sequence())).collect();
+        let keys: Vec<_> = out
+            .iter()
+            .map(|r| (r.time_ns(), r.topic(), r.sequence()))
+            .collect();
         assert_eq!(
             keys,
             [
@@ -180,9 +183,16 @@ mod tests {
         assert_eq!(sorter.len(), 1);
         assert!(matches!(
             sorter.push(EncodedRecord::new(&gyro(10, 9))),
-            Err(LogError::LateRecord { time_ns: 10, completed_until_ns: 10, .. })
+            Err(LogError::LateRecord {
+                time_ns: 10,
+                completed_until_ns: 10,
+                ..
+            })
         ));
-        assert!(sorter.complete_until(3).is_empty(), "completion never goes back");
+        assert!(
+            sorter.complete_until(3).is_empty(),
+            "completion never goes back"
+        );
         assert_eq!(sorter.drain().len(), 1);
         assert!(sorter.is_empty());
     }

@@ -39,14 +39,20 @@ pub struct WriterOptions {
 impl Default for WriterOptions {
     /// Arrival order, 64 KiB buffer.
     fn default() -> Self {
-        Self { order: RecordOrder::Arrival, buffer_bytes: 64 * 1024 }
+        Self {
+            order: RecordOrder::Arrival,
+            buffer_bytes: 64 * 1024,
+        }
     }
 }
 
 impl WriterOptions {
     /// Options for a lockstep run: [`RecordOrder::Sorted`], default buffer.
     pub fn lockstep() -> Self {
-        Self { order: RecordOrder::Sorted, ..Self::default() }
+        Self {
+            order: RecordOrder::Sorted,
+            ..Self::default()
+        }
     }
 }
 
@@ -108,8 +114,11 @@ impl RunLogWriter<BufWriter<File>> {
         let path = path.as_ref();
         let file = File::create(path).map_err(|e| LogError::io(path, e))?;
         let sync_file = file.try_clone().map_err(|e| LogError::io(path, e))?;
-        let mut writer =
-            Self::new(BufWriter::with_capacity(options.buffer_bytes, file), info, options)?;
+        let mut writer = Self::new(
+            BufWriter::with_capacity(options.buffer_bytes, file),
+            info,
+            options,
+        )?;
         writer.sync_file = Some(sync_file);
         Ok(writer)
     }
@@ -119,7 +128,11 @@ impl<W: Write + Seek> RunLogWriter<W> {
     /// Starts a log on `writer` and writes the header, schemas, channels, configuration and
     /// run metadata ([`WriterOptions::buffer_bytes`] is not used: buffer `writer` yourself).
     pub fn new(writer: W, info: &RunInfo, options: WriterOptions) -> Result<Self, LogError> {
-        if let Some(key) = info.extra.keys().find(|k| RESERVED_KEYS.contains(&k.as_str())) {
+        if let Some(key) = info
+            .extra
+            .keys()
+            .find(|k| RESERVED_KEYS.contains(&k.as_str()))
+        {
             return Err(LogError::ReservedKey(key.clone()));
         }
         let mcap_options = mcap::WriteOptions::new()
@@ -152,7 +165,10 @@ impl<W: Write + Seek> RunLogWriter<W> {
         metadata.insert(keys::PROFILE.to_owned(), info.profile.clone());
         metadata.insert(keys::SEED.to_owned(), info.seed.to_string());
         metadata.insert(keys::MODE.to_owned(), info.mode.clone());
-        mcap.write_metadata(&Metadata { name: RUN_METADATA.to_owned(), metadata })?;
+        mcap.write_metadata(&Metadata {
+            name: RUN_METADATA.to_owned(),
+            metadata,
+        })?;
         mcap.flush()?;
 
         Ok(Self {
@@ -191,7 +207,12 @@ impl<W: Write + Seek> RunLogWriter<W> {
     /// Logs an already encoded record, e.g. one released by an external [`TickSorter`]
     /// (bypasses this writer's sorter).
     pub fn write_encoded(&mut self, record: &EncodedRecord) -> Result<(), LogError> {
-        self.put(record.kind(), record.time_ns(), record.sequence(), record.data())
+        self.put(
+            record.kind(),
+            record.time_ns(),
+            record.sequence(),
+            record.data(),
+        )
     }
 
     fn put(
@@ -275,9 +296,18 @@ impl<W: Write + Seek> RunLogWriter<W> {
         if let Some(file) = &self.sync_file {
             file.sync_all().map_err(LogError::Io)?;
         }
-        let per_topic: Vec<_> =
-            TopicKind::ALL.iter().map(|k| k.name()).zip(self.counts.iter().copied()).collect();
-        Ok((LogStats { messages: per_topic.iter().map(|(_, n)| n).sum(), per_topic }, inner))
+        let per_topic: Vec<_> = TopicKind::ALL
+            .iter()
+            .map(|k| k.name())
+            .zip(self.counts.iter().copied())
+            .collect();
+        Ok((
+            LogStats {
+                messages: per_topic.iter().map(|(_, n)| n).sum(),
+                per_topic,
+            },
+            inner,
+        ))
     }
 
     fn drain_sorter(&mut self) -> Result<(), LogError> {

@@ -13,9 +13,12 @@ use testbed_log::{
 /// arriving only after the next tick's records, with completion lagging one tick behind.
 fn sorted_log(ticks: &[Vec<LogRecord>], shuffle_seed: u64) -> Vec<u8> {
     let mut rng = Rng::new(shuffle_seed);
-    let mut writer =
-        RunLogWriter::new(Cursor::new(Vec::new()), &run_info(), WriterOptions::lockstep())
-            .expect("create");
+    let mut writer = RunLogWriter::new(
+        Cursor::new(Vec::new()),
+        &run_info(),
+        WriterOptions::lockstep(),
+    )
+    .expect("create");
     let mut late: Vec<LogRecord> = Vec::new();
     for (k, tick) in ticks.iter().enumerate() {
         let mut tick = tick.clone();
@@ -30,7 +33,9 @@ fn sorted_log(ticks: &[Vec<LogRecord>], shuffle_seed: u64) -> Vec<u8> {
         late = delayed;
         if k > 0 {
             // Tick k has started: everything up to tick k - 1 is in.
-            writer.complete_until((k as u64 - 1) * STEP_NS).expect("complete");
+            writer
+                .complete_until((k as u64 - 1) * STEP_NS)
+                .expect("complete");
         }
     }
     for record in &late {
@@ -58,7 +63,11 @@ fn different_arrival_orders_give_identical_files() {
     let path = temp_path("det_a.mcap");
     std::fs::write(&path, &a).expect("write");
     let log = RunLog::open(&path).expect("open");
-    let read: Vec<LogRecord> = log.records().expect("records").map(|r| r.expect("ok")).collect();
+    let read: Vec<LogRecord> = log
+        .records()
+        .expect("records")
+        .map(|r| r.expect("ok"))
+        .collect();
     let mut expected: Vec<EncodedRecord> = ticks.iter().flatten().map(EncodedRecord::new).collect();
     expected.sort();
     let read_encoded: Vec<EncodedRecord> = read.iter().map(EncodedRecord::new).collect();
@@ -69,9 +78,12 @@ fn different_arrival_orders_give_identical_files() {
 fn arrival_order_is_kept_without_sorting_and_writing_is_repeatable() {
     let ticks = run_records(20, 4);
     let write = |records: &[LogRecord]| {
-        let mut writer =
-            RunLogWriter::new(Cursor::new(Vec::new()), &run_info(), WriterOptions::default())
-                .expect("create");
+        let mut writer = RunLogWriter::new(
+            Cursor::new(Vec::new()),
+            &run_info(),
+            WriterOptions::default(),
+        )
+        .expect("create");
         for r in records {
             writer.write_record(r).expect("write");
         }
@@ -81,17 +93,28 @@ fn arrival_order_is_kept_without_sorting_and_writing_is_repeatable() {
     let mut reversed = records.clone();
     reversed.reverse();
     let first = write(&records);
-    assert_eq!(first, write(&records), "same records, same order: same bytes");
-    assert_ne!(first, write(&reversed), "arrival order is kept (the test is not vacuous)");
+    assert_eq!(
+        first,
+        write(&records),
+        "same records, same order: same bytes"
+    );
+    assert_ne!(
+        first,
+        write(&reversed),
+        "arrival order is kept (the test is not vacuous)"
+    );
 }
 
 #[test]
 fn external_sorter_feeding_an_arrival_writer_matches_the_sorted_writer() {
     let ticks = run_records(10, 5);
     let mut sorter = TickSorter::new();
-    let mut writer =
-        RunLogWriter::new(Cursor::new(Vec::new()), &run_info(), WriterOptions::default())
-            .expect("create");
+    let mut writer = RunLogWriter::new(
+        Cursor::new(Vec::new()),
+        &run_info(),
+        WriterOptions::default(),
+    )
+    .expect("create");
     // The whole run buffered in reverse arrival order, released at the end.
     for tick in ticks.iter().rev() {
         for r in tick.iter().rev() {
@@ -103,9 +126,12 @@ fn external_sorter_feeding_an_arrival_writer_matches_the_sorted_writer() {
     }
     let external = writer_bytes(writer);
 
-    let mut sorted =
-        RunLogWriter::new(Cursor::new(Vec::new()), &run_info(), WriterOptions::lockstep())
-            .expect("create");
+    let mut sorted = RunLogWriter::new(
+        Cursor::new(Vec::new()),
+        &run_info(),
+        WriterOptions::lockstep(),
+    )
+    .expect("create");
     for r in ticks.iter().flatten() {
         sorted.write_record(r).expect("write");
     }

@@ -21,7 +21,11 @@ fn python_mcap_reads_topics_schemas_messages_and_configuration() {
 
     let report = python_read_log(&["summary", path.to_str().expect("utf-8 path")]);
 
-    assert!(report["library"].as_str().is_some_and(|l| l.starts_with("testbed-log/")));
+    assert!(
+        report["library"]
+            .as_str()
+            .is_some_and(|l| l.starts_with("testbed-log/"))
+    );
     // Channels: one per topic, JSON messages, each with its JSON Schema.
     let channels = report["channels"].as_object().expect("channels");
     let topics: Vec<&str> = (1..=topic::ALL.len())
@@ -34,13 +38,20 @@ fn python_mcap_reads_topics_schemas_messages_and_configuration() {
         let schema = &schemas[&channel["schema_id"].to_string()];
         assert_eq!(schema["encoding"], "jsonschema");
         let name = schema["name"].as_str().expect("name");
-        assert!(name.starts_with("testbed::") && name.ends_with(".v1"), "{name}");
+        assert!(
+            name.starts_with("testbed::") && name.ends_with(".v1"),
+            "{name}"
+        );
         assert_eq!(schema["data"]["type"], "object");
         assert!(schema["data"]["properties"]["header"]["properties"]["time_ns"].is_object());
     }
-    let gyro_schema =
-        schemas.values().find(|s| s["name"] == "testbed::GyroSample.v1").expect("gyro schema");
-    let rate = gyro_schema["data"]["properties"]["rate"]["description"].as_str().expect("desc");
+    let gyro_schema = schemas
+        .values()
+        .find(|s| s["name"] == "testbed::GyroSample.v1")
+        .expect("gyro schema");
+    let rate = gyro_schema["data"]["properties"]["rate"]["description"]
+        .as_str()
+        .expect("desc");
     assert!(rate.contains("rad/s"), "units in the description: {rate}");
 
     // Messages: every one decoded as JSON by the script; counts match.

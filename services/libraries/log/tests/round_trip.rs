@@ -16,7 +16,11 @@ fn every_sample_type_round_trips() {
     let path = temp_path("round_trip.mcap");
     let records: Vec<LogRecord> = run_records(40, 1).into_iter().flatten().collect();
     let topics: BTreeSet<_> = records.iter().map(LogRecord::topic).collect();
-    assert_eq!(topics.len(), topic::ALL.len(), "the synthetic run covers every topic");
+    assert_eq!(
+        topics.len(),
+        topic::ALL.len(),
+        "the synthetic run covers every topic"
+    );
 
     let mut writer = RunLogWriter::create(&path, &run_info()).expect("create");
     for record in &records {
@@ -35,13 +39,19 @@ fn every_sample_type_round_trips() {
     assert_eq!(log.topics(), topic::ALL);
     assert!(log.library().starts_with("testbed-log/"));
 
-    let read: Vec<LogRecord> =
-        log.records().expect("records").map(|r| r.expect("decodes")).collect();
+    let read: Vec<LogRecord> = log
+        .records()
+        .expect("records")
+        .map(|r| r.expect("decodes"))
+        .collect();
     assert_eq!(read, records);
 
     // Filters.
-    let gyros: Vec<GyroSample> =
-        log.samples::<GyroSample>().expect("samples").map(|r| r.expect("decodes")).collect();
+    let gyros: Vec<GyroSample> = log
+        .samples::<GyroSample>()
+        .expect("samples")
+        .map(|r| r.expect("decodes"))
+        .collect();
     let expected: Vec<GyroSample> = records
         .iter()
         .filter_map(|r| match r {
@@ -70,7 +80,14 @@ fn edge_values_round_trip() {
     let path = temp_path("edge_values.mcap");
     let mut estimate = AttitudeEstimate {
         header: SampleHeader::new(u64::MAX, u64::MAX, u32::MAX).with_source(u32::MAX),
-        innovation: [f64::NAN, f64::INFINITY, f64::NEG_INFINITY, -0.0, 5e-324, f64::MAX],
+        innovation: [
+            f64::NAN,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            -0.0,
+            5e-324,
+            f64::MAX,
+        ],
         ..AttitudeEstimate::default()
     };
     estimate.covariance[35] = f64::MIN_POSITIVE;
@@ -89,13 +106,22 @@ fn edge_values_round_trip() {
     writer.finish().expect("finish");
 
     let log = RunLog::open(&path).expect("open");
-    let read: Vec<LogRecord> =
-        log.records().expect("records").map(|r| r.expect("decodes")).collect();
-    let LogRecord::AttitudeEstimate(e) = read[0] else { panic!("estimate first: {read:?}") };
+    let read: Vec<LogRecord> = log
+        .records()
+        .expect("records")
+        .map(|r| r.expect("decodes"))
+        .collect();
+    let LogRecord::AttitudeEstimate(e) = read[0] else {
+        panic!("estimate first: {read:?}")
+    };
     assert_eq!(e.header, estimate.header);
     assert!(e.innovation[0].is_nan());
     for i in 1..6 {
-        assert_eq!(e.innovation[i].to_bits(), estimate.innovation[i].to_bits(), "innovation[{i}]");
+        assert_eq!(
+            e.innovation[i].to_bits(),
+            estimate.innovation[i].to_bits(),
+            "innovation[{i}]"
+        );
     }
     assert_eq!(e.covariance, estimate.covariance);
     assert_eq!(read[1], LogRecord::Heartbeat(garbage_name));
@@ -125,16 +151,28 @@ fn writer_checks_its_inputs() {
     assert_eq!(writer.pending(), 1);
     assert!(matches!(
         writer.write(&gyro(15)),
-        Err(LogError::LateRecord { time_ns: 15, completed_until_ns: 15, .. })
+        Err(LogError::LateRecord {
+            time_ns: 15,
+            completed_until_ns: 15,
+            ..
+        })
     ));
-    writer.write(&MagnetometerSample::default()).expect_err("time 0 is late too");
+    writer
+        .write(&MagnetometerSample::default())
+        .expect_err("time 0 is late too");
     writer.finish().expect("finish writes the pending record");
     let log = RunLog::open(&path).expect("open");
-    let times: Vec<u64> =
-        log.records().expect("records").map(|r| r.expect("decodes").header().time_ns).collect();
+    let times: Vec<u64> = log
+        .records()
+        .expect("records")
+        .map(|r| r.expect("decodes").header().time_ns)
+        .collect();
     assert_eq!(times, [10, 20]);
 
-    assert!(matches!(RunLog::open(temp_path("missing.mcap")), Err(LogError::File { .. })));
+    assert!(matches!(
+        RunLog::open(temp_path("missing.mcap")),
+        Err(LogError::File { .. })
+    ));
     let not_mcap = temp_path("not.mcap");
     std::fs::write(&not_mcap, b"hello, world").expect("write");
     assert!(matches!(RunLog::open(&not_mcap), Err(LogError::NotMcap)));
@@ -146,7 +184,9 @@ fn dropping_an_unfinished_writer_still_completes_the_file() {
     {
         let mut writer = RunLogWriter::create_with(&path, &run_info(), WriterOptions::lockstep())
             .expect("create");
-        writer.write(&GyroSample::new(SampleHeader::new(5, 0, 1), [1.0; 3])).expect("write");
+        writer
+            .write(&GyroSample::new(SampleHeader::new(5, 0, 1), [1.0; 3]))
+            .expect("write");
     }
     let log = RunLog::open(&path).expect("open");
     assert!(log.is_complete());

@@ -26,7 +26,15 @@ fn finished_log(name: &str) -> (Vec<u8>, Vec<LogRecord>) {
 fn cut_offsets(frames: &[Framed], len: u64) -> BTreeSet<u64> {
     let mut cuts: BTreeSet<u64> = (0..=16).collect();
     for f in frames {
-        for c in [f.start - 1, f.start, f.start + 1, f.start + 8, f.start + 9, f.end - 1, f.end] {
+        for c in [
+            f.start - 1,
+            f.start,
+            f.start + 1,
+            f.start + 8,
+            f.start + 9,
+            f.end - 1,
+            f.end,
+        ] {
             cuts.insert(c);
         }
     }
@@ -42,11 +50,21 @@ fn every_complete_record_before_a_cut_is_recovered() {
     let (bytes, records) = finished_log("truncation_full_rust.mcap");
     let len = bytes.len() as u64;
     let frames = framing(&bytes);
-    let message_ends: Vec<u64> =
-        frames.iter().filter(|f| f.opcode == MESSAGE).map(|f| f.end).collect();
+    let message_ends: Vec<u64> = frames
+        .iter()
+        .filter(|f| f.opcode == MESSAGE)
+        .map(|f| f.end)
+        .collect();
     assert_eq!(message_ends.len(), records.len());
-    let run_info_end = frames.iter().find(|f| f.opcode == METADATA).expect("metadata").end;
-    assert!(run_info_end < message_ends[0], "run information precedes the messages");
+    let run_info_end = frames
+        .iter()
+        .find(|f| f.opcode == METADATA)
+        .expect("metadata")
+        .end;
+    assert!(
+        run_info_end < message_ends[0],
+        "run information precedes the messages"
+    );
 
     let cut_path = temp_path("truncation_cut.mcap");
     let cuts = cut_offsets(&frames, len);
@@ -58,7 +76,8 @@ fn every_complete_record_before_a_cut_is_recovered() {
             // Cut before the run information was complete: no message could precede it.
             match opened {
                 Err(LogError::MissingRunInfo {
-                    end: LogEnd::Truncated { file_len, .. }, ..
+                    end: LogEnd::Truncated { file_len, .. },
+                    ..
                 }) => {
                     assert_eq!(file_len, cut)
                 }
@@ -67,11 +86,19 @@ fn every_complete_record_before_a_cut_is_recovered() {
             continue;
         }
         let log = opened.unwrap_or_else(|e| panic!("cut at {cut}: {e}"));
-        let complete_end = frames.iter().map(|f| f.end).filter(|&e| e <= cut).max().unwrap_or(8);
+        let complete_end = frames
+            .iter()
+            .map(|f| f.end)
+            .filter(|&e| e <= cut)
+            .max()
+            .unwrap_or(8);
         let expected_end = if cut == len {
             LogEnd::Complete
         } else {
-            LogEnd::Truncated { offset: complete_end, file_len: cut }
+            LogEnd::Truncated {
+                offset: complete_end,
+                file_len: cut,
+            }
         };
         assert_eq!(log.end(), expected_end, "cut at {cut}");
         let n = message_ends.partition_point(|&e| e <= cut);
@@ -88,7 +115,11 @@ fn every_complete_record_before_a_cut_is_recovered() {
             checked_with_messages += 1;
         }
     }
-    assert!(cuts.len() > 2000 && checked_with_messages > 1000, "{} cuts", cuts.len());
+    assert!(
+        cuts.len() > 2000 && checked_with_messages > 1000,
+        "{} cuts",
+        cuts.len()
+    );
 }
 
 #[test]
@@ -115,9 +146,16 @@ fn python_stream_reader_recovers_the_complete_records_of_a_cut_log() {
             .map(|r| serde_json::json!([r.topic(), r.header().time_ns, r.header().sequence]))
             .collect();
         assert_eq!(got, &expected, "cut at {cut}: Python's StreamReader");
-        assert_ne!(report["ended"], "footer", "cut at {cut}: Python must see the cut");
+        assert_ne!(
+            report["ended"], "footer",
+            "cut at {cut}: Python must see the cut"
+        );
 
         let log = RunLog::open(&path).expect("open");
-        assert_eq!(log.records().expect("records").count(), n, "cut at {cut}: RunLog");
+        assert_eq!(
+            log.records().expect("records").count(),
+            n,
+            "cut at {cut}: RunLog"
+        );
     }
 }

@@ -31,11 +31,18 @@ pub const EARTH_RATE_RAD_S: f64 = 7.292_115e-5;
 #[derive(Debug, thiserror::Error)]
 pub enum ConfigError {
     #[error("cannot read model configuration {path}: {source}")]
-    Read { path: String, source: std::io::Error },
+    Read {
+        path: String,
+        source: std::io::Error,
+    },
     #[error("model configuration {origin}: {message}")]
     Parse { origin: String, message: String },
     #[error("model configuration: `{key}` = {value}: {reason}")]
-    Invalid { key: String, value: String, reason: String },
+    Invalid {
+        key: String,
+        value: String,
+        reason: String,
+    },
 }
 
 /// Complete model configuration of the test bed.
@@ -131,7 +138,11 @@ pub struct InclinometerConfig {
 
 impl Default for InclinometerConfig {
     fn default() -> Self {
-        Self { rate_hz: 2.5, noise_deg: [0.0010, 0.0008], range_deg: 25.0 }
+        Self {
+            rate_hz: 2.5,
+            noise_deg: [0.0010, 0.0008],
+            range_deg: 25.0,
+        }
     }
 }
 
@@ -149,7 +160,11 @@ pub struct MagnetometerConfig {
 
 impl Default for MagnetometerConfig {
     fn default() -> Self {
-        Self { rate_hz: 2.5, noise_gauss: [6.9e-4, 3.68e-4, 5.52e-4], range_gauss: 1.0 }
+        Self {
+            rate_hz: 2.5,
+            noise_gauss: [6.9e-4, 3.68e-4, 5.52e-4],
+            range_gauss: 1.0,
+        }
     }
 }
 
@@ -345,16 +360,20 @@ pub struct MagneticDisturbance {
 impl ModelConfig {
     /// Parse and validate a TOML document; `origin` names it in errors (a path, or "<inline>").
     pub fn from_toml_str(text: &str, origin: &str) -> Result<Self, ConfigError> {
-        let config: ModelConfig = toml::from_str(text)
-            .map_err(|e| ConfigError::Parse { origin: origin.to_string(), message: e.to_string() })?;
+        let config: ModelConfig = toml::from_str(text).map_err(|e| ConfigError::Parse {
+            origin: origin.to_string(),
+            message: e.to_string(),
+        })?;
         config.validate()?;
         Ok(config)
     }
 
     /// Read, parse and validate a TOML file.
     pub fn load(path: &Path) -> Result<Self, ConfigError> {
-        let text = std::fs::read_to_string(path)
-            .map_err(|source| ConfigError::Read { path: path.display().to_string(), source })?;
+        let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Read {
+            path: path.display().to_string(),
+            source,
+        })?;
         Self::from_toml_str(&text, &path.display().to_string())
     }
 
@@ -420,7 +439,12 @@ impl ModelConfig {
             v.finite_all("effects.com_offset.r_m", &x.r_m);
         }
         if let Some(x) = &e.earth_rate {
-            v.within("effects.earth_rate.latitude_deg", x.latitude_deg, -90.0, 90.0);
+            v.within(
+                "effects.earth_rate.latitude_deg",
+                x.latitude_deg,
+                -90.0,
+                90.0,
+            );
         }
         if let Some(x) = &e.aero_drag {
             v.non_negative_all("effects.aero_drag.c1", &x.c1);
@@ -431,7 +455,12 @@ impl ModelConfig {
         }
         if let Some(x) = &e.inertia_error {
             for (i, f) in x.fraction.iter().enumerate() {
-                v.within(&format!("effects.inertia_error.fraction[{i}]"), *f, -0.5, 0.5);
+                v.within(
+                    &format!("effects.inertia_error.fraction[{i}]"),
+                    *f,
+                    -0.5,
+                    0.5,
+                );
             }
             let nominal = self.platform.inertia();
             let truth = self.true_inertia();
@@ -448,15 +477,26 @@ impl ModelConfig {
         }
         if let Some(x) = &e.gyro_misalignment {
             for (i, a) in x.angles_rad.iter().enumerate() {
-                v.within(&format!("effects.gyro_misalignment.angles_rad[{i}]"), *a, -0.1, 0.1);
+                v.within(
+                    &format!("effects.gyro_misalignment.angles_rad[{i}]"),
+                    *a,
+                    -0.1,
+                    0.1,
+                );
             }
         }
         if let Some(x) = &e.wheel_friction {
             v.non_negative_all("effects.wheel_friction.coulomb_pos_nm", &x.coulomb_pos_nm);
             v.non_negative_all("effects.wheel_friction.coulomb_neg_nm", &x.coulomb_neg_nm);
-            v.non_negative_all("effects.wheel_friction.viscous_nm_per_rad_s", &x.viscous_nm_per_rad_s);
+            v.non_negative_all(
+                "effects.wheel_friction.viscous_nm_per_rad_s",
+                &x.viscous_nm_per_rad_s,
+            );
             v.non_negative_all("effects.wheel_friction.stribeck_nm", &x.stribeck_nm);
-            v.positive_all("effects.wheel_friction.stribeck_speed_rad_s", &x.stribeck_speed_rad_s);
+            v.positive_all(
+                "effects.wheel_friction.stribeck_speed_rad_s",
+                &x.stribeck_speed_rad_s,
+            );
         }
         if let Some(x) = &e.wheel_torque_scale {
             v.positive_all("effects.wheel_torque_scale.scale", &x.scale);
@@ -465,7 +505,10 @@ impl ModelConfig {
             v.within("effects.actuator_delay.delay_s", x.delay_s, 0.0, 10.0);
         }
         if let Some(x) = &e.magnetic_disturbance {
-            v.finite_all("effects.magnetic_disturbance.hard_iron_gauss", &x.hard_iron_gauss);
+            v.finite_all(
+                "effects.magnetic_disturbance.hard_iron_gauss",
+                &x.hard_iron_gauss,
+            );
         }
         v.finish()
     }
@@ -618,7 +661,11 @@ impl Validator {
         if (m - m.transpose()).abs().max() > 1e-9 * scale {
             self.fail(key, value, "must be symmetric");
         } else if m.cholesky().is_none() {
-            self.fail(key, value, "must be positive definite (all principal moments > 0)");
+            self.fail(
+                key,
+                value,
+                "must be positive definite (all principal moments > 0)",
+            );
         }
     }
     fn finish(self) -> Result<(), ConfigError> {
@@ -642,7 +689,10 @@ mod tests {
         let config = ModelConfig::default();
         config.validate().unwrap();
         let text = config.to_toml_string();
-        assert_eq!(ModelConfig::from_toml_str(&text, "round-trip").unwrap(), config);
+        assert_eq!(
+            ModelConfig::from_toml_str(&text, "round-trip").unwrap(),
+            config
+        );
         assert_eq!(ModelConfig::from_toml_str("", "empty").unwrap(), config);
     }
 
@@ -663,7 +713,8 @@ mod tests {
 
     #[test]
     fn negative_inertia_is_named_with_value() {
-        let msg = refused("[platform]\ninertia_kgm2 = [[-45.2, 0, 0], [0, 46.1, 0], [0, 0, 62.7]]\n");
+        let msg =
+            refused("[platform]\ninertia_kgm2 = [[-45.2, 0, 0], [0, 46.1, 0], [0, 0, 62.7]]\n");
         assert!(msg.contains("platform.inertia_kgm2"), "{msg}");
         assert!(msg.contains("-45.2"), "{msg}");
         assert!(msg.contains("positive definite"), "{msg}");
@@ -671,7 +722,8 @@ mod tests {
 
     #[test]
     fn non_symmetric_inertia_is_refused() {
-        let msg = refused("[platform]\ninertia_kgm2 = [[45.2, 1.0, 0], [0, 46.1, 0], [0, 0, 62.7]]\n");
+        let msg =
+            refused("[platform]\ninertia_kgm2 = [[45.2, 1.0, 0], [0, 46.1, 0], [0, 0, 62.7]]\n");
         assert!(msg.contains("symmetric"), "{msg}");
     }
 
@@ -685,7 +737,10 @@ mod tests {
     #[test]
     fn nan_is_named() {
         let msg = refused("[gyro]\nrange_deg_s = nan\n");
-        assert!(msg.contains("gyro.range_deg_s") && msg.contains("NaN"), "{msg}");
+        assert!(
+            msg.contains("gyro.range_deg_s") && msg.contains("NaN"),
+            "{msg}"
+        );
         let msg = refused("[effects.com_offset]\nr_m = [1e-6, nan, 0.0]\n");
         assert!(msg.contains("effects.com_offset.r_m[1]"), "{msg}");
     }
@@ -693,7 +748,10 @@ mod tests {
     #[test]
     fn negative_noise_is_named() {
         let msg = refused("[magnetometer]\nnoise_gauss = [1e-4, -2e-4, 1e-4]\n");
-        assert!(msg.contains("magnetometer.noise_gauss[1]") && msg.contains("-0.0002"), "{msg}");
+        assert!(
+            msg.contains("magnetometer.noise_gauss[1]") && msg.contains("-0.0002"),
+            "{msg}"
+        );
     }
 
     #[test]
@@ -711,7 +769,9 @@ mod tests {
     #[test]
     fn inertia_error_scales_principal_moments() {
         let mut config = ModelConfig::default();
-        config.effects.inertia_error = Some(InertiaError { fraction: [0.02, 0.0, -0.03] });
+        config.effects.inertia_error = Some(InertiaError {
+            fraction: [0.02, 0.0, -0.03],
+        });
         let truth = config.true_inertia().unwrap();
         assert!((truth[(0, 0)] - 45.2 * 1.02).abs() < 1e-12);
         assert!((truth[(2, 2)] - 62.7 * 0.97).abs() < 1e-12);

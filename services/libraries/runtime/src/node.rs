@@ -27,7 +27,8 @@ use anyhow::Context as _;
 use ipc_types::{ProcessState, Topic};
 use std::time::Duration;
 use testbed_bus::{
-    Bus, BusError, EventLoop, Flow, HeartbeatPublisher, LoopExit, SourceId, TopicSubscriber, Waiter, Wake,
+    Bus, BusError, EventLoop, Flow, HeartbeatPublisher, LoopExit, SourceId, TopicSubscriber,
+    Waiter, Wake,
 };
 
 /// What a node is opened with.
@@ -58,7 +59,10 @@ pub struct WakeOn<'l, 'w, 'a> {
 
 impl<'a> WakeOn<'_, '_, 'a> {
     /// Wake with [`Wake::Data`] when `subscriber` receives a sample.
-    pub fn data<T: Topic>(&mut self, subscriber: &'a TopicSubscriber<T>) -> Result<SourceId, BusError> {
+    pub fn data<T: Topic>(
+        &mut self,
+        subscriber: &'a TopicSubscriber<T>,
+    ) -> Result<SourceId, BusError> {
         self.events.on_data(subscriber)
     }
 
@@ -100,7 +104,11 @@ pub trait Node {
     }
 
     /// Attaches the ports that wake the node.
-    fn wake_on<'a>(&mut self, ports: &'a Self::Ports, wake: &mut WakeOn<'_, '_, 'a>) -> anyhow::Result<()>;
+    fn wake_on<'a>(
+        &mut self,
+        ports: &'a Self::Ports,
+        wake: &mut WakeOn<'_, '_, 'a>,
+    ) -> anyhow::Result<()>;
 
     /// Called once, `Running`, before the first wake-up (a clock owner publishes its first
     /// tick here). [`Flow::Stop`] ends the run at once.
@@ -124,8 +132,12 @@ pub fn run<N: Node>(
     open: impl FnOnce(&Context) -> anyhow::Result<(N, N::Ports)>,
 ) -> anyhow::Result<()> {
     let (config, bus) = process::start(name)?;
-    let (mut node, ports) =
-        open(&Context { name, config: &config, bus: &bus }).with_context(|| format!("{name}: starting"))?;
+    let (mut node, ports) = open(&Context {
+        name,
+        config: &config,
+        bus: &bus,
+    })
+    .with_context(|| format!("{name}: starting"))?;
     let heartbeat = bus.heartbeat(HEARTBEAT_PERIOD)?;
     if let Some(participants) = node.start_barrier(&config) {
         if process::wait_for_participants(&bus, &participants)? == LoopExit::TerminationRequested {
@@ -134,10 +146,20 @@ pub fn run<N: Node>(
     }
     let waiter = Waiter::new()?;
     let mut events = EventLoop::new(&waiter);
-    node.wake_on(&ports, &mut WakeOn { events: &mut events, mode: config.run.mode })?;
+    node.wake_on(
+        &ports,
+        &mut WakeOn {
+            events: &mut events,
+            mode: config.run.mode,
+        },
+    )?;
     events.with_heartbeat(&heartbeat)?;
     heartbeat.set_state(ProcessState::Running);
-    let io = Io { name, mode: config.run.mode, heartbeat: &heartbeat };
+    let io = Io {
+        name,
+        mode: config.run.mode,
+        heartbeat: &heartbeat,
+    };
 
     let mut error = None;
     let mut exit = LoopExit::Stopped;

@@ -4,9 +4,9 @@ use crate::run_config::RunConfig;
 use anyhow::Context;
 use ipc_types::{Heartbeat, ProcessState};
 use std::collections::BTreeSet;
-use std::time::Instant;
 use std::path::PathBuf;
 use std::time::Duration;
+use std::time::Instant;
 use testbed_bus::{Bus, BusConfig, EventLoop, Flow, LoopExit, SubscriberOptions, Waiter};
 
 /// How long the participants of a run have to come up.
@@ -27,7 +27,8 @@ pub struct ProcessArgs {
 pub fn start(name: &str) -> anyhow::Result<(RunConfig, Bus)> {
     testbed_bus::init_logging();
     let args = <ProcessArgs as clap::Parser>::parse();
-    let (config, path) = RunConfig::from_arg_or_env(args.config.as_deref()).with_context(|| format!("{name}: loading the run configuration"))?;
+    let (config, path) = RunConfig::from_arg_or_env(args.config.as_deref())
+        .with_context(|| format!("{name}: loading the run configuration"))?;
     let bus_config = BusConfig::from_env().with_context(|| format!("{name}: bus configuration"))?;
     let bus = Bus::open(name, &bus_config).with_context(|| format!("{name}: opening the bus"))?;
     tracing::info!(config = %path.display(), mode = ?config.run.mode, seed = config.run.seed, "{name} starting");
@@ -51,7 +52,10 @@ pub fn wait_for_participants(bus: &Bus, participants: &[String]) -> anyhow::Resu
     let deadline = Instant::now() + START_TIMEOUT;
     while !waiting.is_empty() {
         let left = deadline.saturating_duration_since(Instant::now());
-        anyhow::ensure!(!left.is_zero(), "participants never reported Running: {waiting:?}");
+        anyhow::ensure!(
+            !left.is_zero(),
+            "participants never reported Running: {waiting:?}"
+        );
         let mut seen = Vec::new();
         let exit = events.run_once(left, |_| {
             let _ = heartbeats.drain(|h| {
@@ -68,6 +72,9 @@ pub fn wait_for_participants(bus: &Bus, participants: &[String]) -> anyhow::Resu
             waiting.remove(name.as_str());
         }
     }
-    tracing::info!(participants = participants.len(), "all participants running; starting the clock");
+    tracing::info!(
+        participants = participants.len(),
+        "all participants running; starting the clock"
+    );
     Ok(LoopExit::Stopped)
 }

@@ -7,8 +7,8 @@ use ipc_types::Device;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use testbed_flight::manoeuvre::Manoeuvre;
-use testbed_flight::schedule::{Schedule, ScheduleError};
 use testbed_flight::mekf::MekfConfig;
+use testbed_flight::schedule::{Schedule, ScheduleError};
 use testbed_flight::tasks::ControllerConfig;
 use testbed_model::ModelConfig;
 
@@ -71,28 +71,45 @@ pub struct RunConfig {
 #[derive(Debug, thiserror::Error)]
 pub enum RunConfigError {
     #[error("cannot read run configuration {path}: {source}")]
-    Read { path: String, source: std::io::Error },
+    Read {
+        path: String,
+        source: std::io::Error,
+    },
     #[error("run configuration {path}: {message}")]
     Parse { path: String, message: String },
     #[error("run configuration {path}: {source}")]
-    Model { path: String, source: testbed_model::config::ConfigError },
+    Model {
+        path: String,
+        source: testbed_model::config::ConfigError,
+    },
     #[error("run configuration {path}: `{key}` = {value}: {reason}")]
-    Invalid { path: String, key: String, value: String, reason: String },
-    #[error("{ENV_RUN_CONFIG} is not set: start this process through the launcher or `testbed run`, or pass --config")]
+    Invalid {
+        path: String,
+        key: String,
+        value: String,
+        reason: String,
+    },
+    #[error(
+        "{ENV_RUN_CONFIG} is not set: start this process through the launcher or `testbed run`, or pass --config"
+    )]
     NotSet,
 }
 
 impl RunConfig {
     pub fn from_toml_str(text: &str, origin: &str) -> Result<Self, RunConfigError> {
-        let config: Self = toml::from_str(text)
-            .map_err(|e| RunConfigError::Parse { path: origin.to_string(), message: e.to_string() })?;
+        let config: Self = toml::from_str(text).map_err(|e| RunConfigError::Parse {
+            path: origin.to_string(),
+            message: e.to_string(),
+        })?;
         config.validate(origin)?;
         Ok(config)
     }
 
     pub fn load(path: &Path) -> Result<Self, RunConfigError> {
-        let text = std::fs::read_to_string(path)
-            .map_err(|source| RunConfigError::Read { path: path.display().to_string(), source })?;
+        let text = std::fs::read_to_string(path).map_err(|source| RunConfigError::Read {
+            path: path.display().to_string(),
+            source,
+        })?;
         Self::from_toml_str(&text, &path.display().to_string())
     }
 
@@ -100,7 +117,9 @@ impl RunConfig {
     pub fn from_arg_or_env(arg: Option<&Path>) -> Result<(Self, PathBuf), RunConfigError> {
         let path = match arg {
             Some(p) => p.to_path_buf(),
-            None => std::env::var_os(ENV_RUN_CONFIG).map(PathBuf::from).ok_or(RunConfigError::NotSet)?,
+            None => std::env::var_os(ENV_RUN_CONFIG)
+                .map(PathBuf::from)
+                .ok_or(RunConfigError::NotSet)?,
         };
         Ok((Self::load(&path)?, path))
     }
@@ -110,7 +129,12 @@ impl RunConfig {
     }
 
     pub fn validate(&self, origin: &str) -> Result<(), RunConfigError> {
-        self.model.validate().map_err(|source| RunConfigError::Model { path: origin.to_string(), source })?;
+        self.model
+            .validate()
+            .map_err(|source| RunConfigError::Model {
+                path: origin.to_string(),
+                source,
+            })?;
         let invalid = |key: &str, value: f64, reason: &str| RunConfigError::Invalid {
             path: origin.to_string(),
             key: key.to_string(),
@@ -118,23 +142,38 @@ impl RunConfig {
             reason: reason.to_string(),
         };
         if !(self.run.duration_s.is_finite() && self.run.duration_s > 0.0) {
-            return Err(invalid("run.duration_s", self.run.duration_s, "must be > 0"));
+            return Err(invalid(
+                "run.duration_s",
+                self.run.duration_s,
+                "must be > 0",
+            ));
         }
         if !(self.run.deadline_slack_s.is_finite() && self.run.deadline_slack_s >= 0.0) {
-            return Err(invalid("run.deadline_slack_s", self.run.deadline_slack_s, "must be >= 0"));
+            return Err(invalid(
+                "run.deadline_slack_s",
+                self.run.deadline_slack_s,
+                "must be >= 0",
+            ));
         }
-        self.schedule().map_err(|e| RunConfigError::Parse { path: origin.to_string(), message: e.to_string() })?;
-        self.can.validate().map_err(|(key, value, reason)| RunConfigError::Invalid {
+        self.schedule().map_err(|e| RunConfigError::Parse {
             path: origin.to_string(),
-            key,
-            value,
-            reason: reason.to_string(),
+            message: e.to_string(),
         })?;
+        self.can
+            .validate()
+            .map_err(|(key, value, reason)| RunConfigError::Invalid {
+                path: origin.to_string(),
+                key,
+                value,
+                reason: reason.to_string(),
+            })?;
         Ok(())
     }
 
     pub fn estimator_config(&self) -> MekfConfig {
-        self.estimator.clone().unwrap_or_else(|| MekfConfig::from_model(&self.model))
+        self.estimator
+            .clone()
+            .unwrap_or_else(|| MekfConfig::from_model(&self.model))
     }
 
     pub fn schedule(&self) -> Result<Schedule, ScheduleError> {
@@ -245,34 +284,67 @@ impl CanSection {
     fn validate(&self) -> Result<(), (String, String, &'static str)> {
         let bad = |key: &str, value: String, reason| Err((format!("can.{key}"), value, reason));
         if !self.id_base.is_multiple_of(16) || self.id_base > 0x7A0 {
-            return bad("id_base", self.id_base.to_string(), "must be a multiple of 16, at most 1952 (0x7A0)");
+            return bad(
+                "id_base",
+                self.id_base.to_string(),
+                "must be a multiple of 16, at most 1952 (0x7A0)",
+            );
         }
         if !(self.replay_speed.is_finite() && self.replay_speed >= 0.0) {
-            return bad("replay_speed", self.replay_speed.to_string(), "must be >= 0 (0: as fast as possible)");
+            return bad(
+                "replay_speed",
+                self.replay_speed.to_string(),
+                "must be >= 0 (0: as fast as possible)",
+            );
         }
         if !(self.command_timeout_s.is_finite() && self.command_timeout_s > 0.0) {
-            return bad("command_timeout_s", self.command_timeout_s.to_string(), "must be > 0");
+            return bad(
+                "command_timeout_s",
+                self.command_timeout_s.to_string(),
+                "must be > 0",
+            );
         }
         if self.link == CanLink::Socketcan && self.interface.trim().is_empty() {
-            return bad("interface", format!("{:?}", self.interface), "must name a CAN interface");
+            return bad(
+                "interface",
+                format!("{:?}", self.interface),
+                "must name a CAN interface",
+            );
         }
         for (device, link) in &self.serial {
             if Device::from_name(device).is_none() {
-                return bad(&format!("serial.{device}"), device.clone(), "not a device (gyro, inclinometer, magnetometer, wheels, cmg)");
+                return bad(
+                    &format!("serial.{device}"),
+                    device.clone(),
+                    "not a device (gyro, inclinometer, magnetometer, wheels, cmg)",
+                );
             }
             if link.baud == 0 {
                 return bad(&format!("serial.{device}.baud"), "0".into(), "must be > 0");
             }
         }
         let f = &self.faults;
-        for (key, rate) in [("drop", f.drop), ("corrupt", f.corrupt), ("delay", f.delay), ("duplicate", f.duplicate)] {
+        for (key, rate) in [
+            ("drop", f.drop),
+            ("corrupt", f.corrupt),
+            ("delay", f.delay),
+            ("duplicate", f.duplicate),
+        ] {
             if !(rate.is_finite() && (0.0..=1.0).contains(&rate)) {
-                return bad(&format!("faults.{key}"), rate.to_string(), "must be a probability from 0 to 1");
+                return bad(
+                    &format!("faults.{key}"),
+                    rate.to_string(),
+                    "must be a probability from 0 to 1",
+                );
             }
         }
         let total = f.drop + f.corrupt + f.delay + f.duplicate;
         if total > 1.0 {
-            return bad("faults", total.to_string(), "the fault probabilities must add up to at most 1");
+            return bad(
+                "faults",
+                total.to_string(),
+                "the fault probabilities must add up to at most 1",
+            );
         }
         Ok(())
     }
@@ -287,11 +359,20 @@ mod tests {
         let config = RunConfig::default();
         let text = config.to_toml_string();
         assert_eq!(RunConfig::from_toml_str(&text, "rt").unwrap(), config);
-        let err = RunConfig::from_toml_str("[run]\nduration_s = -3\n", "run.toml").unwrap_err().to_string();
-        assert!(err.contains("run.duration_s") && err.contains("-3") && err.contains("run.toml"), "{err}");
-        let err = RunConfig::from_toml_str("[run]\nspeed = 3\n", "run.toml").unwrap_err().to_string();
+        let err = RunConfig::from_toml_str("[run]\nduration_s = -3\n", "run.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("run.duration_s") && err.contains("-3") && err.contains("run.toml"),
+            "{err}"
+        );
+        let err = RunConfig::from_toml_str("[run]\nspeed = 3\n", "run.toml")
+            .unwrap_err()
+            .to_string();
         assert!(err.contains("speed"), "{err}");
-        let err = RunConfig::from_toml_str("[model.platform]\nmass_kg = nan\n", "run.toml").unwrap_err().to_string();
+        let err = RunConfig::from_toml_str("[model.platform]\nmass_kg = nan\n", "run.toml")
+            .unwrap_err()
+            .to_string();
         assert!(err.contains("platform.mass_kg"), "{err}");
     }
 
@@ -303,14 +384,22 @@ mod tests {
         assert_eq!(config.run.actuation, Actuation::CanNode);
         assert_eq!(config.can.link, CanLink::SoftwareBus);
         assert_eq!(config.can.serial["gyro"].baud, 115_200);
-        assert_eq!(RunConfig::from_toml_str(&config.to_toml_string(), "rt").unwrap(), config);
+        assert_eq!(
+            RunConfig::from_toml_str(&config.to_toml_string(), "rt").unwrap(),
+            config
+        );
         for (text, key) in [
             ("[can.faults]\ndrop = 1.5\n", "can.faults.drop"),
             ("[can.faults]\ndrop = 0.6\ncorrupt = 0.6\n", "can.faults"),
             ("[can]\nid_base = 257\n", "can.id_base"),
-            ("[can.serial.sonar]\npath = \"/dev/null\"\n", "can.serial.sonar"),
+            (
+                "[can.serial.sonar]\npath = \"/dev/null\"\n",
+                "can.serial.sonar",
+            ),
         ] {
-            let err = RunConfig::from_toml_str(text, "run.toml").unwrap_err().to_string();
+            let err = RunConfig::from_toml_str(text, "run.toml")
+                .unwrap_err()
+                .to_string();
             assert!(err.contains(key) && err.contains("run.toml"), "{err}");
         }
     }

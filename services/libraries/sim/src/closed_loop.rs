@@ -10,15 +10,15 @@
 //! 4. the plant integrates to `t_{k+1}` holding that command (the stepper drive first quantises
 //!    CMG gimbal rates).
 
-use testbed_flight::mekf::{MekfConfig, MekfError, VectorMeasurements};
-use testbed_flight::tasks::{ActuatorTelemetry, ControllerConfig, ControllerTask, EstimatorTask};
 use nalgebra::{Matrix6, Vector3, Vector4, Vector6};
 use serde::{Deserialize, Serialize};
+use testbed_flight::mekf::{MekfConfig, MekfError, VectorMeasurements};
+use testbed_flight::tasks::{ActuatorTelemetry, ControllerConfig, ControllerTask, EstimatorTask};
+use testbed_model::ModelConfig;
 use testbed_model::attitude::{self, Attitude};
 use testbed_model::config::DEG;
 use testbed_model::devices::DeviceSet;
 use testbed_model::physics::{ActuatorCommand, Plant, PlatformState, TiltStopEvent};
-use testbed_model::ModelConfig;
 use testbed_runtime::RunConfig;
 
 use testbed_flight::manoeuvre::Manoeuvre;
@@ -88,7 +88,11 @@ pub struct TargetChange {
 impl TargetChange {
     /// The target attitude, L to B.
     pub fn attitude(&self) -> Attitude {
-        attitude::from_heading_pitch_roll(self.heading_deg * DEG, self.pitch_deg * DEG, self.roll_deg * DEG)
+        attitude::from_heading_pitch_roll(
+            self.heading_deg * DEG,
+            self.pitch_deg * DEG,
+            self.roll_deg * DEG,
+        )
     }
 }
 
@@ -190,7 +194,10 @@ pub fn run(scenario: &Scenario) -> Result<Trace, LoopError> {
 pub fn run_recorded(scenario: &Scenario) -> Result<(Trace, Vec<MeasurementRecord>), LoopError> {
     scenario.model.validate()?;
     if !(scenario.duration_s.is_finite() && scenario.duration_s > 0.0) {
-        return Err(LoopError::Scenario(format!("duration_s = {} must be > 0", scenario.duration_s)));
+        return Err(LoopError::Scenario(format!(
+            "duration_s = {} must be > 0",
+            scenario.duration_s
+        )));
     }
     let model = &scenario.model;
     let schedule = Schedule::from_model(model)?;
@@ -198,12 +205,19 @@ pub fn run_recorded(scenario: &Scenario) -> Result<(Trace, Vec<MeasurementRecord
     let dt_s = schedule.period_s();
 
     if let Some(bad) = scenario.schedule.iter().find(|c| {
-        !(c.t_s.is_finite() && c.heading_deg.is_finite() && c.pitch_deg.is_finite() && c.roll_deg.is_finite())
+        !(c.t_s.is_finite()
+            && c.heading_deg.is_finite()
+            && c.pitch_deg.is_finite()
+            && c.roll_deg.is_finite())
     }) {
-        return Err(LoopError::Scenario(format!("schedule entry {bad:?} is not finite")));
+        return Err(LoopError::Scenario(format!(
+            "schedule entry {bad:?} is not finite"
+        )));
     }
     if scenario.schedule.windows(2).any(|w| w[1].t_s < w[0].t_s) {
-        return Err(LoopError::Scenario("schedule times must be in order".into()));
+        return Err(LoopError::Scenario(
+            "schedule times must be in order".into(),
+        ));
     }
 
     let mut plant = Plant::new(model, scenario.manoeuvre.initial_state())?;
@@ -214,13 +228,21 @@ pub fn run_recorded(scenario: &Scenario) -> Result<(Trace, Vec<MeasurementRecord
     let mut next_change = 0;
     let mut measurements = Vec::with_capacity(tick_count as usize + 1);
 
-    let mut trace = Trace { ticks: Vec::with_capacity(tick_count as usize + 1), tilt_stops: Vec::new(), gate_rejections: 0 };
+    let mut trace = Trace {
+        ticks: Vec::with_capacity(tick_count as usize + 1),
+        tilt_stops: Vec::new(),
+        gate_rejections: 0,
+    };
     for k in 0..=tick_count {
         let t_ns = schedule.time_ns(k);
         let t_s = t_ns as f64 * 1e-9;
         let truth = plant.state().clone();
         // Schedule entries due by this tick (within rounding of the tick clock).
-        while let Some(change) = scenario.schedule.get(next_change).filter(|c| c.t_s <= t_s + 1e-9) {
+        while let Some(change) = scenario
+            .schedule
+            .get(next_change)
+            .filter(|c| c.t_s <= t_s + 1e-9)
+        {
             target = change.attitude();
             controller.set_target(target);
             next_change += 1;
@@ -269,13 +291,20 @@ pub fn run_recorded(scenario: &Scenario) -> Result<(Trace, Vec<MeasurementRecord
             Some((q, rate)) => Some(controller.command(t_s, &q, &rate, &telemetry)?),
             None => None,
         };
-        let mut command = output.as_ref().map_or_else(ActuatorCommand::default, |o| o.command.clone());
-        command.gimbal_rate_rad_s = devices.cmg_stepper.command(&command.gimbal_rate_rad_s).rate_rad_s;
+        let mut command = output
+            .as_ref()
+            .map_or_else(ActuatorCommand::default, |o| o.command.clone());
+        command.gimbal_rate_rad_s = devices
+            .cmg_stepper
+            .command(&command.gimbal_rate_rad_s)
+            .rate_rad_s;
 
         trace.ticks.push(TickRecord {
             t_s,
             pointing_error_rad: attitude::attitude_error(&truth.q, &target),
-            estimate: estimate.as_ref().map(|e| estimate_record(e, &truth, &bias_true)),
+            estimate: estimate
+                .as_ref()
+                .map(|e| estimate_record(e, &truth, &bias_true)),
             truth,
             bias_true,
             command: command.clone(),
@@ -288,7 +317,9 @@ pub fn run_recorded(scenario: &Scenario) -> Result<(Trace, Vec<MeasurementRecord
         let report = plant.step(&command, dt_s)?;
         trace.tilt_stops.extend(report.tilt_stop);
     }
-    trace.gate_rejections = estimator.filter().map_or(0, |f| f.counters().updates_rejected);
+    trace.gate_rejections = estimator
+        .filter()
+        .map_or(0, |f| f.counters().updates_rejected);
     Ok((trace, measurements))
 }
 
@@ -312,14 +343,21 @@ fn estimate_record(
         rate_rad_s: e.rate_rad_s,
         bias_rad_s: e.bias_rad_s,
         attitude_error_rad,
-        attitude_sigma_rad: Vector3::new(e.covariance[(0, 0)], e.covariance[(1, 1)], e.covariance[(2, 2)]).map(f64::sqrt),
+        attitude_sigma_rad: Vector3::new(
+            e.covariance[(0, 0)],
+            e.covariance[(1, 1)],
+            e.covariance[(2, 2)],
+        )
+        .map(f64::sqrt),
         nees: nees(&error, &e.covariance),
     }
 }
 
 /// `eᵀ P⁻¹ e`; infinite if `P` is not positive definite.
 pub fn nees(error: &Vector6<f64>, covariance: &Matrix6<f64>) -> f64 {
-    covariance.cholesky().map_or(f64::INFINITY, |c| error.dot(&c.solve(error)))
+    covariance
+        .cholesky()
+        .map_or(f64::INFINITY, |c| error.dot(&c.solve(error)))
 }
 
 #[cfg(test)]
@@ -347,7 +385,10 @@ mod tests {
         let steady = metrics::steady_error_deg(&trace, 50.0);
         // The paper: level within about 100 s, steady error below 0.02° (X/Y) and 0.05° (Z).
         assert!(settle < 120.0, "settling {settle} s");
-        assert!(steady[0] < 0.02 && steady[1] < 0.02 && steady[2] < 0.05, "steady {steady:?} deg");
+        assert!(
+            steady[0] < 0.02 && steady[1] < 0.02 && steady[2] < 0.05,
+            "steady {steady:?} deg"
+        );
         assert!(trace.tilt_stops.is_empty());
     }
 
@@ -360,30 +401,64 @@ mod tests {
         let with = metrics::steady_error_deg(&run(&scenario).unwrap(), 50.0);
         // Coulomb friction 1.5 mNm against P/2 ≈ 0.22 Nm/rad leaves a dead band of tenths of a
         // degree without compensation; with it the error is at the sensor level.
-        assert!(without[0].max(without[1]) > 5.0 * with[0].max(with[1]), "with {with:?}, without {without:?}");
+        assert!(
+            without[0].max(without[1]) > 5.0 * with[0].max(with[1]),
+            "with {with:?}, without {without:?}"
+        );
     }
 
     #[test]
     fn schedule_moves_the_target_and_the_recording_matches_the_trace() {
         let mut scenario = Scenario::paper_stabilisation(ModelConfig::default(), 3);
-        scenario.manoeuvre = Manoeuvre { initial_heading_deg: 0.0, initial_pitch_deg: 0.0, initial_roll_deg: 0.0, ..Manoeuvre::default() };
+        scenario.manoeuvre = Manoeuvre {
+            initial_heading_deg: 0.0,
+            initial_pitch_deg: 0.0,
+            initial_roll_deg: 0.0,
+            ..Manoeuvre::default()
+        };
         scenario.duration_s = 150.0;
-        scenario.schedule = vec![TargetChange { t_s: 10.0, heading_deg: 0.0, pitch_deg: 3.0, roll_deg: 0.0 }];
+        scenario.schedule = vec![TargetChange {
+            t_s: 10.0,
+            heading_deg: 0.0,
+            pitch_deg: 3.0,
+            roll_deg: 0.0,
+        }];
         let (trace, measured) = run_recorded(&scenario).unwrap();
         assert_eq!(trace, run(&scenario).unwrap());
         assert_eq!(measured.len(), trace.ticks.len());
-        assert!(measured.iter().zip(&trace.ticks).all(|(m, t)| m.t_s == t.t_s));
+        assert!(
+            measured
+                .iter()
+                .zip(&trace.ticks)
+                .all(|(m, t)| m.t_s == t.t_s)
+        );
         // The inclinometer and magnetometer sample at 2.5 Hz: every fourth tick.
-        assert_eq!(measured.iter().filter(|m| m.tilt_rad.is_some()).count(), trace.ticks.len().div_ceil(4));
+        assert_eq!(
+            measured.iter().filter(|m| m.tilt_rad.is_some()).count(),
+            trace.ticks.len().div_ceil(4)
+        );
         // Before the change the platform holds level; after it, it settles on the 3° pitch.
         let last = trace.ticks.last().unwrap();
         let [theta, _] = attitude::tilt_angles(&last.truth.q);
-        assert!((theta / DEG - 3.0).abs() < 0.1, "final tilt {} deg", theta / DEG);
-        assert!(last.pointing_error_rad.norm() < 0.1 * DEG, "{:?}", last.pointing_error_rad);
+        assert!(
+            (theta / DEG - 3.0).abs() < 0.1,
+            "final tilt {} deg",
+            theta / DEG
+        );
+        assert!(
+            last.pointing_error_rad.norm() < 0.1 * DEG,
+            "{:?}",
+            last.pointing_error_rad
+        );
         let before = &trace.ticks[90];
         assert!(attitude::tilt_angles(&before.truth.q)[0].abs() < 0.01 * DEG);
         // Out-of-order schedules are refused.
-        scenario.schedule.push(TargetChange { t_s: 5.0, heading_deg: 0.0, pitch_deg: 0.0, roll_deg: 0.0 });
+        scenario.schedule.push(TargetChange {
+            t_s: 5.0,
+            heading_deg: 0.0,
+            pitch_deg: 0.0,
+            roll_deg: 0.0,
+        });
         assert!(run(&scenario).unwrap_err().to_string().contains("in order"));
     }
 

@@ -2,13 +2,13 @@
 //! stage delivered in a caller-chosen order. Used to test the lockstep protocol (and that the
 //! process split computes exactly what the in-process loop computes) without iceoryx2.
 
-use testbed_flight::controller_node::ControllerNode;
-use testbed_flight::estimator_node::EstimatorNode;
 use crate::plant_node::PlantNode;
-use testbed_runtime::run_config::RunConfig;
 use crate::sim_devices::{SimCmg, SimGyro, SimInclinometer, SimMagnetometer, SimWheels};
 use ipc_types::{AttitudeEstimate, SimTruth};
+use testbed_flight::controller_node::ControllerNode;
+use testbed_flight::estimator_node::EstimatorNode;
 use testbed_flight::tasks::ControllerTask;
+use testbed_runtime::run_config::RunConfig;
 
 /// Everything the estimator and the plant published, in tick order.
 pub struct InMemoryRun {
@@ -18,7 +18,10 @@ pub struct InMemoryRun {
 
 /// Run `config` to its end. `shuffle(k, n)` returns a permutation of `0..n` deciding in which
 /// order tick k's sensor samples reach the estimator and the controller.
-pub fn run(config: &RunConfig, mut shuffle: impl FnMut(u64, usize) -> Vec<usize>) -> anyhow::Result<InMemoryRun> {
+pub fn run(
+    config: &RunConfig,
+    mut shuffle: impl FnMut(u64, usize) -> Vec<usize>,
+) -> anyhow::Result<InMemoryRun> {
     let schedule = config.schedule()?;
     let mut plant = PlantNode::new(config)?;
     let mut gyro = SimGyro::new(config, schedule);
@@ -29,7 +32,10 @@ pub fn run(config: &RunConfig, mut shuffle: impl FnMut(u64, usize) -> Vec<usize>
     let mut estimator = EstimatorNode::new(config.estimator_config(), schedule);
     let task = ControllerTask::new(&config.controller, &config.model, config.manoeuvre.target())?;
     let mut controller = ControllerNode::new(task, config.controller.actuators, schedule);
-    let mut run = InMemoryRun { estimates: Vec::new(), truths: Vec::new() };
+    let mut run = InMemoryRun {
+        estimates: Vec::new(),
+        truths: Vec::new(),
+    };
     loop {
         let (truth, _clock) = plant.outputs();
         run.truths.push(truth);
@@ -79,8 +85,8 @@ pub fn run(config: &RunConfig, mut shuffle: impl FnMut(u64, usize) -> Vec<usize>
 #[cfg(test)]
 mod tests {
     use super::*;
-    use testbed_flight::convert::quaternion_from_array;
     use crate::closed_loop;
+    use testbed_flight::convert::quaternion_from_array;
 
     fn config() -> RunConfig {
         let mut config = RunConfig::default();
@@ -111,9 +117,24 @@ mod tests {
         let trace = closed_loop::run(&closed_loop::Scenario::from_run(&config)).unwrap();
         assert_eq!(pipeline.estimates.len(), trace.ticks.len());
         for (sample, tick) in pipeline.estimates.iter().zip(&trace.ticks) {
-            let expected = tick.estimate.as_ref().expect("estimator initialised at t = 0");
-            assert_eq!(quaternion_from_array(&sample.quaternion).unwrap(), expected.attitude, "t = {}", tick.t_s);
-            assert_eq!(sample.gyro_bias, [expected.bias_rad_s.x, expected.bias_rad_s.y, expected.bias_rad_s.z]);
+            let expected = tick
+                .estimate
+                .as_ref()
+                .expect("estimator initialised at t = 0");
+            assert_eq!(
+                quaternion_from_array(&sample.quaternion).unwrap(),
+                expected.attitude,
+                "t = {}",
+                tick.t_s
+            );
+            assert_eq!(
+                sample.gyro_bias,
+                [
+                    expected.bias_rad_s.x,
+                    expected.bias_rad_s.y,
+                    expected.bias_rad_s.z
+                ]
+            );
         }
     }
 

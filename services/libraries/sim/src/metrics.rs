@@ -8,7 +8,9 @@ use testbed_model::config::DEG;
 /// series (`None` if it never does or ends outside). `samples` are `(t, error)` in time order,
 /// in any consistent unit.
 pub fn settling_time(samples: &[(f64, [f64; 3])], band: f64) -> Option<f64> {
-    let last_outside = samples.iter().rposition(|(_, e)| e.iter().any(|x| x.abs() > band));
+    let last_outside = samples
+        .iter()
+        .rposition(|(_, e)| e.iter().any(|x| x.abs() > band));
     match last_outside {
         None => samples.first().map(|(t, _)| *t),
         Some(i) => samples.get(i + 1).map(|(t, _)| *t),
@@ -29,7 +31,11 @@ pub fn steady_max(samples: &[(f64, [f64; 3])], window_s: f64) -> [f64; 3] {
 
 /// True pointing error of a run in degrees, `(t, [x, y, z])`.
 pub fn pointing_error_deg(trace: &Trace) -> Vec<(f64, [f64; 3])> {
-    trace.ticks.iter().map(|t| (t.t_s, (t.pointing_error_rad / DEG).into())).collect()
+    trace
+        .ticks
+        .iter()
+        .map(|t| (t.t_s, (t.pointing_error_rad / DEG).into()))
+        .collect()
 }
 
 /// Settling time of a run's true pointing error into `band_rad` per axis.
@@ -127,7 +133,11 @@ mod tests {
                 singularity_measure: None,
             })
             .collect();
-        Trace { ticks, tilt_stops: vec![], gate_rejections: 0 }
+        Trace {
+            ticks,
+            tilt_stops: vec![],
+            gate_rejections: 0,
+        }
     }
 
     #[test]

@@ -3,14 +3,14 @@
 //! (Fig. 11–12) and a large-angle CMG slew.
 
 use crate::closed_loop::{self, Feedback, LoopError, Scenario, Trace};
-use testbed_flight::manoeuvre::Manoeuvre;
 use crate::metrics::{self, EstimationStats};
-use testbed_flight::tasks::Actuators;
 use nalgebra::Vector3;
 use serde::Serialize;
+use testbed_flight::manoeuvre::Manoeuvre;
+use testbed_flight::tasks::Actuators;
+use testbed_model::ModelConfig;
 use testbed_model::config::DEG;
 use testbed_model::physics::CmgPyramid;
-use testbed_model::ModelConfig;
 
 /// The paper's numbers (Dai & Jin 2010; `docs/parameters.md` lists the model's).
 pub mod reference {
@@ -151,19 +151,38 @@ pub struct PaperTraces {
 }
 
 /// Run all three scenarios on `model`.
-pub fn reproduce(model: &ModelConfig, options: &PaperOptions) -> Result<(PaperResult, PaperTraces), LoopError> {
+pub fn reproduce(
+    model: &ModelConfig,
+    options: &PaperOptions,
+) -> Result<(PaperResult, PaperTraces), LoopError> {
     if options.runs < 2 {
-        return Err(LoopError::Scenario(format!("runs = {} must be at least 2 for a Monte Carlo", options.runs)));
+        return Err(LoopError::Scenario(format!(
+            "runs = {} must be at least 2 for a Monte Carlo",
+            options.runs
+        )));
     }
     let (ekf, ekf_trace) = ekf_monte_carlo(model, options)?;
     let (control, control_trace, no_comp_trace) = stabilisation(model, options)?;
     let (cmg, cmg_trace) = cmg_slew(model, options)?;
-    let result = PaperResult { ekf, control, cmg, seed: options.seed };
-    let traces = PaperTraces { ekf: ekf_trace, control: control_trace, control_no_compensation: no_comp_trace, cmg: cmg_trace };
+    let result = PaperResult {
+        ekf,
+        control,
+        cmg,
+        seed: options.seed,
+    };
+    let traces = PaperTraces {
+        ekf: ekf_trace,
+        control: control_trace,
+        control_no_compensation: no_comp_trace,
+        cmg: cmg_trace,
+    };
     Ok((result, traces))
 }
 
-fn ekf_monte_carlo(model: &ModelConfig, options: &PaperOptions) -> Result<(EkfResult, Trace), LoopError> {
+fn ekf_monte_carlo(
+    model: &ModelConfig,
+    options: &PaperOptions,
+) -> Result<(EkfResult, Trace), LoopError> {
     let tilt = options.ekf_initial_tilt_deg;
     let mut scenario = Scenario::paper_stabilisation(model.clone(), options.seed);
     scenario.manoeuvre = Manoeuvre {
@@ -175,7 +194,9 @@ fn ekf_monte_carlo(model: &ModelConfig, options: &PaperOptions) -> Result<(EkfRe
     scenario.duration_s = options.ekf_duration_s;
     let traces = run_seeds(&scenario, options.runs)?;
     let stats: EstimationStats = metrics::estimation_stats(&traces, options.ekf_from_s)
-        .ok_or_else(|| LoopError::Scenario("the estimator never initialised in the EKF runs".into()))?;
+        .ok_or_else(|| {
+            LoopError::Scenario("the estimator never initialised in the EKF runs".into())
+        })?;
     let result = EkfResult {
         err3s_xy_deg: stats.err3s_deg[0].max(stats.err3s_deg[1]),
         err3s_z_deg: stats.err3s_deg[2],
@@ -190,13 +211,19 @@ fn ekf_monte_carlo(model: &ModelConfig, options: &PaperOptions) -> Result<(EkfRe
         paper_err3s_xy_deg: reference::EKF_ERR3S_XY_DEG,
         paper_err3s_z_deg: reference::EKF_ERR3S_Z_DEG,
     };
-    let first = traces.into_iter().next().ok_or_else(|| LoopError::Scenario("no EKF run".into()))?;
+    let first = traces
+        .into_iter()
+        .next()
+        .ok_or_else(|| LoopError::Scenario("no EKF run".into()))?;
     Ok((result, first))
 }
 
 /// Run `scenario` with seeds `seed..seed + runs`, on both cores.
 fn run_seeds(scenario: &Scenario, runs: usize) -> Result<Vec<Trace>, LoopError> {
-    let workers = std::thread::available_parallelism().map_or(1, |n| n.get()).min(runs).max(1);
+    let workers = std::thread::available_parallelism()
+        .map_or(1, |n| n.get())
+        .min(runs)
+        .max(1);
     let results: Vec<Vec<(usize, Result<Trace, LoopError>)>> = std::thread::scope(|scope| {
         let handles: Vec<_> = (0..workers)
             .map(|w| {
@@ -212,14 +239,20 @@ fn run_seeds(scenario: &Scenario, runs: usize) -> Result<Vec<Trace>, LoopError> 
                 })
             })
             .collect();
-        handles.into_iter().map(|h| h.join().expect("a Monte Carlo worker panicked")).collect()
+        handles
+            .into_iter()
+            .map(|h| h.join().expect("a Monte Carlo worker panicked"))
+            .collect()
     });
     let mut all: Vec<_> = results.into_iter().flatten().collect();
     all.sort_by_key(|(i, _)| *i);
     all.into_iter().map(|(_, r)| r).collect()
 }
 
-fn stabilisation(model: &ModelConfig, options: &PaperOptions) -> Result<(ControlResult, Trace, Trace), LoopError> {
+fn stabilisation(
+    model: &ModelConfig,
+    options: &PaperOptions,
+) -> Result<(ControlResult, Trace, Trace), LoopError> {
     let mut scenario = Scenario::paper_stabilisation(model.clone(), options.seed);
     scenario.duration_s = options.control_duration_s;
     scenario.controller.wheels.friction_compensation = true;
@@ -300,16 +333,50 @@ mod tests {
     fn reproduces_the_papers_results() {
         let (r, _) = reproduce(&ModelConfig::default(), &PaperOptions::default()).unwrap();
         let within_30_percent = |ours: f64, paper: f64| (ours / paper - 1.0).abs() <= 0.3;
-        assert!(within_30_percent(r.ekf.err3s_xy_deg, reference::EKF_ERR3S_XY_DEG), "{:?}", r.ekf);
-        assert!(within_30_percent(r.ekf.err3s_z_deg, reference::EKF_ERR3S_Z_DEG), "{:?}", r.ekf);
+        assert!(
+            within_30_percent(r.ekf.err3s_xy_deg, reference::EKF_ERR3S_XY_DEG),
+            "{:?}",
+            r.ekf
+        );
+        assert!(
+            within_30_percent(r.ekf.err3s_z_deg, reference::EKF_ERR3S_Z_DEG),
+            "{:?}",
+            r.ekf
+        );
         let [lo, hi] = r.ekf.nees_interval;
-        assert!(r.ekf.nees_mean >= lo && r.ekf.nees_mean <= hi, "{:?}", r.ekf);
-        assert!(r.control.settle_s.is_some_and(|s| s <= 1.2 * reference::SETTLE_S), "{:?}", r.control);
-        assert!(r.control.steady_xy_deg < reference::STEADY_XY_DEG, "{:?}", r.control);
-        assert!(r.control.steady_z_deg < reference::STEADY_Z_DEG, "{:?}", r.control);
-        assert!(r.control.steady_xy_deg_no_compensation > 5.0 * r.control.steady_xy_deg, "{:?}", r.control);
+        assert!(
+            r.ekf.nees_mean >= lo && r.ekf.nees_mean <= hi,
+            "{:?}",
+            r.ekf
+        );
+        assert!(
+            r.control
+                .settle_s
+                .is_some_and(|s| s <= 1.2 * reference::SETTLE_S),
+            "{:?}",
+            r.control
+        );
+        assert!(
+            r.control.steady_xy_deg < reference::STEADY_XY_DEG,
+            "{:?}",
+            r.control
+        );
+        assert!(
+            r.control.steady_z_deg < reference::STEADY_Z_DEG,
+            "{:?}",
+            r.control
+        );
+        assert!(
+            r.control.steady_xy_deg_no_compensation > 5.0 * r.control.steady_xy_deg,
+            "{:?}",
+            r.control
+        );
         assert!(r.cmg.slew_s.is_some(), "{:?}", r.cmg);
-        assert!(r.cmg.max_gimbal_rate_deg_s <= r.cmg.gimbal_rate_limit_deg_s + 1e-9, "{:?}", r.cmg);
+        assert!(
+            r.cmg.max_gimbal_rate_deg_s <= r.cmg.gimbal_rate_limit_deg_s + 1e-9,
+            "{:?}",
+            r.cmg
+        );
         assert!(r.cmg.min_singularity_measure > 0.1, "{:?}", r.cmg);
         assert!((r.cmg.envelope_xy_nms - r.cmg.envelope_xy_analytic_nms).abs() < 1e-9);
         assert!((r.cmg.envelope_z_nms - r.cmg.envelope_z_analytic_nms).abs() < 1e-9);

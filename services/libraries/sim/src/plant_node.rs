@@ -5,12 +5,12 @@
 //! it advances only when both have arrived; paced, it advances on the wall-clock period and
 //! holds the previous command when the answer is late (a deadline miss).
 
-use testbed_flight::convert::{a3, a4, quaternion_to_array, v3, v4, Sequence};
-use testbed_runtime::run_config::RunConfig;
 use ipc_types::{CmgCommand, SampleHeader, SimClockTick, SimTruth, WheelCommand};
+use testbed_flight::convert::{Sequence, a3, a4, quaternion_to_array, v3, v4};
 use testbed_flight::schedule::Schedule;
 use testbed_model::devices::CmgStepperDrive;
-use testbed_model::physics::{ActuatorCommand, Plant, PhysicsError, StepReport};
+use testbed_model::physics::{ActuatorCommand, PhysicsError, Plant, StepReport};
+use testbed_runtime::run_config::RunConfig;
 
 #[derive(Debug, thiserror::Error)]
 pub enum PlantNodeError {
@@ -71,7 +71,9 @@ impl PlantNode {
         let s = self.plant.state();
         let t_ns = self.time_ns();
         let truth = SimTruth {
-            header: self.truth_seq.header(t_ns, SampleHeader::VALID | SampleHeader::SIMULATED),
+            header: self
+                .truth_seq
+                .header(t_ns, SampleHeader::VALID | SampleHeader::SIMULATED),
             quaternion: quaternion_to_array(&s.q),
             rate: a3(&s.rate_b),
             wheel_speed: a3(&s.wheel_speed),
@@ -84,7 +86,9 @@ impl PlantNode {
             _pad0: 0,
         };
         let mut clock = SimClockTick::default();
-        clock.header = self.tick_seq.header(t_ns, SampleHeader::VALID | SampleHeader::SIMULATED);
+        clock.header = self
+            .tick_seq
+            .header(t_ns, SampleHeader::VALID | SampleHeader::SIMULATED);
         clock.tick = self.tick;
         clock.sim_time_ns = t_ns;
         clock.step_ns = self.schedule.period_ns;
@@ -118,7 +122,10 @@ impl PlantNode {
     /// did not arrive (counted as a deadline miss).
     pub fn advance(&mut self) -> Result<StepReport, PlantNodeError> {
         let mut command = match (&self.wheel, &self.cmg) {
-            (Some(w), Some(c)) => ActuatorCommand { wheel_torque_nm: v3(&w.torque), gimbal_rate_rad_s: v4(&c.gimbal_rate) },
+            (Some(w), Some(c)) => ActuatorCommand {
+                wheel_torque_nm: v3(&w.torque),
+                gimbal_rate_rad_s: v4(&c.gimbal_rate),
+            },
             _ => {
                 self.deadline_misses += 1;
                 self.held.clone()

@@ -1,20 +1,24 @@
 //! The simulated gateways' logic: each applies one device model to the plant's truth and
 //! produces exactly the sample the real gateway would publish, at the device's rate.
 
-use testbed_flight::convert::{a3, a4, quaternion_from_array, saturation_flags, v3, v4, Sequence};
-use testbed_runtime::run_config::RunConfig;
 use ipc_types::{
-    CmgCommand, CmgTelemetry, GyroSample, InclinometerSample, MagnetometerSample, SampleHeader, SimTruth,
-    WheelCommand, WheelTelemetry,
+    CmgCommand, CmgTelemetry, GyroSample, InclinometerSample, MagnetometerSample, SampleHeader,
+    SimTruth, WheelCommand, WheelTelemetry,
 };
+use testbed_flight::convert::{Sequence, a3, a4, quaternion_from_array, saturation_flags, v3, v4};
 use testbed_flight::schedule::Schedule;
 use testbed_model::devices::{CmgEncoder, Gyro, Inclinometer, Magnetometer, WheelTachometer};
+use testbed_runtime::run_config::RunConfig;
 
 const SIMULATED_VALID: u32 = SampleHeader::VALID | SampleHeader::SIMULATED;
 
 /// Flags of a simulated sample from a ranged sensor: out of range is published without `VALID`.
 fn ranged_flags(valid: bool, saturated: &[bool]) -> u32 {
-    let range = if valid { SampleHeader::VALID } else { SampleHeader::OUT_OF_RANGE };
+    let range = if valid {
+        SampleHeader::VALID
+    } else {
+        SampleHeader::OUT_OF_RANGE
+    };
     SampleHeader::SIMULATED | saturation_flags(saturated) | range
 }
 
@@ -31,7 +35,11 @@ pub struct SimGyro {
 
 impl SimGyro {
     pub fn new(config: &RunConfig, schedule: Schedule) -> Self {
-        Self { gyro: Gyro::new(&config.model, config.run.seed), schedule, seq: Sequence::default() }
+        Self {
+            gyro: Gyro::new(&config.model, config.run.seed),
+            schedule,
+            seq: Sequence::default(),
+        }
     }
 
     /// The gyro samples on every tick.
@@ -40,7 +48,10 @@ impl SimGyro {
         let q = quaternion_from_array(&truth.quaternion)?;
         let reading = self.gyro.sample(&q, &v3(&truth.rate));
         let flags = SIMULATED_VALID | saturation_flags(&reading.saturated);
-        Some(GyroSample { header: self.seq.header(truth.header.time_ns, flags), rate: a3(&reading.rate_rad_s) })
+        Some(GyroSample {
+            header: self.seq.header(truth.header.time_ns, flags),
+            rate: a3(&reading.rate_rad_s),
+        })
     }
 }
 
@@ -52,7 +63,11 @@ pub struct SimInclinometer {
 
 impl SimInclinometer {
     pub fn new(config: &RunConfig, schedule: Schedule) -> Self {
-        Self { device: Inclinometer::new(&config.model, config.run.seed), schedule, seq: Sequence::default() }
+        Self {
+            device: Inclinometer::new(&config.model, config.run.seed),
+            schedule,
+            seq: Sequence::default(),
+        }
     }
 
     /// A sample on the inclinometer's ticks; out of range is published without `VALID`.
@@ -64,7 +79,10 @@ impl SimInclinometer {
         let q = quaternion_from_array(&truth.quaternion)?;
         let r = self.device.sample(&q);
         let flags = ranged_flags(r.valid(), &r.saturated);
-        Some(InclinometerSample { header: self.seq.header(truth.header.time_ns, flags), tilt: r.tilt_rad })
+        Some(InclinometerSample {
+            header: self.seq.header(truth.header.time_ns, flags),
+            tilt: r.tilt_rad,
+        })
     }
 }
 
@@ -76,7 +94,11 @@ pub struct SimMagnetometer {
 
 impl SimMagnetometer {
     pub fn new(config: &RunConfig, schedule: Schedule) -> Self {
-        Self { device: Magnetometer::new(&config.model, config.run.seed), schedule, seq: Sequence::default() }
+        Self {
+            device: Magnetometer::new(&config.model, config.run.seed),
+            schedule,
+            seq: Sequence::default(),
+        }
     }
 
     pub fn on_truth(&mut self, truth: &SimTruth) -> Option<MagnetometerSample> {
@@ -87,7 +109,10 @@ impl SimMagnetometer {
         let q = quaternion_from_array(&truth.quaternion)?;
         let r = self.device.sample(&q);
         let flags = ranged_flags(r.valid(), &r.saturated);
-        Some(MagnetometerSample { header: self.seq.header(truth.header.time_ns, flags), field: a3(&r.field_t) })
+        Some(MagnetometerSample {
+            header: self.seq.header(truth.header.time_ns, flags),
+            field: a3(&r.field_t),
+        })
     }
 }
 
@@ -134,7 +159,12 @@ pub struct SimCmg {
 
 impl SimCmg {
     pub fn new(config: &RunConfig, schedule: Schedule) -> Self {
-        Self { encoder: CmgEncoder::new(&config.model.cmg), schedule, rate_in_effect: [0.0; 4], seq: Sequence::default() }
+        Self {
+            encoder: CmgEncoder::new(&config.model.cmg),
+            schedule,
+            rate_in_effect: [0.0; 4],
+            seq: Sequence::default(),
+        }
     }
 
     pub fn on_command(&mut self, c: &CmgCommand) {

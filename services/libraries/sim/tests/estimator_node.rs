@@ -1,13 +1,19 @@
 //! The estimator node on simulated sensor samples: how it answers ticks with bad samples.
 
-use ipc_types::{AttitudeEstimate, GyroSample, InclinometerSample, MagnetometerSample, SampleHeader};
+use ipc_types::{
+    AttitudeEstimate, GyroSample, InclinometerSample, MagnetometerSample, SampleHeader,
+};
 use testbed_flight::estimator_node::{EstimatorCounters, EstimatorNode};
 use testbed_runtime::RunConfig;
 use testbed_sim::plant_node::PlantNode;
 use testbed_sim::sim_devices::{SimGyro, SimInclinometer, SimMagnetometer};
 
 /// One tick's sensor samples.
-type Tick = (GyroSample, Option<InclinometerSample>, Option<MagnetometerSample>);
+type Tick = (
+    GyroSample,
+    Option<InclinometerSample>,
+    Option<MagnetometerSample>,
+);
 
 /// 8 s of the default run's sensor samples (the plant coasting without commands).
 fn samples() -> (RunConfig, Vec<Tick>) {
@@ -23,7 +29,11 @@ fn samples() -> (RunConfig, Vec<Tick>) {
     let mut out = Vec::new();
     loop {
         let (truth, _) = plant.outputs();
-        out.push((gyro.on_truth(&truth).unwrap(), tilt.on_truth(&truth), field.on_truth(&truth)));
+        out.push((
+            gyro.on_truth(&truth).unwrap(),
+            tilt.on_truth(&truth),
+            field.on_truth(&truth),
+        ));
         if plant.at_end() {
             return (config, out);
         }

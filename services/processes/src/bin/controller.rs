@@ -1,5 +1,8 @@
 //! The controller process (see `testbed_processes::controller`).
 
 fn main() -> anyhow::Result<()> {
-    testbed_runtime::run("controller", testbed_processes::controller::ControllerProcess::open)
+    testbed_runtime::run(
+        "controller",
+        testbed_processes::controller::ControllerProcess::open,
+    )
 }

@@ -1,5 +1,8 @@
 //! The estimator process (see `testbed_processes::estimator`).
 
 fn main() -> anyhow::Result<()> {
-    testbed_runtime::run("estimator", testbed_processes::estimator::EstimatorProcess::open)
+    testbed_runtime::run(
+        "estimator",
+        testbed_processes::estimator::EstimatorProcess::open,
+    )
 }

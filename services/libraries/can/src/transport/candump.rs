@@ -78,8 +78,10 @@ fn hex_value(s: &str) -> Option<u32> {
 }
 
 fn parse_time(token: &str) -> Result<u64, LineError> {
-    let inner =
-        token.strip_prefix('(').and_then(|t| t.strip_suffix(')')).ok_or(LineError::BadTimestamp)?;
+    let inner = token
+        .strip_prefix('(')
+        .and_then(|t| t.strip_suffix(')'))
+        .ok_or(LineError::BadTimestamp)?;
     let (secs, frac) = inner.split_once('.').ok_or(LineError::BadTimestamp)?;
     let digits = |s: &str| !s.is_empty() && s.bytes().all(|b| b.is_ascii_digit());
     if !digits(secs) || !digits(frac) || frac.len() > 9 || secs.len() > 19 {
@@ -148,7 +150,11 @@ pub fn parse_candump_line(line: &str) -> Result<CandumpEntry<'_>, LineError> {
     }
     let frame = parse_frame(tokens.next().ok_or(LineError::NoFrame)?)?;
     match (tokens.next(), tokens.next()) {
-        (None, _) | (Some("R" | "T"), None) => Ok(CandumpEntry { time_ns, iface, frame }),
+        (None, _) | (Some("R" | "T"), None) => Ok(CandumpEntry {
+            time_ns,
+            iface,
+            frame,
+        }),
         _ => Err(LineError::TrailingText),
     }
 }
@@ -278,7 +284,10 @@ impl<R: BufRead> CandumpReader<R> {
     fn malformed(&mut self, reason: LineError) {
         self.stats.malformed += 1;
         if self.stats.first_malformed.len() < MAX_KEPT_MALFORMED {
-            self.stats.first_malformed.push(MalformedLine { line: self.stats.lines, reason });
+            self.stats.first_malformed.push(MalformedLine {
+                line: self.stats.lines,
+                reason,
+            });
         }
     }
 
@@ -315,7 +324,11 @@ impl<R: BufRead> CandumpReader<R> {
             match parsed {
                 Ok((time_ns, frame, true)) => {
                     self.stats.frames += 1;
-                    return Ok(Some(TimestampedFrame { frame, time_ns, source: TimeSource::Log }));
+                    return Ok(Some(TimestampedFrame {
+                        frame,
+                        time_ns,
+                        source: TimeSource::Log,
+                    }));
                 }
                 Ok((_, _, false)) => self.stats.other_iface += 1,
                 Err(LineError::ErrorFrame) => self.stats.error_frames += 1,
@@ -374,7 +387,13 @@ impl<R: BufRead> CandumpReplay<R> {
                 )));
             }
         }
-        Ok(Self { reader, pacing, next: None, start: None, discarded: 0 })
+        Ok(Self {
+            reader,
+            pacing,
+            next: None,
+            start: None,
+            discarded: 0,
+        })
     }
 
     /// The log's statistics so far (malformed lines with their numbers).
@@ -401,14 +420,18 @@ impl<R: BufRead> CanTransport for CandumpReplay<R> {
                 .next_frame()
                 .map_err(|e| TransportError::io("reading candump log", e))?;
         }
-        let Some(frame) = self.next else { return Err(TransportError::Closed) };
+        let Some(frame) = self.next else {
+            return Err(TransportError::Closed);
+        };
         let Pacing::Timed { speed } = self.pacing else {
             self.next = None;
             return Ok(Some(frame));
         };
         let (start, t0) = *self.start.get_or_insert((Instant::now(), frame.time_ns));
         let offset_s = frame.time_ns.saturating_sub(t0) as f64 * 1e-9 / speed;
-        let due = Duration::try_from_secs_f64(offset_s).ok().and_then(|d| start.checked_add(d));
+        let due = Duration::try_from_secs_f64(offset_s)
+            .ok()
+            .and_then(|d| start.checked_add(d));
         let now = Instant::now();
         let wait = match due {
             Some(due) => due.saturating_duration_since(now),
@@ -439,12 +462,19 @@ impl<W: Write> CandumpWriter<W> {
                 "interface name {iface:?} is not usable in a candump log"
             )));
         }
-        Ok(Self { writer, iface: iface.to_string() })
+        Ok(Self {
+            writer,
+            iface: iface.to_string(),
+        })
     }
 
     /// Write one line for `frame` at `time_ns` (ns since the Unix epoch).
     pub fn write(&mut self, time_ns: u64, frame: &CanFrame) -> std::io::Result<()> {
-        writeln!(self.writer, "{}", format_candump_line(time_ns, &self.iface, frame))
+        writeln!(
+            self.writer,
+            "{}",
+            format_candump_line(time_ns, &self.iface, frame)
+        )
     }
 
     /// Flush the underlying writer.
@@ -507,7 +537,10 @@ mod tests {
         let e = parse_candump_line("(1700000000.123456) can0 123#DEADBEEF").unwrap();
         assert_eq!(e.time_ns, 1_700_000_000_123_456_000);
         assert_eq!(e.iface, "can0");
-        assert_eq!(e.frame, CanFrame::standard(0x123, &[0xDE, 0xAD, 0xBE, 0xEF]).unwrap());
+        assert_eq!(
+            e.frame,
+            CanFrame::standard(0x123, &[0xDE, 0xAD, 0xBE, 0xEF]).unwrap()
+        );
         assert_eq!(
             format_candump_line(e.time_ns, e.iface, &e.frame),
             "(1700000000.123456) can0 123#DEADBEEF"
@@ -517,12 +550,24 @@ mod tests {
     #[test]
     fn parses_variants() {
         let ext = parse_candump_line("(0000000001.000001)  vcan0  1ABCDEF0#01 T").unwrap();
-        assert_eq!(ext.frame, CanFrame::new(CanId::Extended(0x1ABC_DEF0), &[1]).unwrap());
+        assert_eq!(
+            ext.frame,
+            CanFrame::new(CanId::Extended(0x1ABC_DEF0), &[1]).unwrap()
+        );
         assert_eq!(ext.time_ns, 1_000_001_000);
         let rtr = parse_candump_line("(1.5) can0 7FF#R3").unwrap();
-        assert_eq!(rtr.frame, CanFrame::remote(CanId::Standard(0x7FF), 3).unwrap());
+        assert_eq!(
+            rtr.frame,
+            CanFrame::remote(CanId::Standard(0x7FF), 3).unwrap()
+        );
         assert_eq!(rtr.time_ns, 1_500_000_000);
-        assert!(parse_candump_line("(1.0) can0 001#").unwrap().frame.data().is_empty());
+        assert!(
+            parse_candump_line("(1.0) can0 001#")
+                .unwrap()
+                .frame
+                .data()
+                .is_empty()
+        );
         let dlc = parse_candump_line("(1.0) can0 001#0102030405060708_C").unwrap();
         assert_eq!(dlc.frame.dlc(), 8);
     }
@@ -551,7 +596,11 @@ mod tests {
             ("(1.0) can0 123#+1", BadData),
             ("(1.0) can0 123#é1", BadData),
         ] {
-            assert_eq!(parse_candump_line(line).map(|e| e.frame), Err(why), "{line}");
+            assert_eq!(
+                parse_candump_line(line).map(|e| e.frame),
+                Err(why),
+                "{line}"
+            );
         }
     }
 
@@ -569,13 +618,24 @@ mod tests {
         assert_eq!(ids, [0x100, 0x104]);
         let s = r.stats();
         assert_eq!(
-            (s.lines, s.frames, s.blank, s.other_iface, s.error_frames, s.malformed),
+            (
+                s.lines,
+                s.frames,
+                s.blank,
+                s.other_iface,
+                s.error_frames,
+                s.malformed
+            ),
             (8, 2, 1, 1, 1, 3)
         );
         let lines: Vec<u64> = s.first_malformed.iter().map(|m| m.line).collect();
         assert_eq!(lines, [3, 5, 6]);
         assert_eq!(s.first_malformed[1].reason, LineError::NotUtf8);
         assert_eq!(s.first_malformed[2].reason, LineError::LineTooLong);
-        assert!(s.to_string().contains("line 3: missing or malformed time stamp"), "{s}");
+        assert!(
+            s.to_string()
+                .contains("line 3: missing or malformed time stamp"),
+            "{s}"
+        );
     }
 }

@@ -24,8 +24,11 @@ impl MemoryTransport {
 
 impl CanTransport for MemoryTransport {
     fn send(&mut self, frame: &CanFrame) -> Result<(), TransportError> {
-        let stamped =
-            TimestampedFrame { frame: *frame, time_ns: host_time_ns(), source: TimeSource::Host };
+        let stamped = TimestampedFrame {
+            frame: *frame,
+            time_ns: host_time_ns(),
+            source: TimeSource::Host,
+        };
         self.tx.send(stamped).map_err(|_| TransportError::Closed)
     }
 
@@ -54,12 +57,18 @@ mod tests {
         let (mut a, mut b) = MemoryTransport::pair();
         let f = CanFrame::standard(0x123, &[1, 2]).unwrap();
         a.send(&f).unwrap();
-        assert_eq!(b.recv(Duration::from_millis(100)).unwrap().unwrap().frame, f);
+        assert_eq!(
+            b.recv(Duration::from_millis(100)).unwrap().unwrap().frame,
+            f
+        );
         assert!(b.recv(Duration::ZERO).unwrap().is_none());
         b.send(&f).unwrap();
         assert_eq!(a.recv(Duration::ZERO).unwrap().unwrap().frame, f);
         drop(a);
-        assert!(matches!(b.recv(Duration::from_millis(1)), Err(TransportError::Closed)));
+        assert!(matches!(
+            b.recv(Duration::from_millis(1)),
+            Err(TransportError::Closed)
+        ));
         assert!(matches!(b.send(&f), Err(TransportError::Closed)));
     }
 }

@@ -81,7 +81,10 @@ pub enum TransportError {
 
 impl TransportError {
     pub(crate) fn io(context: impl Into<String>, source: std::io::Error) -> Self {
-        TransportError::Io { context: context.into(), source }
+        TransportError::Io {
+            context: context.into(),
+            source,
+        }
     }
 }
 
@@ -103,7 +106,9 @@ pub(crate) fn deadline_after(timeout: Duration) -> Option<std::time::Instant> {
 
 /// Time left until `deadline` (`Duration::MAX` without deadline, zero once passed).
 pub(crate) fn time_left(deadline: Option<std::time::Instant>) -> Duration {
-    deadline.map_or(Duration::MAX, |d| d.saturating_duration_since(std::time::Instant::now()))
+    deadline.map_or(Duration::MAX, |d| {
+        d.saturating_duration_since(std::time::Instant::now())
+    })
 }
 
 impl<T: CanTransport + ?Sized> CanTransport for &mut T {

@@ -50,7 +50,11 @@ pub fn crc16(bytes: &[u8]) -> u16 {
     for &b in bytes {
         crc ^= u16::from(b) << 8;
         for _ in 0..8 {
-            crc = if crc & 0x8000 != 0 { (crc << 1) ^ 0x1021 } else { crc << 1 };
+            crc = if crc & 0x8000 != 0 {
+                (crc << 1) ^ 0x1021
+            } else {
+                crc << 1
+            };
         }
     }
     crc
@@ -127,8 +131,12 @@ pub fn encode_packet(frame: &CanFrame, out: &mut [u8; MAX_WIRE]) -> Result<usize
     let body = 3 + data.len();
     let crc = crc16(&packet[..body]);
     packet[body..body + 2].copy_from_slice(&crc.to_be_bytes());
-    let n = cobs_encode(&packet[..body + 2], &mut out[..MAX_STUFFED])
-        .ok_or(TransportError::FrameNotSupported { frame: *frame, reason: "packet too long" })?;
+    let n = cobs_encode(&packet[..body + 2], &mut out[..MAX_STUFFED]).ok_or(
+        TransportError::FrameNotSupported {
+            frame: *frame,
+            reason: "packet too long",
+        },
+    )?;
     out[n] = 0;
     Ok(n + 1)
 }
@@ -257,8 +265,11 @@ impl Deframer {
             return Err(PacketError::BadHeader);
         }
         let id = CanId::Standard(header & 0x7FF);
-        let frame =
-            if remote { CanFrame::remote(id, dlc) } else { CanFrame::new(id, &packet[3..body]) };
+        let frame = if remote {
+            CanFrame::remote(id, dlc)
+        } else {
+            CanFrame::new(id, &packet[3..body])
+        };
         frame.map_err(|_| PacketError::BadLength)
     }
 }
@@ -278,7 +289,10 @@ impl SerialConfig {
 
     /// `path` at the default line rate.
     pub fn new(path: &str) -> Self {
-        Self { path: path.to_string(), baud: Self::DEFAULT_BAUD }
+        Self {
+            path: path.to_string(),
+            baud: Self::DEFAULT_BAUD,
+        }
     }
 }
 
@@ -450,8 +464,11 @@ mod tests {
             assert_eq!(got, [Ok(f)]);
         }
         assert!(
-            encode_packet(&CanFrame::new(CanId::Extended(1), &[]).unwrap(), &mut [0; MAX_WIRE])
-                .is_err()
+            encode_packet(
+                &CanFrame::new(CanId::Extended(1), &[]).unwrap(),
+                &mut [0; MAX_WIRE]
+            )
+            .is_err()
         );
     }
 

@@ -35,8 +35,13 @@ impl std::fmt::Display for SocketCanSupport {
 /// Whether SocketCAN works here and `iface` exists (no side effect beyond a short-lived socket).
 pub fn probe_socketcan(iface: &str) -> SocketCanSupport {
     // SAFETY: plain socket(2) call; the descriptor is closed right away.
-    let fd =
-        unsafe { libc::socket(libc::AF_CAN, libc::SOCK_RAW | libc::SOCK_CLOEXEC, libc::CAN_RAW) };
+    let fd = unsafe {
+        libc::socket(
+            libc::AF_CAN,
+            libc::SOCK_RAW | libc::SOCK_CLOEXEC,
+            libc::CAN_RAW,
+        )
+    };
     if fd < 0 {
         return SocketCanSupport::NoKernelSupport(std::io::Error::last_os_error().to_string());
     }
@@ -97,7 +102,11 @@ impl SocketCanTransport {
         socket
             .set_recv_timestamp(true)
             .map_err(|e| TransportError::io(format!("enabling time stamps on {iface}"), e))?;
-        Ok(Self { socket, iface: iface.to_string(), error_frames: 0 })
+        Ok(Self {
+            socket,
+            iface: iface.to_string(),
+            error_frames: 0,
+        })
     }
 
     /// The interface name.
@@ -178,7 +187,11 @@ pub(crate) fn from_socketcan(frame: &socketcan::CanFrame) -> Option<CanFrame> {
 /// Wait up to `timeout` for `fd` to be readable; Ok(false) on time-out.
 fn poll_readable(fd: i32, timeout: Duration) -> std::io::Result<bool> {
     let ms = timeout.as_nanos().div_ceil(1_000_000).min(i32::MAX as u128) as i32;
-    let mut pfd = libc::pollfd { fd, events: libc::POLLIN, revents: 0 };
+    let mut pfd = libc::pollfd {
+        fd,
+        events: libc::POLLIN,
+        revents: 0,
+    };
     loop {
         // SAFETY: one valid pollfd.
         let n = unsafe { libc::poll(&mut pfd, 1, ms) };
@@ -224,10 +237,17 @@ impl CanTransport for SocketCanTransport {
                 .socket
                 .and_then(|t| t.duration_since(UNIX_EPOCH).ok())
             {
-                Some(d) => (u64::try_from(d.as_nanos()).unwrap_or(u64::MAX), TimeSource::Kernel),
+                Some(d) => (
+                    u64::try_from(d.as_nanos()).unwrap_or(u64::MAX),
+                    TimeSource::Kernel,
+                ),
                 None => (host_time_ns(), TimeSource::Host),
             };
-            return Ok(Some(TimestampedFrame { frame, time_ns, source }));
+            return Ok(Some(TimestampedFrame {
+                frame,
+                time_ns,
+                source,
+            }));
         }
     }
 }

@@ -51,7 +51,11 @@ impl Rng {
 fn header(t: u64, seq: u64, rng: &mut Rng) -> SampleHeader {
     let flags = SampleHeader::VALID
         | SampleHeader::SIMULATED
-        | if matches!(rng.next_u64() % 7, 0) { SampleHeader::SATURATED_Y } else { 0 };
+        | if matches!(rng.next_u64() % 7, 0) {
+            SampleHeader::SATURATED_Y
+        } else {
+            0
+        };
     SampleHeader::new(t, seq, flags)
 }
 
@@ -132,8 +136,20 @@ pub fn tick_records(k: u64, rng: &mut Rng) -> Vec<LogRecord> {
             .into(),
         );
     }
-    out.push(AppliedWheelCommand { header: header(t, k, rng), torque: rng.array() }.into());
-    out.push(AppliedCmgCommand { header: header(t, k, rng), gimbal_rate: rng.array() }.into());
+    out.push(
+        AppliedWheelCommand {
+            header: header(t, k, rng),
+            torque: rng.array(),
+        }
+        .into(),
+    );
+    out.push(
+        AppliedCmgCommand {
+            header: header(t, k, rng),
+            gimbal_rate: rng.array(),
+        }
+        .into(),
+    );
     if matches!(k % 10, 0) {
         out.push(
             CanLinkStatus {
@@ -205,7 +221,11 @@ pub fn framing(bytes: &[u8]) -> Vec<Framed> {
         let opcode = bytes[pos];
         let len = u64::from_le_bytes(bytes[pos + 1..pos + 9].try_into().expect("8 bytes"));
         let end = pos + 9 + len as usize;
-        out.push(Framed { opcode, start: pos as u64, end: end as u64 });
+        out.push(Framed {
+            opcode,
+            start: pos as u64,
+            end: end as u64,
+        });
         pos = end;
         if opcode == 0x02 {
             assert_eq!(&bytes[pos..], b"\x89MCAP0\r\n", "trailing magic");
@@ -217,7 +237,9 @@ pub fn framing(bytes: &[u8]) -> Vec<Framed> {
 /// Runs the Python script `tests/read_log.py` with `args`, returning its JSON output.
 /// Fails with instructions if `python3` or its `mcap` package is missing.
 pub fn python_read_log(args: &[&str]) -> serde_json::Value {
-    let check = std::process::Command::new("python3").args(["-c", "import mcap"]).output();
+    let check = std::process::Command::new("python3")
+        .args(["-c", "import mcap"])
+        .output();
     match check {
         Err(e) => panic!("python3 is needed to check logs with a standard MCAP reader: {e}"),
         Ok(out) if !out.status.success() => panic!(
@@ -228,14 +250,20 @@ pub fn python_read_log(args: &[&str]) -> serde_json::Value {
         Ok(_) => {}
     }
     let script = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/read_log.py");
-    let out =
-        std::process::Command::new("python3").arg(script).args(args).output().expect("run python3");
+    let out = std::process::Command::new("python3")
+        .arg(script)
+        .args(args)
+        .output()
+        .expect("run python3");
     assert!(
         out.status.success(),
         "read_log.py {args:?} failed:\n{}",
         String::from_utf8_lossy(&out.stderr)
     );
     serde_json::from_slice(&out.stdout).unwrap_or_else(|e| {
-        panic!("read_log.py printed no JSON ({e}):\n{}", String::from_utf8_lossy(&out.stdout))
+        panic!(
+            "read_log.py printed no JSON ({e}):\n{}",
+            String::from_utf8_lossy(&out.stdout)
+        )
     })
 }

@@ -46,7 +46,9 @@ impl CmgPyramid {
 
     /// Total cluster momentum in body axes, Nms.
     pub fn momentum(&self, gimbal_rad: &Vector4<f64>) -> Vector3<f64> {
-        (0..4).map(|i| self.rotor_direction(i, gimbal_rad[i])).sum::<Vector3<f64>>()
+        (0..4)
+            .map(|i| self.rotor_direction(i, gimbal_rad[i]))
+            .sum::<Vector3<f64>>()
             * self.rotor_momentum_nms
     }
 
@@ -85,7 +87,10 @@ mod tests {
     use super::*;
 
     fn pyramid() -> CmgPyramid {
-        CmgPyramid { rotor_momentum_nms: 1.0, skew_rad: 54.74_f64.to_radians() }
+        CmgPyramid {
+            rotor_momentum_nms: 1.0,
+            skew_rad: 54.74_f64.to_radians(),
+        }
     }
 
     #[test]

@@ -19,7 +19,10 @@ pub struct CommandDelay {
 impl CommandDelay {
     /// `delay_s` ≥ 0, s (0: commands act when issued).
     pub fn new(delay_s: f64) -> Self {
-        Self { delay_s, queue: VecDeque::new() }
+        Self {
+            delay_s,
+            queue: VecDeque::new(),
+        }
     }
 
     pub fn delay_s(&self) -> f64 {
@@ -30,7 +33,11 @@ impl CommandDelay {
     /// newest one replaces the newer ones: the plant's clock never runs backwards, so that can
     /// only be a re-issue at the same instant.
     pub fn push(&mut self, issued_s: f64, command: ActuatorCommand) {
-        while self.queue.back().is_some_and(|(t, _)| *t >= issued_s - TIME_TOLERANCE_S) {
+        while self
+            .queue
+            .back()
+            .is_some_and(|(t, _)| *t >= issued_s - TIME_TOLERANCE_S)
+        {
             self.queue.pop_back();
         }
         self.queue.push_back((issued_s, command));
@@ -48,12 +55,19 @@ impl CommandDelay {
 
     /// First instant after `t_s` at which the acting command changes, if any is queued.
     pub fn next_change_after(&self, t_s: f64) -> Option<f64> {
-        self.queue.iter().map(|(issued, _)| issued + self.delay_s).find(|t| *t > t_s + TIME_TOLERANCE_S)
+        self.queue
+            .iter()
+            .map(|(issued, _)| issued + self.delay_s)
+            .find(|t| *t > t_s + TIME_TOLERANCE_S)
     }
 
     /// Forget commands that can no longer act at or after `t_s`.
     pub fn discard_before(&mut self, t_s: f64) {
-        while self.queue.get(1).is_some_and(|(issued, _)| issued + self.delay_s <= t_s + TIME_TOLERANCE_S) {
+        while self
+            .queue
+            .get(1)
+            .is_some_and(|(issued, _)| issued + self.delay_s <= t_s + TIME_TOLERANCE_S)
+        {
             self.queue.pop_front();
         }
     }
@@ -74,7 +88,10 @@ mod tests {
     use nalgebra::Vector3;
 
     fn torque(x: f64) -> ActuatorCommand {
-        ActuatorCommand { wheel_torque_nm: Vector3::new(x, 0.0, 0.0), ..Default::default() }
+        ActuatorCommand {
+            wheel_torque_nm: Vector3::new(x, 0.0, 0.0),
+            ..Default::default()
+        }
     }
 
     #[test]

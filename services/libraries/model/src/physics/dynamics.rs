@@ -64,12 +64,15 @@ impl Dynamics {
     /// Uses the true inertia (`effects.inertia_error` applied). The configuration must be valid.
     pub fn from_config(config: &ModelConfig) -> Result<Self, PhysicsError> {
         let wheel_inertia = config.wheels.inertia_kgm2;
-        let bad = || PhysicsError::InertiaNotPositiveDefinite { wheel_inertia_kgm2: wheel_inertia };
+        let bad = || PhysicsError::InertiaNotPositiveDefinite {
+            wheel_inertia_kgm2: wheel_inertia,
+        };
         let inertia = config.true_inertia().ok_or_else(bad)?;
         let mut locked_inverse = [Matrix3::zeros(); 8];
         for (mask, inverse) in locked_inverse.iter_mut().enumerate() {
             let stuck = Vector3::from_fn(|i, _| if mask & (1 << i) != 0 { 1.0 } else { 0.0 });
-            let m = inertia - Matrix3::from_diagonal(&(Vector3::repeat(1.0) - stuck)) * wheel_inertia;
+            let m =
+                inertia - Matrix3::from_diagonal(&(Vector3::repeat(1.0) - stuck)) * wheel_inertia;
             // Cholesky both proves positive definiteness and gives the inverse.
             *inverse = m.cholesky().ok_or_else(bad)?.inverse();
         }
@@ -172,8 +175,8 @@ impl Dynamics {
             match input.modes[i] {
                 WheelMode::Stuck => mask |= 1 << i,
                 WheelMode::Sliding { direction } => {
-                    net[i] =
-                        input.motor_torque_nm[i] - self.friction[i].sliding_torque(wheel_speed[i], direction);
+                    net[i] = input.motor_torque_nm[i]
+                        - self.friction[i].sliding_torque(wheel_speed[i], direction);
                     rhs[i] -= net[i];
                 }
             }
@@ -200,7 +203,8 @@ impl Dynamics {
         dy.fixed_rows_mut::<4>(0).copy_from(&q_dot.coords);
         dy.fixed_rows_mut::<3>(4).copy_from(&w_dot);
         dy.fixed_rows_mut::<3>(7).copy_from(&n_dot);
-        dy.fixed_rows_mut::<4>(10).copy_from(&input.gimbal_rate_rad_s);
+        dy.fixed_rows_mut::<4>(10)
+            .copy_from(&input.gimbal_rate_rad_s);
         dy
     }
 
@@ -222,7 +226,13 @@ impl Dynamics {
             gimbal_rate_rad_s: *gimbal_rate,
             modes: [0, 1, 2].map(|i| {
                 let n = s.wheel_speed[i];
-                if n == 0.0 { WheelMode::Stuck } else { WheelMode::Sliding { direction: n.signum() } }
+                if n == 0.0 {
+                    WheelMode::Stuck
+                } else {
+                    WheelMode::Sliding {
+                        direction: n.signum(),
+                    }
+                }
             }),
         };
         for _ in 0..3 {
@@ -232,7 +242,9 @@ impl Dynamics {
                 if input.modes[i] == WheelMode::Stuck {
                     let holding = motor_torque_nm[i] - self.wheel_inertia * w_dot[i];
                     if holding.abs() > self.friction[i].breakaway_nm {
-                        input.modes[i] = WheelMode::Sliding { direction: holding.signum() };
+                        input.modes[i] = WheelMode::Sliding {
+                            direction: holding.signum(),
+                        };
                         released = true;
                     }
                 }

@@ -50,9 +50,18 @@ impl ExternalTorqueModel {
         let e = &config.effects;
         let mg = config.platform.mass_kg * config.platform.gravity_mps2;
         Self {
-            weight_moment_b: e.com_offset.as_ref().map_or_else(Vector3::zeros, |c| Vector3::from(c.r_m) * mg),
-            drag_c1: e.aero_drag.as_ref().map_or_else(Vector3::zeros, |d| Vector3::from(d.c1)),
-            drag_c2: e.aero_drag.as_ref().map_or_else(Vector3::zeros, |d| Vector3::from(d.c2)),
+            weight_moment_b: e
+                .com_offset
+                .as_ref()
+                .map_or_else(Vector3::zeros, |c| Vector3::from(c.r_m) * mg),
+            drag_c1: e
+                .aero_drag
+                .as_ref()
+                .map_or_else(Vector3::zeros, |d| Vector3::from(d.c1)),
+            drag_c2: e
+                .aero_drag
+                .as_ref()
+                .map_or_else(Vector3::zeros, |d| Vector3::from(d.c2)),
             constant_b: e
                 .constant_torque
                 .as_ref()
@@ -65,7 +74,9 @@ impl ExternalTorqueModel {
         ExternalTorque {
             gravity_b: self.weight_moment_b.cross(&attitude::gravity_b(q)),
             drag_b: -(self.drag_c1.component_mul(rate_b)
-                + self.drag_c2.component_mul(&rate_b.component_mul(&rate_b.abs()))),
+                + self
+                    .drag_c2
+                    .component_mul(&rate_b.component_mul(&rate_b.abs()))),
             constant_b: self.constant_b,
         }
     }
@@ -73,7 +84,11 @@ impl ExternalTorqueModel {
 
 /// External torque breakdown (gravity, drag, constant), Nm, body axes, at attitude `q` (L→B) and
 /// body rate `rate_b` (rad/s, relative to L, body axes).
-pub fn external_torque(config: &ModelConfig, q: &Attitude, rate_b: &Vector3<f64>) -> ExternalTorque {
+pub fn external_torque(
+    config: &ModelConfig,
+    q: &Attitude,
+    rate_b: &Vector3<f64>,
+) -> ExternalTorque {
     ExternalTorqueModel::from_config(config).torque(q, rate_b)
 }
 
@@ -96,7 +111,12 @@ mod tests {
         let r_b = Vector3::new(12e-6, -5e-6, -3e-6);
         config.effects.com_offset = Some(ComOffset { r_m: r_b.into() });
         let mg = 350.0 * 9.806;
-        for (psi, theta, phi) in [(0.0, 0.0, 0.0), (1.0, 0.3, -0.2), (-2.5, -0.45, 0.5), (0.3, 0.0, 0.52)] {
+        for (psi, theta, phi) in [
+            (0.0, 0.0, 0.0),
+            (1.0, 0.3, -0.2),
+            (-2.5, -0.45, 0.5),
+            (0.3, 0.0, 0.52),
+        ] {
             let q = from_heading_pitch_roll(psi, theta, phi);
             // Independent truth: the weight m g (0, 0, −1) acts at the centre of mass r, worked in
             // the level frame and rotated into body axes with the attitude matrix.
@@ -105,7 +125,11 @@ mod tests {
             let weight_l = Vector3::new(0.0, 0.0, -mg);
             let truth_b = a * r_l.cross(&weight_l);
             let t = external_torque(&config, &q, &Vector3::zeros());
-            assert!((t.gravity_b - truth_b).norm() < 1e-15, "{:?} vs {truth_b:?}", t.gravity_b);
+            assert!(
+                (t.gravity_b - truth_b).norm() < 1e-15,
+                "{:?} vs {truth_b:?}",
+                t.gravity_b
+            );
             assert_eq!(t.total_b(), t.gravity_b);
         }
         // Level platform: only the horizontal offset acts, M = m g (−r_y, r_x, 0).
@@ -116,8 +140,13 @@ mod tests {
     #[test]
     fn drag_opposes_rate_per_axis_and_constant_adds() {
         let mut config = ModelConfig::default();
-        config.effects.aero_drag = Some(AeroDrag { c1: [1e-3, 2e-3, 3e-3], c2: [1e-2, 0.0, 2e-2] });
-        config.effects.constant_torque = Some(ConstantTorque { torque_nm: [1e-4, -2e-4, 3e-4] });
+        config.effects.aero_drag = Some(AeroDrag {
+            c1: [1e-3, 2e-3, 3e-3],
+            c2: [1e-2, 0.0, 2e-2],
+        });
+        config.effects.constant_torque = Some(ConstantTorque {
+            torque_nm: [1e-4, -2e-4, 3e-4],
+        });
         let w = Vector3::new(0.1, -0.2, -0.3);
         let t = external_torque(&config, &Attitude::identity(), &w);
         let drag = Vector3::new(-(1e-4 + 1e-4), 4e-4, 9e-4 + 1.8e-3);

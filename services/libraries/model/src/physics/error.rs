@@ -20,5 +20,9 @@ pub enum PhysicsError {
     #[error("integrator substep {max_substep_s} s must be finite and > 0")]
     InvalidSubstep { max_substep_s: f64 },
     #[error("initial tilt {angle_deg}° of body {axis:?} is beyond the tilt stop ±{limit_deg}°")]
-    InitialTiltBeyondStop { axis: super::TiltAxis, angle_deg: f64, limit_deg: f64 },
+    InitialTiltBeyondStop {
+        axis: super::TiltAxis,
+        angle_deg: f64,
+        limit_deg: f64,
+    },
 }

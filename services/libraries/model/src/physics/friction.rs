@@ -69,7 +69,11 @@ impl WheelFrictionModel {
 
     /// Friction torque (Nm, opposing the relative motion) at speed `n` (rad/s), 0 at `n = 0`.
     pub fn torque(&self, n: f64) -> f64 {
-        if n == 0.0 { 0.0 } else { self.sliding_torque(n, n.signum()) }
+        if n == 0.0 {
+            0.0
+        } else {
+            self.sliding_torque(n, n.signum())
+        }
     }
 
     /// Friction of a wheel known to slide in `direction` (±1), at speed `n`.
@@ -77,7 +81,11 @@ impl WheelFrictionModel {
     /// The plant freezes the direction for an integration step so the Coulomb term does not flip
     /// inside the Runge–Kutta stages; at `n = 0` it is the direction the wheel breaks away in.
     pub fn sliding_torque(&self, n: f64, direction: f64) -> f64 {
-        let coulomb = if direction > 0.0 { self.coulomb_pos_nm } else { self.coulomb_neg_nm };
+        let coulomb = if direction > 0.0 {
+            self.coulomb_pos_nm
+        } else {
+            self.coulomb_neg_nm
+        };
         let level = match self.stribeck_speed_rad_s {
             Some(ns) => coulomb + (self.breakaway_nm - coulomb) * (-(n / ns).powi(2)).exp(),
             None => coulomb,

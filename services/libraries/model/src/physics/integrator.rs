@@ -59,7 +59,9 @@ mod tests {
     #[test]
     fn time_argument_reaches_the_stages() {
         // y' = t integrates exactly (quadrature is Simpson's rule).
-        let y = rk4_step(1.0, &SVector::<f64, 1>::new(0.0), 2.0, |t, _| SVector::<f64, 1>::new(t * t));
+        let y = rk4_step(1.0, &SVector::<f64, 1>::new(0.0), 2.0, |t, _| {
+            SVector::<f64, 1>::new(t * t)
+        });
         assert!((y[0] - (27.0 - 1.0) / 3.0).abs() < 1e-12);
     }
 }

@@ -47,7 +47,9 @@ pub struct IntegratorOptions {
 
 impl Default for IntegratorOptions {
     fn default() -> Self {
-        Self { max_substep_s: 0.01 }
+        Self {
+            max_substep_s: 0.01,
+        }
     }
 }
 
@@ -105,10 +107,14 @@ impl Plant {
     ) -> Result<Self, PhysicsError> {
         config.validate()?;
         if !(options.max_substep_s.is_finite() && options.max_substep_s > 0.0) {
-            return Err(PhysicsError::InvalidSubstep { max_substep_s: options.max_substep_s });
+            return Err(PhysicsError::InvalidSubstep {
+                max_substep_s: options.max_substep_s,
+            });
         }
         if !initial.is_finite() {
-            return Err(PhysicsError::NonFinite { what: "initial platform state" });
+            return Err(PhysicsError::NonFinite {
+                what: "initial platform state",
+            });
         }
         let tilt_limit_rad = config.platform.tilt_limit_rad();
         let tilt = attitude::tilt_angles(&initial.q);
@@ -149,26 +155,41 @@ impl Plant {
     ///
     /// Refuses a non-finite or non-positive `dt_s` and a non-finite command (the state is left
     /// untouched).
-    pub fn step(&mut self, command: &ActuatorCommand, dt_s: f64) -> Result<StepReport, PhysicsError> {
+    pub fn step(
+        &mut self,
+        command: &ActuatorCommand,
+        dt_s: f64,
+    ) -> Result<StepReport, PhysicsError> {
         if !(dt_s.is_finite() && dt_s > 0.0) {
             return Err(PhysicsError::InvalidStep { dt_s });
         }
         if !command.is_finite() {
-            return Err(PhysicsError::NonFinite { what: "actuator command" });
+            return Err(PhysicsError::NonFinite {
+                what: "actuator command",
+            });
         }
-        let mut report =
-            StepReport { tilt_stop: None, at_tilt_stop: false, applied: self.applied.clone(), substeps: 0 };
+        let mut report = StepReport {
+            tilt_stop: None,
+            at_tilt_stop: false,
+            applied: self.applied.clone(),
+            substeps: 0,
+        };
         self.delay.push(self.time_s, command.clone());
         let t_end = self.time_s + dt_s;
         while t_end - self.time_s > TIME_TOLERANCE_S {
             let acting = self.delay.in_effect(self.time_s);
-            let segment_end = self.delay.next_change_after(self.time_s).map_or(t_end, |t| t.min(t_end));
+            let segment_end = self
+                .delay
+                .next_change_after(self.time_s)
+                .map_or(t_end, |t| t.min(t_end));
             let (motor, gimbal_rate) = self.actuation(&acting);
             // A whole number of substeps often divides with a rounding error above it
             // (0.1 / 0.01 = 10.000000000000002): allow the clock's tolerance before rounding up,
             // or about half of the steps would take one substep more than they need.
             let span = segment_end - self.time_s;
-            let substeps = ((span - TIME_TOLERANCE_S) / self.max_substep_s).ceil().max(1.0) as usize;
+            let substeps = ((span - TIME_TOLERANCE_S) / self.max_substep_s)
+                .ceil()
+                .max(1.0) as usize;
             let h = (segment_end - self.time_s) / substeps as f64;
             for _ in 0..substeps {
                 self.substep(&motor, &gimbal_rate, h, &mut report);
@@ -214,7 +235,9 @@ impl Plant {
 
     /// External torque on the platform now, by cause, Nm, body axes.
     pub fn external_torque_b(&self) -> ExternalTorque {
-        self.dynamics.external().torque(&self.state.q, &self.state.rate_b)
+        self.dynamics
+            .external()
+            .torque(&self.state.q, &self.state.rate_b)
     }
 
     /// Delivered motor torque and gimbal rate for an acting command: the drive clamps the torque
@@ -224,7 +247,10 @@ impl Plant {
         let t = self.max_torque_nm;
         let g = self.max_gimbal_rate_rad_s;
         (
-            command.wheel_torque_nm.map(|x| x.clamp(-t, t)).component_mul(&self.torque_scale),
+            command
+                .wheel_torque_nm
+                .map(|x| x.clamp(-t, t))
+                .component_mul(&self.torque_scale),
             command.gimbal_rate_rad_s.map(|x| x.clamp(-g, g)),
         )
     }
@@ -242,7 +268,8 @@ impl Plant {
             let wheel = Wheel::ALL[i];
             let friction = self.dynamics.friction(wheel).torque(n).abs();
             let headroom = friction
-                + self.dynamics.wheel_effective_inertia(wheel) * (self.max_speed_rad_s - n.abs()) / h;
+                + self.dynamics.wheel_effective_inertia(wheel) * (self.max_speed_rad_s - n.abs())
+                    / h;
             tau.signum() * tau.abs().min(headroom.max(0.0))
         })
     }
@@ -259,13 +286,20 @@ impl Plant {
         for split in 0..MAX_SPLITS {
             let motor = self.speed_limited(delivered, remaining);
             let modes = self.dynamics.wheel_modes(&self.state, &motor, gimbal_rate);
-            let input = StepInput { motor_torque_nm: motor, gimbal_rate_rad_s: *gimbal_rate, modes };
+            let input = StepInput {
+                motor_torque_nm: motor,
+                gimbal_rate_rad_s: *gimbal_rate,
+                modes,
+            };
             let y0 = self.state.to_vector();
             let dynamics = &self.dynamics;
             let integrate = |h: f64| rk4_step(0.0, &y0, h, |_, y| dynamics.derivative(y, &input));
             let full = integrate(remaining);
-            let crossing =
-                if split + 1 < MAX_SPLITS { earliest_zero_crossing(&y0, &full, &modes) } else { None };
+            let crossing = if split + 1 < MAX_SPLITS {
+                earliest_zero_crossing(&y0, &full, &modes)
+            } else {
+                None
+            };
             let (taken, y1) = match crossing {
                 None => (remaining, full),
                 Some((_, fraction)) => (fraction * remaining, integrate(fraction * remaining)),
@@ -283,7 +317,10 @@ impl Plant {
                 }
             }
             self.time_s += taken;
-            self.applied = AppliedActuation { wheel_motor_torque_nm: motor, gimbal_rate_rad_s: *gimbal_rate };
+            self.applied = AppliedActuation {
+                wheel_motor_torque_nm: motor,
+                gimbal_rate_rad_s: *gimbal_rate,
+            };
             remaining -= taken;
             if crossing.is_none() || remaining <= 1e-12 * h {
                 break;
@@ -315,7 +352,11 @@ impl Plant {
             let k = axis.index();
             let new_strike = !self.in_contact[k] && report.tilt_stop.is_none();
             if let Some(angle_rad) = engaged[k].filter(|_| new_strike) {
-                report.tilt_stop = Some(TiltStopEvent { time_s: self.time_s, axis, angle_rad });
+                report.tilt_stop = Some(TiltStopEvent {
+                    time_s: self.time_s,
+                    axis,
+                    angle_rad,
+                });
             }
             // Contact lasts while the platform sits on the stop (within rounding), so resting
             // contact, which may leave the angle exactly on the limit for a step, is not a new

@@ -3,7 +3,8 @@
 use super::*;
 use crate::attitude::{self, from_heading_pitch_roll};
 use crate::config::{
-    ActuatorDelay, AeroDrag, ComOffset, ConstantTorque, DEG, InertiaError, ModelConfig, WheelTorqueScale,
+    ActuatorDelay, AeroDrag, ComOffset, ConstantTorque, DEG, InertiaError, ModelConfig,
+    WheelTorqueScale,
 };
 use nalgebra::{Vector3, Vector4};
 
@@ -34,7 +35,10 @@ fn step(p: &mut Plant, command: &ActuatorCommand, dt: f64) -> StepReport {
 }
 
 fn wheel_z(torque: f64) -> ActuatorCommand {
-    ActuatorCommand { wheel_torque_nm: Vector3::new(0.0, 0.0, torque), ..Default::default() }
+    ActuatorCommand {
+        wheel_torque_nm: Vector3::new(0.0, 0.0, torque),
+        ..Default::default()
+    }
 }
 
 fn j() -> f64 {
@@ -43,7 +47,11 @@ fn j() -> f64 {
 
 /// Run torque-free for 1000 s and return the largest relative drifts of the level-frame momentum
 /// vector, its magnitude and the kinetic energy.
-fn torque_free_drift(config: &ModelConfig, initial: PlatformState, command: &ActuatorCommand) -> [f64; 3] {
+fn torque_free_drift(
+    config: &ModelConfig,
+    initial: PlatformState,
+    command: &ActuatorCommand,
+) -> [f64; 3] {
     let mut p = plant(config, initial);
     let h0 = p.angular_momentum_l();
     let e0 = p.kinetic_energy_j();
@@ -51,7 +59,11 @@ fn torque_free_drift(config: &ModelConfig, initial: PlatformState, command: &Act
     for k in 0..10_000 {
         let report = step(&mut p, command, 0.1);
         let tilt = attitude::tilt_angles(&p.state().q);
-        assert!(report.tilt_stop.is_none() && !report.at_tilt_stop, "t = {}: tilt {tilt:?}", p.time_s());
+        assert!(
+            report.tilt_stop.is_none() && !report.at_tilt_stop,
+            "t = {}: tilt {tilt:?}",
+            p.time_s()
+        );
         if k % 10 == 9 {
             let h = p.angular_momentum_l();
             drift[0] = drift[0].max((h - h0).norm() / h0.norm());
@@ -77,17 +89,29 @@ fn tumbling() -> PlatformState {
 fn torque_free_motion_with_wheels_conserves_momentum_and_energy() {
     let config = frictionless(ModelConfig::default());
     let drift = torque_free_drift(&config, tumbling(), &ActuatorCommand::default());
-    assert!(drift.iter().all(|d| *d < 1e-9), "drift H_L, |H|, E: {drift:?}");
+    assert!(
+        drift.iter().all(|d| *d < 1e-9),
+        "drift H_L, |H|, E: {drift:?}"
+    );
 }
 
 #[test]
 fn torque_free_motion_with_cmg_momentum_at_fixed_gimbals_conserves_momentum_and_energy() {
     let config = frictionless(ModelConfig::default());
-    let initial = PlatformState { gimbal: Vector4::new(0.3, -0.2, 0.5, 0.1), ..tumbling() };
+    let initial = PlatformState {
+        gimbal: Vector4::new(0.3, -0.2, 0.5, 0.1),
+        ..tumbling()
+    };
     let h_cmg = CmgPyramid::from_config(&config.cmg).momentum(&initial.gimbal);
-    assert!(h_cmg.norm() > 0.5, "the test needs real CMG momentum: {h_cmg}");
+    assert!(
+        h_cmg.norm() > 0.5,
+        "the test needs real CMG momentum: {h_cmg}"
+    );
     let drift = torque_free_drift(&config, initial, &ActuatorCommand::default());
-    assert!(drift.iter().all(|d| *d < 1e-9), "drift H_L, |H|, E: {drift:?}");
+    assert!(
+        drift.iter().all(|d| *d < 1e-9),
+        "drift H_L, |H|, E: {drift:?}"
+    );
 }
 
 #[test]
@@ -96,34 +120,54 @@ fn moving_gimbals_exchange_momentum_but_conserve_the_total() {
     // plus nutation, so the stop is moved out of the way.
     let mut config = frictionless(ModelConfig::default());
     config.platform.tilt_limit_deg = 89.0;
-    let command =
-        ActuatorCommand { gimbal_rate_rad_s: Vector4::new(0.02, -0.03, 0.025, 0.01), ..Default::default() };
+    let command = ActuatorCommand {
+        gimbal_rate_rad_s: Vector4::new(0.02, -0.03, 0.025, 0.01),
+        ..Default::default()
+    };
     let drift = torque_free_drift(&config, tumbling(), &command);
-    assert!(drift[0] < 1e-9 && drift[1] < 1e-9, "drift H_L, |H|: {drift:?}");
+    assert!(
+        drift[0] < 1e-9 && drift[1] < 1e-9,
+        "drift H_L, |H|: {drift:?}"
+    );
     // The servos do work on the platform: energy is not an integral here, and the check must
     // be able to tell.
-    assert!(drift[2] > 1e-6, "energy should change with moving gimbals: {drift:?}");
+    assert!(
+        drift[2] > 1e-6,
+        "energy should change with moving gimbals: {drift:?}"
+    );
 }
 
 #[test]
 fn gimbal_rate_is_clamped_and_cmg_torque_keeps_total_momentum() {
     let config = ModelConfig::default();
     let mut p = plant(&config, PlatformState::default());
-    let command =
-        ActuatorCommand { gimbal_rate_rad_s: Vector4::new(10.0, -10.0, 0.5, 0.0), ..Default::default() };
+    let command = ActuatorCommand {
+        gimbal_rate_rad_s: Vector4::new(10.0, -10.0, 0.5, 0.0),
+        ..Default::default()
+    };
     let mut report = None;
     for _ in 0..10 {
         report = Some(step(&mut p, &command, 0.1));
     }
     let max = 90.0 * DEG;
     let expected = Vector4::new(max, -max, 0.5, 0.0);
-    assert!((p.state().gimbal - expected).norm() < 1e-12, "{}", p.state().gimbal);
-    let applied = report.map(|r| r.applied.gimbal_rate_rad_s).unwrap_or_else(Vector4::zeros);
+    assert!(
+        (p.state().gimbal - expected).norm() < 1e-12,
+        "{}",
+        p.state().gimbal
+    );
+    let applied = report
+        .map(|r| r.applied.gimbal_rate_rad_s)
+        .unwrap_or_else(Vector4::zeros);
     assert!((applied - Vector4::new(max, -max, 0.5, 0.0)).norm() < 1e-15);
     // The cluster now holds momentum; the platform carries the opposite.
     let cluster = CmgPyramid::from_config(&config.cmg).momentum(&p.state().gimbal);
     assert!(cluster.norm() > 0.5, "{cluster}");
-    assert!(p.angular_momentum_l().norm() < 1e-9 * cluster.norm(), "{}", p.angular_momentum_l());
+    assert!(
+        p.angular_momentum_l().norm() < 1e-9 * cluster.norm(),
+        "{}",
+        p.angular_momentum_l()
+    );
     assert!(p.state().rate_b.norm() > 1e-3);
 }
 
@@ -133,12 +177,18 @@ fn coasting_wheel_spins_down_as_the_closed_form_and_the_platform_takes_its_momen
     // J_eff n' = −(T + K n), J_eff = J (Izz − J) / Izz, so for n > 0
     // n(t) = (n0 + T/K) e^{−K t / J_eff} − T/K, reaching 0 at t_s = (J_eff/K) ln(1 + K n0 / T).
     let config = diagonal();
-    let (t_c, k) = (config.wheels.coulomb_nm[2], config.wheels.viscous_nm_per_rad_s[2]);
+    let (t_c, k) = (
+        config.wheels.coulomb_nm[2],
+        config.wheels.viscous_nm_per_rad_s[2],
+    );
     let j = config.wheels.inertia_kgm2;
     let j_eff = j * (IZZ - j) / IZZ;
     let n0 = 600.0;
     let t_stop = j_eff / k * (1.0 + k * n0 / t_c).ln();
-    let initial = PlatformState { wheel_speed: Vector3::new(0.0, 0.0, n0), ..Default::default() };
+    let initial = PlatformState {
+        wheel_speed: Vector3::new(0.0, 0.0, n0),
+        ..Default::default()
+    };
     let mut p = plant(&config, initial);
     let mut stopped_at = None;
     for step_index in 1..=5000 {
@@ -148,7 +198,10 @@ fn coasting_wheel_spins_down_as_the_closed_form_and_the_platform_takes_its_momen
         let n = s.wheel_speed.z;
         if t < t_stop {
             let truth = (n0 + t_c / k) * (-k * t / j_eff).exp() - t_c / k;
-            assert!((n - truth).abs() < 1e-9 * n0, "t = {t}: n = {n}, closed form {truth}");
+            assert!(
+                (n - truth).abs() < 1e-9 * n0,
+                "t = {t}: n = {n}, closed form {truth}"
+            );
         } else if stopped_at.is_none() && n == 0.0 {
             stopped_at = Some(t);
         }
@@ -159,7 +212,10 @@ fn coasting_wheel_spins_down_as_the_closed_form_and_the_platform_takes_its_momen
         assert!(s.rate_b.x.abs() < 1e-15 && s.rate_b.y.abs() < 1e-15);
     }
     let stopped_at = stopped_at.unwrap_or(f64::NAN);
-    assert!((stopped_at - t_stop).abs() <= 0.1 + 1e-9, "stopped at {stopped_at}, closed form {t_stop}");
+    assert!(
+        (stopped_at - t_stop).abs() <= 0.1 + 1e-9,
+        "stopped at {stopped_at}, closed form {t_stop}"
+    );
     // Stuck, not chattering: exactly zero to the end, platform spinning at J n0 / Izz.
     assert_eq!(p.state().wheel_speed.z, 0.0);
     assert!((p.state().rate_b.z - j * n0 / IZZ).abs() < 1e-15);
@@ -168,7 +224,10 @@ fn coasting_wheel_spins_down_as_the_closed_form_and_the_platform_takes_its_momen
 #[test]
 fn motor_torque_below_breakaway_leaves_a_stopped_wheel_stuck_and_above_it_spins_up() {
     let config = diagonal();
-    let (t_c, k) = (config.wheels.coulomb_nm[2], config.wheels.viscous_nm_per_rad_s[2]);
+    let (t_c, k) = (
+        config.wheels.coulomb_nm[2],
+        config.wheels.viscous_nm_per_rad_s[2],
+    );
     let mut p = plant(&config, PlatformState::default());
     for _ in 0..100 {
         step(&mut p, &wheel_z(0.9 * t_c), 0.1);
@@ -182,21 +241,35 @@ fn motor_torque_below_breakaway_leaves_a_stopped_wheel_stuck_and_above_it_spins_
         step(&mut p, &wheel_z(tau), 0.1);
     }
     let truth = (tau - t_c) / k * (1.0 - (-k * 2.0 / j_eff).exp());
-    assert!((p.state().wheel_speed.z - truth).abs() < 1e-9 * truth, "{} vs {truth}", p.state().wheel_speed.z);
+    assert!(
+        (p.state().wheel_speed.z - truth).abs() < 1e-9 * truth,
+        "{} vs {truth}",
+        p.state().wheel_speed.z
+    );
 }
 
 #[test]
 fn wheel_torque_is_clamped_and_scaled() {
     let mut config = frictionless(diagonal());
-    config.effects.wheel_torque_scale = Some(WheelTorqueScale { scale: [1.0, 1.0, 0.9] });
+    config.effects.wheel_torque_scale = Some(WheelTorqueScale {
+        scale: [1.0, 1.0, 0.9],
+    });
     let mut p = plant(&config, PlatformState::default());
-    let command = ActuatorCommand { wheel_torque_nm: Vector3::new(-5.0, 0.0, 5.0), ..Default::default() };
+    let command = ActuatorCommand {
+        wheel_torque_nm: Vector3::new(-5.0, 0.0, 5.0),
+        ..Default::default()
+    };
     let mut report = None;
     for _ in 0..10 {
         report = Some(step(&mut p, &command, 0.1));
     }
-    let applied = report.map(|r| r.applied.wheel_motor_torque_nm).unwrap_or_else(Vector3::zeros);
-    assert!((applied - Vector3::new(-0.1, 0.0, 0.09)).norm() < 1e-15, "{applied}");
+    let applied = report
+        .map(|r| r.applied.wheel_motor_torque_nm)
+        .unwrap_or_else(Vector3::zeros);
+    assert!(
+        (applied - Vector3::new(-0.1, 0.0, 0.09)).norm() < 1e-15,
+        "{applied}"
+    );
     // Reaction on the platform: (I_ii − J) w_i' = −τ_i.
     let w = p.state().rate_b;
     assert!((w.x - 0.1 / (IXX - j())).abs() < 1e-14, "{w}");
@@ -216,10 +289,16 @@ fn wheel_speed_saturates_at_the_limit() {
         fastest = fastest.max(p.state().wheel_speed.z);
     }
     assert!(fastest <= n_max * (1.0 + 1e-9), "{fastest} > {n_max}");
-    assert!(p.state().wheel_speed.z >= n_max * (1.0 - 1e-6), "{}", p.state().wheel_speed.z);
+    assert!(
+        p.state().wheel_speed.z >= n_max * (1.0 - 1e-6),
+        "{}",
+        p.state().wheel_speed.z
+    );
     // At the limit the drive only holds the speed: its torque balances friction.
     let holding = wheel_friction_torque(&config, Wheel::Z, n_max);
-    let applied = report.map(|r| r.applied.wheel_motor_torque_nm.z).unwrap_or(f64::NAN);
+    let applied = report
+        .map(|r| r.applied.wheel_motor_torque_nm.z)
+        .unwrap_or(f64::NAN);
     assert!((applied - holding).abs() < 1e-6, "{applied} vs {holding}");
 }
 
@@ -234,11 +313,18 @@ fn actuator_delay_shifts_the_response_by_the_delay() {
         config.effects.actuator_delay = delay_effect.map(|delay_s| ActuatorDelay { delay_s });
         let mut p = plant(&config, PlatformState::default());
         for k in 1..=40 {
-            let command = if k > 10 { wheel_z(tau) } else { ActuatorCommand::default() };
+            let command = if k > 10 {
+                wheel_z(tau)
+            } else {
+                ActuatorCommand::default()
+            };
             step(&mut p, &command, 0.1);
             let t = k as f64 * 0.1;
             let w = p.state().rate_b.z;
-            assert!((w - response(t, t_on)).abs() < 1e-12, "delay {delay_effect:?}, t = {t}: {w}");
+            assert!(
+                (w - response(t, t_on)).abs() < 1e-12,
+                "delay {delay_effect:?}, t = {t}: {w}"
+            );
         }
     }
 }
@@ -249,11 +335,16 @@ fn gravity_torque_of_a_pendulous_offset_oscillates_at_the_pendulum_frequency() {
     // φ'' = −(m g c / Ixx) φ for small φ (the wheels stay stuck: full Ixx).
     let c = 20e-6;
     let mut config = diagonal();
-    config.effects.com_offset = Some(ComOffset { r_m: [0.0, 0.0, -c] });
+    config.effects.com_offset = Some(ComOffset {
+        r_m: [0.0, 0.0, -c],
+    });
     let omega = (config.platform.mass_kg * config.platform.gravity_mps2 * c / IXX).sqrt();
     let period = 2.0 * std::f64::consts::PI / omega;
     let amplitude = 0.5 * DEG;
-    let initial = PlatformState { q: from_heading_pitch_roll(0.0, 0.0, amplitude), ..Default::default() };
+    let initial = PlatformState {
+        q: from_heading_pitch_roll(0.0, 0.0, amplitude),
+        ..Default::default()
+    };
     let mut p = plant(&config, initial);
     let dt = 0.1;
     let mut crossings = Vec::new();
@@ -271,8 +362,14 @@ fn gravity_torque_of_a_pendulous_offset_oscillates_at_the_pendulum_frequency() {
     }
     let measured = crossings[2] - crossings[0];
     // Finite amplitude lengthens the period by A²/16 ≈ 5e-6.
-    assert!((measured / period - 1.0).abs() < 1e-4, "period {measured} s, closed form {period} s");
-    assert!((peak / amplitude - 1.0).abs() < 1e-3, "amplitude {peak} vs {amplitude}");
+    assert!(
+        (measured / period - 1.0).abs() < 1e-4,
+        "period {measured} s, closed form {period} s"
+    );
+    assert!(
+        (peak / amplitude - 1.0).abs() < 1e-3,
+        "amplitude {peak} vs {amplitude}"
+    );
     assert_eq!(p.state().wheel_speed, Vector3::zeros());
 }
 
@@ -280,14 +377,27 @@ fn gravity_torque_of_a_pendulous_offset_oscillates_at_the_pendulum_frequency() {
 fn linear_drag_decays_the_spin_exponentially() {
     let c1 = 0.05;
     let mut config = diagonal();
-    config.effects.aero_drag = Some(AeroDrag { c1: [0.0, 0.0, c1], c2: [0.0; 3] });
+    config.effects.aero_drag = Some(AeroDrag {
+        c1: [0.0, 0.0, c1],
+        c2: [0.0; 3],
+    });
     let w0 = 0.1;
-    let mut p = plant(&config, PlatformState { rate_b: Vector3::new(0.0, 0.0, w0), ..Default::default() });
+    let mut p = plant(
+        &config,
+        PlatformState {
+            rate_b: Vector3::new(0.0, 0.0, w0),
+            ..Default::default()
+        },
+    );
     for _ in 0..1000 {
         step(&mut p, &ActuatorCommand::default(), 0.1);
     }
     let truth = w0 * (-c1 * 100.0 / IZZ).exp();
-    assert!((p.state().rate_b.z / truth - 1.0).abs() < 1e-9, "{} vs {truth}", p.state().rate_b.z);
+    assert!(
+        (p.state().rate_b.z / truth - 1.0).abs() < 1e-9,
+        "{} vs {truth}",
+        p.state().rate_b.z
+    );
     let drag = p.external_torque_b().drag_b.z;
     assert!((drag + c1 * p.state().rate_b.z).abs() < 1e-15);
 }
@@ -299,7 +409,9 @@ fn tilt_stop_fires_once_and_holds_the_platform_on_the_stop() {
     // t* = sqrt(2 · 30° · Ixx / M).
     let m = 0.5;
     let mut config = diagonal();
-    config.effects.constant_torque = Some(ConstantTorque { torque_nm: [m, 0.0, 0.0] });
+    config.effects.constant_torque = Some(ConstantTorque {
+        torque_nm: [m, 0.0, 0.0],
+    });
     let limit = config.platform.tilt_limit_rad();
     let t_hit = (2.0 * limit * IXX / m).sqrt();
     let mut p = plant(&config, PlatformState::default());
@@ -308,7 +420,10 @@ fn tilt_stop_fires_once_and_holds_the_platform_on_the_stop() {
         let report = step(&mut p, &ActuatorCommand::default(), 0.1);
         events.extend(report.tilt_stop);
         let [theta, phi] = attitude::tilt_angles(&p.state().q);
-        assert!(phi >= -limit - 1e-12 && theta.abs() < 1e-12, "step {k}: φ = {phi}, θ = {theta}");
+        assert!(
+            phi >= -limit - 1e-12 && theta.abs() < 1e-12,
+            "step {k}: φ = {phi}, θ = {theta}"
+        );
         if p.time_s() > t_hit + 0.1 {
             assert!(report.at_tilt_stop);
         }
@@ -316,7 +431,11 @@ fn tilt_stop_fires_once_and_holds_the_platform_on_the_stop() {
     assert_eq!(events.len(), 1, "{events:?}");
     let event = events[0];
     assert_eq!(event.axis, TiltAxis::Y);
-    assert!(event.time_s >= t_hit && event.time_s <= t_hit + 0.01 + 1e-9, "{} vs {t_hit}", event.time_s);
+    assert!(
+        event.time_s >= t_hit && event.time_s <= t_hit + 0.01 + 1e-9,
+        "{} vs {t_hit}",
+        event.time_s
+    );
     let rate_at_hit = m / IXX * t_hit;
     assert!(
         event.angle_rad < -limit && event.angle_rad > -limit - rate_at_hit * 0.011,
@@ -324,14 +443,26 @@ fn tilt_stop_fires_once_and_holds_the_platform_on_the_stop() {
         event.angle_rad
     );
     // Resting on the stop: at most one substep of rate builds up before contact removes it.
-    assert!(p.state().rate_b.x.abs() <= m / IXX * 0.01 * 1.01, "{}", p.state().rate_b);
+    assert!(
+        p.state().rate_b.x.abs() <= m / IXX * 0.01 * 1.01,
+        "{}",
+        p.state().rate_b
+    );
 }
 
 #[test]
 fn true_inertia_carries_the_inertia_error() {
     let mut config = diagonal();
-    config.effects.inertia_error = Some(InertiaError { fraction: [0.0, 0.0, 0.1] });
-    let p = plant(&config, PlatformState { rate_b: Vector3::new(0.0, 0.0, 0.1), ..Default::default() });
+    config.effects.inertia_error = Some(InertiaError {
+        fraction: [0.0, 0.0, 0.1],
+    });
+    let p = plant(
+        &config,
+        PlatformState {
+            rate_b: Vector3::new(0.0, 0.0, 0.1),
+            ..Default::default()
+        },
+    );
     assert!((p.angular_momentum_b().z - IZZ * 1.1 * 0.1).abs() < 1e-12);
     assert!((p.kinetic_energy_j() - 0.5 * IZZ * 1.1 * 0.01).abs() < 1e-12);
 }
@@ -339,16 +470,34 @@ fn true_inertia_carries_the_inertia_error() {
 #[test]
 fn bad_inputs_are_refused() {
     let config = ModelConfig::default();
-    let beyond = PlatformState { q: from_heading_pitch_roll(0.0, 31.0 * DEG, 0.0), ..Default::default() };
+    let beyond = PlatformState {
+        q: from_heading_pitch_roll(0.0, 31.0 * DEG, 0.0),
+        ..Default::default()
+    };
     assert!(matches!(
         Plant::new(&config, beyond),
-        Err(PhysicsError::InitialTiltBeyondStop { axis: TiltAxis::X, .. })
+        Err(PhysicsError::InitialTiltBeyondStop {
+            axis: TiltAxis::X,
+            ..
+        })
     ));
-    let nan = PlatformState { rate_b: Vector3::new(f64::NAN, 0.0, 0.0), ..Default::default() };
-    assert!(matches!(Plant::new(&config, nan), Err(PhysicsError::NonFinite { .. })));
+    let nan = PlatformState {
+        rate_b: Vector3::new(f64::NAN, 0.0, 0.0),
+        ..Default::default()
+    };
+    assert!(matches!(
+        Plant::new(&config, nan),
+        Err(PhysicsError::NonFinite { .. })
+    ));
     let mut p = plant(&config, PlatformState::default());
-    assert!(matches!(p.step(&ActuatorCommand::default(), 0.0), Err(PhysicsError::InvalidStep { .. })));
-    assert!(matches!(p.step(&wheel_z(f64::INFINITY), 0.1), Err(PhysicsError::NonFinite { .. })));
+    assert!(matches!(
+        p.step(&ActuatorCommand::default(), 0.0),
+        Err(PhysicsError::InvalidStep { .. })
+    ));
+    assert!(matches!(
+        p.step(&wheel_z(f64::INFINITY), 0.1),
+        Err(PhysicsError::NonFinite { .. })
+    ));
     assert_eq!(p.time_s(), 0.0);
     let mut bad = ModelConfig::default();
     bad.wheels.inertia_kgm2 = 50.0;
@@ -368,5 +517,8 @@ fn a_step_of_a_whole_number_of_substeps_takes_exactly_that_many() {
         assert_eq!(report.substeps, 10, "step {k} at t = {} s", p.time_s());
     }
     // A step that is not a whole number of substeps rounds up.
-    assert_eq!(step(&mut p, &ActuatorCommand::default(), 0.105).substeps, 11);
+    assert_eq!(
+        step(&mut p, &ActuatorCommand::default(), 0.105).substeps,
+        11
+    );
 }

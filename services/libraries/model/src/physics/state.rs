@@ -74,13 +74,19 @@ pub struct ActuatorCommand {
 impl Default for ActuatorCommand {
     /// Motors off, gimbals held.
     fn default() -> Self {
-        Self { wheel_torque_nm: Vector3::zeros(), gimbal_rate_rad_s: Vector4::zeros() }
+        Self {
+            wheel_torque_nm: Vector3::zeros(),
+            gimbal_rate_rad_s: Vector4::zeros(),
+        }
     }
 }
 
 impl ActuatorCommand {
     pub fn is_finite(&self) -> bool {
-        self.wheel_torque_nm.iter().chain(self.gimbal_rate_rad_s.iter()).all(|x| x.is_finite())
+        self.wheel_torque_nm
+            .iter()
+            .chain(self.gimbal_rate_rad_s.iter())
+            .all(|x| x.is_finite())
     }
 }
 
@@ -99,6 +105,9 @@ mod tests {
         };
         let back = PlatformState::from_vector(&s.to_vector());
         assert!((back.q.coords - s.q.coords).norm() < 1e-15);
-        assert_eq!((back.rate_b, back.wheel_speed, back.gimbal), (s.rate_b, s.wheel_speed, s.gimbal));
+        assert_eq!(
+            (back.rate_b, back.wheel_speed, back.gimbal),
+            (s.rate_b, s.wheel_speed, s.gimbal)
+        );
     }
 }

@@ -75,11 +75,15 @@ pub fn enforce_tilt_stop(
             }
             engaged[axis.index()].get_or_insert(angle);
             let side = angle.signum();
-            let Some(u) = tilt_rate_axis(&state.q, axis) else { continue };
+            let Some(u) = tilt_rate_axis(&state.q, axis) else {
+                continue;
+            };
             // A rotation about û (fixed in the plane-normal of e and G) changes the angle by
             // exactly its own amount, so one rotation lands on the stop.
             state.q = attitude::propagate(&state.q, &u, -(angle - side * limit_rad));
-            let Some(u) = tilt_rate_axis(&state.q, axis) else { continue };
+            let Some(u) = tilt_rate_axis(&state.q, axis) else {
+                continue;
+            };
             let into_stop = u.dot(&state.rate_b);
             if into_stop * side > 0.0 {
                 let ku = impact_inverse * u;
@@ -118,20 +122,27 @@ mod tests {
             gimbal: Vector4::zeros(),
         };
         let u0 = tilt_rate_axis(&s.q, TiltAxis::X).unwrap_or_else(Vector3::zeros);
-        assert!(u0.dot(&s.rate_b) > 0.0, "test must start moving into the stop");
+        assert!(
+            u0.dot(&s.rate_b) > 0.0,
+            "test must start moving into the stop"
+        );
         let momentum = |s: &PlatformState| inertia() * s.rate_b + s.wheel_speed * j;
         let momentum_before = momentum(&s);
         let wheel_absolute_before = s.wheel_speed + s.rate_b;
         let phi_before = attitude::tilt_angles(&s.q)[1];
         let energy = |s: &PlatformState| {
-            0.5 * s.rate_b.dot(&(platform * s.rate_b)) + 0.5 * j * (s.wheel_speed + s.rate_b).norm_squared()
+            0.5 * s.rate_b.dot(&(platform * s.rate_b))
+                + 0.5 * j * (s.wheel_speed + s.rate_b).norm_squared()
         };
         let e_before = energy(&s);
 
         let engaged = enforce_tilt_stop(limit, &k, &Vector3::repeat(true), &mut s);
 
         let theta_found = engaged[0].unwrap_or(f64::NAN);
-        assert!((theta_found - 31f64.to_radians()).abs() < 1e-9, "{theta_found}");
+        assert!(
+            (theta_found - 31f64.to_radians()).abs() < 1e-9,
+            "{theta_found}"
+        );
         assert_eq!(engaged[1], None);
         let [theta, phi] = attitude::tilt_angles(&s.q);
         assert!((theta - limit).abs() < 1e-12, "{theta}");
@@ -143,7 +154,10 @@ mod tests {
         let down = attitude::gravity_b(&s.q);
         let impulse = momentum(&s) - momentum_before;
         assert!(impulse.norm() > 1e-3);
-        assert!(impulse.dot(&down).abs() < 1e-14 * impulse.norm(), "{impulse}");
+        assert!(
+            impulse.dot(&down).abs() < 1e-14 * impulse.norm(),
+            "{impulse}"
+        );
         assert!(((s.wheel_speed + s.rate_b) - wheel_absolute_before).norm() < 1e-12);
         assert!(energy(&s) < e_before, "an inelastic impact dissipates");
     }
