@@ -76,6 +76,10 @@ impl Recording {
         self.ticks.len()
     }
 
+    pub fn is_empty(&self) -> bool {
+        self.ticks.is_empty()
+    }
+
     fn header(k: usize) -> SampleHeader {
         SampleHeader::new(k as u64 * TICK_NS, k as u64, SampleHeader::VALID)
     }

@@ -36,6 +36,8 @@
 //! run is deterministic however the OS schedules the processes, and identical to the in-process
 //! loop of `testbed_sim::closed_loop` for the same seed.
 
+#![forbid(unsafe_code)]
+
 pub mod can_gateway;
 pub mod can_link;
 pub mod can_node;

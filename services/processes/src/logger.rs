@@ -173,10 +173,10 @@ impl Node for LoggerProcess {
                 }
             }
             _ => {
-                if !self.lockstep {
-                    if let Some(c) = self.candump.as_mut() {
-                        c.write_until(u64::MAX)?;
-                    }
+                if !self.lockstep
+                    && let Some(c) = self.candump.as_mut()
+                {
+                    c.write_until(u64::MAX)?;
                 }
                 if let Some(writer) = self.writer.as_mut() {
                     writer.flush()?;

@@ -220,31 +220,6 @@ pub fn logging_directives(rust_log: Option<&str>) -> String {
     }
 }
 
-#[cfg(test)]
-mod logging_tests {
-    use super::*;
-    use tracing_subscriber::filter::LevelFilter;
-
-    #[test]
-    fn iceoryx2_stays_at_warn_unless_named() {
-        assert_eq!(logging_directives(None), "info,iceoryx2=warn");
-        assert_eq!(logging_directives(Some("debug")), "debug,iceoryx2=warn");
-        assert_eq!(
-            logging_directives(Some("debug,iceoryx2=debug")),
-            "debug,iceoryx2=debug"
-        );
-        assert_eq!(
-            logging_iceoryx2_level("debug,iceoryx2=warn"),
-            LevelFilter::WARN
-        );
-        assert_eq!(
-            logging_iceoryx2_level("warn,iceoryx2=trace"),
-            LevelFilter::TRACE
-        );
-        assert_eq!(logging_iceoryx2_level("error"), LevelFilter::ERROR);
-    }
-}
-
 /// The level of the `iceoryx2` directive in `directives` (the last one naming it), else the
 /// overall level (the last bare level), else `info`.
 fn logging_iceoryx2_level(directives: &str) -> tracing_subscriber::filter::LevelFilter {
@@ -255,12 +230,12 @@ fn logging_iceoryx2_level(directives: &str) -> tracing_subscriber::filter::Level
         .filter_map(|d| d.split_once('='))
         .filter(|(target, _)| target.trim().starts_with("iceoryx2"))
         .filter_map(|(_, l)| level(l))
-        .last();
+        .next_back();
     let bare = directives
         .split(',')
         .filter(|d| !d.contains('='))
         .filter_map(level)
-        .last();
+        .next_back();
     named.or(bare).unwrap_or(LevelFilter::INFO)
 }
 
@@ -354,5 +329,30 @@ impl Bus {
             service: name.to_owned(),
             source: Box::new(e),
         })
+    }
+}
+
+#[cfg(test)]
+mod logging_tests {
+    use super::*;
+    use tracing_subscriber::filter::LevelFilter;
+
+    #[test]
+    fn iceoryx2_stays_at_warn_unless_named() {
+        assert_eq!(logging_directives(None), "info,iceoryx2=warn");
+        assert_eq!(logging_directives(Some("debug")), "debug,iceoryx2=warn");
+        assert_eq!(
+            logging_directives(Some("debug,iceoryx2=debug")),
+            "debug,iceoryx2=debug"
+        );
+        assert_eq!(
+            logging_iceoryx2_level("debug,iceoryx2=warn"),
+            LevelFilter::WARN
+        );
+        assert_eq!(
+            logging_iceoryx2_level("warn,iceoryx2=trace"),
+            LevelFilter::TRACE
+        );
+        assert_eq!(logging_iceoryx2_level("error"), LevelFilter::ERROR);
     }
 }

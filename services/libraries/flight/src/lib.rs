@@ -12,6 +12,8 @@
 //! * [`manoeuvre`]: the experiment programme (initial condition, target).
 //! * [`convert`]: sample arrays to and from nalgebra types.
 
+#![forbid(unsafe_code)]
+
 pub mod cmg_steering;
 pub mod control;
 pub mod controller_node;

@@ -47,7 +47,8 @@ impl Schedule {
     }
     /// The tick at `t_ns`, if `t_ns` falls on one.
     pub fn tick_at(&self, t_ns: u64) -> Option<u64> {
-        (t_ns % self.period_ns == 0).then_some(t_ns / self.period_ns)
+        t_ns.is_multiple_of(self.period_ns)
+            .then_some(t_ns / self.period_ns)
     }
     pub fn period_s(&self) -> f64 {
         self.period_ns as f64 * 1e-9
@@ -57,10 +58,10 @@ impl Schedule {
         (duration_s * 1e9 / self.period_ns as f64).round() as u64
     }
     pub fn tilt_due(&self, k: u64) -> bool {
-        k % self.tilt_every == 0
+        k.is_multiple_of(self.tilt_every)
     }
     pub fn field_due(&self, k: u64) -> bool {
-        k % self.field_every == 0
+        k.is_multiple_of(self.field_every)
     }
 }
 

@@ -54,6 +54,8 @@
 //! On hardware (paced runs) the gateways publish each sample as it completes instead, and the
 //! node's heartbeat only tells them the node is alive.
 
+#![forbid(unsafe_code)]
+
 pub mod bus_transport;
 pub mod faults;
 pub mod gateway;

@@ -15,6 +15,7 @@
 //! * [`experiment`]: an excitation schedule for the closed loop and its data as a CSV directory.
 //! * [`stats`]: least squares and residual statistics.
 
+#![forbid(unsafe_code)]
 // Index loops over the 3 axes and the parameter columns read as the maths they implement.
 #![allow(clippy::needless_range_loop)]
 

@@ -134,7 +134,9 @@ fn a_number_truncated_at_the_end_of_a_file_is_refused() {
 
 #[test]
 fn bad_data_is_refused_naming_the_file_and_row() {
-    let cases: Vec<(&str, Box<dyn Fn(&Path)>, Vec<&str>)> = vec![
+    // (what is wrong, how to break a good data directory, what the error must name)
+    type Case<'a> = (&'a str, Box<dyn Fn(&Path)>, Vec<&'a str>);
+    let cases: Vec<Case> = vec![
         (
             "missing gyro",
             Box::new(|d: &Path| std::fs::remove_file(d.join("gyro.csv")).expect("rm")),
@@ -216,7 +218,7 @@ fn bad_data_is_refused_naming_the_file_and_row() {
             "short row",
             Box::new(|d: &Path| {
                 edit_line(&d.join("wheels.csv"), 3, |l| {
-                    l.rsplitn(2, ',').nth(1).unwrap_or("").to_string()
+                    l.rsplit_once(',').map(|x| x.0).unwrap_or("").to_string()
                 })
             }),
             vec!["wheels.csv", "row 2", "6 fields"],

@@ -7,6 +7,8 @@
 //! * [`devices`]: gyro, inclinometer, magnetometer, wheel and CMG device models (noise, bias,
 //!   quantisation, range), seeded and reproducible.
 
+#![forbid(unsafe_code)]
+
 pub mod attitude;
 pub mod config;
 pub mod devices;

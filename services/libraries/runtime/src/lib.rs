@@ -1,6 +1,8 @@
 //! The process runtime of the pipeline: the run configuration every process reads, and one
 //! lifecycle for every process ([`Node`], [`run`]).
 
+#![forbid(unsafe_code)]
+
 pub mod node;
 pub mod process;
 pub mod run_config;

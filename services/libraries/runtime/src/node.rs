@@ -139,10 +139,10 @@ pub fn run<N: Node>(
     })
     .with_context(|| format!("{name}: starting"))?;
     let heartbeat = bus.heartbeat(HEARTBEAT_PERIOD)?;
-    if let Some(participants) = node.start_barrier(&config) {
-        if process::wait_for_participants(&bus, &participants)? == LoopExit::TerminationRequested {
-            return Ok(());
-        }
+    if let Some(participants) = node.start_barrier(&config)
+        && process::wait_for_participants(&bus, &participants)? == LoopExit::TerminationRequested
+    {
+        return Ok(());
     }
     let waiter = Waiter::new()?;
     let mut events = EventLoop::new(&waiter);

@@ -9,6 +9,8 @@
 //! * [`metrics`]: settling time, steady error, estimation accuracy and consistency.
 //! * [`paper`]: the paper's results reproduced side by side with its numbers.
 
+#![forbid(unsafe_code)]
+
 pub mod closed_loop;
 pub mod in_memory;
 pub mod metrics;

@@ -85,13 +85,14 @@ impl PlantNode {
             tilt_stop: self.tilt_stop,
             _pad0: 0,
         };
-        let mut clock = SimClockTick::default();
-        clock.header = self
-            .tick_seq
-            .header(t_ns, SampleHeader::VALID | SampleHeader::SIMULATED);
-        clock.tick = self.tick;
-        clock.sim_time_ns = t_ns;
-        clock.step_ns = self.schedule.period_ns;
+        let clock = SimClockTick {
+            header: self
+                .tick_seq
+                .header(t_ns, SampleHeader::VALID | SampleHeader::SIMULATED),
+            tick: self.tick,
+            sim_time_ns: t_ns,
+            step_ns: self.schedule.period_ns,
+        };
         (truth, clock)
     }
 

@@ -233,7 +233,7 @@ where
                 .map_err(draw_error)?;
         }
     }
-    let groups = if panel.series.len() % 3 == 0 {
+    let groups = if panel.series.len().is_multiple_of(3) {
         3
     } else {
         COLOURS.len()

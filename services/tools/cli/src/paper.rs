@@ -57,10 +57,7 @@ pub fn run(args: &PaperArgs) -> Result<()> {
 fn print_table(r: &PaperResult, o: &PaperOptions) {
     let opt = |x: Option<f64>| x.map_or_else(|| "never".to_string(), |s| format!("{s:.1} s"));
     let verdict = |ok: bool| if ok { "ok" } else { "MISSED" };
-    println!(
-        "{:<52} {:>12} {:>12}  {}",
-        "quantity", "paper", "project", ""
-    );
+    println!("{:<52} {:>12} {:>12}  ", "quantity", "paper", "project");
     println!("{}", "-".repeat(84));
     println!(
         "EKF, {} Monte Carlo runs, pooled {}–{} s (Fig. 8)",

@@ -206,7 +206,7 @@ pub fn run(args: &RunArgs) -> Result<()> {
         launched?;
         let comparison = summary::compare_estimates(source, &log)?;
         if args.json {
-            let mut value = serde_json::to_value(&comparison)?;
+            let mut value = serde_json::to_value(comparison)?;
             value["config"] = serde_json::json!(config_path.display().to_string());
             println!("{}", serde_json::to_string_pretty(&value)?);
         } else {

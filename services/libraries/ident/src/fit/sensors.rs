@@ -188,7 +188,6 @@ impl Problem<'_> {
 
     /// A sensor fit that stopped at its starting values (screened out): the values, no standard
     /// errors, every value counted as estimated.
-
     fn unchanged(
         &self,
         layout: &[(Cause, usize)],
