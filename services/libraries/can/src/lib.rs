@@ -49,6 +49,7 @@ mod codec;
 mod frame;
 mod message;
 pub mod protocol;
+pub mod protocol_doc;
 pub mod transport;
 
 pub use bus_frame::{BusFrameError, crc15, frame_check};
