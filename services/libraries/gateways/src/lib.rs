@@ -1,5 +1,6 @@
-//! The real platform path as processes: the device gateways, the software CAN bus, the
-//! simulated smart CAN node and the replay of recorded bus traffic.
+//! The real platform path: the device gateways' logic, the software CAN bus, the
+//! simulated smart CAN node and the replay of recorded bus traffic (their processes are nodes in
+//! `testbed-processes`).
 //!
 //! ```text
 //!              SimTruth                       testbed/can/bus (CanBusFrame)
