@@ -2,11 +2,11 @@
 //! runs as a real process on a bus: it is started as the launcher would start it, counts the
 //! estimates published to it, and reports them when asked to stop.
 
-use ipc_types::{AttitudeEstimate, SampleHeader};
+use ipc_types::{AttitudeEstimate, Heartbeat, SampleHeader};
 use std::io::Read;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
-use testbed_bus::{Bus, BusConfig, Delivery, remove_all};
+use testbed_bus::{Bus, BusConfig, Delivery, SubscriberOptions, remove_all};
 use testbed_e2e::{Scratch, workspace_root};
 use testbed_runtime::RunConfig;
 
@@ -59,19 +59,38 @@ fn the_worked_example_counts_estimates_and_reports_them_when_stopped() {
 
     let bus = Bus::open("worked-example-test", &bus_config).unwrap();
     let estimates = bus.publisher::<AttitudeEstimate>().unwrap();
+    let heartbeats = bus
+        .subscriber_with::<Heartbeat>(SubscriberOptions::buffer(64))
+        .unwrap();
     let deadline = Instant::now() + Duration::from_secs(60);
     while estimates.subscriber_count() == 0 {
         assert!(Instant::now() < deadline, "the example never subscribed");
         std::thread::sleep(Duration::from_millis(20));
     }
-    // 20 estimates, every fourth not valid.
-    for k in 0..20u64 {
+    // 20 estimates, every fourth not valid. The first alone: a subscriber attaches to a new
+    // publisher when it first reads (testbed-bus `TopicPublisher::publish`), so the burst waits
+    // until the example's heartbeat shows that read.
+    let estimate = |k: u64| {
         let flags = if k % 4 == 3 { 0 } else { SampleHeader::VALID };
-        let estimate = AttitudeEstimate {
+        AttitudeEstimate {
             header: SampleHeader::new(k * 100_000_000, k, flags),
             ..Default::default()
-        };
-        estimates.publish(&estimate).unwrap();
+        }
+    };
+    estimates.publish(&estimate(0)).unwrap();
+    let mut read_one = false;
+    while !read_one {
+        assert!(
+            Instant::now() < deadline,
+            "the example never read its first estimate"
+        );
+        heartbeats
+            .drain(|h| read_one |= h.name() == "estimate-watch" && h.samples_in >= 1)
+            .unwrap();
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    for k in 1..20u64 {
+        estimates.publish(&estimate(k)).unwrap();
     }
     std::thread::sleep(Duration::from_millis(500));
     // SAFETY: signalling our own child by its pid.
@@ -85,6 +104,7 @@ fn the_worked_example_counts_estimates_and_reports_them_when_stopped() {
         .read_to_string(&mut log)
         .unwrap();
     drop(estimates);
+    drop(heartbeats);
     drop(bus);
     let _ = remove_all(&bus_config);
     assert!(status.success(), "the example failed ({status}):\n{log}");

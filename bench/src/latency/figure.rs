@@ -47,6 +47,15 @@ fn colour_of(transports: &mut Vec<String>, key: &str) -> RGBColor {
 }
 
 pub fn write(path: &Path, report: &Report) -> Result<()> {
+    // plotters draws text with ab_glyph and no system fonts: register the embedded one.
+    static FONT: std::sync::Once = std::sync::Once::new();
+    FONT.call_once(|| {
+        let _ = plotters::style::register_font(
+            "sans-serif",
+            plotters::style::FontStyle::Normal,
+            epaint_default_fonts::UBUNTU_LIGHT,
+        );
+    });
     let root = SVGBackend::new(path, (1400, 1100)).into_drawing_area();
     root.fill(&WHITE).map_err(draw_error)?;
     let root = root
