@@ -151,7 +151,16 @@ impl Node for PlantProcess {
         if node.at_end() {
             return Ok(Flow::Stop);
         }
+        let was_zeroed = node.commands_zeroed();
         node.advance()?;
+        match (was_zeroed, self.node.commands_zeroed()) {
+            (false, true) => tracing::warn!(
+                t_s = self.node.time_ns() as f64 * 1e-9,
+                "no wheel and CMG commands for run.command_timeout_s: applying zero torque and gimbal rate"
+            ),
+            (true, false) => tracing::info!("commands again: applying them"),
+            _ => {}
+        }
         self.publish(ports)?;
         io.heartbeat.set_time_ns(self.node.time_ns());
         Ok(Flow::Continue)
@@ -166,6 +175,7 @@ impl Node for PlantProcess {
             wall_s = wall,
             x_real_time = simulated / wall.max(1e-9),
             deadline_misses = self.node.deadline_misses(),
+            ticks_with_commands_zeroed = self.node.zeroed_ticks(),
             "plant done"
         );
         Ok(())

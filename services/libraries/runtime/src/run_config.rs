@@ -31,6 +31,10 @@ pub struct RunSection {
     pub participants: Vec<String>,
     /// Slack after a tick's period before the controller counts a missed deadline, s.
     pub deadline_slack_s: f64,
+    /// An actuator that hears no command for this long commands zero (wheel torque, gimbal rate)
+    /// until commands come again, s. Default 0.2 s: two periods of the 10 Hz loop (assumed; the
+    /// paper gives no value). Only a paced run can miss commands: lockstep waits for them.
+    pub command_timeout_s: f64,
     /// Log whose inputs the `replay` process feeds to the estimator and controller.
     pub replay: Option<PathBuf>,
     /// How the controller's commands reach the plant: `direct`, or through the wheel and CMG
@@ -48,6 +52,7 @@ impl Default for RunSection {
             log: PathBuf::from("out/run.mcap"),
             participants: Vec::new(),
             deadline_slack_s: 0.05,
+            command_timeout_s: 0.2,
             replay: None,
             actuation: Actuation::Direct,
         }
@@ -153,6 +158,13 @@ impl RunConfig {
                 "run.deadline_slack_s",
                 self.run.deadline_slack_s,
                 "must be >= 0",
+            ));
+        }
+        if !(self.run.command_timeout_s.is_finite() && self.run.command_timeout_s > 0.0) {
+            return Err(invalid(
+                "run.command_timeout_s",
+                self.run.command_timeout_s,
+                "must be > 0",
             ));
         }
         self.schedule().map_err(|e| RunConfigError::Parse {

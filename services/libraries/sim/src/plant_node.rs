@@ -3,7 +3,10 @@
 //! Each tick it publishes the true state ([`SimTruth`]) and the tick ([`SimClockTick`]), then
 //! waits for the controller's wheel and CMG commands stamped with that tick's time. In lockstep
 //! it advances only when both have arrived; paced, it advances on the wall-clock period and
-//! holds the previous command when the answer is late (a deadline miss).
+//! holds the previous command when the answer is late (a deadline miss). Like a real actuator
+//! drive, it does not hold a command forever: after `run.command_timeout_s` without a command
+//! (two periods by default) it applies zero wheel torque and zero gimbal rate until commands
+//! come again, so a hung or dead controller cannot leave a wheel accelerating.
 
 use ipc_types::{CmgCommand, SampleHeader, SimClockTick, SimTruth, WheelCommand};
 use testbed_flight::convert::{Sequence, a3, a4, quaternion_to_array, v3, v4};
@@ -29,6 +32,12 @@ pub struct PlantNode {
     wheel: Option<WheelCommand>,
     cmg: Option<CmgCommand>,
     held: ActuatorCommand,
+    /// Ticks in a row without both commands.
+    unanswered: u64,
+    /// Unanswered ticks after which the commands are zeroed (`run.command_timeout_s`).
+    zero_after: u64,
+    /// Ticks integrated with zeroed commands.
+    zeroed_ticks: u64,
     tilt_stop: u32,
     deadline_misses: u64,
     truth_seq: Sequence,
@@ -47,6 +56,11 @@ impl PlantNode {
             wheel: None,
             cmg: None,
             held: ActuatorCommand::default(),
+            unanswered: 0,
+            zero_after: (config.run.command_timeout_s / schedule.period_s() - 1e-9)
+                .ceil()
+                .max(1.0) as u64,
+            zeroed_ticks: 0,
             tilt_stop: 0,
             deadline_misses: 0,
             truth_seq: Sequence::default(),
@@ -119,17 +133,37 @@ impl PlantNode {
         self.tick >= self.last_tick
     }
 
+    /// Ticks integrated with zeroed commands because none came for `run.command_timeout_s`.
+    pub fn zeroed_ticks(&self) -> u64 {
+        self.zeroed_ticks
+    }
+
+    /// Whether the last tick was integrated with zeroed commands.
+    pub fn commands_zeroed(&self) -> bool {
+        self.unanswered >= self.zero_after
+    }
+
     /// Integrate to the next tick with the current tick's commands, or the held ones if they
-    /// did not arrive (counted as a deadline miss).
+    /// did not arrive (counted as a deadline miss), or zero once none came for
+    /// `run.command_timeout_s`.
     pub fn advance(&mut self) -> Result<StepReport, PlantNodeError> {
         let mut command = match (&self.wheel, &self.cmg) {
-            (Some(w), Some(c)) => ActuatorCommand {
-                wheel_torque_nm: v3(&w.torque),
-                gimbal_rate_rad_s: v4(&c.gimbal_rate),
-            },
+            (Some(w), Some(c)) => {
+                self.unanswered = 0;
+                ActuatorCommand {
+                    wheel_torque_nm: v3(&w.torque),
+                    gimbal_rate_rad_s: v4(&c.gimbal_rate),
+                }
+            }
             _ => {
                 self.deadline_misses += 1;
-                self.held.clone()
+                self.unanswered += 1;
+                if self.unanswered >= self.zero_after {
+                    self.zeroed_ticks += 1;
+                    ActuatorCommand::default()
+                } else {
+                    self.held.clone()
+                }
             }
         };
         command.gimbal_rate_rad_s = self.stepper.command(&command.gimbal_rate_rad_s).rate_rad_s;
@@ -142,5 +176,44 @@ impl PlantNode {
         self.wheel = None;
         self.cmg = None;
         Ok(report)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::Vector3;
+
+    fn commands(node: &mut PlantNode, torque_nm: f64) {
+        let header = SampleHeader::new(node.time_ns(), node.tick(), SampleHeader::VALID);
+        node.on_wheel_command(&WheelCommand::new(header, [torque_nm; 3]));
+        node.on_cmg_command(&CmgCommand::new(header, [0.0; 4]));
+    }
+
+    #[test]
+    fn a_command_is_held_one_period_and_zeroed_after_the_timeout() {
+        let config = RunConfig::default(); // 0.1 s ticks, command_timeout_s = 0.2
+        let mut node = PlantNode::new(&config).unwrap();
+        commands(&mut node, 0.05);
+        let answered = node.advance().unwrap();
+        assert_eq!(
+            answered.applied.wheel_motor_torque_nm,
+            Vector3::repeat(0.05)
+        );
+        // The controller falls silent: one period on the last command, then zero.
+        let held = node.advance().unwrap();
+        assert_eq!(held.applied.wheel_motor_torque_nm, Vector3::repeat(0.05));
+        assert!(!node.commands_zeroed());
+        for _ in 0..5 {
+            let silent = node.advance().unwrap();
+            assert_eq!(silent.applied.wheel_motor_torque_nm, Vector3::zeros());
+            assert!(node.commands_zeroed());
+        }
+        assert_eq!((node.deadline_misses(), node.zeroed_ticks()), (6, 5));
+        // Commands again: applied at once.
+        commands(&mut node, -0.02);
+        let back = node.advance().unwrap();
+        assert_eq!(back.applied.wheel_motor_torque_nm, Vector3::repeat(-0.02));
+        assert!(!node.commands_zeroed());
     }
 }
