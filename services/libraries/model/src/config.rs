@@ -95,7 +95,8 @@ impl Default for PlatformConfig {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct GyroConfig {
-    /// Sample rate, Hz. **paper** (10 Hz).
+    /// Sample rate, Hz, which is also the tick of the estimation and control loop (1 Hz to
+    /// 1 kHz). **paper** (10 Hz).
     pub rate_hz: f64,
     /// Initial bias per axis, °/s. **paper** Table I (includes the Earth's rotation).
     pub bias_deg_s: [f64; 3],
@@ -399,7 +400,9 @@ impl ModelConfig {
         v.finite_all("platform.field_l_gauss", &p.field_l_gauss);
 
         let g = &self.gyro;
-        v.positive("gyro.rate_hz", g.rate_hz);
+        // The gyro rate is the loop's tick: from 1 Hz (slower, and a paced run waits seconds
+        // per tick) to 1 kHz (the event loop's timers resolve milliseconds).
+        v.within("gyro.rate_hz", g.rate_hz, 1.0, 1000.0);
         v.finite_all("gyro.bias_deg_s", &g.bias_deg_s);
         v.non_negative_all("gyro.noise_density_deg_sqrt_s", &g.noise_density_deg_sqrt_s);
         v.non_negative_all("gyro.bias_walk_deg_s32", &g.bias_walk_deg_s32);

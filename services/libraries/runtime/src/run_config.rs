@@ -10,6 +10,7 @@ use testbed_flight::manoeuvre::Manoeuvre;
 use testbed_flight::mekf::MekfConfig;
 use testbed_flight::schedule::{Schedule, ScheduleError};
 use testbed_flight::tasks::ControllerConfig;
+use testbed_flight::tasks::ControllerTask;
 use testbed_model::ModelConfig;
 
 /// Environment variable holding the path of the run configuration.
@@ -94,6 +95,13 @@ pub enum RunConfigError {
         value: String,
         reason: String,
     },
+    /// A component refused its part of the configuration (estimator, controller).
+    #[error("run configuration {path}: {component}: {message}")]
+    Component {
+        path: String,
+        component: &'static str,
+        message: String,
+    },
     #[error(
         "{ENV_RUN_CONFIG} is not set: start this process through the launcher or `testbed run`, or pass --config"
     )]
@@ -167,6 +175,18 @@ impl RunConfig {
                 "must be > 0",
             ));
         }
+        // What the estimator and controller processes would refuse at start, refused before
+        // anything is launched.
+        let component = |component, message: String| RunConfigError::Component {
+            path: origin.to_string(),
+            component,
+            message,
+        };
+        self.estimator_config()
+            .validate()
+            .map_err(|e| component("estimator", e.to_string()))?;
+        ControllerTask::new(&self.controller, &self.model, self.manoeuvre.target())
+            .map_err(|e| component("controller", e.to_string()))?;
         self.schedule().map_err(|e| RunConfigError::Parse {
             path: origin.to_string(),
             message: e.to_string(),
@@ -386,6 +406,28 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(err.contains("platform.mass_kg"), "{err}");
+    }
+
+    #[test]
+    fn what_the_processes_would_refuse_is_refused_at_load() {
+        let refused = |text: &str| {
+            RunConfig::from_toml_str(text, "run.toml")
+                .unwrap_err()
+                .to_string()
+        };
+        // A NaN gain: the controller would refuse it at start.
+        let err = refused("[controller.wheels]\np_nm = [nan, 1.0, 1.0]\n");
+        assert!(
+            err.contains("controller") && err.contains("p_nm[0]") && err.contains("run.toml"),
+            "{err}"
+        );
+        // Loop rates the pipeline cannot serve (1e10 Hz panicked five processes, 0.001 Hz hung
+        // a paced run).
+        for rate in ["1e10", "0.001"] {
+            let err = refused(&format!("[model.gyro]\nrate_hz = {rate}\n"));
+            assert!(err.contains("gyro.rate_hz"), "{err}");
+        }
+        assert!(RunConfig::from_toml_str("[model.gyro]\nrate_hz = 10.0\n", "ok.toml").is_ok());
     }
 
     #[test]
