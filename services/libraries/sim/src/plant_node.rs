@@ -12,6 +12,7 @@ use ipc_types::{CmgCommand, SampleHeader, SimClockTick, SimTruth, WheelCommand};
 use testbed_flight::convert::{Sequence, a3, a4, quaternion_to_array, v3, v4};
 use testbed_flight::schedule::Schedule;
 use testbed_model::devices::CmgStepperDrive;
+use testbed_model::physics::delay::TIME_TOLERANCE_S;
 use testbed_model::physics::{ActuatorCommand, PhysicsError, Plant, StepReport};
 use testbed_runtime::run_config::RunConfig;
 
@@ -57,7 +58,8 @@ impl PlantNode {
             cmg: None,
             held: ActuatorCommand::default(),
             unanswered: 0,
-            zero_after: (config.run.command_timeout_s / schedule.period_s() - 1e-9)
+            // Whole periods in the timeout, within the clock's tolerance (0.2 s / 0.1 s is 2).
+            zero_after: ((config.run.command_timeout_s - TIME_TOLERANCE_S) / schedule.period_s())
                 .ceil()
                 .max(1.0) as u64,
             zeroed_ticks: 0,

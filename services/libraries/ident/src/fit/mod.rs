@@ -100,6 +100,20 @@ pub struct FittedCause {
     pub note: String,
 }
 
+impl FittedCause {
+    /// A cause whose parameters with a finite standard error were estimated (and count as free).
+    pub fn estimated(cause: Cause, values: Vec<f64>, stderr: Vec<f64>) -> Self {
+        let free = stderr.iter().filter(|s| s.is_finite()).count();
+        Self {
+            cause,
+            values,
+            stderr,
+            free,
+            note: String::new(),
+        }
+    }
+}
+
 /// The estimated state and the channels built on it, for one sensor configuration.
 #[derive(Debug)]
 pub struct State {

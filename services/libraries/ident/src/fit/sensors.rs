@@ -173,14 +173,7 @@ impl Problem<'_> {
                     }
                 })
                 .collect();
-            let free = se.iter().filter(|s| s.is_finite()).count();
-            out.push(FittedCause {
-                cause,
-                values,
-                stderr: se,
-                free,
-                note: String::new(),
-            });
+            out.push(FittedCause::estimated(cause, values, se));
             i += len;
         }
         Ok((config, out))

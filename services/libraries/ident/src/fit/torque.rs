@@ -78,14 +78,7 @@ impl Problem<'_> {
                 values[off] += theta[j];
                 se[off] = stderr[j];
             }
-            let free = se.iter().filter(|s| s.is_finite()).count();
-            out.push(FittedCause {
-                cause,
-                values,
-                stderr: se,
-                free,
-                note: String::new(),
-            });
+            out.push(FittedCause::estimated(cause, values, se));
         }
         Ok((delta, out))
     }

@@ -97,14 +97,7 @@ impl Problem<'_> {
                     f64::NAN
                 };
             }
-            let free = se.iter().filter(|s| s.is_finite()).count();
-            out.push(FittedCause {
-                cause: Cause::WheelTorqueScale,
-                values,
-                stderr: se,
-                free,
-                note: String::new(),
-            });
+            out.push(FittedCause::estimated(Cause::WheelTorqueScale, values, se));
         }
         if fit_friction {
             let nominal = Cause::WheelFriction.values(&self.base);
@@ -162,14 +155,11 @@ impl Problem<'_> {
             });
         }
         if fit_delay {
-            let free = usize::from(delay_se.is_finite());
-            out.push(FittedCause {
-                cause: Cause::ActuatorDelay,
-                values: vec![delay],
-                stderr: vec![delay_se],
-                free,
-                note: String::new(),
-            });
+            out.push(FittedCause::estimated(
+                Cause::ActuatorDelay,
+                vec![delay],
+                vec![delay_se],
+            ));
         }
         Ok(out)
     }
