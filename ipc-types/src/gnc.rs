@@ -100,6 +100,9 @@ pub enum ControllerMode {
     CmgSlew = 3,
     /// Fault: outputs zeroed after a detected failure.
     Fault = 4,
+    /// Safe mode: an input is lost or invalid, a wheel is near its speed limit, or the ground
+    /// asked for it; wheels at a safe torque (zero or rate damping on the gyro), gimbals held.
+    Safe = 5,
 }
 
 impl ControllerMode {
@@ -111,6 +114,7 @@ impl ControllerMode {
             2 => Self::WheelPointing,
             3 => Self::CmgSlew,
             4 => Self::Fault,
+            5 => Self::Safe,
             _ => return None,
         })
     }

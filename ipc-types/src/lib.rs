@@ -50,10 +50,10 @@ pub use actuators::{CmgCommand, CmgTelemetry, WheelCommand, WheelTelemetry};
 pub use can::{AppliedCmgCommand, AppliedWheelCommand, CanBusFrame, CanLinkStatus, can_source};
 pub use gnc::{AttitudeEstimate, ControllerMode, ControllerStatus};
 pub use header::SampleHeader;
-pub use run::{ClockMode, Device};
+pub use run::{ClockMode, Device, ENV_RESTART_COUNT, restart_count};
 pub use sensors::{GyroSample, InclinometerSample, MagnetometerSample};
 pub use sim::{SimClockTick, SimTruth};
-pub use system::{Heartbeat, ProcessState};
+pub use system::{HealthEvent, HealthEventKind, Heartbeat, ProcessState};
 
 /// The identity attitude quaternion `[x, y, z, w] = [0, 0, 0, 1]` (B coincides with L).
 pub const IDENTITY_QUATERNION: [f64; 4] = [0.0, 0.0, 0.0, 1.0];
@@ -101,4 +101,5 @@ impl_topic! {
     CanLinkStatus => CAN_STATUS / CAN_STATUS_EVENT,
     AppliedWheelCommand => WHEEL_APPLIED / WHEEL_APPLIED_EVENT,
     AppliedCmgCommand => CMG_APPLIED / CMG_APPLIED_EVENT,
+    HealthEvent => HEALTH / HEALTH_EVENT,
 }

@@ -3,6 +3,19 @@
 
 use core::fmt;
 
+/// Environment variable the launcher sets for every process: how often the process was
+/// restarted in this run (`0` at its first start). A restarted logger writes a new log
+/// segment; a clock owner refuses to restart (it would rewind time).
+pub const ENV_RESTART_COUNT: &str = "TESTBED_RESTART_COUNT";
+
+/// This process's restart count ([`ENV_RESTART_COUNT`]; 0 when unset or not a number).
+pub fn restart_count() -> u32 {
+    std::env::var(ENV_RESTART_COUNT)
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(0)
+}
+
 /// A device of the platform, as configurations and profiles name it (`"gyro"`, …, `"cmg"`).
 #[derive(
     Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize, serde::Deserialize,

@@ -61,6 +61,29 @@ pub struct Heartbeat {
     pub frames_bad: u64,
 }
 
+/// Stores `name` NUL-padded in `field`, truncated at a character boundary to the field's 32
+/// bytes. Returns `false` if it had to be truncated.
+fn store_name(field: &mut [u8; 32], name: &str) -> bool {
+    let mut len = name.len().min(field.len());
+    while !name.is_char_boundary(len) {
+        len -= 1;
+    }
+    *field = [0; 32];
+    field[..len].copy_from_slice(&name.as_bytes()[..len]);
+    len == name.len()
+}
+
+/// The name stored in `field`: bytes up to the first NUL, cut at the first invalid UTF-8 byte.
+fn stored_name(field: &[u8; 32]) -> &str {
+    let len = field.iter().position(|&b| b == 0).unwrap_or(field.len());
+    let bytes = &field[..len];
+    match core::str::from_utf8(bytes) {
+        Ok(s) => s,
+        // Cannot fail: the prefix up to `valid_up_to` is valid UTF-8.
+        Err(e) => core::str::from_utf8(&bytes[..e.valid_up_to()]).unwrap_or_default(),
+    }
+}
+
 impl Heartbeat {
     /// Capacity of [`name`](Self::name) in bytes.
     pub const NAME_LEN: usize = 32;
@@ -78,28 +101,12 @@ impl Heartbeat {
     /// Stores `name`, truncated at a character boundary to at most [`NAME_LEN`](Self::NAME_LEN)
     /// bytes. Returns `false` if it had to be truncated.
     pub fn set_name(&mut self, name: &str) -> bool {
-        let mut len = name.len().min(Self::NAME_LEN);
-        while !name.is_char_boundary(len) {
-            len -= 1;
-        }
-        self.name = [0; Self::NAME_LEN];
-        self.name[..len].copy_from_slice(&name.as_bytes()[..len]);
-        len == name.len()
+        store_name(&mut self.name, name)
     }
 
     /// The stored name: bytes up to the first NUL, cut at the first invalid UTF-8 byte.
     pub fn name(&self) -> &str {
-        let len = self
-            .name
-            .iter()
-            .position(|&b| b == 0)
-            .unwrap_or(Self::NAME_LEN);
-        let bytes = &self.name[..len];
-        match core::str::from_utf8(bytes) {
-            Ok(s) => s,
-            // Cannot fail: the prefix up to `valid_up_to` is valid UTF-8.
-            Err(e) => core::str::from_utf8(&bytes[..e.valid_up_to()]).unwrap_or_default(),
-        }
+        stored_name(&self.name)
     }
 
     /// The state, or `None` for an unknown wire value.
@@ -110,5 +117,149 @@ impl Heartbeat {
     /// Sets the state.
     pub const fn set_state(&mut self, state: ProcessState) {
         self.state = state as u32;
+    }
+}
+
+/// What a [`HealthEvent`] reports, stored as `u32` in [`HealthEvent::kind`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[repr(u32)]
+pub enum HealthEventKind {
+    /// Not a known kind (a zeroed sample).
+    #[default]
+    Unknown = 0,
+    /// An input stream of the reporter stopped for two of its periods; `value` is the time
+    /// since its last sample, s.
+    InputLost = 1,
+    /// A lost input stream delivers again; `value` is how long it was lost, s.
+    InputRestored = 2,
+    /// A process's heartbeat stopped (hung or stopped); `value` is the heartbeat's age, s.
+    ProcessHung = 3,
+    /// A process ended while the run went on; `detail` is the exit status, or 128 + the
+    /// signal that killed it.
+    ProcessExited = 4,
+    /// A process was restarted; `detail` is the restart count.
+    ProcessRestarted = 5,
+    /// The controller entered safe mode; `detail` holds the reason bits (1 estimate lost,
+    /// 2 estimate invalid, 4 wheel telemetry lost, 8 CMG telemetry lost, 16 wheel near its
+    /// speed limit, 32 ground command).
+    SafeModeEntered = 6,
+    /// The controller left safe mode.
+    SafeModeLeft = 7,
+    /// An actuator (gateway or plant) heard no command for its timeout and applies zero;
+    /// `value` is the time since the last command, s.
+    CommandsZeroed = 8,
+    /// Commands arrive again after [`CommandsZeroed`](Self::CommandsZeroed).
+    CommandsResumed = 9,
+    /// The run was ended because of the subject (e.g. a lockstep run cannot go on without a
+    /// process).
+    RunAborted = 10,
+}
+
+impl HealthEventKind {
+    /// The kind with wire value `value`, if any.
+    pub const fn from_u32(value: u32) -> Option<Self> {
+        Some(match value {
+            0 => Self::Unknown,
+            1 => Self::InputLost,
+            2 => Self::InputRestored,
+            3 => Self::ProcessHung,
+            4 => Self::ProcessExited,
+            5 => Self::ProcessRestarted,
+            6 => Self::SafeModeEntered,
+            7 => Self::SafeModeLeft,
+            8 => Self::CommandsZeroed,
+            9 => Self::CommandsResumed,
+            10 => Self::RunAborted,
+            _ => return None,
+        })
+    }
+
+    /// Whether the event is a fault (as opposed to a recovery).
+    pub const fn is_fault(self) -> bool {
+        matches!(
+            self,
+            Self::InputLost
+                | Self::ProcessHung
+                | Self::ProcessExited
+                | Self::SafeModeEntered
+                | Self::CommandsZeroed
+                | Self::RunAborted
+        )
+    }
+
+    /// A short name for reports.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Self::Unknown => "unknown",
+            Self::InputLost => "input lost",
+            Self::InputRestored => "input restored",
+            Self::ProcessHung => "process hung",
+            Self::ProcessExited => "process exited",
+            Self::ProcessRestarted => "process restarted",
+            Self::SafeModeEntered => "safe mode entered",
+            Self::SafeModeLeft => "safe mode left",
+            Self::CommandsZeroed => "commands zeroed",
+            Self::CommandsResumed => "commands resumed",
+            Self::RunAborted => "run aborted",
+        }
+    }
+}
+
+/// A fault or recovery seen by a process or the launcher: the run's event list (all
+/// reporters share the topic; published only when something happens).
+#[derive(Debug, Clone, Copy, PartialEq, Default, ZeroCopySend)]
+#[type_name("testbed::HealthEvent.v1")]
+#[repr(C)]
+pub struct HealthEvent {
+    /// Common header; `time_ns` is the run's clock when the event was seen (the reporter's
+    /// latest sample time; 0 if it has none), `sequence` counts the reporter's events.
+    pub header: SampleHeader,
+    /// The reporting process (UTF-8, NUL-padded; `launcher` for the supervisor).
+    pub reporter: [u8; 32],
+    /// What the event is about: a process name, or a topic without its `testbed/` prefix.
+    pub subject: [u8; 32],
+    /// [`HealthEventKind`] as `u32`.
+    pub kind: u32,
+    /// Kind-specific detail (exit status, restart count, reason bits).
+    pub detail: u32,
+    /// Kind-specific value (an age or duration in s).
+    pub value: f64,
+}
+
+impl HealthEvent {
+    /// An event of `kind` about `subject` reported by `reporter` (names truncated to 32 bytes).
+    pub fn new(
+        header: SampleHeader,
+        reporter: &str,
+        subject: &str,
+        kind: HealthEventKind,
+        detail: u32,
+        value: f64,
+    ) -> Self {
+        let mut event = Self {
+            header,
+            kind: kind as u32,
+            detail,
+            value,
+            ..Self::default()
+        };
+        store_name(&mut event.reporter, reporter);
+        store_name(&mut event.subject, subject.strip_prefix("testbed/").unwrap_or(subject));
+        event
+    }
+
+    /// The kind, or `None` for an unknown wire value.
+    pub const fn kind(&self) -> Option<HealthEventKind> {
+        HealthEventKind::from_u32(self.kind)
+    }
+
+    /// The reporting process.
+    pub fn reporter(&self) -> &str {
+        stored_name(&self.reporter)
+    }
+
+    /// What the event is about.
+    pub fn subject(&self) -> &str {
+        stored_name(&self.subject)
     }
 }

@@ -70,6 +70,9 @@ fn layouts_are_pinned() {
         injected_rx_drop: 176, injected_rx_corrupt: 184, injected_rx_delay: 192,
         injected_rx_duplicate: 200,
     });
+    pin_layout!(HealthEvent, size 104, align 8, {
+        header: 0, reporter: 24, subject: 56, kind: 88, detail: 92, value: 96,
+    });
     assert_eq!(size_of::<ControllerMode>(), 4);
     assert_eq!(size_of::<ProcessState>(), 4);
 }
@@ -102,6 +105,7 @@ fn all_names() -> Vec<(&'static str, &'static str, &'static str)> {
         names::<CanLinkStatus>(),
         names::<AppliedWheelCommand>(),
         names::<AppliedCmgCommand>(),
+        names::<HealthEvent>(),
     ]
 }
 

@@ -54,6 +54,9 @@ topics! {
     WHEEL_APPLIED, WHEEL_APPLIED_EVENT = "testbed/actuators/wheels/applied";
     /// [`AppliedCmgCommand`](crate::AppliedCmgCommand): gimbal rates as the CAN node applies them.
     CMG_APPLIED, CMG_APPLIED_EVENT = "testbed/actuators/cmg/applied";
+    /// [`HealthEvent`](crate::HealthEvent): faults and recoveries (lost inputs, hung or dead
+    /// processes, safe mode, zeroed actuators), published when they happen.
+    HEALTH, HEALTH_EVENT = "testbed/system/health";
 }
 
 /// Name of the event service paired with the data service `topic` (`topic` + [`EVENT_SUFFIX`]).

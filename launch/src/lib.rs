@@ -7,6 +7,7 @@
 pub mod profile;
 pub mod supervisor;
 pub mod sys;
+pub mod watchdog;
 
 pub use profile::{Profile, ProfileError};
 pub use supervisor::{Outcome, Plan, Supervisor};

@@ -41,9 +41,17 @@ pub use ipc_types::{ClockMode, Device};
 use serde::Deserialize;
 
 /// Environment variables the launcher sets for every child; a profile may not set them.
-pub const RESERVED_ENV_PREFIXES: &[&str] = &["TESTBED_BUS_", "TESTBED_RUN_", "TESTBED_DEVICE_"];
+pub const RESERVED_ENV_PREFIXES: &[&str] = &[
+    "TESTBED_BUS_",
+    "TESTBED_RUN_",
+    "TESTBED_DEVICE_",
+    "TESTBED_RESTART_",
+];
 /// Longest process name (fits `ipc_types::Heartbeat::name` and an iceoryx2 node name).
 pub const MAX_NAME_LEN: usize = 31;
+
+/// Programs that own the run's clock: never restarted mid-run.
+pub const CLOCK_OWNERS: &[&str] = &["plant", "replay", "can-replay"];
 
 /// A profile that cannot be used.
 #[derive(Debug, thiserror::Error)]
@@ -152,6 +160,10 @@ pub struct Supervision {
     pub term_timeout_s: f64,
     /// Delay before a restart, s.
     pub restart_delay_s: f64,
+    /// A running process whose heartbeat (every 0.5 s) stops for this long is hung: it is
+    /// killed and its exit policy applies. Two heartbeat periods by default; 0 turns the
+    /// watchdog off. s.
+    pub heartbeat_timeout_s: f64,
 }
 
 impl Default for Supervision {
@@ -160,6 +172,7 @@ impl Default for Supervision {
             stop_timeout_s: 2.0,
             term_timeout_s: 2.0,
             restart_delay_s: 0.5,
+            heartbeat_timeout_s: 1.0,
         }
     }
 }
@@ -316,6 +329,11 @@ impl Profile {
         self.check_seconds("supervision.stop_timeout_s", s.stop_timeout_s, true)?;
         self.check_seconds("supervision.term_timeout_s", s.term_timeout_s, true)?;
         self.check_seconds("supervision.restart_delay_s", s.restart_delay_s, true)?;
+        self.check_seconds(
+            "supervision.heartbeat_timeout_s",
+            s.heartbeat_timeout_s,
+            true,
+        )?;
         if self.run.mode == ClockMode::Lockstep
             && let Some((device, _)) = self.devices.iter().find(|(_, s)| **s == Source::Real)
         {
@@ -403,6 +421,20 @@ impl Profile {
                 ));
             }
             _ => {}
+        }
+        let program = Path::new(&p.command)
+            .file_name()
+            .and_then(|n| n.to_str())
+            .unwrap_or_default();
+        if CLOCK_OWNERS.contains(&program) && p.on_exit == OnExit::Restart {
+            return Err(self.invalid(
+                key("on_exit"),
+                p.on_exit.as_str(),
+                format!(
+                    "{program} owns the run's clock: a restarted {program} would start time again \
+                     at 0 (use \"stop_all\")"
+                ),
+            ));
         }
         match (p.device, p.source) {
             (Some(_), None) => {

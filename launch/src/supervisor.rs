@@ -8,10 +8,13 @@ use std::os::unix::process::CommandExt as _;
 
 use testbed_bus::{BusConfig, cleanup_dead_nodes};
 
+use ipc_types::HealthEventKind;
+
 use crate::profile::{
     ClockMode, Device, OnExit, ProcessSpec, Profile, RunSettings, Source, Supervision,
 };
 use crate::sys::{self, ExitHow, SignalSet};
+use crate::watchdog::{self, Watchdog};
 
 /// How long to wait for a process to disappear after SIGKILL before giving up on it.
 const KILL_WAIT: Duration = Duration::from_secs(5);
@@ -30,6 +33,8 @@ pub const ENV_RUN_LOG: &str = "TESTBED_RUN_LOG";
 pub const ENV_RUN_PROFILE: &str = "TESTBED_RUN_PROFILE";
 /// Environment variable with the run configuration file (`[run] config`), when there is one.
 pub const ENV_RUN_CONFIG: &str = "TESTBED_RUN_CONFIG";
+/// Environment variable with how often the process was restarted in this run (0 at first).
+pub const ENV_RESTART_COUNT: &str = ipc_types::ENV_RESTART_COUNT;
 /// Prefix of the per-device variables (`TESTBED_DEVICE_GYRO=real|simulated`).
 pub const ENV_DEVICE_PREFIX: &str = "TESTBED_DEVICE_";
 
@@ -149,6 +154,7 @@ pub struct Supervisor<'p> {
     failed: bool,
     killed: bool,
     wall_deadline: Option<Instant>,
+    watchdog: Option<Watchdog>,
 }
 
 fn secs(s: f64) -> Duration {
@@ -179,6 +185,7 @@ impl<'p> Supervisor<'p> {
             failed: false,
             killed: false,
             wall_deadline: None,
+            watchdog: None,
         }
     }
 
@@ -186,6 +193,7 @@ impl<'p> Supervisor<'p> {
     /// supervise, stop in reverse order, reap everything.
     pub fn run(mut self) -> Outcome {
         self.cleanup("before the run");
+        self.watchdog = self.open_watchdog();
         self.wall_deadline = self.plan.run.max_wall_s.map(|s| Instant::now() + secs(s));
         let order = self.plan.profile.start_order.clone();
         for &index in &order {
@@ -207,7 +215,14 @@ impl<'p> Supervisor<'p> {
             let timeout = self
                 .next_deadline()
                 .map(|t| t.saturating_duration_since(Instant::now()));
+            let timeout = match &self.watchdog {
+                Some(_) => Some(timeout.map_or(watchdog::POLL_PERIOD, |t| {
+                    t.min(watchdog::POLL_PERIOD)
+                })),
+                None => timeout,
+            };
             self.handle_events(timeout);
+            self.check_heartbeats();
             self.start_due_restarts();
             if let Some(deadline) = self.wall_deadline
                 && Instant::now() >= deadline
@@ -218,6 +233,8 @@ impl<'p> Supervisor<'p> {
         }
         self.shutdown();
         self.reap_strays();
+        // The bus node goes before the cleanup, which would otherwise find it alive.
+        self.watchdog = None;
         self.cleanup("after the run");
         let exit_code = i32::from(self.failed || self.killed);
         let reason = self.stop_reason.unwrap_or_default();
@@ -234,6 +251,64 @@ impl<'p> Supervisor<'p> {
                 report.failed
             ),
             Err(e) => tracing::warn!("bus cleanup {when} failed: {e}"),
+        }
+    }
+
+    /// The heartbeat watchdog, unless `supervision.heartbeat_timeout_s` is 0. A launcher that
+    /// cannot join the bus runs without it (and says so): the processes will fail to join too.
+    fn open_watchdog(&self) -> Option<Watchdog> {
+        let timeout_s = self.plan.supervision.heartbeat_timeout_s;
+        if timeout_s <= 0.0 {
+            tracing::warn!("supervision.heartbeat_timeout_s = 0: hung processes go unnoticed");
+            return None;
+        }
+        match Watchdog::open(&self.plan.bus, secs(timeout_s)) {
+            Ok(w) => Some(w),
+            Err(e) => {
+                tracing::error!("cannot watch heartbeats (joining the bus failed): {e}");
+                None
+            }
+        }
+    }
+
+    /// Kills every process whose heartbeat stopped for `supervision.heartbeat_timeout_s`: a
+    /// hung process is treated as a dead one (its exit policy applies once it is reaped).
+    fn check_heartbeats(&mut self) {
+        let Some(watchdog) = self.watchdog.as_mut() else {
+            return;
+        };
+        if self.stop_reason.is_some() {
+            return;
+        }
+        watchdog.poll();
+        let now = Instant::now();
+        for proc in &self.procs {
+            let Some(pid) = proc.pid else { continue };
+            let Some(silent) = watchdog.hung(pid as u32, now) else {
+                continue;
+            };
+            let name = &proc.spec.name;
+            tracing::error!(
+                "process {name:?} (pid {pid}) sent no heartbeat for {:.2} s (limit {} s): hung; killing it",
+                silent.as_secs_f64(),
+                self.plan.supervision.heartbeat_timeout_s
+            );
+            watchdog.report(
+                HealthEventKind::ProcessHung,
+                name,
+                0,
+                silent.as_secs_f64(),
+            );
+            watchdog.forget(pid as u32);
+            if let Err(e) = sys::signal_group(pid, sys::SIGKILL) {
+                tracing::error!("cannot kill {name:?} (pid {pid}): {e}");
+            }
+        }
+    }
+
+    fn report(&self, kind: HealthEventKind, subject: &str, detail: u32, value: f64) {
+        if let Some(w) = &self.watchdog {
+            w.report(kind, subject, detail, value);
         }
     }
 
@@ -260,6 +335,7 @@ impl<'p> Supervisor<'p> {
             .args(&spec.args)
             .envs(self.env.iter().map(|(k, v)| (k, v)))
             .env(ENV_PROCESS_NAME, &spec.name)
+            .env(ENV_RESTART_COUNT, proc.restarts.to_string())
             .envs(&spec.env)
             .stdin(Stdio::null())
             // Own process group: a Ctrl-C in the terminal reaches only the launcher, which
@@ -378,6 +454,31 @@ impl<'p> Supervisor<'p> {
             self.request_stop(format!("{name:?} completed the run"));
             return;
         }
+        if let Some(w) = self.watchdog.as_mut() {
+            w.forget(pid as u32);
+        }
+        let status = match how {
+            ExitHow::Code(code) => code as u32,
+            ExitHow::Signal(signal) => 128 + signal as u32,
+        };
+        self.report(HealthEventKind::ProcessExited, name, status, 0.0);
+        if self.plan.run.mode == ClockMode::Lockstep {
+            // In lockstep every process takes part in every tick: without this one the run
+            // would wait for it forever. End it, named, rather than freeze.
+            let at = self
+                .watchdog
+                .as_ref()
+                .map_or(String::new(), |w| format!(" at t = {:.1} s", w.run_time_s()));
+            tracing::error!(
+                "process {name:?} (pid {pid}) {how}{at}; a lockstep run cannot go on without it (restarts apply to paced runs only): stopping all"
+            );
+            self.report(HealthEventKind::RunAborted, name, status, 0.0);
+            self.failed = true;
+            self.request_stop(format!(
+                "{name:?} {how}{at}: a lockstep run cannot go on without it"
+            ));
+            return;
+        }
         match spec.on_exit {
             OnExit::StopAll => {
                 if spec.required {
@@ -396,11 +497,12 @@ impl<'p> Supervisor<'p> {
                     proc.restarts += 1;
                     let delay = secs(self.plan.supervision.restart_delay_s);
                     proc.restart_at = Some(Instant::now() + delay);
+                    let restarts = proc.restarts;
                     tracing::warn!(
-                        "process {name:?} (pid {pid}) {how}; restarting in {delay:?} (restart {} of {})",
-                        proc.restarts,
+                        "process {name:?} (pid {pid}) {how}; restarting in {delay:?} (restart {restarts} of {})",
                         spec.max_restarts
                     );
+                    self.report(HealthEventKind::ProcessRestarted, name, restarts, 0.0);
                 } else if spec.required {
                     tracing::error!(
                         "required process {name:?} (pid {pid}) {how} with no restarts left (max_restarts = {}); stopping all",

@@ -217,7 +217,12 @@ fn role(spec: &WorkerSpec, link: &mut dyn ChainLink) -> Result<()> {
             stage(
                 spec,
                 link,
-                &mut ControllerNode::new(task, config.controller.actuators, config.schedule()?),
+                &mut ControllerNode::new(
+                    task,
+                    &config.controller,
+                    &config.model.wheels,
+                    config.schedule()?,
+                ),
             )
         }
         _ => wheel_gateway(spec, link),

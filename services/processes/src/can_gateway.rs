@@ -5,12 +5,12 @@
 use crate::can_link::Link;
 use anyhow::{Context as _, bail};
 use ipc_types::{
-    CanLinkStatus, CmgCommand, CmgTelemetry, GyroSample, InclinometerSample, MagnetometerSample,
-    ProcessState, WheelCommand, WheelTelemetry,
+    CanLinkStatus, CmgCommand, CmgTelemetry, GyroSample, HealthEventKind, InclinometerSample,
+    MagnetometerSample, ProcessState, SampleHeader, WheelCommand, WheelTelemetry,
 };
 use std::time::{Duration, Instant};
 use testbed_bus::{Bus, BusError, Flow, LoopExit, SourceId, TopicPublisher, TopicSubscriber, Wake};
-use testbed_can::{Sample, TransportError};
+use testbed_can::{FrameBatch, Sample, TransportError};
 use testbed_gateways::bus_transport::SoftwareBusTransport;
 use testbed_gateways::gateway::{Gateway, GatewayDevice};
 use testbed_gateways::node;
@@ -81,6 +81,12 @@ pub struct CanGateway {
     ended: bool,
     /// The CAN node's heartbeats: how many, when they last grew, whether the node is lost.
     node_seen: (u64, Instant, bool),
+    /// The control period: commands are expected once per period.
+    period: Duration,
+    /// The command stream's attachment (paced runs: its silence wakes the gateway).
+    command_source: Option<SourceId>,
+    /// No command came for two periods: the device has been commanded zero.
+    zeroed: bool,
 }
 
 impl CanGateway {
@@ -129,6 +135,9 @@ impl CanGateway {
             latest_ns: 0,
             ended: false,
             node_seen: (0, Instant::now(), false),
+            period: Duration::from_nanos(schedule.period_ns),
+            command_source: None,
+            zeroed: false,
         };
         Ok((node, ports))
     }
@@ -201,6 +210,51 @@ impl CanGateway {
             _ => 0,
         };
         io.heartbeat.add_samples_in(drained as u64);
+        if drained > 0 && self.zeroed {
+            self.zeroed = false;
+            io.health.report(
+                self.latest_ns,
+                HealthEventKind::CommandsResumed,
+                io.name,
+                0,
+                0.0,
+            );
+        }
+        self.send_batches(ports, io, batches);
+        Ok(())
+    }
+
+    /// The last line of defence when the controller is dead or hung: no command for two
+    /// periods, so the device is commanded zero (wheel torque, gimbal rate), again after every
+    /// further two periods of silence, until commands come again.
+    fn command_zero(&mut self, ports: &CanGatewayPorts, io: &Io) {
+        let header = SampleHeader::new(self.latest_ns, 0, SampleHeader::VALID);
+        let gateway = &mut self.gateway;
+        let batch = match (&ports.wheel_commands, &ports.cmg_commands) {
+            (Some(_), _) => gateway.wheel_command(&WheelCommand::new(header, [0.0; 3])),
+            (_, Some(_)) => gateway.cmg_command(&CmgCommand::new(header, [0.0; 4])),
+            _ => return,
+        };
+        if !self.zeroed {
+            self.zeroed = true;
+            io.health.report(
+                self.latest_ns,
+                HealthEventKind::CommandsZeroed,
+                io.name,
+                0,
+                (self.period * testbed_runtime::health::LOST_AFTER_PERIODS).as_secs_f64(),
+            );
+        }
+        self.send_batches(ports, io, vec![(self.latest_ns, batch)]);
+    }
+
+    fn send_batches<E: std::fmt::Display>(
+        &mut self,
+        ports: &CanGatewayPorts,
+        io: &Io,
+        batches: Vec<(u64, Result<FrameBatch, E>)>,
+    ) {
+        let gateway = &mut self.gateway;
         for (t_ns, batch) in batches {
             let batch = match batch {
                 Ok(batch) => batch,
@@ -229,7 +283,6 @@ impl CanGateway {
                 }
             }
         }
-        Ok(())
     }
 }
 
@@ -246,10 +299,10 @@ impl Node for CanGateway {
             None => wake.interval(POLL_PERIOD)?,
         };
         if let Some(s) = &ports.wheel_commands {
-            wake.data(s)?;
+            self.command_source = Some(wake.input(s, self.period)?);
         }
         if let Some(s) = &ports.cmg_commands {
-            wake.data(s)?;
+            self.command_source = Some(wake.input(s, self.period)?);
         }
         self.status_interval = (!self.tick_sync)
             .then(|| wake.interval(Duration::from_secs(1)))
@@ -273,6 +326,11 @@ impl Node for CanGateway {
             return Ok(Flow::Stop);
         }
         self.send_commands(ports, io)?;
+        if let Wake::DeadlineMissed(source) = wake
+            && Some(source) == self.command_source
+        {
+            self.command_zero(ports, io);
+        }
         let name = io.name;
         if self.gateway.node_heartbeats() != self.node_seen.0 {
             if self.node_seen.2 {

@@ -1,13 +1,17 @@
 //! The controller process: PD + friction compensation on the wheels (or the CMG slew law), one
 //! command per tick from the estimate and the actuators' telemetry. In a paced run a tick whose
-//! estimate is later than its period plus the configured slack is a missed deadline.
+//! estimate is later than its period plus the configured slack is a missed deadline. Safe mode
+//! (see [`testbed_flight::safe_mode`]) takes over when the estimate or actuator telemetry is
+//! lost or invalid or a wheel nears its speed limit; its changes go to the health topic.
 
 use ipc_types::{
-    AttitudeEstimate, CmgCommand, CmgTelemetry, ControllerStatus, WheelCommand, WheelTelemetry,
+    AttitudeEstimate, CmgCommand, CmgTelemetry, ControllerStatus, GyroSample, HealthEventKind,
+    WheelCommand, WheelTelemetry,
 };
 use std::time::Duration;
-use testbed_bus::{Flow, LoopExit, TopicPublisher, TopicSubscriber, Wake};
+use testbed_bus::{Flow, LoopExit, SourceId, TopicPublisher, TopicSubscriber, Wake};
 use testbed_flight::controller_node::ControllerNode;
+use testbed_flight::safe_mode::SafeTransition;
 use testbed_flight::tasks::ControllerTask;
 use testbed_runtime::{Context, Io, Node, WakeOn};
 
@@ -16,6 +20,8 @@ pub struct ControllerPorts {
     estimate: TopicSubscriber<AttitudeEstimate>,
     wheels: TopicSubscriber<WheelTelemetry>,
     cmg: TopicSubscriber<CmgTelemetry>,
+    /// The gyro, read on every wake-up (it wakes nothing): safe mode damps its rate.
+    gyro: TopicSubscriber<GyroSample>,
     status: TopicPublisher<ControllerStatus>,
     wheel_command: TopicPublisher<WheelCommand>,
     cmg_command: TopicPublisher<CmgCommand>,
@@ -26,6 +32,10 @@ pub struct ControllerProcess {
     node: ControllerNode,
     /// How late an estimate may be (paced runs): the tick period plus `run.deadline_slack_s`.
     deadline: Duration,
+    /// The tick period.
+    period: Duration,
+    /// The estimate's attachment (its missed deadlines are missed control cycles).
+    estimate_source: Option<SourceId>,
 }
 
 impl ControllerProcess {
@@ -34,17 +44,27 @@ impl ControllerProcess {
         let schedule = config.schedule()?;
         let task =
             ControllerTask::new(&config.controller, &config.model, config.manoeuvre.target())?;
-        let node = ControllerNode::new(task, config.controller.actuators, schedule);
+        let node = ControllerNode::new(task, &config.controller, &config.model.wheels, schedule);
+        let period = Duration::from_nanos(schedule.period_ns);
         let deadline = Duration::from_secs_f64(schedule.period_s() + config.run.deadline_slack_s);
         let ports = ControllerPorts {
             estimate: cx.bus.subscriber()?,
             wheels: cx.bus.subscriber()?,
             cmg: cx.bus.subscriber()?,
+            gyro: cx.bus.subscriber()?,
             status: cx.bus.publisher()?,
             wheel_command: cx.bus.publisher()?,
             cmg_command: cx.bus.publisher()?,
         };
-        Ok((Self { node, deadline }, ports))
+        Ok((
+            Self {
+                node,
+                deadline,
+                period,
+                estimate_source: None,
+            },
+            ports,
+        ))
     }
 }
 
@@ -56,15 +76,19 @@ impl Node for ControllerProcess {
         ports: &'a ControllerPorts,
         wake: &mut WakeOn<'_, '_, 'a>,
     ) -> anyhow::Result<()> {
-        wake.data_within(&ports.estimate, self.deadline)?;
-        wake.data(&ports.wheels)?;
-        wake.data(&ports.cmg)?;
+        self.estimate_source = Some(wake.data_within(&ports.estimate, self.deadline)?);
+        wake.watch(&ports.estimate, self.period);
+        wake.input(&ports.wheels, self.period)?;
+        wake.input(&ports.cmg, self.period)?;
+        wake.watch(&ports.gyro, self.period);
         Ok(())
     }
 
     fn on_wake(&mut self, ports: &ControllerPorts, wake: Wake, io: &Io) -> anyhow::Result<Flow> {
         let node = &mut self.node;
-        if let Wake::DeadlineMissed(_) = wake {
+        if let Wake::DeadlineMissed(source) = wake
+            && Some(source) == self.estimate_source
+        {
             node.count_deadline_miss();
             tracing::warn!(
                 misses = node.deadline_misses(),
@@ -73,7 +97,8 @@ impl Node for ControllerProcess {
         }
         let received = ports.estimate.drain(|e| node.on_estimate(&e))?
             + ports.wheels.drain(|t| node.on_wheel_telemetry(&t))?
-            + ports.cmg.drain(|t| node.on_cmg_telemetry(&t))?;
+            + ports.cmg.drain(|t| node.on_cmg_telemetry(&t))?
+            + ports.gyro.drain(|g| node.on_gyro(&g))?;
         io.heartbeat.add_samples_in(received as u64);
         for cycle in node.ready() {
             io.heartbeat.set_time_ns(cycle.status.header.time_ns);
@@ -82,6 +107,24 @@ impl Node for ControllerProcess {
             ports.cmg_command.publish(&cycle.cmg)?;
             io.heartbeat.add_samples_out(3);
         }
+        for (t_ns, transition) in node.take_transitions() {
+            match transition {
+                SafeTransition::Entered(reasons) => io.health.report(
+                    t_ns,
+                    HealthEventKind::SafeModeEntered,
+                    io.name,
+                    reasons.0,
+                    0.0,
+                ),
+                SafeTransition::Left => {
+                    io.health
+                        .report(t_ns, HealthEventKind::SafeModeLeft, io.name, 0, 0.0)
+                }
+            }
+            if let SafeTransition::Entered(reasons) = transition {
+                tracing::warn!("safe mode: {}", reasons.describe());
+            }
+        }
         Ok(Flow::Continue)
     }
 
@@ -89,6 +132,7 @@ impl Node for ControllerProcess {
         tracing::info!(
             deadline_misses = self.node.deadline_misses(),
             errors = self.node.errors(),
+            safe_mode_entries = self.node.safe_mode().entries(),
             "controller stopping"
         );
         Ok(())

@@ -2,6 +2,7 @@
 //! inclinometer and magnetometer; one attitude estimate per tick.
 
 use ipc_types::{AttitudeEstimate, GyroSample, InclinometerSample, MagnetometerSample};
+use std::time::Duration;
 use testbed_bus::{Flow, TopicPublisher, TopicSubscriber, Wake};
 use testbed_flight::estimator_node::EstimatorNode;
 use testbed_runtime::{Context, Io, Node, WakeOn};
@@ -17,18 +18,24 @@ pub struct EstimatorPorts {
 /// The estimator process: [`EstimatorNode`] on the bus.
 pub struct EstimatorProcess {
     node: EstimatorNode,
+    /// Sample periods of the gyro, inclinometer and magnetometer (liveness of the inputs).
+    periods: [Duration; 3],
 }
 
 impl EstimatorProcess {
     pub fn open(cx: &Context) -> anyhow::Result<(Self, EstimatorPorts)> {
-        let node = EstimatorNode::new(cx.config.estimator_config(), cx.config.schedule()?);
+        let schedule = cx.config.schedule()?;
+        let node = EstimatorNode::new(cx.config.estimator_config(), schedule);
+        let tick = Duration::from_nanos(schedule.period_ns);
+        let every = |ticks: u64| tick * u32::try_from(ticks).unwrap_or(u32::MAX);
+        let periods = [tick, every(schedule.tilt_every), every(schedule.field_every)];
         let ports = EstimatorPorts {
             gyro: cx.bus.subscriber()?,
             tilt: cx.bus.subscriber()?,
             field: cx.bus.subscriber()?,
             estimate: cx.bus.publisher()?,
         };
-        Ok((Self { node }, ports))
+        Ok((Self { node, periods }, ports))
     }
 }
 
@@ -40,9 +47,10 @@ impl Node for EstimatorProcess {
         ports: &'a EstimatorPorts,
         wake: &mut WakeOn<'_, '_, 'a>,
     ) -> anyhow::Result<()> {
-        wake.data(&ports.gyro)?;
-        wake.data(&ports.tilt)?;
-        wake.data(&ports.field)?;
+        let [gyro, tilt, field] = self.periods;
+        wake.input(&ports.gyro, gyro)?;
+        wake.input(&ports.tilt, tilt)?;
+        wake.input(&ports.field, field)?;
         Ok(())
     }
 

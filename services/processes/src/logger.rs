@@ -9,6 +9,9 @@
 //! clock and, in lockstep, ordered per tick by (time, sender, sender's sequence) so the file is
 //! as reproducible as the log. Frames whose frame check fails (corrupted on the bus) are left
 //! out, as `candump` never sees a frame that failed its CRC.
+//!
+//! A logger restarted by the launcher (paced runs) never truncates: it writes the segment
+//! `<log stem>.segment-<n>.mcap` ([`segment_path`]), and `testbed run` summarises them all.
 
 use anyhow::Context as _;
 use ipc_types::*;
@@ -56,6 +59,8 @@ pub struct LoggerProcess {
     path: std::path::PathBuf,
     writer: Option<RunLogWriter>,
     candump: Option<BusRecording>,
+    /// The clock tick before the newest one seen (lockstep ordering).
+    previous_tick_ns: Option<u64>,
 }
 
 impl LoggerProcess {
@@ -78,6 +83,7 @@ impl LoggerProcess {
             logged::<CanLinkStatus>(bus)?,
             logged::<AppliedWheelCommand>(bus)?,
             logged::<AppliedCmgCommand>(bus)?,
+            logged::<HealthEvent>(bus)?,
         ];
         if !lockstep {
             topics.push(logged::<Heartbeat>(bus)?);
@@ -89,7 +95,14 @@ impl LoggerProcess {
             config_toml: config.to_toml_string(),
             extra: Default::default(),
         };
-        let path = config.run.log.clone();
+        let path = segment_path(&config.run.log, ipc_types::restart_count());
+        if path != config.run.log {
+            tracing::warn!(
+                "restarted: logging to the new segment {} ({} keeps what was logged before)",
+                path.display(),
+                config.run.log.display()
+            );
+        }
         if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
             std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
         }
@@ -113,6 +126,7 @@ impl LoggerProcess {
                 path,
                 writer: Some(writer),
                 candump,
+                previous_tick_ns: None,
             },
             LoggerPorts { topics },
         ))
@@ -165,12 +179,20 @@ impl Node for LoggerProcess {
             // collects what landed in subscribers drained before the clock's.
             Some(t_ns) if self.lockstep && t_ns > 0 => {
                 self.write_pass(ports, io)?;
-                if let Some(writer) = self.writer.as_mut() {
-                    writer.complete_until(t_ns - 1)?;
+                // Tick k's clock completes tick k−2, not k−1: a process need not have finished
+                // publishing tick k−1 when the plant starts tick k (a CAN gateway's status, a
+                // frame no one waits for), but every process takes part in tick k, and each
+                // handles its ticks in order, so nothing of tick k−2 can still come once tick
+                // k has started. The order of the file does not depend on the load.
+                if let Some(done) = self.previous_tick_ns.filter(|&p| p > 0) {
+                    if let Some(writer) = self.writer.as_mut() {
+                        writer.complete_until(done - 1)?;
+                    }
+                    if let Some(c) = self.candump.as_mut() {
+                        c.write_until(done - 1)?;
+                    }
                 }
-                if let Some(c) = self.candump.as_mut() {
-                    c.write_until(t_ns - 1)?;
-                }
+                self.previous_tick_ns = Some(t_ns);
             }
             _ => {
                 if !self.lockstep
@@ -193,11 +215,29 @@ impl Node for LoggerProcess {
             .finish()
             .with_context(|| format!("finalising the log {}", self.path.display()))?;
         tracing::info!(log = %self.path.display(), ?stats, "log finalised");
+        if stats.late_records > 0 {
+            tracing::warn!(
+                late_records = stats.late_records,
+                "records arrived after their tick was written: logged out of time order"
+            );
+        }
         if let Some(candump) = self.candump.take() {
             candump.finish()?;
         }
         last.map(|_| ())
     }
+}
+
+/// Where the log goes: the run's log, or after the logger's `n`-th restart in the run its
+/// `n`-th segment `<stem>.segment-<n>.mcap` beside it, so a restart never truncates what was
+/// logged before.
+pub fn segment_path(log: &std::path::Path, restarts: u32) -> std::path::PathBuf {
+    if restarts == 0 {
+        return log.to_path_buf();
+    }
+    let stem = log.file_stem().unwrap_or_default().to_string_lossy();
+    let ext = log.extension().map_or(String::new(), |e| format!(".{}", e.to_string_lossy()));
+    log.with_file_name(format!("{stem}.segment-{restarts}{ext}"))
 }
 
 /// The software CAN bus written as a `candump -L` file.
@@ -258,5 +298,25 @@ impl BusRecording {
             .with_context(|| format!("writing {}", self.path.display()))?;
         tracing::info!(candump = %self.path.display(), frames = self.written, corrupted_left_out = self.corrupted, "bus recording finalised");
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::segment_path;
+    use std::path::Path;
+
+    #[test]
+    fn a_restarted_logger_writes_a_new_segment_beside_the_log() {
+        let log = Path::new("out/simulation.mcap");
+        assert_eq!(segment_path(log, 0), log);
+        assert_eq!(
+            segment_path(log, 2),
+            Path::new("out/simulation.segment-2.mcap")
+        );
+        assert_eq!(
+            segment_path(Path::new("run"), 1),
+            Path::new("run.segment-1")
+        );
     }
 }

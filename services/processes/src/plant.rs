@@ -9,7 +9,8 @@
 //! gateways and the CAN bus (`AppliedWheelCommand`, `AppliedCmgCommand`, same time stamps).
 
 use ipc_types::{
-    AppliedCmgCommand, AppliedWheelCommand, CmgCommand, SimClockTick, SimTruth, WheelCommand,
+    AppliedCmgCommand, AppliedWheelCommand, CmgCommand, HealthEventKind, SimClockTick, SimTruth,
+    WheelCommand,
 };
 use std::time::{Duration, Instant};
 use testbed_bus::{
@@ -51,10 +52,17 @@ pub struct PlantProcess {
     /// The pacing interval (paced runs).
     pace: Option<SourceId>,
     started: Instant,
+    /// `run.command_timeout_s` (reported with a zeroing).
+    command_timeout_s: f64,
 }
 
 impl PlantProcess {
     pub fn open(cx: &Context) -> anyhow::Result<(Self, PlantPorts)> {
+        let restarts = ipc_types::restart_count();
+        anyhow::ensure!(
+            restarts == 0,
+            "the plant owns the run's clock and cannot restart mid-run (restart {restarts}): time would start again at 0"
+        );
         let node = PlantNode::new(cx.config)?;
         let period = Duration::from_secs_f64(cx.config.schedule()?.period_s());
         let bus = cx.bus;
@@ -76,6 +84,7 @@ impl PlantProcess {
             period,
             pace: None,
             started: Instant::now(),
+            command_timeout_s: cx.config.run.command_timeout_s,
         };
         Ok((
             process,
@@ -153,12 +162,27 @@ impl Node for PlantProcess {
         }
         let was_zeroed = node.commands_zeroed();
         node.advance()?;
+        let t_ns = self.node.time_ns();
         match (was_zeroed, self.node.commands_zeroed()) {
-            (false, true) => tracing::warn!(
-                t_s = self.node.time_ns() as f64 * 1e-9,
-                "no wheel and CMG commands for run.command_timeout_s: applying zero torque and gimbal rate"
+            (false, true) => {
+                tracing::warn!(
+                    "no wheel and CMG commands for run.command_timeout_s: applying zero torque and gimbal rate"
+                );
+                io.health.report(
+                    t_ns,
+                    HealthEventKind::CommandsZeroed,
+                    "actuators/commands",
+                    0,
+                    self.command_timeout_s,
+                );
+            }
+            (true, false) => io.health.report(
+                t_ns,
+                HealthEventKind::CommandsResumed,
+                "actuators/commands",
+                0,
+                0.0,
             ),
-            (true, false) => tracing::info!("commands again: applying them"),
             _ => {}
         }
         self.publish(ports)?;

@@ -87,11 +87,14 @@ pub struct SimGatewayPorts<D: SimDevice> {
 pub struct SimGateway<D> {
     device: D,
     truths: Vec<SimTruth>,
+    /// The plant's tick period (liveness of the truth stream).
+    period: std::time::Duration,
 }
 
 impl<D: SimDevice> SimGateway<D> {
     pub fn open(cx: &Context) -> anyhow::Result<(Self, SimGatewayPorts<D>)> {
-        let device = D::new(cx.config, cx.config.schedule()?);
+        let schedule = cx.config.schedule()?;
+        let device = D::new(cx.config, schedule);
         let commands = D::commands(cx.bus)?;
         let ports = SimGatewayPorts {
             truth: cx.bus.subscriber()?,
@@ -102,6 +105,7 @@ impl<D: SimDevice> SimGateway<D> {
             Self {
                 device,
                 truths: Vec::new(),
+                period: std::time::Duration::from_nanos(schedule.period_ns),
             },
             ports,
         ))
@@ -116,7 +120,7 @@ impl<D: SimDevice> Node for SimGateway<D> {
         ports: &'a Self::Ports,
         wake: &mut WakeOn<'_, '_, 'a>,
     ) -> anyhow::Result<()> {
-        wake.data(&ports.truth)?;
+        wake.input(&ports.truth, self.period)?;
         Ok(())
     }
 

@@ -31,7 +31,7 @@ pub const MAX_PREFIX_LEN: usize = 24;
 
 /// What a publisher does when a subscriber's buffer is full.
 ///
-/// The heartbeat topic always uses [`Delivery::Overflow`], whatever the run's mode.
+/// The heartbeat and health topics always use [`Delivery::Overflow`], whatever the run's mode.
 ///
 /// This is a property of the iceoryx2 *service* (`enable_safe_overflow`), so every process of a
 /// run must use the same value: a mismatch is refused by iceoryx2 when the second process opens

@@ -47,11 +47,13 @@ impl SubscriberOptions {
     }
 }
 
-/// The delivery mode of `T`'s topic: the run's, except for heartbeats, which always overflow.
-/// Heartbeats are paced by wall time and never part of a reproducible log, and a process must
-/// never block on a heartbeat nobody reads.
+/// The delivery mode of `T`'s topic: the run's, except for heartbeats and health events,
+/// which always overflow. Heartbeats are paced by wall time and never part of a reproducible
+/// log, and a process must never block on a heartbeat nobody reads; health events are rare
+/// (far fewer than a subscriber's buffer) and are published when something has already gone
+/// wrong, possibly with a dead subscriber: reporting a fault must never block the reporter.
 pub(crate) fn delivery_of<T: Topic>(bus: &Bus) -> Delivery {
-    if T::NAME == ipc_types::topic::HEARTBEAT {
+    if T::NAME == ipc_types::topic::HEARTBEAT || T::NAME == ipc_types::topic::HEALTH {
         Delivery::Overflow
     } else {
         bus.config().delivery

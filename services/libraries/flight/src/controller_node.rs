@@ -2,14 +2,21 @@
 //! telemetry of that tick.
 
 use crate::convert::{Sequence, a3, a4, quaternion_from_array, seconds, v3, v4};
+use crate::safe_mode::{SafeMode, SafeReason, SafeReasons, SafeTransition, safe_wheel_torque};
 use crate::schedule::Schedule;
-use crate::tasks::{ActuatorTelemetry, Actuators, ControllerTask};
+use crate::tasks::{ActuatorTelemetry, Actuators, ControllerConfig, ControllerTask};
 use ipc_types::{
-    AttitudeEstimate, CmgCommand, CmgTelemetry, ControllerMode, ControllerStatus, SampleHeader,
-    WheelCommand, WheelTelemetry,
+    AttitudeEstimate, CmgCommand, CmgTelemetry, ControllerMode, ControllerStatus, GyroSample,
+    SampleHeader, WheelCommand, WheelTelemetry,
 };
+use nalgebra::Vector3;
 use std::collections::BTreeMap;
+use testbed_model::WheelConfig;
 use testbed_model::physics::ActuatorCommand;
+
+/// An input is lost when the newest sample seen of any input is this many control periods
+/// newer than its own newest sample.
+const LOST_AFTER_PERIODS: u64 = 2;
 
 #[derive(Debug, Default, Clone, Copy)]
 struct Pending {
@@ -26,10 +33,44 @@ pub struct ControlCycle {
     pub cmg: CmgCommand,
 }
 
+/// Newest sample times of the controller's inputs (run clock, ns): what tells a lost input.
+#[derive(Debug, Default, Clone, Copy)]
+struct InputTimes {
+    /// The newest time of any input: the controller's "now".
+    newest_ns: Option<u64>,
+    estimate_ns: Option<u64>,
+    wheels_ns: Option<u64>,
+    cmg_ns: Option<u64>,
+    /// A valid estimate has been seen: from then on an invalid one is a fault, not start-up.
+    had_valid_estimate: bool,
+}
+
+impl InputTimes {
+    fn saw(&mut self, t_ns: u64) {
+        self.newest_ns = Some(self.newest_ns.map_or(t_ns, |n| n.max(t_ns)));
+    }
+
+    /// Whether an input whose newest sample is `own_ns` is lost: the freshest input is
+    /// [`LOST_AFTER_PERIODS`] periods newer. An input never seen is judged from the first
+    /// sample of any input on (start-up takes the same grace).
+    fn lost(&self, own_ns: Option<u64>, first_ns: u64, period_ns: u64) -> bool {
+        let newest = self.newest_ns.unwrap_or(0);
+        newest >= own_ns.unwrap_or(first_ns) + LOST_AFTER_PERIODS * period_ns
+    }
+}
+
+/// The wheels' limits the safe torque respects.
+#[derive(Debug, Clone, Copy)]
+struct WheelLimits {
+    max_torque_nm: f64,
+    max_speed_rad_s: f64,
+}
+
 pub struct ControllerNode {
     task: ControllerTask,
     actuators: Actuators,
     schedule: Schedule,
+    period_ns: u64,
     pending: BTreeMap<u64, Pending>,
     last_cycle_ns: Option<u64>,
     deadline_misses: u64,
@@ -37,14 +78,28 @@ pub struct ControllerNode {
     status_seq: Sequence,
     wheel_seq: Sequence,
     cmg_seq: Sequence,
+    inputs: InputTimes,
+    first_input_ns: Option<u64>,
+    /// The latest gyro sample: time (ns) and body rate (rad/s), for rate damping in safe mode.
+    gyro: Option<(u64, Vector3<f64>)>,
+    safe: SafeMode,
+    wheel_limits: WheelLimits,
+    transitions: Vec<(u64, SafeTransition)>,
 }
 
 impl ControllerNode {
-    pub fn new(task: ControllerTask, actuators: Actuators, schedule: Schedule) -> Self {
+    /// The controller of `config` (actuators, safe mode) for wheels `wheels` on `schedule`.
+    pub fn new(
+        task: ControllerTask,
+        config: &ControllerConfig,
+        wheels: &WheelConfig,
+        schedule: Schedule,
+    ) -> Self {
         Self {
             task,
-            actuators,
+            actuators: config.actuators,
             schedule,
+            period_ns: (schedule.time_ns(1)).max(1),
             pending: BTreeMap::new(),
             last_cycle_ns: None,
             deadline_misses: 0,
@@ -52,7 +107,36 @@ impl ControllerNode {
             status_seq: Sequence::default(),
             wheel_seq: Sequence::default(),
             cmg_seq: Sequence::default(),
+            inputs: InputTimes::default(),
+            first_input_ns: None,
+            gyro: None,
+            safe: SafeMode::new(config.safe_mode.clone()),
+            wheel_limits: WheelLimits {
+                max_torque_nm: wheels.max_torque_nm,
+                max_speed_rad_s: wheels.max_speed_rad_s(),
+            },
+            transitions: Vec::new(),
         }
+    }
+
+    /// Safe mode (state, reasons, entries).
+    pub fn safe_mode(&self) -> &SafeMode {
+        &self.safe
+    }
+
+    /// A ground command: `true` enters and holds safe mode, `false` releases it.
+    pub fn ground_safe_mode(&mut self, safe: bool) {
+        self.safe.ground_command(safe);
+    }
+
+    /// Safe-mode changes since the last call, with their run times (ns).
+    pub fn take_transitions(&mut self) -> Vec<(u64, SafeTransition)> {
+        std::mem::take(&mut self.transitions)
+    }
+
+    fn saw(&mut self, t_ns: u64) {
+        self.first_input_ns.get_or_insert(t_ns);
+        self.inputs.saw(t_ns);
     }
 
     /// A cycle that should have run did not (reported by the process's deadline).
@@ -75,26 +159,57 @@ impl ControllerNode {
     }
 
     pub fn on_estimate(&mut self, e: &AttitudeEstimate) {
-        if let Some(p) = self.slot(e.header.time_ns) {
+        let t_ns = e.header.time_ns;
+        self.saw(t_ns);
+        self.inputs.estimate_ns = Some(self.inputs.estimate_ns.map_or(t_ns, |n| n.max(t_ns)));
+        if let Some(p) = self.slot(t_ns) {
             p.estimate = Some(*e);
         }
     }
 
     pub fn on_wheel_telemetry(&mut self, t: &WheelTelemetry) {
-        if let Some(p) = self.slot(t.header.time_ns) {
+        let t_ns = t.header.time_ns;
+        self.saw(t_ns);
+        self.inputs.wheels_ns = Some(self.inputs.wheels_ns.map_or(t_ns, |n| n.max(t_ns)));
+        if let Some(p) = self.slot(t_ns) {
             p.wheels = Some(*t);
         }
     }
 
     pub fn on_cmg_telemetry(&mut self, t: &CmgTelemetry) {
-        if let Some(p) = self.slot(t.header.time_ns) {
+        let t_ns = t.header.time_ns;
+        self.saw(t_ns);
+        self.inputs.cmg_ns = Some(self.inputs.cmg_ns.map_or(t_ns, |n| n.max(t_ns)));
+        if let Some(p) = self.slot(t_ns) {
             p.cmg = Some(*t);
         }
     }
 
+    /// A gyro sample: the body rate safe mode damps (the estimator may be what failed).
+    pub fn on_gyro(&mut self, g: &GyroSample) {
+        let t_ns = g.header.time_ns;
+        let newer = self.gyro.is_none_or(|(last, _)| t_ns >= last);
+        if newer && g.header.is_valid() {
+            self.gyro = Some((t_ns, v3(&g.rate)));
+        }
+    }
+
+    /// Whether the estimate stream is lost (see [`LOST_AFTER_PERIODS`]); never before the
+    /// first estimate (the estimator may still be starting).
+    fn estimate_lost(&self) -> bool {
+        self.inputs.estimate_ns.is_some()
+            && self.inputs.lost(
+                self.inputs.estimate_ns,
+                self.first_input_ns.unwrap_or(0),
+                self.period_ns,
+            )
+    }
+
     /// Cycles for every tick whose estimate and telemetry are all in, oldest first. A tick
     /// overtaken by a later estimate runs with what it has (missing telemetry reads as zero).
+    /// Once the estimate is lost, every tick with actuator telemetry runs in safe mode.
     pub fn ready(&mut self) -> Vec<ControlCycle> {
+        let estimate_lost = self.estimate_lost();
         let newest_estimate = self
             .pending
             .iter()
@@ -105,12 +220,13 @@ impl ControllerNode {
         while let Some((&t_ns, p)) = self.pending.first_key_value() {
             let complete = p.estimate.is_some() && p.wheels.is_some() && p.cmg.is_some();
             let overtaken = newest_estimate.is_some_and(|n| n > t_ns);
-            if !(complete || overtaken) {
+            let without_estimate = estimate_lost && (p.wheels.is_some() || p.cmg.is_some());
+            if !(complete || overtaken || without_estimate) {
                 break;
             }
             let p = *p;
             self.pending.remove(&t_ns);
-            if p.estimate.is_some() {
+            if p.estimate.is_some() || without_estimate {
                 out.push(self.cycle(t_ns, &p));
             }
         }
@@ -127,6 +243,17 @@ impl ControllerNode {
         let estimate = p.estimate.filter(|e| e.header.is_valid());
         let attitude =
             estimate.and_then(|e| quaternion_from_array(&e.quaternion).map(|q| (q, v3(&e.rate))));
+        let usable = attitude
+            .as_ref()
+            .is_some_and(|(q, rate)| q.coords.iter().chain(rate.iter()).all(|x| x.is_finite()));
+        self.inputs.had_valid_estimate |= usable;
+        let wrong = self.wrong_inputs(t_ns, p, usable, &telemetry);
+        if let Some(transition) = self.safe.update(t_ns, wrong) {
+            self.transitions.push((t_ns, transition));
+        }
+        if self.safe.is_active() {
+            return self.safe_cycle(t_ns, period, &telemetry);
+        }
         let (command, error, mode, saturated) = match attitude {
             Some((q, rate)) => match self.task.command(seconds(t_ns), &q, &rate, &telemetry) {
                 Ok(o) => {
@@ -175,6 +302,89 @@ impl ControllerNode {
             ..ControllerStatus::default()
         };
         status.set_mode(mode);
+        self.outputs(t_ns, status, &command)
+    }
+
+    /// What is wrong with the inputs of the cycle at `t_ns` (the reasons for safe mode).
+    fn wrong_inputs(
+        &self,
+        t_ns: u64,
+        p: &Pending,
+        usable_estimate: bool,
+        telemetry: &ActuatorTelemetry,
+    ) -> SafeReasons {
+        let first = self.first_input_ns.unwrap_or(t_ns);
+        let limit = self.safe.config().wheel_speed_fraction * self.wheel_limits.max_speed_rad_s;
+        let wheels_fast = p.wheels.is_some()
+            && telemetry
+                .wheel_speed_rad_s
+                .iter()
+                .any(|n| !(n.abs() < limit));
+        SafeReasons::NONE
+            .with(
+                SafeReason::EstimateLost,
+                p.estimate.is_none() && self.estimate_lost(),
+            )
+            .with(
+                SafeReason::EstimateInvalid,
+                p.estimate.is_some() && !usable_estimate && self.inputs.had_valid_estimate,
+            )
+            .with(
+                SafeReason::WheelTelemetryLost,
+                self.inputs.lost(self.inputs.wheels_ns, first, self.period_ns),
+            )
+            .with(
+                SafeReason::CmgTelemetryLost,
+                self.inputs.lost(self.inputs.cmg_ns, first, self.period_ns),
+            )
+            .with(SafeReason::WheelSpeedLimit, wheels_fast)
+    }
+
+    /// A safe-mode cycle: safe wheel torque, gimbals held.
+    fn safe_cycle(
+        &mut self,
+        t_ns: u64,
+        period: u64,
+        telemetry: &ActuatorTelemetry,
+    ) -> ControlCycle {
+        let fresh_gyro = self
+            .gyro
+            .filter(|(t, _)| *t + LOST_AFTER_PERIODS * self.period_ns > t_ns)
+            .map(|(_, rate)| rate);
+        // Without wheel telemetry the speeds are unknown: no torque at all.
+        let wheels_unknown = self.safe.reasons().contains(SafeReason::WheelTelemetryLost);
+        let wheel_torque_nm = if wheels_unknown {
+            Vector3::zeros()
+        } else {
+            safe_wheel_torque(
+            self.safe.config(),
+            fresh_gyro.as_ref(),
+            &telemetry.wheel_speed_rad_s,
+            self.wheel_limits.max_torque_nm,
+                self.wheel_limits.max_speed_rad_s,
+            )
+        };
+        let command = ActuatorCommand {
+            wheel_torque_nm,
+            gimbal_rate_rad_s: Default::default(),
+        };
+        let mut status = ControllerStatus {
+            header: self.status_seq.header(t_ns, SampleHeader::VALID),
+            torque_command: a3(&(-command.wheel_torque_nm)),
+            deadline_misses: self.deadline_misses,
+            loop_period_ns: period,
+            ..ControllerStatus::default()
+        };
+        status.set_mode(ControllerMode::Safe);
+        self.outputs(t_ns, status, &command)
+    }
+
+    fn outputs(
+        &mut self,
+        t_ns: u64,
+        status: ControllerStatus,
+        command: &ActuatorCommand,
+    ) -> ControlCycle {
         ControlCycle {
             status,
             wheels: WheelCommand {

@@ -3,6 +3,7 @@
 //! * [`mekf`]: the multiplicative EKF of Lefferts, Markley and Shuster (gyro propagation,
 //!   inclinometer + magnetometer vector updates, innovation gating).
 //! * [`control`]: PD attitude control on the reaction wheels with friction compensation.
+//! * [`safe_mode`]: when the controller stops trusting its inputs, and what it commands then.
 //! * [`cmg_steering`]: singularity-robust steering of the four-CMG pyramid and a slew law.
 //! * [`tasks`]: the estimator and controller as tasks (maths only), shared by the in-process
 //!   closed loop and the pipeline.
@@ -21,6 +22,7 @@ pub mod convert;
 pub mod estimator_node;
 pub mod manoeuvre;
 pub mod mekf;
+pub mod safe_mode;
 pub mod schedule;
 pub mod stats;
 pub mod tasks;

@@ -3,7 +3,8 @@
 use crate::json::{DecodeError, Field, as_object, check_no_extra, member, object_schema};
 use ipc_types::{
     AppliedCmgCommand, AppliedWheelCommand, AttitudeEstimate, CanBusFrame, CanLinkStatus,
-    CmgCommand, CmgTelemetry, ControllerStatus, GyroSample, Heartbeat, InclinometerSample,
+    CmgCommand, CmgTelemetry, ControllerStatus, GyroSample, HealthEvent, Heartbeat,
+    InclinometerSample,
     MagnetometerSample, SampleHeader, SimClockTick, SimTruth, Topic, WheelCommand, WheelTelemetry,
 };
 use serde_json::Value;
@@ -323,7 +324,8 @@ log_types! {
     ControllerStatus(ControllerStatus) = "testbed::ControllerStatus.v1",
     "Status of the attitude controller, published once per control cycle." {
         header: "Common header; time_ns is the time of the estimate the cycle used.",
-        mode: "Controller mode: 0 Idle, 1 RateDamping, 2 WheelPointing, 3 CmgSlew, 4 Fault.",
+        mode: "Controller mode: 0 Idle, 1 RateDamping, 2 WheelPointing, 3 CmgSlew, 4 Fault, \
+               5 Safe.",
         attitude_error: "Attitude error 2*q_e,v (vector part of q_e = q * q_ref^-1), body axes, \
                          rad.",
         torque_command: "Commanded control torque on the platform, body axes, N m (before \
@@ -436,6 +438,23 @@ log_types! {
                  node holds the previous command.",
         gimbal_rate: "Gimbal rates, rad/s.",
     } pad [];
+
+    /// [`HealthEvent`] on [`topic::HEALTH`](ipc_types::topic::HEALTH).
+    Health(HealthEvent) = "testbed::HealthEvent.v1",
+    "A fault or recovery seen by a process or the launcher (the run's event list)." {
+        header: "Common header; time_ns is the run's clock when the event was seen (the \
+                 reporter's latest sample time), sequence counts the reporter's events.",
+        reporter: "Reporting process (UTF-8, at most 32 bytes; launcher for the supervisor).",
+        subject: "What the event is about: a process name, or a topic without its testbed/ \
+                  prefix.",
+        kind: "Event kind: 1 input lost, 2 input restored, 3 process hung, 4 process exited, \
+               5 process restarted, 6 safe mode entered, 7 safe mode left, 8 commands zeroed, \
+               9 commands resumed, 10 run aborted.",
+        detail: "Kind-specific: exit status or 128 + signal (4), restart count (5), safe-mode \
+                 reason bits (6: 1 estimate lost, 2 estimate invalid, 4 wheel telemetry lost, \
+                 8 CMG telemetry lost, 16 wheel near its speed limit, 32 ground command).",
+        value: "Kind-specific: time since the last sample or heartbeat, or outage length, s.",
+    } pad [];
 }
 
 #[cfg(test)]
@@ -473,6 +492,7 @@ mod tests {
         check::<CanLinkStatus>();
         check::<AppliedWheelCommand>();
         check::<AppliedCmgCommand>();
+        check::<HealthEvent>();
     }
 
     #[test]
@@ -515,6 +535,7 @@ mod tests {
             TopicKind::CanStatus => LogRecord::CanStatus(Default::default()),
             TopicKind::WheelApplied => LogRecord::WheelApplied(Default::default()),
             TopicKind::CmgApplied => LogRecord::CmgApplied(Default::default()),
+            TopicKind::Health => LogRecord::Health(Default::default()),
         };
         let mut out = Vec::new();
         record.encode_json(&mut out);

@@ -84,6 +84,11 @@ impl TickSorter {
         Self::default()
     }
 
+    /// Whether a record of `time_ns` comes too late: that time is already completed.
+    pub fn is_late(&self, time_ns: u64) -> bool {
+        self.completed_until.is_some_and(|done| time_ns <= done)
+    }
+
     /// Buffers `record`. Fails with [`LogError::LateRecord`] (record not buffered) if its time
     /// was already completed.
     pub fn push(&mut self, record: EncodedRecord) -> Result<(), LogError> {

@@ -63,6 +63,9 @@ pub struct LogStats {
     pub messages: u64,
     /// Messages written per topic, in [`LogRecord::TOPICS`] order (every topic listed).
     pub per_topic: Vec<(&'static str, u64)>,
+    /// In [`RecordOrder::Sorted`]: records that arrived after their time was completed,
+    /// written at once (out of time order) rather than lost.
+    pub late_records: u64,
 }
 
 /// Writes one run's log: an MCAP file with every topic, the run's configuration and metadata.
@@ -70,7 +73,7 @@ pub struct LogStats {
 /// # File layout
 ///
 /// Header, then one JSON Schema (`jsonschema`) and one channel (`json` messages) per topic of
-/// [`LogRecord::TOPICS`], in that order (channel ids 1 to 16), the configuration as attachment
+/// [`LogRecord::TOPICS`], in that order (channel ids 1 to 17), the configuration as attachment
 /// [`CONFIG_ATTACHMENT`], the run metadata record [`RUN_METADATA`], then the messages, and on
 /// [`finish`](Self::finish) the summary section (schemas, channels, statistics, attachment and
 /// metadata indexes) and footer. Every message's `log_time` and `publish_time` is the sample's
@@ -94,6 +97,7 @@ pub struct RunLogWriter<W: Write + Seek = BufWriter<File>> {
     channel_ids: Vec<u16>,
     counts: Vec<u64>,
     sorter: Option<TickSorter>,
+    late_records: u64,
     sync_file: Option<File>,
     scratch: Vec<u8>,
 }
@@ -176,6 +180,7 @@ impl<W: Write + Seek> RunLogWriter<W> {
             counts: vec![0; channel_ids.len()],
             channel_ids,
             sorter: (options.order == RecordOrder::Sorted).then(TickSorter::new),
+            late_records: 0,
             sync_file: None,
             scratch: Vec::with_capacity(1024),
         })
@@ -189,11 +194,23 @@ impl<W: Write + Seek> RunLogWriter<W> {
 
     /// Logs `record` (see [`write`](Self::write)).
     ///
-    /// In [`RecordOrder::Sorted`], a record whose time was already completed is refused with
-    /// [`LogError::LateRecord`] and not logged.
+    /// In [`RecordOrder::Sorted`], a record whose time was already completed is written at
+    /// once, out of time order, and counted ([`LogStats::late_records`]): never lost.
     pub fn write_record(&mut self, record: &LogRecord) -> Result<(), LogError> {
         if let Some(sorter) = &mut self.sorter {
-            return sorter.push(EncodedRecord::new(record));
+            let header = record.header();
+            if !sorter.is_late(header.time_ns) {
+                return sorter.push(EncodedRecord::new(record));
+            }
+            // Its place in the sorted order is gone; losing it would be worse than writing it
+            // out of order (MCAP allows any order; readers that sort by time still place it).
+            self.late_records += 1;
+            tracing::warn!(
+                topic = record.kind().name(),
+                time_ns = header.time_ns,
+                "late record written out of time order"
+            );
+            return self.write_encoded(&EncodedRecord::new(record));
         }
         let mut data = std::mem::take(&mut self.scratch);
         data.clear();
@@ -305,6 +322,7 @@ impl<W: Write + Seek> RunLogWriter<W> {
             LogStats {
                 messages: per_topic.iter().map(|(_, n)| n).sum(),
                 per_topic,
+                late_records: self.late_records,
             },
             inner,
         ))

@@ -14,4 +14,4 @@ pub mod config;
 pub mod devices;
 pub mod physics;
 
-pub use config::ModelConfig;
+pub use config::{ModelConfig, WheelConfig};

@@ -21,11 +21,12 @@
 //! }
 //! ```
 
+use crate::health::{HealthReporter, InputWatch, LOST_AFTER_PERIODS};
 use crate::process::{self, HEARTBEAT_PERIOD};
 use crate::{ClockMode, RunConfig};
 use anyhow::Context as _;
 use ipc_types::{ProcessState, Topic};
-use std::time::Duration;
+use std::time::{Duration, Instant};
 use testbed_bus::{
     Bus, BusError, EventLoop, Flow, HeartbeatPublisher, LoopExit, SourceId, TopicSubscriber,
     Waiter, Wake,
@@ -49,12 +50,15 @@ pub struct Io<'a> {
     pub mode: ClockMode,
     /// The process's heartbeat: its state and counters go out every heartbeat period.
     pub heartbeat: &'a HeartbeatPublisher,
+    /// The process's health events (faults and recoveries it sees).
+    pub health: &'a HealthReporter,
 }
 
 /// Where a node says what wakes it ([`Node::wake_on`]).
 pub struct WakeOn<'l, 'w, 'a> {
     events: &'l mut EventLoop<'w, 'a>,
     mode: ClockMode,
+    watch: &'l mut InputWatch<'a>,
 }
 
 impl<'a> WakeOn<'_, '_, 'a> {
@@ -77,6 +81,35 @@ impl<'a> WakeOn<'_, '_, 'a> {
         match self.mode {
             ClockMode::Lockstep => self.events.on_data(subscriber),
             ClockMode::Paced => self.events.on_data_with_deadline(subscriber, deadline),
+        }
+    }
+
+    /// An input stream with period `period`: wakes with [`Wake::Data`], and in a paced run is
+    /// watched for liveness (lost after [`LOST_AFTER_PERIODS`] periods without a sample:
+    /// reported, heartbeat `Degraded`) and wakes with [`Wake::DeadlineMissed`] then and after
+    /// every further such silence, so a node can act on the loss (an actuator gateway
+    /// commands zero). In lockstep, data only.
+    pub fn input<T: Topic>(
+        &mut self,
+        subscriber: &'a TopicSubscriber<T>,
+        period: Duration,
+    ) -> Result<SourceId, BusError> {
+        match self.mode {
+            ClockMode::Lockstep => self.events.on_data(subscriber),
+            ClockMode::Paced => {
+                self.watch.watch(subscriber, period);
+                self.events
+                    .on_data_with_deadline(subscriber, period * LOST_AFTER_PERIODS)
+            }
+        }
+    }
+
+    /// Watches the liveness of `subscriber` (period `period`) in a paced run, as
+    /// [`input`](Self::input) does, without attaching it: for a subscriber already attached
+    /// with [`data_within`](Self::data_within), or one the node polls.
+    pub fn watch<T: Topic>(&mut self, subscriber: &'a TopicSubscriber<T>, period: Duration) {
+        if self.mode == ClockMode::Paced {
+            self.watch.watch(subscriber, period);
         }
     }
 
@@ -139,6 +172,7 @@ pub fn run<N: Node>(
     })
     .with_context(|| format!("{name}: starting"))?;
     let heartbeat = bus.heartbeat(HEARTBEAT_PERIOD)?;
+    let health = HealthReporter::new(&bus, name)?;
     if let Some(participants) = node.start_barrier(&config)
         && process::wait_for_participants(&bus, &participants)? == LoopExit::TerminationRequested
     {
@@ -146,11 +180,13 @@ pub fn run<N: Node>(
     }
     let waiter = Waiter::new()?;
     let mut events = EventLoop::new(&waiter);
+    let mut watch = InputWatch::default();
     node.wake_on(
         &ports,
         &mut WakeOn {
             events: &mut events,
             mode: config.run.mode,
+            watch: &mut watch,
         },
     )?;
     events.with_heartbeat(&heartbeat)?;
@@ -159,6 +195,7 @@ pub fn run<N: Node>(
         name,
         mode: config.run.mode,
         heartbeat: &heartbeat,
+        health: &health,
     };
 
     let mut error = None;
@@ -171,7 +208,11 @@ pub fn run<N: Node>(
         }
     };
     if step(node.start(&ports, &io)) == Flow::Continue {
-        match events.run(|wake| step(node.on_wake(&ports, wake, &io))) {
+        let on_wake = |wake| {
+            watch.check(Instant::now(), &heartbeat, &health);
+            step(node.on_wake(&ports, wake, &io))
+        };
+        match events.run(on_wake) {
             Ok(e) => exit = e,
             Err(e) => {
                 error.get_or_insert(e.into());

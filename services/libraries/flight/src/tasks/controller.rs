@@ -5,6 +5,7 @@
 
 use crate::cmg_steering::{CmgSteering, CmgSteeringConfig, SlewConfig, SlewController};
 use crate::control::{ControlError, WheelControlConfig, WheelController};
+use crate::safe_mode::SafeModeConfig;
 use nalgebra::{Vector3, Vector4};
 use serde::{Deserialize, Serialize};
 use testbed_model::ModelConfig;
@@ -29,6 +30,8 @@ pub struct ControllerConfig {
     pub wheels: WheelControlConfig,
     pub slew: SlewConfig,
     pub steering: CmgSteeringConfig,
+    /// When the controller stops trusting its inputs and what it commands then.
+    pub safe_mode: SafeModeConfig,
 }
 
 impl Default for ControllerConfig {
@@ -38,6 +41,7 @@ impl Default for ControllerConfig {
             wheels: WheelControlConfig::default(),
             slew: SlewConfig::default(),
             steering: CmgSteeringConfig::default(),
+            safe_mode: SafeModeConfig::default(),
         }
     }
 }
@@ -83,6 +87,7 @@ impl ControllerTask {
         model: &ModelConfig,
         target: Attitude,
     ) -> Result<Self, ControlError> {
+        config.safe_mode.validate()?;
         let law = match config.actuators {
             Actuators::Wheels => Law::Wheels(WheelController::new(&config.wheels, &model.wheels)?),
             Actuators::Cmg => {

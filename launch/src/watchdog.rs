@@ -1,0 +1,100 @@
+//! The launcher's view of the run on the bus: every process's heartbeat, watched against
+//! `supervision.heartbeat_timeout_s`, and the health events the launcher reports (exits,
+//! restarts, hangs, an aborted run).
+//!
+//! A process is watched from its first `Running` (or `Degraded`) heartbeat until it reports
+//! `Stopping`: before, it may still be opening devices or waiting at the start barrier; after,
+//! it may take a while to finalise (the logger writing its summary). Heartbeats are matched by
+//! pid, so a restarted process is watched afresh.
+
+use std::collections::HashMap;
+use std::time::{Duration, Instant};
+
+use ipc_types::{HealthEvent, HealthEventKind, Heartbeat, ProcessState, SampleHeader};
+use testbed_bus::{Bus, BusConfig, BusError, SubscriberOptions, TopicPublisher, TopicSubscriber};
+
+/// The launcher's name on the bus and in health events.
+pub const LAUNCHER: &str = "launcher";
+
+/// How often the launcher looks at the heartbeats (at most this late in noticing a hang
+/// beyond the timeout).
+pub const POLL_PERIOD: Duration = Duration::from_millis(100);
+
+#[derive(Debug, Clone, Copy)]
+struct Seen {
+    at: Instant,
+    watched: bool,
+}
+
+/// Heartbeats in, health events out.
+pub struct Watchdog {
+    heartbeats: TopicSubscriber<Heartbeat>,
+    health: TopicPublisher<HealthEvent>,
+    /// Latest heartbeat per pid.
+    seen: HashMap<u32, Seen>,
+    /// The newest run time any heartbeat reported, ns (the time stamp of launcher events).
+    run_time_ns: u64,
+    timeout: Duration,
+    // Dropped last: the ports above belong to this node.
+    _bus: Bus,
+}
+
+impl Watchdog {
+    /// Joins the run's bus as [`LAUNCHER`].
+    pub fn open(config: &BusConfig, timeout: Duration) -> Result<Self, BusError> {
+        let bus = Bus::open(LAUNCHER, config)?;
+        Ok(Self {
+            // Heartbeats always overflow: a launcher that falls behind never blocks anyone.
+            heartbeats: bus.subscriber_with(SubscriberOptions::buffer(256))?,
+            health: bus.publisher()?,
+            seen: HashMap::new(),
+            run_time_ns: 0,
+            timeout,
+            _bus: bus,
+        })
+    }
+
+    /// Takes every pending heartbeat.
+    pub fn poll(&mut self) {
+        let now = Instant::now();
+        let seen = &mut self.seen;
+        let run_time = &mut self.run_time_ns;
+        let drained = self.heartbeats.drain(|hb| {
+            *run_time = (*run_time).max(hb.header.time_ns);
+            let watched = matches!(
+                hb.state(),
+                Some(ProcessState::Running | ProcessState::Degraded)
+            );
+            seen.insert(hb.pid, Seen { at: now, watched });
+        });
+        if let Err(e) = drained {
+            tracing::warn!("reading heartbeats: {e}");
+        }
+    }
+
+    /// How long the watched process `pid` has been silent, if longer than the timeout.
+    pub fn hung(&self, pid: u32, now: Instant) -> Option<Duration> {
+        let seen = self.seen.get(&pid)?;
+        let silent = now.saturating_duration_since(seen.at);
+        (seen.watched && silent >= self.timeout).then_some(silent)
+    }
+
+    /// Forgets `pid` (it ended).
+    pub fn forget(&mut self, pid: u32) {
+        self.seen.remove(&pid);
+    }
+
+    /// Publishes a health event about `subject` (and logs nothing: the caller does).
+    pub fn report(&self, kind: HealthEventKind, subject: &str, detail: u32, value: f64) {
+        let header = SampleHeader::new(self.run_time_ns, self.health.sent(), SampleHeader::VALID);
+        let event = HealthEvent::new(header, LAUNCHER, subject, kind, detail, value);
+        if let Err(e) = self.health.publish(&event) {
+            tracing::warn!("health event not published: {e}");
+        }
+    }
+
+    /// The newest run time seen in a heartbeat, s.
+    pub fn run_time_s(&self) -> f64 {
+        self.run_time_ns as f64 * 1e-9
+    }
+}
