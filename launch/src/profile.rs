@@ -164,6 +164,9 @@ pub struct Supervision {
     /// killed and its exit policy applies. Two heartbeat periods by default; 0 turns the
     /// watchdog off. s.
     pub heartbeat_timeout_s: f64,
+    /// `testbed run` exits 0 even if the controller entered safe mode (for fault-injection and
+    /// chaos runs); by default a run with safe mode fails after its summary.
+    pub tolerate_safe_mode: bool,
 }
 
 impl Default for Supervision {
@@ -173,6 +176,7 @@ impl Default for Supervision {
             term_timeout_s: 2.0,
             restart_delay_s: 0.5,
             heartbeat_timeout_s: 1.0,
+            tolerate_safe_mode: false,
         }
     }
 }

@@ -1,7 +1,8 @@
 //! Health of a running process: the events it reports ([`HealthReporter`]) and the liveness of
 //! its input streams ([`InputWatch`]).
 //!
-//! An input stream is lost when it delivered nothing for two of its periods (paced runs only:
+//! An input stream is lost when it delivered nothing for one and a half of its periods, so that
+//! the loss is noticed within two periods by a process that wakes once per period (paced only:
 //! in lockstep time stands still while a process waits, and a process that dies or hangs ends
 //! the run through the launcher). Losing and regaining an input is logged, reported on the
 //! health topic and shown in the heartbeat (`Degraded` while any input is lost); what to do
@@ -13,7 +14,8 @@ use std::cell::Cell;
 use std::time::{Duration, Instant};
 use testbed_bus::{Bus, BusError, HeartbeatPublisher, TopicPublisher, TopicSubscriber};
 
-/// How many of its periods an input may stay silent before it counts as lost.
+/// Periods of silence after which an input's deadline wakes its process ([`crate::WakeOn::input`]):
+/// the process can act (an actuator gateway commands zero) within two periods.
 pub const LOST_AFTER_PERIODS: u32 = 2;
 
 /// Publishes the process's [`HealthEvent`]s (and logs each one).
@@ -87,18 +89,19 @@ struct Watched<'a> {
     lost_since: Cell<Option<Instant>>,
 }
 
-/// The input streams a process watches, each against [`LOST_AFTER_PERIODS`] of its period.
+/// The input streams a process watches, each against 1.5 of its periods.
 #[derive(Default)]
 pub struct InputWatch<'a> {
     inputs: Vec<Watched<'a>>,
 }
 
 impl<'a> InputWatch<'a> {
-    /// Watches `subscriber`, whose stream has period `period`.
+    /// Watches `subscriber`, whose stream has period `period`: lost after 1.5 periods of
+    /// silence, so that a process waking once per period notices within two.
     pub fn watch<T: Topic>(&mut self, subscriber: &'a TopicSubscriber<T>, period: Duration) {
         self.inputs.push(Watched {
             topic: T::NAME,
-            limit: period * LOST_AFTER_PERIODS,
+            limit: period * 3 / 2,
             port: subscriber,
             lost_since: Cell::new(None),
         });

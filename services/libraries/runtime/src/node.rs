@@ -85,7 +85,7 @@ impl<'a> WakeOn<'_, '_, 'a> {
     }
 
     /// An input stream with period `period`: wakes with [`Wake::Data`], and in a paced run is
-    /// watched for liveness (lost after [`LOST_AFTER_PERIODS`] periods without a sample:
+    /// watched for liveness (lost after 1.5 periods without a sample:
     /// reported, heartbeat `Degraded`) and wakes with [`Wake::DeadlineMissed`] then and after
     /// every further such silence, so a node can act on the loss (an actuator gateway
     /// commands zero). In lockstep, data only.

@@ -248,7 +248,14 @@ pub fn run(args: &RunArgs) -> Result<()> {
     } else {
         print_summary(&summary, &figures);
     }
-    launched
+    launched?;
+    if summary.health.safe_mode_entries > 0 && !profile.supervision.tolerate_safe_mode {
+        anyhow::bail!(
+            "the controller entered safe mode {} time(s) during the run (see its health above); a profile that expects this sets `[supervision] tolerate_safe_mode = true`",
+            summary.health.safe_mode_entries
+        );
+    }
+    Ok(())
 }
 
 /// The run configuration a log was recorded with.
@@ -438,7 +445,15 @@ fn print_summary(s: &RunSummary, figures: &[PathBuf]) {
     );
     println!("  initial condition    {}", s.initial_condition);
     println!("  controller           {}", s.controller);
-    println!("  attitude error = rotation vector from target to true attitude, body axes, degrees");
+    if s.attitude_from == "truth" {
+        println!(
+            "  attitude error = rotation vector from target to true attitude, body axes, degrees"
+        );
+    } else {
+        println!(
+            "  attitude error = the controller's error of the ESTIMATE against the target (no truth in this log), body axes, degrees"
+        );
+    }
     println!(
         "  settling time        {settle}   (first time after which |error| stays within {}° on every axis)",
         summary::SETTLE_BAND_DEG
@@ -471,7 +486,14 @@ fn print_summary(s: &RunSummary, figures: &[PathBuf]) {
             xyz(e.final_3sigma_deg, 4)
         );
     }
+    if let (None, Some(sigma)) = (&s.estimator, s.estimate_3sigma_deg) {
+        println!(
+            "  estimator 3σ         {}   (the filter's own attitude 3σ at the end, deg)",
+            xyz(sigma, 4)
+        );
+    }
     println!("  deadline misses      {}", s.deadline_misses);
+    print_health(&s.health);
     println!(
         "  log                  {}{}",
         s.log,
@@ -483,6 +505,61 @@ fn print_summary(s: &RunSummary, figures: &[PathBuf]) {
     );
     for f in figures {
         println!("  figure               {}", f.display());
+    }
+}
+
+/// How many health events the summary lists (all are in the log and in `--json`).
+const EVENTS_SHOWN: usize = 20;
+
+fn print_health(h: &summary::HealthSummary) {
+    if h.can_frames_ok + h.can_frames_bad > 0 {
+        println!(
+            "  CAN frames           {} decoded, {} rejected (all links)",
+            h.can_frames_ok, h.can_frames_bad
+        );
+    }
+    if !h.marked {
+        println!("  health               no fault: no safe mode, process exit, restart, hang, lost input or zeroed command");
+        return;
+    }
+    println!(
+        "  HEALTH               safe mode entered {} times ({} cycles), process exits {}, restarts {}, hangs {}, inputs lost {}, commands zeroed {}{}",
+        h.safe_mode_entries,
+        h.safe_mode_cycles,
+        h.process_exits,
+        h.restarts,
+        h.hangs,
+        h.inputs_lost,
+        h.commands_zeroed,
+        if h.aborted { ", RUN ABORTED" } else { "" }
+    );
+    for e in h.events.iter().take(EVENTS_SHOWN) {
+        println!(
+            "    t = {:>8.1} s  {:<18} {:<28} by {}{}",
+            e.t_s,
+            e.kind,
+            e.subject,
+            e.reporter,
+            match e.kind.as_str() {
+                "safe mode entered" => format!(
+                    " ({})",
+                    testbed_flight::safe_mode::SafeReasons(e.detail).describe()
+                ),
+                "process exited" if e.detail > 128 => format!(" (signal {})", e.detail - 128),
+                "process exited" => format!(" (exit status {})", e.detail),
+                "input lost" | "process hung" => format!(" (silent {:.2} s)", e.value),
+                _ => String::new(),
+            }
+        );
+    }
+    if h.events.len() > EVENTS_SHOWN {
+        println!(
+            "    … {} more events in the log (topic testbed/system/health, or --json)",
+            h.events.len() - EVENTS_SHOWN
+        );
+    }
+    for segment in &h.segments {
+        println!("  log segment          {segment}   (written by the restarted logger)");
     }
 }
 

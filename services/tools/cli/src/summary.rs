@@ -7,7 +7,10 @@
 //! |error| per axis over the last [`STEADY_WINDOW_S`] of the run.
 
 use anyhow::Context;
-use ipc_types::{AttitudeEstimate, ControllerStatus, SimTruth, WheelCommand};
+use ipc_types::{
+    AttitudeEstimate, CanLinkStatus, ControllerMode, ControllerStatus, HealthEvent,
+    HealthEventKind, SimTruth, WheelCommand, WheelTelemetry,
+};
 use nalgebra::Vector3;
 use serde::Serialize;
 use std::collections::HashMap;
@@ -62,6 +65,131 @@ pub struct RunSummary {
     pub log: String,
     /// The log ends with its summary (false: the logger was killed, records are still all read).
     pub log_complete: bool,
+    /// Where the attitude error comes from: `truth` (simulation), or `estimate` (no truth in
+    /// the log, e.g. the real platform: the controller's error of the estimate against the
+    /// target, so settling and steady error are as good as the estimate, see its 3σ).
+    pub attitude_from: String,
+    /// The filter's own attitude 3σ (3 √P_ii) of the final estimate, degrees, if any estimate.
+    pub estimate_3sigma_deg: Option<[f64; 3]>,
+    /// Faults and recoveries of the run.
+    pub health: HealthSummary,
+}
+
+/// What went wrong during a run, and what recovered: from the health events, the controller's
+/// status and the CAN links' counters.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct HealthSummary {
+    /// Every health event, in log order.
+    pub events: Vec<HealthLine>,
+    /// Times the controller entered safe mode, and control cycles it spent there.
+    pub safe_mode_entries: usize,
+    pub safe_mode_cycles: usize,
+    /// Processes that ended while the run went on (killed, crashed), restarts, hangs.
+    pub process_exits: usize,
+    pub restarts: usize,
+    pub hangs: usize,
+    /// Input streams lost (a process's input silent for two periods).
+    pub inputs_lost: usize,
+    /// Times an actuator (plant or gateway) heard no command and applied zero.
+    pub commands_zeroed: usize,
+    /// The run was aborted because of a process (lockstep).
+    pub aborted: bool,
+    /// CAN frames decoded and rejected, summed over the links' final counters.
+    pub can_frames_ok: u64,
+    pub can_frames_bad: u64,
+    /// Log segments written by a restarted logger, beside the log.
+    pub segments: Vec<String>,
+    /// Anything above happened (other than CAN counters): the run is marked.
+    pub marked: bool,
+}
+
+/// One health event, readable.
+#[derive(Debug, Clone, Serialize)]
+pub struct HealthLine {
+    /// Run time, s.
+    pub t_s: f64,
+    pub reporter: String,
+    pub kind: String,
+    pub subject: String,
+    pub detail: u32,
+    pub value: f64,
+}
+
+impl HealthLine {
+    fn new(e: &HealthEvent) -> Self {
+        Self {
+            t_s: seconds(e.header.time_ns),
+            reporter: e.reporter().to_owned(),
+            kind: e.kind().unwrap_or_default().name().to_owned(),
+            subject: e.subject().to_owned(),
+            detail: e.detail,
+            value: e.value,
+        }
+    }
+}
+
+/// The health of the run in `log` (and the segments beside `path`).
+fn health(log: &RunLog, path: &Path) -> anyhow::Result<HealthSummary> {
+    let mut h = HealthSummary::default();
+    for event in log.samples::<HealthEvent>()? {
+        let event = event.with_context(|| format!("reading {}", path.display()))?;
+        match event.kind() {
+            Some(HealthEventKind::SafeModeEntered) => h.safe_mode_entries += 1,
+            Some(HealthEventKind::ProcessExited) => h.process_exits += 1,
+            Some(HealthEventKind::ProcessRestarted) => h.restarts += 1,
+            Some(HealthEventKind::ProcessHung) => h.hangs += 1,
+            Some(HealthEventKind::InputLost) => h.inputs_lost += 1,
+            Some(HealthEventKind::CommandsZeroed) => h.commands_zeroed += 1,
+            Some(HealthEventKind::RunAborted) => h.aborted = true,
+            _ => {}
+        }
+        h.events.push(HealthLine::new(&event));
+    }
+    for status in log.samples::<ControllerStatus>()? {
+        let status = status.with_context(|| format!("reading {}", path.display()))?;
+        if status.mode() == Some(ControllerMode::Safe) {
+            h.safe_mode_cycles += 1;
+        }
+    }
+    let mut links: HashMap<u32, CanLinkStatus> = HashMap::new();
+    for status in log.samples::<CanLinkStatus>()? {
+        let status = status.with_context(|| format!("reading {}", path.display()))?;
+        links.insert(status.header.source_id, status);
+    }
+    h.can_frames_ok = links.values().map(|s| s.frames_ok).sum();
+    h.can_frames_bad = links.values().map(|s| s.frames_bad).sum();
+    h.segments = segments(path);
+    h.marked = h.safe_mode_entries + h.process_exits + h.restarts + h.hangs + h.inputs_lost
+        + h.commands_zeroed
+        > 0
+        || h.aborted
+        || !h.segments.is_empty();
+    Ok(h)
+}
+
+/// The segments a restarted logger wrote beside `path` (`<stem>.segment-<n>.<ext>`), in order.
+pub fn segments(path: &Path) -> Vec<String> {
+    let stem = path.file_stem().unwrap_or_default().to_string_lossy();
+    let prefix = format!("{stem}.segment-");
+    let dir = path
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    let mut found: Vec<(u32, String)> = std::fs::read_dir(dir)
+        .into_iter()
+        .flatten()
+        .flatten()
+        .filter_map(|entry| {
+            let name = entry.file_name().to_string_lossy().into_owned();
+            let rest = name.strip_prefix(&prefix)?;
+            let (n, ext) = rest.split_once('.').unwrap_or((rest, ""));
+            let same_ext = path.extension().map_or(ext.is_empty(), |e| e == ext);
+            Some((n.parse().ok()?, name)).filter(|_| same_ext)
+        })
+        .map(|(n, name)| (n, dir.join(name).display().to_string()))
+        .collect();
+    found.sort();
+    found.into_iter().map(|(_, p)| p).collect()
 }
 
 /// The estimator's attitude error against the truth at the same time: the rotation vector from
@@ -156,11 +284,21 @@ pub fn summarise(
                 .deadline_misses,
         );
     }
+    let attitude_from = if series.t_s.is_empty() {
+        estimated_series(&log, path, &mut series)?;
+        "estimate"
+    } else {
+        "truth"
+    };
     anyhow::ensure!(
         !series.t_s.is_empty(),
-        "{}: the log holds no simulation truth",
+        "{}: the log holds neither simulation truth nor controller status: nothing to summarise",
         path.display()
     );
+    let estimate_3sigma_deg = series.estimates.last().map(|e| {
+        let sigma3 = |i: usize| 3.0 * e.covariance[7 * i].max(0.0).sqrt() / DEG;
+        [sigma3(0), sigma3(1), sigma3(2)]
+    });
     let errors: Vec<(f64, [f64; 3])> = series
         .t_s
         .iter()
@@ -226,8 +364,49 @@ pub fn summarise(
         seed: log.info().seed,
         log: path.display().to_string(),
         log_complete: log.is_complete(),
+        attitude_from: attitude_from.to_owned(),
+        estimate_3sigma_deg,
+        health: health(&log, path)?,
     };
     Ok((summary, series, config))
+}
+
+/// Without truth (the real platform): the attitude error is the controller's (estimate against
+/// target, cycles in safe mode left out: they compute none), the rate the estimate's, the
+/// wheel speeds their telemetry's.
+fn estimated_series(log: &RunLog, path: &Path, series: &mut RunSeries) -> anyhow::Result<()> {
+    let rates: HashMap<u64, [f64; 3]> = series
+        .estimates
+        .iter()
+        .map(|e| (e.header.time_ns, (Vector3::from(e.rate) / DEG).into()))
+        .collect();
+    let mut wheels: HashMap<u64, [f64; 3]> = HashMap::new();
+    for t in log.samples::<WheelTelemetry>()? {
+        let t = t.with_context(|| format!("reading {}", path.display()))?;
+        wheels.insert(t.header.time_ns, (Vector3::from(t.speed) / RPM).into());
+    }
+    for status in log.samples::<ControllerStatus>()? {
+        let status = status.with_context(|| format!("reading {}", path.display()))?;
+        let computed = matches!(
+            status.mode(),
+            Some(ControllerMode::WheelPointing | ControllerMode::CmgSlew)
+        );
+        if !computed {
+            continue;
+        }
+        let t_ns = status.header.time_ns;
+        series.t_s.push(seconds(t_ns));
+        series
+            .error_deg
+            .push((Vector3::from(status.attitude_error) / DEG).into());
+        series
+            .rate_deg_s
+            .push(rates.get(&t_ns).copied().unwrap_or_default());
+        series
+            .wheel_speed_rpm
+            .push(wheels.get(&t_ns).copied().unwrap_or_default());
+    }
+    Ok(())
 }
 
 /// The control law and its gains, in one line.
