@@ -244,7 +244,10 @@ impl HealthEvent {
             ..Self::default()
         };
         store_name(&mut event.reporter, reporter);
-        store_name(&mut event.subject, subject.strip_prefix("testbed/").unwrap_or(subject));
+        store_name(
+            &mut event.subject,
+            subject.strip_prefix("testbed/").unwrap_or(subject),
+        );
         event
     }
 

@@ -214,10 +214,14 @@ fn helpers() {
     let t = SimClockTick::new(3, 300, 100);
     assert_eq!((t.header.time_ns, t.header.sequence), (300, 3));
     assert!(t.header.has(SampleHeader::VALID | SampleHeader::SIMULATED));
-    for v in 0..6 {
+    for v in 0..12 {
         assert_eq!(
             ControllerMode::from_u32(v).map(|m| m as u32),
-            (v < 5).then_some(v)
+            (v < 6).then_some(v)
+        );
+        assert_eq!(
+            HealthEventKind::from_u32(v).map(|k| k as u32),
+            (v < 11).then_some(v)
         );
         assert_eq!(
             ProcessState::from_u32(v).map(|s| s as u32),
@@ -246,4 +250,21 @@ fn iceoryx2_round_trip() -> Result<(), Box<dyn core::error::Error>> {
     let received = subscriber.receive()?.expect("one sample");
     assert_eq!(*received.payload(), sent);
     Ok(())
+}
+
+#[test]
+fn health_events_name_reporter_and_subject_without_the_topic_prefix() {
+    let e = HealthEvent::new(
+        SampleHeader::new(5, 1, SampleHeader::VALID),
+        "controller",
+        "testbed/actuators/wheels/telemetry",
+        HealthEventKind::InputLost,
+        0,
+        0.25,
+    );
+    assert_eq!(e.reporter(), "controller");
+    assert_eq!(e.subject(), "actuators/wheels/telemetry");
+    assert_eq!(e.kind(), Some(HealthEventKind::InputLost));
+    assert!(HealthEventKind::InputLost.is_fault());
+    assert!(!HealthEventKind::InputRestored.is_fault());
 }

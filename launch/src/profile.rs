@@ -16,6 +16,8 @@
 //! stop_timeout_s = 2.0       # after SIGINT, wait this long before SIGTERM
 //! term_timeout_s = 2.0       # after SIGTERM, wait this long before SIGKILL
 //! restart_delay_s = 0.5      # delay before restarting a process (on_exit = "restart")
+//! heartbeat_timeout_s = 1.0  # a Running process silent this long is hung: killed (0: off)
+//! tolerate_safe_mode = false # testbed run exits 0 even if the controller entered safe mode
 //!
 //! [[process]]
 //! name = "sim-gyro"          # unique; [A-Za-z0-9_-], at most 31 bytes

@@ -216,9 +216,9 @@ impl<'p> Supervisor<'p> {
                 .next_deadline()
                 .map(|t| t.saturating_duration_since(Instant::now()));
             let timeout = match &self.watchdog {
-                Some(_) => Some(timeout.map_or(watchdog::POLL_PERIOD, |t| {
-                    t.min(watchdog::POLL_PERIOD)
-                })),
+                Some(_) => {
+                    Some(timeout.map_or(watchdog::POLL_PERIOD, |t| t.min(watchdog::POLL_PERIOD)))
+                }
                 None => timeout,
             };
             self.handle_events(timeout);
@@ -293,12 +293,7 @@ impl<'p> Supervisor<'p> {
                 silent.as_secs_f64(),
                 self.plan.supervision.heartbeat_timeout_s
             );
-            watchdog.report(
-                HealthEventKind::ProcessHung,
-                name,
-                0,
-                silent.as_secs_f64(),
-            );
+            watchdog.report(HealthEventKind::ProcessHung, name, 0, silent.as_secs_f64());
             watchdog.forget(pid as u32);
             if let Err(e) = sys::signal_group(pid, sys::SIGKILL) {
                 tracing::error!("cannot kill {name:?} (pid {pid}): {e}");
@@ -382,6 +377,10 @@ impl<'p> Supervisor<'p> {
             }
             if self.procs[index].restart_at.is_some_and(|t| t <= now) {
                 self.procs[index].restart_at = None;
+                // The dead process's ports still count against the services' limits (16
+                // publishers, 16 subscribers): free them before its successor opens new ones.
+                let name = self.procs[index].spec.name.clone();
+                self.cleanup(&format!("before restarting {name:?}"));
                 self.start(index);
             }
         }
@@ -465,10 +464,9 @@ impl<'p> Supervisor<'p> {
         if self.plan.run.mode == ClockMode::Lockstep {
             // In lockstep every process takes part in every tick: without this one the run
             // would wait for it forever. End it, named, rather than freeze.
-            let at = self
-                .watchdog
-                .as_ref()
-                .map_or(String::new(), |w| format!(" at t = {:.1} s", w.run_time_s()));
+            let at = self.watchdog.as_ref().map_or(String::new(), |w| {
+                format!(" at t = {:.1} s", w.run_time_s())
+            });
             tracing::error!(
                 "process {name:?} (pid {pid}) {how}{at}; a lockstep run cannot go on without it (restarts apply to paced runs only): stopping all"
             );

@@ -76,21 +76,24 @@ fn descendant(root: u32, program: &str) -> Option<u32> {
         let rest = &stat[stat.rfind(')')? + 2..];
         rest.split(' ').nth(1)?.parse().ok()
     };
-    std::fs::read_dir("/proc").ok()?.flatten().find_map(|entry| {
-        let pid: u32 = entry.file_name().to_str()?.parse().ok()?;
-        let comm = std::fs::read_to_string(format!("/proc/{pid}/comm")).ok()?;
-        if comm.trim_end() != program {
-            return None;
-        }
-        let mut p = pid;
-        for _ in 0..8 {
-            p = parent_of(p)?;
-            if p == root {
-                return Some(pid);
+    std::fs::read_dir("/proc")
+        .ok()?
+        .flatten()
+        .find_map(|entry| {
+            let pid: u32 = entry.file_name().to_str()?.parse().ok()?;
+            let comm = std::fs::read_to_string(format!("/proc/{pid}/comm")).ok()?;
+            if comm.trim_end() != program {
+                return None;
             }
-        }
-        None
-    })
+            let mut p = pid;
+            for _ in 0..8 {
+                p = parent_of(p)?;
+                if p == root {
+                    return Some(pid);
+                }
+            }
+            None
+        })
 }
 
 struct Outcome {
@@ -130,7 +133,11 @@ fn run_with_fault(
         Fault::Stop => libc::SIGSTOP,
     };
     // SAFETY: kill has no memory-safety preconditions.
-    assert_eq!(unsafe { libc::kill(target as i32, signal) }, 0, "signalling {program}");
+    assert_eq!(
+        unsafe { libc::kill(target as i32, signal) },
+        0,
+        "signalling {program}"
+    );
     if fault == Fault::Stop {
         std::thread::sleep(Duration::from_secs(3));
         // SAFETY: as above; the process may be gone (killed as hung): then this fails harmlessly.

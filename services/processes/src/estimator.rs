@@ -28,7 +28,11 @@ impl EstimatorProcess {
         let node = EstimatorNode::new(cx.config.estimator_config(), schedule);
         let tick = Duration::from_nanos(schedule.period_ns);
         let every = |ticks: u64| tick * u32::try_from(ticks).unwrap_or(u32::MAX);
-        let periods = [tick, every(schedule.tilt_every), every(schedule.field_every)];
+        let periods = [
+            tick,
+            every(schedule.tilt_every),
+            every(schedule.field_every),
+        ];
         let ports = EstimatorPorts {
             gyro: cx.bus.subscriber()?,
             tilt: cx.bus.subscriber()?,

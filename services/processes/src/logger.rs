@@ -236,7 +236,9 @@ pub fn segment_path(log: &std::path::Path, restarts: u32) -> std::path::PathBuf 
         return log.to_path_buf();
     }
     let stem = log.file_stem().unwrap_or_default().to_string_lossy();
-    let ext = log.extension().map_or(String::new(), |e| format!(".{}", e.to_string_lossy()));
+    let ext = log
+        .extension()
+        .map_or(String::new(), |e| format!(".{}", e.to_string_lossy()));
     log.with_file_name(format!("{stem}.segment-{restarts}{ext}"))
 }
 

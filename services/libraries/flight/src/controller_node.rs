@@ -226,7 +226,10 @@ impl ControllerNode {
             }
             let p = *p;
             self.pending.remove(&t_ns);
-            if p.estimate.is_some() || without_estimate {
+            // Without an estimate only the newest tick is worth a command: one for an older
+            // tick would reach the actuators late.
+            let newest = self.inputs.newest_ns.is_none_or(|n| t_ns >= n);
+            if p.estimate.is_some() || (without_estimate && newest) {
                 out.push(self.cycle(t_ns, &p));
             }
         }
@@ -331,7 +334,8 @@ impl ControllerNode {
             )
             .with(
                 SafeReason::WheelTelemetryLost,
-                self.inputs.lost(self.inputs.wheels_ns, first, self.period_ns),
+                self.inputs
+                    .lost(self.inputs.wheels_ns, first, self.period_ns),
             )
             .with(
                 SafeReason::CmgTelemetryLost,
@@ -357,10 +361,10 @@ impl ControllerNode {
             Vector3::zeros()
         } else {
             safe_wheel_torque(
-            self.safe.config(),
-            fresh_gyro.as_ref(),
-            &telemetry.wheel_speed_rad_s,
-            self.wheel_limits.max_torque_nm,
+                self.safe.config(),
+                fresh_gyro.as_ref(),
+                &telemetry.wheel_speed_rad_s,
+                self.wheel_limits.max_torque_nm,
                 self.wheel_limits.max_speed_rad_s,
             )
         };
@@ -396,5 +400,110 @@ impl ControllerNode {
                 gimbal_rate: a4(&command.gimbal_rate_rad_s),
             },
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use testbed_model::ModelConfig;
+    use testbed_model::attitude::Attitude;
+
+    const TICK_NS: u64 = 100_000_000;
+
+    fn node() -> ControllerNode {
+        let model = ModelConfig::default();
+        let config = ControllerConfig::default();
+        let task = ControllerTask::new(&config, &model, Attitude::identity()).unwrap();
+        ControllerNode::new(
+            task,
+            &config,
+            &model.wheels,
+            Schedule::from_model(&model).unwrap(),
+        )
+    }
+
+    fn header(k: u64) -> SampleHeader {
+        SampleHeader::new(k * TICK_NS, k, SampleHeader::VALID)
+    }
+
+    fn estimate(k: u64) -> AttitudeEstimate {
+        AttitudeEstimate {
+            header: header(k),
+            quaternion: [0.0, 0.0, 0.0, 1.0],
+            ..AttitudeEstimate::default()
+        }
+    }
+
+    fn telemetry(node: &mut ControllerNode, k: u64, wheel_speed: f64) {
+        node.on_wheel_telemetry(&WheelTelemetry {
+            header: header(k),
+            speed: [wheel_speed; 3],
+            torque: [0.0; 3],
+        });
+        node.on_cmg_telemetry(&CmgTelemetry {
+            header: header(k),
+            ..CmgTelemetry::default()
+        });
+    }
+
+    #[test]
+    fn a_lost_estimate_gives_rate_damping_on_the_gyro_at_the_second_silent_tick() {
+        let mut node = node();
+        for k in 0..=5 {
+            node.on_estimate(&estimate(k));
+            telemetry(&mut node, k, 0.0);
+            let cycles = node.ready();
+            assert_eq!(cycles.len(), 1);
+            assert_eq!(cycles[0].status.mode(), Some(ControllerMode::WheelPointing));
+        }
+        // The estimator stops after tick 5; the gyro and the actuators go on.
+        let rate = [0.01, -0.02, 0.005];
+        let mut safe_at = None;
+        for k in 6..=9 {
+            node.on_gyro(&GyroSample::new(header(k), rate));
+            telemetry(&mut node, k, 0.0);
+            for cycle in node.ready() {
+                let t = cycle.status.header.time_ns / TICK_NS;
+                safe_at.get_or_insert(t);
+                assert_eq!(cycle.status.mode(), Some(ControllerMode::Safe));
+                assert_eq!(cycle.cmg.gimbal_rate, [0.0; 4], "gimbals held");
+                // Platform torque −K·ω (K = 5 N m s): wheel motor torque +K·ω.
+                assert_eq!(cycle.wheels.torque, rate.map(|w| 5.0 * w));
+            }
+        }
+        // Tick 6 waits for its estimate; at tick 7 the estimate is two periods old: lost.
+        assert_eq!(safe_at, Some(7));
+        let transitions = node.take_transitions();
+        assert_eq!(transitions.len(), 1);
+        assert!(matches!(
+            transitions[0],
+            (t, SafeTransition::Entered(r)) if t == 7 * TICK_NS && r.contains(SafeReason::EstimateLost)
+        ));
+
+        // Estimates again: safe mode is left after recovery_s (5 s) of healthy inputs.
+        let mut left_at = None;
+        for k in 10..=80 {
+            node.on_estimate(&estimate(k));
+            telemetry(&mut node, k, 0.0);
+            node.ready();
+            if let Some((t, SafeTransition::Left)) = node.take_transitions().first() {
+                left_at = Some(t / TICK_NS);
+            }
+        }
+        assert_eq!(left_at, Some(60), "healthy from tick 10, left 5 s later");
+    }
+
+    #[test]
+    fn a_wheel_near_its_limit_enters_safe_mode_and_is_not_driven_further() {
+        let mut node = node();
+        let limit = 6000.0 * std::f64::consts::PI / 30.0;
+        node.on_gyro(&GyroSample::new(header(0), [0.01; 3]));
+        node.on_estimate(&estimate(0));
+        telemetry(&mut node, 0, 0.8 * limit);
+        let cycle = node.ready()[0];
+        assert_eq!(cycle.status.mode(), Some(ControllerMode::Safe));
+        // +K·ω would speed up the +0.8-limit wheels: refused.
+        assert_eq!(cycle.wheels.torque, [0.0; 3]);
     }
 }

@@ -352,7 +352,9 @@ mod tests {
         let t = safe.update(10_200 * MS, SafeReasons::NONE);
         assert_eq!(
             t,
-            Some(SafeTransition::Entered(SafeReasons(SafeReason::Ground as u32)))
+            Some(SafeTransition::Entered(SafeReasons(
+                SafeReason::Ground as u32
+            )))
         );
         assert_eq!(safe.update(99_000 * MS, SafeReasons::NONE), None);
         assert!(safe.is_active());
@@ -394,11 +396,19 @@ mod tests {
             ..SafeModeConfig::default()
         };
         let e = bad.validate().unwrap_err().to_string();
-        assert!(e.contains("wheel_speed_fraction") && e.contains("1.2"), "{e}");
+        assert!(
+            e.contains("wheel_speed_fraction") && e.contains("1.2"),
+            "{e}"
+        );
         let nan = SafeModeConfig {
             rate_gain_nms: f64::NAN,
             ..SafeModeConfig::default()
         };
-        assert!(nan.validate().unwrap_err().to_string().contains("rate_gain"));
+        assert!(
+            nan.validate()
+                .unwrap_err()
+                .to_string()
+                .contains("rate_gain")
+        );
     }
 }

@@ -40,7 +40,8 @@ fn run(config: &RunConfig) -> Outcome {
     let mut estimator = EstimatorNode::new(config.estimator_config(), schedule);
     let task =
         ControllerTask::new(&config.controller, &config.model, config.manoeuvre.target()).unwrap();
-    let mut controller = ControllerNode::new(task, &config.controller, &config.model.wheels, schedule);
+    let mut controller =
+        ControllerNode::new(task, &config.controller, &config.model.wheels, schedule);
     let target = config.manoeuvre.target();
     let mut out = Outcome {
         errors: Vec::new(),

@@ -4,8 +4,8 @@ use crate::json::{DecodeError, Field, as_object, check_no_extra, member, object_
 use ipc_types::{
     AppliedCmgCommand, AppliedWheelCommand, AttitudeEstimate, CanBusFrame, CanLinkStatus,
     CmgCommand, CmgTelemetry, ControllerStatus, GyroSample, HealthEvent, Heartbeat,
-    InclinometerSample,
-    MagnetometerSample, SampleHeader, SimClockTick, SimTruth, Topic, WheelCommand, WheelTelemetry,
+    InclinometerSample, MagnetometerSample, SampleHeader, SimClockTick, SimTruth, Topic,
+    WheelCommand, WheelTelemetry,
 };
 use serde_json::Value;
 

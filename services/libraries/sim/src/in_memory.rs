@@ -31,7 +31,8 @@ pub fn run(
     let mut cmg = SimCmg::new(config, schedule);
     let mut estimator = EstimatorNode::new(config.estimator_config(), schedule);
     let task = ControllerTask::new(&config.controller, &config.model, config.manoeuvre.target())?;
-    let mut controller = ControllerNode::new(task, &config.controller, &config.model.wheels, schedule);
+    let mut controller =
+        ControllerNode::new(task, &config.controller, &config.model.wheels, schedule);
     let mut run = InMemoryRun {
         estimates: Vec::new(),
         truths: Vec::new(),

@@ -519,7 +519,9 @@ fn print_health(h: &summary::HealthSummary) {
         );
     }
     if !h.marked {
-        println!("  health               no fault: no safe mode, process exit, restart, hang, lost input or zeroed command");
+        println!(
+            "  health               no fault: no safe mode, process exit, restart, hang, lost input or zeroed command"
+        );
         return;
     }
     println!(

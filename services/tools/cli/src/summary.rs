@@ -159,7 +159,11 @@ fn health(log: &RunLog, path: &Path) -> anyhow::Result<HealthSummary> {
     h.can_frames_ok = links.values().map(|s| s.frames_ok).sum();
     h.can_frames_bad = links.values().map(|s| s.frames_bad).sum();
     h.segments = segments(path);
-    h.marked = h.safe_mode_entries + h.process_exits + h.restarts + h.hangs + h.inputs_lost
+    h.marked = h.safe_mode_entries
+        + h.process_exits
+        + h.restarts
+        + h.hangs
+        + h.inputs_lost
         + h.commands_zeroed
         > 0
         || h.aborted
