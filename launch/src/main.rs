@@ -57,6 +57,10 @@ struct Args {
     /// Validate the profile, print the start order and exit.
     #[arg(long)]
     check: bool,
+    /// Stop the run (as on SIGTERM) when process PID is no longer the launcher's parent:
+    /// `testbed run` passes its own pid, so the pipeline never outlives it.
+    #[arg(long, value_name = "PID")]
+    exit_with_parent: Option<i32>,
 }
 
 fn plan(args: &Args) -> anyhow::Result<Result<Plan, ProfileError>> {
@@ -142,6 +146,12 @@ fn main() -> ExitCode {
     };
     testbed_bus::init_logging();
     let args = Args::parse();
+    if let Some(parent) = args.exit_with_parent
+        && let Err(e) = sys::stop_when_orphaned(parent)
+    {
+        tracing::error!("cannot watch the parent process {parent}: {e}");
+        return ExitCode::from(1);
+    }
     let plan = match plan(&args) {
         Ok(Ok(plan)) => plan,
         Ok(Err(e)) => {

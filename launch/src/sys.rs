@@ -55,6 +55,18 @@ impl SignalSet {
         }
     }
 
+    /// Unblocks the signals again (their dispositions stay the default): for a program that
+    /// takes them synchronously only for a while (`testbed run` while the launcher runs).
+    pub fn unblock(&self) -> io::Result<()> {
+        // SAFETY: the set is initialised; pthread_sigmask only reads it.
+        let rc =
+            unsafe { libc::pthread_sigmask(libc::SIG_UNBLOCK, &self.set, std::ptr::null_mut()) };
+        if rc != 0 {
+            return Err(io::Error::from_raw_os_error(rc));
+        }
+        Ok(())
+    }
+
     /// Waits up to `timeout` (forever if `None`) for one of the signals; `None` on timeout or
     /// when interrupted by another signal.
     pub fn wait(&self, timeout: Option<Duration>) -> io::Result<Option<libc::c_int>> {
@@ -202,6 +214,52 @@ pub fn signal_name(signal: libc::c_int) -> String {
         _ => return format!("signal {signal}"),
     };
     name.to_owned()
+}
+
+/// Sends SIGTERM to this process once `parent` is no longer its parent (it died, even by
+/// SIGKILL; checked now and every 100 ms from a thread), so that the run stops in order, as on
+/// a stop request. Call after [`SignalSet::block`] (the thread inherits the blocked mask, and
+/// the signal is taken by the supervisor's wait).
+///
+/// Not `PR_SET_PDEATHSIG`: that fires when the parent *thread* exits, so a multi-threaded
+/// parent (`testbed run` with its progress display) can send it once per thread, and the
+/// supervisor takes a second stop signal as "kill everything at once".
+pub fn stop_when_orphaned(parent: libc::pid_t) -> io::Result<()> {
+    let orphaned = move || {
+        // SAFETY: getppid has no preconditions.
+        unsafe { libc::getppid() != parent }
+    };
+    let stop = || {
+        // SAFETY: kill(2) on this very process.
+        unsafe { libc::kill(libc::getpid(), SIGTERM) };
+    };
+    if orphaned() {
+        stop();
+        return Ok(());
+    }
+    std::thread::Builder::new()
+        .name("parent-watch".into())
+        .spawn(move || {
+            while !orphaned() {
+                std::thread::sleep(Duration::from_millis(100));
+            }
+            stop();
+        })?;
+    Ok(())
+}
+
+/// For `pre_exec`: unblocks every signal, leaving the dispositions as they are (see
+/// [`prepare_child`] for the launcher's own children).
+pub fn unblock_all() -> io::Result<()> {
+    // SAFETY: sigemptyset and sigprocmask are async-signal-safe.
+    unsafe {
+        let mut empty: libc::sigset_t = std::mem::zeroed();
+        libc::sigemptyset(&mut empty);
+        if libc::sigprocmask(libc::SIG_SETMASK, &empty, std::ptr::null_mut()) != 0 {
+            return Err(io::Error::last_os_error());
+        }
+    }
+    Ok(())
 }
 
 /// For `pre_exec`: unblocks every signal (the launcher's blocked set would otherwise be

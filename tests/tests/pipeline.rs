@@ -98,7 +98,8 @@ fn two_lockstep_runs_with_the_same_seed_give_byte_identical_logs() {
     );
 }
 
-/// Processes whose environment names this bus prefix.
+/// Processes whose environment names a bus prefix starting with `prefix` (`tb<pid>_`: a run's
+/// prefix is `tb<pid>_<random>_`).
 fn processes_on_bus(prefix: &str) -> Vec<u32> {
     let needle = format!("TESTBED_BUS_PREFIX={prefix}");
     std::fs::read_dir("/proc")
@@ -106,8 +107,10 @@ fn processes_on_bus(prefix: &str) -> Vec<u32> {
         .flatten()
         .filter_map(|e| e.file_name().to_str().and_then(|n| n.parse::<u32>().ok()))
         .filter(|pid| {
-            std::fs::read(format!("/proc/{pid}/environ"))
-                .is_ok_and(|env| env.split(|b| *b == 0).any(|var| var == needle.as_bytes()))
+            std::fs::read(format!("/proc/{pid}/environ")).is_ok_and(|env| {
+                env.split(|b| *b == 0)
+                    .any(|var| var.starts_with(needle.as_bytes()))
+            })
         })
         .collect()
 }
@@ -167,12 +170,14 @@ fn sigint_stops_every_process_removes_the_bus_and_finalises_the_log() {
         .map(|e| e.file_name())
         .collect();
     assert!(shm.is_empty(), "stale shared memory: {shm:?}");
-    let root = std::path::PathBuf::from(format!("/tmp/{}", prefix.trim_end_matches('_')));
-    assert!(
-        !root.exists(),
-        "the bus root {} was left behind",
-        root.display()
-    );
+    // The run's private bus root, /tmp/tb<pid>_<random>.
+    let roots: Vec<_> = std::fs::read_dir("/tmp")
+        .unwrap()
+        .flatten()
+        .filter(|e| e.file_name().to_string_lossy().starts_with(&prefix))
+        .map(|e| e.path())
+        .collect();
+    assert!(roots.is_empty(), "the bus root was left behind: {roots:?}");
     let summary: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(summary["log_complete"], true, "{summary}");
     let simulated = number(&summary, "simulated_s");

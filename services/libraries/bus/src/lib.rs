@@ -80,6 +80,7 @@ mod config;
 mod event_loop;
 mod heartbeat;
 mod ports;
+mod private;
 mod wait;
 
 use std::error::Error as StdError;
@@ -99,6 +100,7 @@ pub use event_loop::{
 };
 pub use heartbeat::HeartbeatPublisher;
 pub use ports::{SubscriberOptions, TopicPublisher, TopicSubscriber};
+pub use private::{CollectReport, PrivateRun, collect_dead_runs};
 pub use wait::{ENV_WAIT, WaitStats, WaitStrategy};
 
 /// Boxed iceoryx2 error.

@@ -307,6 +307,24 @@ pub fn read_records<R: Record>(
         }
         rows.push(value);
     }
+    // A writer killed mid-row leaves a last line without its newline, and a number cut there
+    // (`0.12` of `0.1234`) still parses: an unended last row is refused, naming its last field.
+    if !rows.is_empty() && !text.ends_with('\n') {
+        let last = text.rsplit('\n').next().unwrap_or_default();
+        let fields = last.split(',').count();
+        let column = headers.get(fields.saturating_sub(1)).unwrap_or("?");
+        let value = last.rsplit(',').next().unwrap_or_default().trim();
+        return Err(DataError::Row {
+            file: file.to_path_buf(),
+            row: rows.len(),
+            line: text.split('\n').count(),
+            message: format!(
+                "column `{column}`: `{value}` ends the file without a newline: the file looks \
+                 cut while being written (a cut number still parses); if the row is complete, \
+                 end the file with a newline"
+            ),
+        });
+    }
     Ok(rows)
 }
 
@@ -518,5 +536,17 @@ mod tests {
             e.contains("row 2") && e.contains("3 fields") && e.contains("`wz`"),
             "{e}"
         );
+        // Cut inside a number that still parses (0.1234 → 0.12): refused all the same.
+        let e = parse_gyro("t_s,wx,wy,wz\n0,1,2,3\n0.12,3.4,5,0.12").unwrap_err();
+        assert!(
+            e.contains("gyro.csv")
+                && e.contains("row 2")
+                && e.contains("line 3")
+                && e.contains("`wz`")
+                && e.contains("`0.12`")
+                && e.contains("newline"),
+            "{e}"
+        );
+        assert!(parse_gyro("t_s,wx,wy,wz\n0,1,2,3\n0.12,3.4,5,0.12\n").is_ok());
     }
 }

@@ -33,12 +33,14 @@
 mod json;
 mod reader;
 mod record;
+mod repair;
 mod sorter;
 mod writer;
 
 pub use json::DecodeError;
 pub use reader::{LogEnd, Records, RunLog, Samples};
 pub use record::{LogEncode, LogRecord};
+pub use repair::{RepairReport, repair};
 pub use sorter::{EncodedRecord, TickSorter};
 pub use writer::{LogStats, RecordOrder, RunLogWriter, WriterOptions};
 

@@ -67,7 +67,7 @@ pub struct RunLog {
 }
 
 /// Outcome of reading the next record's framing.
-enum Next {
+pub(crate) enum Next {
     /// A complete record: opcode, offset of its opcode byte, body length.
     Record { opcode: u8, offset: u64, len: u64 },
     /// The bytes from `offset` on do not hold a complete record.
@@ -75,7 +75,7 @@ enum Next {
 }
 
 /// Reads MCAP record framing (opcode, length) from a file of known length.
-struct Framing {
+pub(crate) struct Framing {
     reader: BufReader<File>,
     pos: u64,
     file_len: u64,
@@ -84,7 +84,7 @@ struct Framing {
 impl Framing {
     /// Opens `path` and checks the leading magic. `Err(file_len)`: the file is shorter than
     /// the magic but a prefix of it.
-    fn open(path: &Path) -> Result<Result<Self, u64>, LogError> {
+    pub(crate) fn open(path: &Path) -> Result<Result<Self, u64>, LogError> {
         let file = File::open(path).map_err(|e| LogError::io(path, e))?;
         let file_len = file.metadata().map_err(|e| LogError::io(path, e))?.len();
         let mut reader = BufReader::with_capacity(64 * 1024, file);
@@ -106,7 +106,29 @@ impl Framing {
         }))
     }
 
-    fn next(&mut self) -> Result<Next, LogError> {
+    /// Length of the file.
+    pub(crate) fn file_len(&self) -> u64 {
+        self.file_len
+    }
+
+    /// After the footer's body: whether the closing magic follows (the file is complete).
+    pub(crate) fn end_after_footer(&mut self) -> Result<LogEnd, LogError> {
+        let rest = self.file_len - self.pos;
+        let mut magic = [0u8; 8];
+        let n = rest.min(8) as usize;
+        let tail = magic.get_mut(..n).ok_or(LogError::NotMcap)?;
+        self.reader.read_exact(tail)?;
+        Ok(if n == 8 && *tail == *mcap::MAGIC {
+            LogEnd::Complete
+        } else {
+            LogEnd::Truncated {
+                offset: self.pos,
+                file_len: self.file_len,
+            }
+        })
+    }
+
+    pub(crate) fn next(&mut self) -> Result<Next, LogError> {
         let offset = self.pos;
         if self.file_len - offset < 9 {
             return Ok(Next::Cut { offset });
@@ -128,7 +150,7 @@ impl Framing {
         })
     }
 
-    fn body(&mut self, len: u64, buf: &mut Vec<u8>) -> Result<(), LogError> {
+    pub(crate) fn body(&mut self, len: u64, buf: &mut Vec<u8>) -> Result<(), LogError> {
         buf.clear();
         // `len` fits the file (checked in `next`), so it fits memory as a file read would.
         buf.resize(
@@ -139,7 +161,7 @@ impl Framing {
         Ok(())
     }
 
-    fn skip(&mut self, len: u64) -> Result<(), LogError> {
+    pub(crate) fn skip(&mut self, len: u64) -> Result<(), LogError> {
         match i64::try_from(len) {
             Ok(len) => self.reader.seek_relative(len)?,
             Err(_) => {
@@ -249,19 +271,7 @@ impl RunLog {
                 }
                 op::FOOTER => {
                     framing.skip(len)?;
-                    let rest = file_len - framing.pos;
-                    let mut magic = [0u8; 8];
-                    let n = rest.min(8) as usize;
-                    let tail = magic.get_mut(..n).ok_or(LogError::NotMcap)?;
-                    framing.reader.read_exact(tail)?;
-                    end = Some(if n == 8 && *tail == *mcap::MAGIC {
-                        LogEnd::Complete
-                    } else {
-                        LogEnd::Truncated {
-                            offset: framing.pos,
-                            file_len,
-                        }
-                    });
+                    end = Some(framing.end_after_footer()?);
                 }
                 _ => framing.skip(len)?,
             }
@@ -294,6 +304,11 @@ impl RunLog {
             end,
             message_count,
         })
+    }
+
+    /// The file's path.
+    pub fn path(&self) -> &Path {
+        &self.path
     }
 
     /// The run information: profile, seed, mode, configuration text, further entries.

@@ -159,3 +159,57 @@ fn python_stream_reader_recovers_the_complete_records_of_a_cut_log() {
         );
     }
 }
+
+#[test]
+fn a_repaired_cut_log_is_complete_and_holds_every_complete_record() {
+    let (bytes, records) = finished_log("truncation_full_repair.mcap");
+    let frames = framing(&bytes);
+    let messages: Vec<&Framed> = frames.iter().filter(|f| f.opcode == MESSAGE).collect();
+    let mid = messages[messages.len() / 2];
+    // Inside a message body, exactly between two records, inside the footer, and complete.
+    let footer = frames.last().expect("footer");
+    let cuts = [
+        (mid.start + mid.end) / 2,
+        messages[messages.len() / 4].start,
+        footer.start + 3,
+        bytes.len() as u64,
+    ];
+    for (i, &cut) in cuts.iter().enumerate() {
+        let path = temp_path(&format!("truncation_repair_{i}.mcap"));
+        std::fs::write(&path, &bytes[..cut as usize]).expect("write prefix");
+        let n = messages.iter().filter(|f| f.end <= cut).count();
+        let cut_log = RunLog::open(&path).expect("open the cut log");
+        assert_eq!(cut_log.message_count(), n as u64, "cut at {cut}");
+
+        // In place: the repaired file replaces the cut one.
+        let report = testbed_log::repair(&path, &path).expect("repair");
+        assert_eq!(report.messages, n as u64, "cut at {cut}: {report:?}");
+        assert_eq!(report.end == LogEnd::Complete, cut == bytes.len() as u64);
+        let repaired = RunLog::open(&path).expect("open the repaired log");
+        assert!(repaired.is_complete(), "cut at {cut}: {:?}", repaired.end());
+        assert_eq!(repaired.info(), &run_info());
+        let read: Vec<LogRecord> = repaired
+            .records()
+            .expect("records")
+            .map(|r| r.expect("decodes"))
+            .collect();
+        assert!(read == records[..n], "cut at {cut}: records differ");
+
+        // Python's make_reader (reads from the footer) now accepts it.
+        let summary = python_read_log(&["summary", path.to_str().expect("utf-8 path")]);
+        assert_eq!(
+            summary["statistics"]["message_count"], n as u64,
+            "cut at {cut}: {summary}"
+        );
+    }
+    // A file that is not a log is refused, and the output is not created.
+    let junk = temp_path("truncation_repair_junk.mcap");
+    let out = temp_path("truncation_repair_junk_out.mcap");
+    std::fs::write(&junk, b"not an mcap file").expect("write");
+    let _ = std::fs::remove_file(&out);
+    assert!(matches!(
+        testbed_log::repair(&junk, &out),
+        Err(LogError::NotMcap)
+    ));
+    assert!(!out.exists());
+}

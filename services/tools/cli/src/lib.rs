@@ -6,6 +6,7 @@
 pub mod errors;
 pub mod figure;
 pub mod identify;
+pub mod log;
 pub mod paper;
 pub mod progress;
 pub mod run;
@@ -36,6 +37,8 @@ pub enum Command {
     Identify(identify::IdentifyArgs),
     /// Simulate an identification experiment and write it as a measured-data CSV directory.
     Experiment(identify::ExperimentArgs),
+    /// Run-log tools: `testbed log repair IN [OUT]` makes a cut log complete again.
+    Log(log::LogArgs),
 }
 
 /// Runs the command line: clap's own message and status for a wrong command line, the error
@@ -48,6 +51,7 @@ pub fn main() -> std::process::ExitCode {
         Command::Run(args) => run::run(args),
         Command::Identify(args) => identify::run_identify(args),
         Command::Experiment(args) => identify::run_experiment(args),
+        Command::Log(args) => log::run(args),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,

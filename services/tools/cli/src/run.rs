@@ -10,7 +10,6 @@ use crate::summary::{self, RunSeries, RunSummary};
 use anyhow::{Context, Result, bail};
 use std::path::{Path, PathBuf};
 use std::process::Command;
-use testbed_bus::BusConfig;
 use testbed_launch::profile::Profile;
 use testbed_runtime::{ClockMode, RunConfig};
 
@@ -180,13 +179,24 @@ pub fn run(args: &RunArgs) -> Result<()> {
             config_path.display(),
             max_wall.map_or_else(String::new, |s| format!(", at most {s} s wall time")),
         );
-        return launch(&profile_path, &config, None, max_wall, true, None);
+        return launch(&profile_path, &config, None, max_wall, true, None, None);
     }
     if let Some(dir) = log.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     }
-    std::fs::write(&config_path, config.to_toml_string())
+    // Held (by this process, the launcher and every pipeline process) until the run's last
+    // process is gone: a second run on the same log is refused instead of overwriting it.
+    let run_lock = RunLock::acquire(&config_path, &log)?;
+    run_lock
+        .write(config.to_toml_string().as_bytes())
         .with_context(|| format!("writing the run configuration {}", config_path.display()))?;
+    let replay_source = match &args.replay {
+        Some(source) => Some(
+            testbed_log::RunLog::open(source)
+                .with_context(|| format!("opening the log to replay {}", source.display()))?,
+        ),
+        None => None,
+    };
 
     let follow = (!args.no_progress).then(|| progress::Follow {
         log: log.clone(),
@@ -200,6 +210,7 @@ pub fn run(args: &RunArgs) -> Result<()> {
         max_wall,
         false,
         follow,
+        Some(&run_lock),
     );
 
     if let Some(source) = &args.replay_candump {
@@ -224,10 +235,17 @@ pub fn run(args: &RunArgs) -> Result<()> {
 
     // A failed pipeline still leaves a readable log: summarise what was recorded, then fail.
     let summarised = summary::summarise(&log, ends_by_duration.then_some(config.run.duration_s));
+    // A logger that died leaves a log cut mid-record, which readers that start from the footer
+    // (Python's make_reader, viewers) refuse: make it complete, keeping every complete record.
+    let repaired = repair_if_cut(&log);
     let (summary, series, _) = match summarised {
         Ok(s) => s,
         Err(e) => return Err(launched.err().unwrap_or(e)),
     };
+    let replay_warning = replay_source.as_ref().and_then(replay_cut_warning);
+    if let Some(warning) = &replay_warning {
+        eprintln!("warning: {warning}");
+    }
     let title = format!(
         "testbed run: profile {}, seed {}. errors are rotation vectors in body axes (truth vs target, estimate vs truth)",
         config.run.profile, config.run.seed
@@ -244,10 +262,29 @@ pub fn run(args: &RunArgs) -> Result<()> {
                 .collect::<Vec<_>>()
         );
         value["config"] = serde_json::json!(config_path.display().to_string());
+        if let Some(report) = &repaired {
+            value["log_repaired"] = serde_json::json!({
+                "messages": report.messages,
+                "until_s": report.last_time_ns as f64 * 1e-9,
+                "dropped_bytes": report.dropped_bytes,
+            });
+        }
+        if let Some(warning) = &replay_warning {
+            value["replay_source_cut"] = serde_json::json!(warning);
+        }
         println!("{}", serde_json::to_string_pretty(&value)?);
     } else {
         print_summary(&summary, &figures);
+        if let Some(report) = &repaired {
+            println!(
+                "  log repaired         {} complete messages kept (up to t = {:.3} s), {} bytes of a cut record dropped",
+                report.messages,
+                report.last_time_ns as f64 * 1e-9,
+                report.dropped_bytes
+            );
+        }
     }
+    drop(run_lock);
     launched?;
     if summary.health.safe_mode_entries > 0 && !profile.supervision.tolerate_safe_mode {
         anyhow::bail!(
@@ -256,6 +293,52 @@ pub fn run(args: &RunArgs) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// Repairs the log in place when it was cut (the logger died); says what it did on stderr.
+fn repair_if_cut(log: &Path) -> Option<testbed_log::RepairReport> {
+    match testbed_log::RunLog::open(log) {
+        Ok(opened) if !opened.is_complete() => {}
+        _ => return None,
+    }
+    match crate::log::repair(log, log) {
+        Ok(report) => {
+            eprintln!(
+                "note: the log was not finalised (its logger died); {}",
+                crate::log::describe(log, &report)
+            );
+            Some(report)
+        }
+        Err(e) => {
+            eprintln!(
+                "warning: the log {} was not finalised and could not be repaired ({}); every complete record is still readable by a streaming reader; retry with `testbed log repair {}`",
+                log.display(),
+                crate::errors::report(&e),
+                log.display()
+            );
+            None
+        }
+    }
+}
+
+/// For a replayed log that was cut: how much of it the replay covered.
+fn replay_cut_warning(source: &testbed_log::RunLog) -> Option<String> {
+    let testbed_log::LogEnd::Truncated { offset, file_len } = source.end() else {
+        return None;
+    };
+    let until_ns = source
+        .records()
+        .ok()?
+        .flatten()
+        .map(|r| r.header().time_ns)
+        .max()
+        .unwrap_or(0);
+    Some(format!(
+        "the replayed log {} was cut (not finalised: its logger died or the file was truncated): complete records end at byte {offset} of {file_len}; replayed its {} complete messages, up to t = {:.3} s of the recorded run; what came after was never recorded",
+        source.path().display(),
+        source.message_count(),
+        until_ns as f64 * 1e-9
+    ))
 }
 
 /// The run configuration a log was recorded with.
@@ -270,6 +353,12 @@ fn recorded_config(log: &Path) -> Result<RunConfig> {
 
 /// Start `testbed-launch` (next to this executable) on the profile and wait for it; with
 /// `check`, only its dry run (`--check`: profile, binaries, start order).
+///
+/// While the launcher runs, this process takes SIGINT, SIGTERM and SIGHUP and forwards them to
+/// it (the launcher then stops the pipeline and finalises the log); the launcher stops the run
+/// as on SIGTERM if this process dies (`--exit-with-parent`), and its own children get SIGTERM
+/// when it dies (PR_SET_PDEATHSIG), so the pipeline never outlives `testbed`. This process is the pipeline's subreaper: it waits for
+/// every process of the run, even those a killed launcher orphaned, before removing the bus.
 fn launch(
     profile: &Path,
     config: &RunConfig,
@@ -277,6 +366,7 @@ fn launch(
     max_wall: Option<f64>,
     check: bool,
     follow: Option<progress::Follow>,
+    run_lock: Option<&RunLock>,
 ) -> Result<()> {
     let exe = std::env::current_exe().context("locating the testbed executable")?;
     let bin_dir = exe
@@ -289,9 +379,6 @@ fn launch(
             launcher.display()
         );
     }
-    // One bus per run: a unique prefix and a short root (Unix socket paths must stay < 108 bytes).
-    let id = std::process::id();
-    let bus = BusConfig::new(format!("tb{id}_"), format!("/tmp/tb{id}/"));
     let mut command = Command::new(&launcher);
     if std::env::var_os("RUST_LOG").is_none() {
         // The summary is the output; the processes speak up only for warnings.
@@ -304,9 +391,6 @@ fn launch(
         .args(["--seed", &config.run.seed.to_string()])
         .arg("--log")
         .arg(&config.run.log)
-        .args(["--bus-prefix", &bus.prefix])
-        .arg("--bus-root")
-        .arg(&bus.root)
         .arg("--bin-dir")
         .arg(bin_dir);
     if let Some(path) = config_path {
@@ -325,24 +409,25 @@ fn launch(
         }
         return Ok(());
     }
-    // Ctrl-C reaches the whole foreground group: the launcher stops the pipeline and finalises
-    // the log; this process waits for it and then summarises what was recorded.
-    let _ignore_interrupt = IgnoreInterrupt::new();
-    let mut child = command
-        .spawn()
-        .with_context(|| format!("starting {}", launcher.display()))?;
-    let progress = follow.map(progress::Progress::start);
-    let status = child
-        .wait()
-        .with_context(|| format!("waiting for {}", launcher.display()));
-    if let Some(progress) = progress {
-        progress.finish();
+    // Buses of earlier runs whose `testbed` died (SIGKILL, crash) are collected first.
+    let collected = testbed_bus::collect_dead_runs(Path::new(BUS_BASE), BUS_TAG);
+    for failed in &collected.failed {
+        eprintln!("warning: cannot remove the bus of a dead earlier run: {failed}");
     }
-    let status = status?;
+    // One private bus per run: a fresh directory (mode 0700, unpredictable name) as the root,
+    // its name as the prefix of every shared-memory file (short: Unix socket paths < 108 bytes).
+    let private = testbed_bus::PrivateRun::create(Path::new(BUS_BASE), BUS_TAG)
+        .context("creating the run's private bus directory")?;
+    command
+        .args(["--bus-prefix", &private.bus.prefix])
+        .arg("--bus-root")
+        .arg(&private.bus.root);
+    let result = supervise_launcher(&mut command, &launcher, follow, run_lock);
     // Every process of the run has been reaped: leave no shared memory, socket or directory.
-    if let Err(e) = testbed_bus::remove_all(&bus) {
+    if let Err(e) = private.remove() {
         eprintln!("warning: removing the run's iceoryx2 resources: {e}");
     }
+    let status = result?;
     if !status.success() {
         bail!(
             "the pipeline failed ({status}); the launcher's messages above say which process and how"
@@ -351,21 +436,178 @@ fn launch(
     Ok(())
 }
 
-/// Ignores SIGINT while alive (restores the default on drop).
-struct IgnoreInterrupt;
+/// Directory of the runs' private bus roots, and the start of their names (`/tmp/tb<pid>_…`).
+const BUS_BASE: &str = "/tmp";
+const BUS_TAG: &str = "tb";
+/// How long the processes a dead launcher left get to end (they got SIGTERM) before SIGKILL.
+const ORPHAN_WAIT: std::time::Duration = std::time::Duration::from_secs(10);
 
-impl IgnoreInterrupt {
-    fn new() -> Self {
-        // SAFETY: replacing the SIGINT disposition with SIG_IGN has no preconditions.
-        unsafe { libc::signal(libc::SIGINT, libc::SIG_IGN) };
-        Self
+/// Starts the launcher, forwards stop signals to it, waits for it and then for every process
+/// it left (see [`launch`]).
+fn supervise_launcher(
+    command: &mut Command,
+    launcher: &Path,
+    follow: Option<progress::Follow>,
+    run_lock: Option<&RunLock>,
+) -> Result<std::process::ExitStatus> {
+    use std::os::unix::process::CommandExt as _;
+    use testbed_launch::sys::{self, SignalSet};
+    // SAFETY: prctl(PR_SET_CHILD_SUBREAPER) only changes this process's attributes.
+    if unsafe { libc::prctl(libc::PR_SET_CHILD_SUBREAPER, 1, 0, 0, 0) } != 0 {
+        eprintln!(
+            "warning: cannot become the pipeline's subreaper: {}",
+            std::io::Error::last_os_error()
+        );
+    }
+    // Before any thread exists (the progress display starts below): signals are taken
+    // synchronously; the launcher gets an empty mask (prepare_child).
+    let signals = SignalSet::block(&[sys::SIGINT, sys::SIGTERM, sys::SIGHUP, sys::SIGCHLD])
+        .context("blocking the stop signals")?;
+    // SAFETY: getpid has no preconditions.
+    let parent = unsafe { libc::getpid() };
+    let lock_fd = run_lock.map(RunLock::raw_fd);
+    // The launcher stops the run when this process dies (even by SIGKILL); see
+    // sys::stop_when_orphaned for why not PR_SET_PDEATHSIG.
+    command.args(["--exit-with-parent", &parent.to_string()]);
+    // SAFETY: the closure makes only async-signal-safe calls (sigprocmask, fcntl).
+    unsafe {
+        command.pre_exec(move || {
+            sys::unblock_all()?;
+            if let Some(fd) = lock_fd {
+                // Inherited across exec by the launcher and its children: the run keeps the
+                // log locked until its last process is gone, even if this one dies first.
+                if libc::fcntl(fd, libc::F_SETFD, 0) != 0 {
+                    return Err(std::io::Error::last_os_error());
+                }
+            }
+            Ok(())
+        });
+    }
+    // Own process group: a Ctrl-C in the terminal reaches this process only, which forwards it
+    // once (the launcher takes a second stop signal as "kill the rest at once").
+    command.process_group(0);
+    let mut child = match command.spawn() {
+        Ok(child) => child,
+        Err(e) => {
+            let _ = signals.unblock();
+            return Err(e).with_context(|| format!("starting {}", launcher.display()));
+        }
+    };
+    let launcher_pid = libc::pid_t::try_from(child.id()).unwrap_or(libc::pid_t::MAX);
+    let progress = follow.map(progress::Progress::start);
+    let status = loop {
+        match signals.wait(Some(std::time::Duration::from_millis(200))) {
+            Ok(Some(signal)) if signal != sys::SIGCHLD => {
+                // SAFETY: kill(2) on our own child, not yet reaped (its pid cannot be reused).
+                unsafe { libc::kill(launcher_pid, signal) };
+            }
+            Ok(_) => {}
+            Err(e) => eprintln!("warning: waiting for signals: {e}"),
+        }
+        match child.try_wait() {
+            Ok(Some(status)) => break Ok(status),
+            Ok(None) => {}
+            Err(e) => break Err(e),
+        }
+    };
+    wait_for_orphans();
+    if let Some(progress) = progress {
+        progress.finish();
+    }
+    let _ = signals.unblock();
+    status.with_context(|| format!("waiting for {}", launcher.display()))
+}
+
+/// Reaps the processes a dead launcher left (reparented to this subreaper; they got SIGTERM
+/// from PR_SET_PDEATHSIG), killing those still running after [`ORPHAN_WAIT`].
+fn wait_for_orphans() {
+    let deadline = std::time::Instant::now() + ORPHAN_WAIT;
+    let mut killed = false;
+    loop {
+        let mut status = 0;
+        // SAFETY: waitpid writes the status it is given.
+        let pid = unsafe { libc::waitpid(-1, &mut status, libc::WNOHANG) };
+        match pid {
+            p if p > 0 => continue,
+            0 => {}
+            _ => return, // ECHILD: no child left
+        }
+        if !killed && std::time::Instant::now() >= deadline {
+            for orphan in own_children() {
+                eprintln!("warning: pipeline process {orphan} did not stop; killing it");
+                // SAFETY: kill(2) on our own child, not yet reaped (its pid cannot be reused).
+                unsafe { libc::kill(orphan, libc::SIGKILL) };
+            }
+            killed = true;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
     }
 }
 
-impl Drop for IgnoreInterrupt {
-    fn drop(&mut self) {
-        // SAFETY: restoring the default disposition has no preconditions.
-        unsafe { libc::signal(libc::SIGINT, libc::SIG_DFL) };
+/// The pids whose parent is this process (from /proc).
+fn own_children() -> Vec<libc::pid_t> {
+    let me = std::process::id().to_string();
+    std::fs::read_dir("/proc")
+        .into_iter()
+        .flatten()
+        .flatten()
+        .filter_map(|e| e.file_name().to_str()?.parse::<libc::pid_t>().ok())
+        .filter(|pid| {
+            // /proc/<pid>/stat: "pid (comm) state ppid ..."; comm may hold spaces and ')'.
+            std::fs::read_to_string(format!("/proc/{pid}/stat")).is_ok_and(|stat| {
+                stat.rsplit_once(')')
+                    .and_then(|(_, rest)| rest.split_whitespace().nth(1).map(|p| p == me))
+                    .unwrap_or(false)
+            })
+        })
+        .collect()
+}
+
+/// The lock of one run on its log: an exclusive `flock` on the run configuration file beside
+/// the log (`<log>.run.toml`), which every run writes anyway, so no extra file is left.
+pub struct RunLock {
+    file: std::fs::File,
+}
+
+impl RunLock {
+    /// Locks `config_path` (creating it, not truncating it yet); refuses, naming the log, when
+    /// another run holds it.
+    fn acquire(config_path: &Path, log: &Path) -> Result<Self> {
+        use std::os::fd::AsRawFd as _;
+        let file = std::fs::OpenOptions::new()
+            .read(true)
+            .write(true)
+            .create(true)
+            .truncate(false)
+            .open(config_path)
+            .with_context(|| format!("opening the run configuration {}", config_path.display()))?;
+        // SAFETY: flock on a file descriptor this function owns.
+        if unsafe { libc::flock(file.as_raw_fd(), libc::LOCK_EX | libc::LOCK_NB) } != 0 {
+            let e = std::io::Error::last_os_error();
+            if e.raw_os_error() == Some(libc::EWOULDBLOCK) {
+                bail!(
+                    "another testbed run is using the log {} (its run configuration {} is locked): wait for it to end, or give this run another --log",
+                    log.display(),
+                    config_path.display()
+                );
+            }
+            return Err(e).with_context(|| format!("locking {}", config_path.display()));
+        }
+        Ok(Self { file })
+    }
+
+    /// Replaces the file's content (the lock stays: same open file).
+    fn write(&self, bytes: &[u8]) -> std::io::Result<()> {
+        use std::io::Write as _;
+        let mut file = &self.file;
+        file.set_len(0)?;
+        std::io::Seek::seek(&mut file, std::io::SeekFrom::Start(0))?;
+        file.write_all(bytes)
+    }
+
+    fn raw_fd(&self) -> libc::c_int {
+        use std::os::fd::AsRawFd as _;
+        self.file.as_raw_fd()
     }
 }
 
