@@ -14,6 +14,9 @@
 # Exit status: the command's; 124 when the VM did not report one in time; 125 when the VM
 # could not be set up; 77 when this machine cannot run it (no /dev/kvm, no qemu or kernel),
 # with the reason on stderr. tests/vm/README.md has the details.
+#
+# Environment: TESTBED_VM_ACCEL (below), KVM_PROBE_S (how long KVM may take to boot when it is
+# probed, default 60 s).
 set -euo pipefail
 
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
@@ -36,20 +39,14 @@ unavailable() {
     echo "tests/vm/run.sh: cannot run the CAN test VM here: $*" >&2
     exit 77
 }
-# How the VM runs: TESTBED_VM_ACCEL=kvm (fail without a working KVM), tcg (QEMU's emulator, slow,
-# any machine) or auto (default: KVM when it boots the kernel, else TCG with a warning).
+# How the VM runs: TESTBED_VM_ACCEL=kvm (KVM only), tcg (QEMU's emulator: slow, any machine) or
+# auto (default): KVM, or TCG with a warning where /dev/kvm exists but does not boot the
+# kernel (a nested, paravirtual KVM); without /dev/kvm the VM is not started (status 77).
 accel="${TESTBED_VM_ACCEL:-auto}"
 case "$accel" in
     kvm | auto)
-        if [[ ! -e /dev/kvm ]]; then
-            [[ "$accel" == kvm ]] && unavailable "/dev/kvm is missing (no KVM on this machine)"
-            echo "tests/vm/run.sh: WARNING: /dev/kvm is missing: the VM runs under QEMU's TCG emulator (slow)" >&2
-            accel=tcg
-        elif [[ ! -r /dev/kvm || ! -w /dev/kvm ]]; then
-            [[ "$accel" == kvm ]] && unavailable "/dev/kvm is not readable and writable by $(id -un)"
-            echo "tests/vm/run.sh: WARNING: /dev/kvm is not usable by $(id -un): the VM runs under TCG (slow)" >&2
-            accel=tcg
-        fi
+        [[ -e /dev/kvm ]] || unavailable "/dev/kvm is missing (no KVM on this machine; TESTBED_VM_ACCEL=tcg runs the VM emulated, slowly)"
+        [[ -r /dev/kvm && -w /dev/kvm ]] || unavailable "/dev/kvm is not readable and writable by $(id -un)"
         ;;
     tcg) ;;
     *) echo "run.sh: TESTBED_VM_ACCEL must be kvm, tcg or auto, not $accel" >&2; exit 2 ;;

@@ -9,15 +9,20 @@
 //! clock and, in lockstep, ordered per tick by (time, sender, sender's sequence) so the file is
 //! as reproducible as the log. Frames whose frame check fails (corrupted on the bus) are left
 //! out, as `candump` never sees a frame that failed its CRC.
+//!
+//! With `can.link = "socketcan"` the recording is of the interface itself, as `candump -L`
+//! makes it: a raw socket without filters, every frame in the kernel's order with its kernel
+//! receive time stamp (the run's frames and anything else on the bus).
 
 use anyhow::Context as _;
 use ipc_types::*;
 use std::collections::BTreeMap;
 use std::io::BufWriter;
 use testbed_bus::{Bus, Flow, LoopExit, SubscriberOptions, TopicSubscriber, Wake};
-use testbed_can::CanFrame;
-use testbed_can::transport::CandumpWriter;
+use testbed_can::transport::{CandumpWriter, SocketCanTransport};
+use testbed_can::{CanFrame, CanTransport};
 use testbed_log::{LogEncode, LogRecord, RunInfo, RunLogWriter, WriterOptions};
+use testbed_runtime::run_config::CanLink;
 use testbed_runtime::{ClockMode, Context, Io, Node, WakeOn};
 
 /// A subscriber whose samples go to the log, whatever their type.
@@ -56,6 +61,8 @@ pub struct LoggerProcess {
     path: std::path::PathBuf,
     writer: Option<RunLogWriter>,
     candump: Option<BusRecording>,
+    /// The SocketCAN recording (`can.link = "socketcan"` with `can.record_candump`).
+    interface: Option<InterfaceRecording>,
 }
 
 impl LoggerProcess {
@@ -100,12 +107,20 @@ impl LoggerProcess {
         };
         let writer = RunLogWriter::create_with(&path, &info, options)
             .with_context(|| format!("creating the log {}", path.display()))?;
-        let candump = match config.can.record_candump {
-            true => Some(BusRecording::create(
-                &path.with_extension("candump.log"),
-                &config.can.interface,
-            )?),
-            false => None,
+        let candump_path = path.with_extension("candump.log");
+        let (candump, interface) = match (config.can.record_candump, config.can.link) {
+            (true, CanLink::Socketcan) => (
+                None,
+                Some(InterfaceRecording::open(
+                    &candump_path,
+                    &config.can.interface,
+                )?),
+            ),
+            (true, _) => (
+                Some(BusRecording::create(&candump_path, &config.can.interface)?),
+                None,
+            ),
+            (false, _) => (None, None),
         };
         Ok((
             Self {
@@ -113,6 +128,7 @@ impl LoggerProcess {
                 path,
                 writer: Some(writer),
                 candump,
+                interface,
             },
             LoggerPorts { topics },
         ))
@@ -156,10 +172,16 @@ impl Node for LoggerProcess {
         for topic in &ports.topics {
             topic.attach(wake)?;
         }
+        if self.interface.is_some() {
+            wake.interval(crate::can_gateway::POLL_PERIOD)?;
+        }
         Ok(())
     }
 
     fn on_wake(&mut self, ports: &LoggerPorts, _wake: Wake, io: &Io) -> anyhow::Result<Flow> {
+        if let Some(recording) = self.interface.as_mut() {
+            recording.drain()?;
+        }
         match self.write_pass(ports, io)? {
             // Everything published before tick k's clock sample is queued by now; one more pass
             // collects what landed in subscribers drained before the clock's.
@@ -195,6 +217,9 @@ impl Node for LoggerProcess {
         tracing::info!(log = %self.path.display(), ?stats, "log finalised");
         if let Some(candump) = self.candump.take() {
             candump.finish()?;
+        }
+        if let Some(recording) = self.interface.take() {
+            recording.finish()?;
         }
         last.map(|_| ())
     }
@@ -257,6 +282,66 @@ impl BusRecording {
             .flush()
             .with_context(|| format!("writing {}", self.path.display()))?;
         tracing::info!(candump = %self.path.display(), frames = self.written, corrupted_left_out = self.corrupted, "bus recording finalised");
+        Ok(())
+    }
+}
+
+/// A SocketCAN interface written as a `candump -L` file, as `candump -L IFACE` writes it.
+struct InterfaceRecording {
+    path: std::path::PathBuf,
+    socket: SocketCanTransport,
+    writer: CandumpWriter<BufWriter<std::fs::File>>,
+    written: u64,
+    receive_errors: u64,
+}
+
+impl InterfaceRecording {
+    fn open(path: &std::path::Path, iface: &str) -> anyhow::Result<Self> {
+        // Opened before any other process of the run starts (the logger starts first), so the
+        // recording holds every frame of the run.
+        let socket = SocketCanTransport::open(iface)
+            .with_context(|| format!("recording can.interface = {iface:?}"))?;
+        let file =
+            std::fs::File::create(path).with_context(|| format!("creating {}", path.display()))?;
+        let writer = CandumpWriter::new(BufWriter::new(file), iface)
+            .with_context(|| format!("can.interface for {}", path.display()))?;
+        Ok(Self {
+            path: path.to_path_buf(),
+            socket,
+            writer,
+            written: 0,
+            receive_errors: 0,
+        })
+    }
+
+    /// Writes every frame the socket holds.
+    fn drain(&mut self) -> anyhow::Result<()> {
+        loop {
+            match self.socket.recv(std::time::Duration::ZERO) {
+                Ok(Some(frame)) => {
+                    self.writer
+                        .write(frame.time_ns, &frame.frame)
+                        .with_context(|| format!("writing {}", self.path.display()))?;
+                    self.written += 1;
+                }
+                Ok(None) => return Ok(()),
+                Err(e) => {
+                    // The interface going down reports ENETDOWN once; the recording goes on
+                    // when it is back.
+                    self.receive_errors += 1;
+                    tracing::warn!("recording {}: {e}", self.socket.iface());
+                    return Ok(());
+                }
+            }
+        }
+    }
+
+    fn finish(mut self) -> anyhow::Result<()> {
+        self.drain()?;
+        self.writer
+            .flush()
+            .with_context(|| format!("writing {}", self.path.display()))?;
+        tracing::info!(candump = %self.path.display(), frames = self.written, receive_errors = self.receive_errors, "interface recording finalised");
         Ok(())
     }
 }

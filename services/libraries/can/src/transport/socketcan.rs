@@ -3,7 +3,7 @@
 use super::{CanTransport, TransportError};
 use crate::frame::{CanFrame, CanId, TimeSource, TimestampedFrame, host_time_ns};
 use crate::protocol::{Device, IdMap};
-use socketcan::{EmbeddedFrame, ExtendedId, Id, Socket, SocketOptions, StandardId};
+use socketcan::{EmbeddedFrame, ExtendedId, Frame as _, Id, Socket, SocketOptions, StandardId};
 use std::os::fd::AsRawFd;
 use std::time::{Duration, UNIX_EPOCH};
 
@@ -60,14 +60,23 @@ pub fn probe_socketcan(iface: &str) -> SocketCanSupport {
 /// A raw CAN socket bound to one interface, with kernel receive time stamps.
 ///
 /// Receives every frame by default; narrow with [`set_device_filters`](Self::set_device_filters)
-/// or [`set_filters`](Self::set_filters). Error frames are not requested from the kernel; if
-/// any arrive they are dropped and counted ([`error_frames`](Self::error_frames)).
+/// or [`set_filters`](Self::set_filters). Error frames are requested from the kernel with
+/// [`report_error_frames`](Self::report_error_frames); they are never returned as frames but
+/// counted ([`error_frames`](Self::error_frames), [`bus_off`](Self::bus_off)) and the last one
+/// kept ([`last_error`](Self::last_error)).
 #[derive(Debug)]
 pub struct SocketCanTransport {
     socket: socketcan::CanSocket,
     iface: String,
     error_frames: u64,
+    bus_off: u64,
+    last_error: Option<u32>,
 }
+
+/// `CAN_ERR_BUSOFF` of `linux/can/error.h`: the controller went bus-off.
+pub const CAN_ERR_BUSOFF: u32 = 0x0000_0040;
+/// `CAN_ERR_MASK`: every error class.
+pub const CAN_ERR_MASK: u32 = 0x1FFF_FFFF;
 
 fn open_error(iface: &str, e: std::io::Error) -> TransportError {
     match e.raw_os_error() {
@@ -106,7 +115,63 @@ impl SocketCanTransport {
             socket,
             iface: iface.to_string(),
             error_frames: 0,
+            bus_off: 0,
+            last_error: None,
         })
+    }
+
+    /// Asks the kernel for error frames of every class (`CAN_RAW_ERR_FILTER = CAN_ERR_MASK`):
+    /// bus errors, controller problems, bus-off, restarts. They are counted, not returned.
+    pub fn report_error_frames(&mut self) -> Result<(), TransportError> {
+        self.socket
+            .set_error_filter(CAN_ERR_MASK)
+            .map_err(|e| TransportError::io(format!("requesting error frames on {}", self.iface), e))
+    }
+
+    /// Error frames that went bus-off (`CAN_ERR_BUSOFF`).
+    pub fn bus_off(&self) -> u64 {
+        self.bus_off
+    }
+
+    /// The error class bits (`can_id & CAN_ERR_MASK`) of the last error frame.
+    pub fn last_error(&self) -> Option<u32> {
+        self.last_error
+    }
+
+    /// Whether the interface is administratively up (`IFF_UP` of `SIOCGIFFLAGS`): `ip link set
+    /// IFACE down` clears it, and no frame goes out or comes in until it is up again.
+    pub fn is_up(&self) -> Result<bool, TransportError> {
+        // SAFETY: ifreq is plain data; zeroed is a valid value.
+        let mut req: libc::ifreq = unsafe { std::mem::zeroed() };
+        let name = self.iface.as_bytes();
+        if name.len() >= req.ifr_name.len() {
+            return Err(TransportError::Config(format!(
+                "interface name {:?} longer than {} bytes",
+                self.iface,
+                req.ifr_name.len() - 1
+            )));
+        }
+        for (dst, &src) in req.ifr_name.iter_mut().zip(name) {
+            *dst = src as libc::c_char;
+        }
+        // SAFETY: SIOCGIFFLAGS reads the name and writes the flags of one valid ifreq; a CAN
+        // socket passes the request to the network device layer.
+        let rc = unsafe {
+            libc::ioctl(
+                self.socket.as_raw_fd(),
+                libc::SIOCGIFFLAGS as _,
+                &mut req as *mut libc::ifreq,
+            )
+        };
+        if rc < 0 {
+            return Err(TransportError::io(
+                format!("reading the flags of {}", self.iface),
+                std::io::Error::last_os_error(),
+            ));
+        }
+        // SAFETY: SIOCGIFFLAGS filled the flags member of the union.
+        let flags = unsafe { req.ifr_ifru.ifru_flags };
+        Ok(i32::from(flags) & libc::IFF_UP != 0)
     }
 
     /// The interface name.
@@ -230,7 +295,10 @@ impl CanTransport for SocketCanTransport {
                 .read_frame_with_timestamps()
                 .map_err(|e| TransportError::io(format!("receiving on {}", self.iface), e))?;
             let Some(frame) = from_socketcan(&frame) else {
+                let class = frame.id_word() & CAN_ERR_MASK;
                 self.error_frames += 1;
+                self.bus_off += u64::from(class & CAN_ERR_BUSOFF != 0);
+                self.last_error = Some(class);
                 continue;
             };
             let (time_ns, source) = match stamps
