@@ -164,7 +164,10 @@ pub mod vm {
         let _ = super::binary("testbed");
         std::fs::write(scratch.join("script.sh"), script).expect("writing the VM script");
         let out = Command::new(super::workspace_root().join("tests/vm/run.sh"))
-            .args(["--scratch", scratch.to_str().expect("scratch path is UTF-8")])
+            .args([
+                "--scratch",
+                scratch.to_str().expect("scratch path is UTF-8"),
+            ])
             .args(["--timeout", &timeout_s.to_string()])
             .args(["--", "sh", "/scratch/script.sh"])
             .output()

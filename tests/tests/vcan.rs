@@ -18,6 +18,16 @@ fn samples<T: LogEncode>(log: &Path) -> Vec<T> {
         .collect()
 }
 
+/// Frames `candump -d` reports dropped by its socket: the last `(total drops N)`.
+fn candump_drops(path: &Path) -> u64 {
+    let text = std::fs::read_to_string(path).unwrap();
+    text.lines()
+        .filter_map(|l| l.split("(total drops ").nth(1))
+        .filter_map(|rest| rest.trim_end_matches(')').parse::<u64>().ok())
+        .max()
+        .unwrap_or(0)
+}
+
 fn last_status(log: &Path) -> BTreeMap<u32, CanLinkStatus> {
     samples::<CanLinkStatus>(log)
         .into_iter()
@@ -25,11 +35,13 @@ fn last_status(log: &Path) -> BTreeMap<u32, CanLinkStatus> {
         .collect()
 }
 
-/// The frames of a `candump -L` file: (time, interface, frame) per line.
+/// The frames of a `candump -L` file: (time, interface, frame) per line (without the
+/// `DROPCOUNT` lines of `candump -d`).
 fn candump_lines(path: &Path) -> Vec<(String, String, String)> {
-    let text = std::fs::read_to_string(path)
-        .unwrap_or_else(|e| panic!("reading {}: {e}", path.display()));
+    let text =
+        std::fs::read_to_string(path).unwrap_or_else(|e| panic!("reading {}: {e}", path.display()));
     text.lines()
+        .filter(|line| !line.starts_with("DROPCOUNT"))
         .map(|line| {
             let mut parts = line.split(' ');
             let mut next = || parts.next().unwrap_or_default().to_string();
@@ -68,15 +80,26 @@ fn the_vm_loads_vcan_and_returns_the_commands_output_and_status() {
         ),
     );
     assert_eq!(run.status, 3, "{}", run.console);
-    assert!(run.console.contains("vcan0: <NOARP,UP,LOWER_UP>"), "{}", run.console);
+    assert!(
+        run.console.contains("vcan0: <NOARP,UP,LOWER_UP>"),
+        "{}",
+        run.console
+    );
     assert!(run.console.contains("workspace shared"), "{}", run.console);
-    assert!(!run.console.contains("workspace writable"), "{}", run.console);
-    assert!(run.console.contains(") vcan0 123#DEADBEEF"), "{}", run.console);
+    assert!(
+        !run.console.contains("workspace writable"),
+        "{}",
+        run.console
+    );
+    assert!(
+        run.console.contains(") vcan0 123#DEADBEEF"),
+        "{}",
+        run.console
+    );
 }
 
 #[test]
-fn a_lockstep_run_over_vcan0_gives_can_sims_estimates_bit_for_bit_and_candump_sees_every_frame()
-{
+fn a_lockstep_run_over_vcan0_gives_can_sims_estimates_bit_for_bit_and_candump_sees_every_frame() {
     if !vm::ready_or_skip("vcan lockstep") {
         return;
     }
@@ -101,7 +124,7 @@ fn a_lockstep_run_over_vcan0_gives_can_sims_estimates_bit_for_bit_and_candump_se
         scratch.path(),
         900,
         &format!(
-            "candump -L vcan0 > /scratch/candump.log &\n\
+            "candump -L -d vcan0 > /scratch/candump.log &\n\
              dump=$!\n\
              sleep 1\n\
              status=0\n\
@@ -152,7 +175,12 @@ fn a_lockstep_run_over_vcan0_gives_can_sims_estimates_bit_for_bit_and_candump_se
             .unwrap_or_else(|| panic!("no status of CAN link {source}"));
         assert!(s.frames_ok > 0, "{s:?}");
         assert_eq!(
-            (s.frames_bad, s.lost_frames, s.stale_samples, s.transport_errors),
+            (
+                s.frames_bad,
+                s.lost_frames,
+                s.stale_samples,
+                s.transport_errors
+            ),
             (0, 0, 0, 0),
             "{s:?}"
         );
@@ -160,6 +188,7 @@ fn a_lockstep_run_over_vcan0_gives_can_sims_estimates_bit_for_bit_and_candump_se
 
     // candump -L vcan0 and the project's recording: the same frames, in the same order, with
     // the same kernel time stamps.
+    assert_eq!(candump_drops(&dir.join("candump.log")), 0);
     let candump = candump_lines(&dir.join("candump.log"));
     let recorded = candump_lines(&dir.join("vcan.candump.log"));
     // 10 Hz: per tick 3 gyro + wheel + CMG telemetry frames and a tick sync, commands back.
@@ -172,5 +201,143 @@ fn a_lockstep_run_over_vcan0_gives_can_sims_estimates_bit_for_bit_and_candump_se
         "vcan lockstep: {} estimates identical to can-sim's, {} frames recorded by candump and by the logger",
         got.len(),
         candump.len()
+    );
+}
+
+/// Injected garbage (can-utils' `cangen`), two link flaps (`ip link set vcan0 down` / `up`) and
+/// a flood of highest-priority frames during a paced run on vcan0: the gateways count and drop
+/// the garbage, report the link lost and back, keep the commands going out; nothing panics
+/// and the run ends normally.
+#[test]
+fn garbage_link_flaps_and_a_flood_on_vcan0_are_counted_and_survived() {
+    if !vm::ready_or_skip("vcan faults") {
+        return;
+    }
+    let scratch = Scratch::new("vcan-faults");
+    let (testbed, vcan) = testbed_in_vm();
+    let run = vm::run(
+        scratch.path(),
+        900,
+        &format!(
+            "candump -L -d vcan0 > /scratch/candump.log &\n\
+             dump=$!\n\
+             sleep 1\n\
+             {testbed} run --profile {vcan} --paced --seed 9 --duration 40 \
+               --log /scratch/faults.mcap --json > /scratch/summary.json 2> /scratch/run.err &\n\
+             run=$!\n\
+             sleep 10\n\
+             echo garbage\n\
+             cangen vcan0 -g 1 -I r -L r -D r -n 300\n\
+             cangen vcan0 -g 1 -e -I r -L r -D r -n 50\n\
+             cangen vcan0 -g 1 -R -I r -n 50\n\
+             for id in 101 112 120 12F 130 140 14F; do cangen vcan0 -g 2 -I $id -L 1 -D r -n 10; done\n\
+             echo flap 1; /usr/bin/ip link set vcan0 down; sleep 2; /usr/bin/ip link set vcan0 up\n\
+             sleep 4\n\
+             echo flap 2; /usr/bin/ip link set vcan0 down; sleep 2; /usr/bin/ip link set vcan0 up\n\
+             sleep 4\n\
+             echo flood; cangen vcan0 -g 0 -p 10 -I 000 -L 8 -D i -n 20000\n\
+             echo flood over\n\
+             status=0; wait $run || status=$?\n\
+             sleep 1\n\
+             kill $dump\n\
+             grep -c . /scratch/run.err || true\n\
+             grep -E 'link lost|link back|panicked|ERROR' /scratch/run.err || true\n\
+             echo testbed run status $status\n\
+             exit $status\n"
+        ),
+    );
+    let dir = scratch.path();
+    let errors = std::fs::read_to_string(dir.join("run.err")).unwrap_or_default();
+    assert_eq!(run.status, 0, "{}\n{errors}", run.console);
+    assert!(!errors.contains("panicked"), "{errors}");
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["log_complete"], true, "{summary}");
+
+    let log = dir.join("faults.mcap");
+    let statuses = samples::<CanLinkStatus>(&log);
+    let gateways = [
+        can_source::GYRO,
+        can_source::INCLINOMETER,
+        can_source::MAGNETOMETER,
+        can_source::WHEELS,
+        can_source::CMG,
+    ];
+    let last = last_status(&log);
+    let mut garbage = 0;
+    for source in gateways {
+        let of = |s: &&CanLinkStatus| s.header.source_id == source;
+        let s = last
+            .get(&source)
+            .unwrap_or_else(|| panic!("no status of CAN link {source}"));
+        // Each gateway got frames of wrong length in its block and the node's; counted, dropped.
+        assert!(s.frames_bad > 0 && s.wrong_dlc > 0, "{s:?}");
+        garbage += s.frames_bad;
+        // Two flaps: each reported (a status without VALID) and recovered (VALID again after).
+        let invalid: Vec<_> = statuses
+            .iter()
+            .filter(of)
+            .filter(|s| !s.header.is_valid())
+            .collect();
+        assert!(
+            !invalid.is_empty(),
+            "gateway {source}: link loss never reported"
+        );
+        let recovered = statuses
+            .iter()
+            .filter(of)
+            .any(|s| s.header.is_valid() && s.header.sequence > invalid[0].header.sequence);
+        assert!(recovered, "gateway {source}: link never back");
+        assert!(s.transport_errors >= 2, "{s:?}");
+    }
+    let lost_lines = errors.matches("link lost").count();
+    assert_eq!(lost_lines, 2 * gateways.len(), "{errors}");
+
+    // The flood: up to 20000 frames of identifier 0 (a receiver too slow for it loses some in
+    // its socket's queue), and the wheel commands went on meanwhile.
+    let candump = candump_lines(&dir.join("candump.log"));
+    let flood: Vec<usize> = candump
+        .iter()
+        .enumerate()
+        .filter(|(_, (_, _, f))| f.starts_with("000#"))
+        .map(|(i, _)| i)
+        .collect();
+    assert!(
+        flood.len() > 1000,
+        "{} flood frames seen by candump",
+        flood.len()
+    );
+    let (first, last_flood) = (flood[0], flood[flood.len() - 1]);
+    let commands_during = candump[first..last_flood]
+        .iter()
+        .filter(|(_, _, f)| f.starts_with("100#"))
+        .count();
+    assert!(commands_during > 0, "no wheel command during the flood");
+    // Every frame on the bus is recorded or counted lost, by candump and by the logger alike.
+    let recorded = candump_lines(&dir.join("faults.candump.log"));
+    let candump_lost = candump_drops(&dir.join("candump.log"));
+    let logger_lost: u64 = errors
+        .lines()
+        .filter_map(|l| l.split_once(" frames lost in the socket's receive queue"))
+        .filter_map(|(before, _)| before.rsplit(' ').next()?.parse::<u64>().ok())
+        .sum();
+    assert_eq!(
+        candump.len() as u64 + candump_lost,
+        recorded.len() as u64 + logger_lost,
+        "candump {} + {candump_lost} lost, logger {} + {logger_lost} lost",
+        candump.len(),
+        recorded.len()
+    );
+    let flood_recorded = recorded
+        .iter()
+        .filter(|(_, _, f)| f.starts_with("000#"))
+        .count();
+    eprintln!(
+        "vcan faults: {garbage} garbage frames counted by the gateways, {lost_lines} link losses reported, \
+         {commands_during} wheel commands during the flood; candump {} frames ({} flood, {candump_lost} lost), \
+         logger {} frames ({flood_recorded} flood, {logger_lost} lost)",
+        candump.len(),
+        flood.len(),
+        recorded.len()
     );
 }

@@ -391,6 +391,7 @@ impl Node for CanGateway {
             foreign,
             transport_errors = s.transport_errors,
             link_losses = self.link.losses,
+            queue_drops = self.other_link.as_ref().map_or(0, Link::queue_drops),
             link_recoveries = self.link.recoveries,
             "{} stopping",
             io.name

@@ -114,6 +114,15 @@ impl Link {
         }
     }
 
+    /// Frames lost in the receive queue of a SocketCAN socket (`SO_RXQ_OVFL`); 0 for the other
+    /// links.
+    pub fn queue_drops(&self) -> u64 {
+        match self {
+            Link::SocketCan(t) => t.queue_drops(),
+            _ => 0,
+        }
+    }
+
     /// Whether the link is up: false while a SocketCAN interface is down (`ip link set IFACE
     /// down`, or a controller that went bus-off and was not restarted); always true for the
     /// other links, whose loss shows as a transport error or their end.

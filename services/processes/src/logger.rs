@@ -341,7 +341,16 @@ impl InterfaceRecording {
         self.writer
             .flush()
             .with_context(|| format!("writing {}", self.path.display()))?;
-        tracing::info!(candump = %self.path.display(), frames = self.written, receive_errors = self.receive_errors, "interface recording finalised");
+        let drops = self.socket.queue_drops();
+        if drops > 0 {
+            // The recording misses frames: say how many (a flood the logger could not keep up with).
+            tracing::warn!(
+                "recording {}: {drops} frames lost in the socket's receive queue; {} recorded",
+                self.socket.iface(),
+                self.written
+            );
+        }
+        tracing::info!(candump = %self.path.display(), frames = self.written, queue_drops = drops, receive_errors = self.receive_errors, "interface recording finalised");
         Ok(())
     }
 }

@@ -5,7 +5,7 @@ use crate::frame::{CanFrame, CanId, TimeSource, TimestampedFrame, host_time_ns};
 use crate::protocol::{Device, IdMap};
 use socketcan::{EmbeddedFrame, ExtendedId, Frame as _, Id, Socket, SocketOptions, StandardId};
 use std::os::fd::AsRawFd;
-use std::time::{Duration, UNIX_EPOCH};
+use std::time::Duration;
 
 /// What [`probe_socketcan`] found.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -71,6 +71,8 @@ pub struct SocketCanTransport {
     error_frames: u64,
     bus_off: u64,
     last_error: Option<u32>,
+    /// Frames the kernel dropped because this socket's receive queue was full (`SO_RXQ_OVFL`).
+    queue_drops: u64,
 }
 
 /// `CAN_ERR_BUSOFF` of `linux/can/error.h`: the controller went bus-off.
@@ -111,21 +113,32 @@ impl SocketCanTransport {
         socket
             .set_recv_timestamp(true)
             .map_err(|e| TransportError::io(format!("enabling time stamps on {iface}"), e))?;
+        socket
+            .set_socket_option(libc::SOL_SOCKET, libc::SO_RXQ_OVFL, &(1 as libc::c_int))
+            .map_err(|e| TransportError::io(format!("enabling drop counts on {iface}"), e))?;
         Ok(Self {
             socket,
             iface: iface.to_string(),
             error_frames: 0,
             bus_off: 0,
             last_error: None,
+            queue_drops: 0,
         })
+    }
+
+    /// Frames the kernel dropped so far because this socket's receive queue was full (the
+    /// reader too slow for the bus, e.g. under a flood): `SO_RXQ_OVFL`, as of the last frame
+    /// received.
+    pub fn queue_drops(&self) -> u64 {
+        self.queue_drops
     }
 
     /// Asks the kernel for error frames of every class (`CAN_RAW_ERR_FILTER = CAN_ERR_MASK`):
     /// bus errors, controller problems, bus-off, restarts. They are counted, not returned.
     pub fn report_error_frames(&mut self) -> Result<(), TransportError> {
-        self.socket
-            .set_error_filter(CAN_ERR_MASK)
-            .map_err(|e| TransportError::io(format!("requesting error frames on {}", self.iface), e))
+        self.socket.set_error_filter(CAN_ERR_MASK).map_err(|e| {
+            TransportError::io(format!("requesting error frames on {}", self.iface), e)
+        })
     }
 
     /// Error frames that went bus-off (`CAN_ERR_BUSOFF`).
@@ -249,6 +262,73 @@ pub(crate) fn from_socketcan(frame: &socketcan::CanFrame) -> Option<CanFrame> {
     }
 }
 
+/// One frame as `recvmsg` returned it, with its ancillary data.
+struct Received {
+    frame: libc::can_frame,
+    /// The kernel's receive time stamp (`SO_TIMESTAMPNS`), ns since the Unix epoch.
+    time_ns: Option<u64>,
+    /// The socket's drop counter (`SO_RXQ_OVFL`), cumulative, wrapping at 2³².
+    drops: Option<u32>,
+}
+
+/// Reads one classic frame from raw CAN socket `fd` with `recvmsg`, parsing the time stamp and
+/// the drop counter (the `socketcan` crate's reader skips the latter).
+fn recv_frame(fd: i32) -> std::io::Result<Received> {
+    // SAFETY: can_frame is plain data; zeroed is a valid value.
+    let mut frame: libc::can_frame = unsafe { std::mem::zeroed() };
+    let mut iov = libc::iovec {
+        iov_base: (&mut frame as *mut libc::can_frame).cast(),
+        iov_len: std::mem::size_of::<libc::can_frame>(),
+    };
+    // u64 elements: cmsghdr alignment. Room for a timespec and a u32 control message.
+    let mut control = [0u64; 16];
+    // SAFETY: msghdr is plain data; zeroed is a valid value.
+    let mut msg: libc::msghdr = unsafe { std::mem::zeroed() };
+    msg.msg_iov = &mut iov;
+    msg.msg_iovlen = 1;
+    msg.msg_control = control.as_mut_ptr().cast();
+    msg.msg_controllen = std::mem::size_of_val(&control) as _;
+    // SAFETY: msg points at a valid iovec and control buffer that outlive the call.
+    let n = unsafe { libc::recvmsg(fd, &mut msg, 0) };
+    if n < 0 {
+        return Err(std::io::Error::last_os_error());
+    }
+    if n as usize != std::mem::size_of::<libc::can_frame>() {
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            format!("a read of {n} bytes is not a classic CAN frame"),
+        ));
+    }
+    let mut received = Received {
+        frame,
+        time_ns: None,
+        drops: None,
+    };
+    // SAFETY: the CMSG_* macros walk the control buffer recvmsg filled, within msg_controllen;
+    // each payload is read unaligned and only when the message is long enough for it.
+    unsafe {
+        let mut cmsg = libc::CMSG_FIRSTHDR(&msg);
+        while !cmsg.is_null() {
+            let (level, kind, len) = ((*cmsg).cmsg_level, (*cmsg).cmsg_type, (*cmsg).cmsg_len);
+            let data = libc::CMSG_DATA(cmsg);
+            let fits = |size: usize| len as usize >= libc::CMSG_LEN(size as u32) as usize;
+            if level == libc::SOL_SOCKET {
+                if kind == libc::SO_TIMESTAMPNS && fits(std::mem::size_of::<libc::timespec>()) {
+                    let t = std::ptr::read_unaligned(data.cast::<libc::timespec>());
+                    received.time_ns = u64::try_from(t.tv_sec)
+                        .ok()
+                        .and_then(|s| s.checked_mul(1_000_000_000))
+                        .and_then(|s| s.checked_add(u64::try_from(t.tv_nsec).ok()?));
+                } else if kind == libc::SO_RXQ_OVFL && fits(std::mem::size_of::<u32>()) {
+                    received.drops = Some(std::ptr::read_unaligned(data.cast::<u32>()));
+                }
+            }
+            cmsg = libc::CMSG_NXTHDR(&msg, cmsg);
+        }
+    }
+    Ok(received)
+}
+
 /// Wait up to `timeout` for `fd` to be readable; Ok(false) on time-out.
 fn poll_readable(fd: i32, timeout: Duration) -> std::io::Result<bool> {
     let ms = timeout.as_nanos().div_ceil(1_000_000).min(i32::MAX as u128) as i32;
@@ -290,10 +370,12 @@ impl CanTransport for SocketCanTransport {
             if !readable {
                 return Ok(None);
             }
-            let (frame, stamps) = self
-                .socket
-                .read_frame_with_timestamps()
+            let received = recv_frame(self.socket.as_raw_fd())
                 .map_err(|e| TransportError::io(format!("receiving on {}", self.iface), e))?;
+            if let Some(drops) = received.drops {
+                self.queue_drops = u64::from(drops);
+            }
+            let frame = socketcan::CanFrame::from(received.frame);
             let Some(frame) = from_socketcan(&frame) else {
                 let class = frame.id_word() & CAN_ERR_MASK;
                 self.error_frames += 1;
@@ -301,14 +383,8 @@ impl CanTransport for SocketCanTransport {
                 self.last_error = Some(class);
                 continue;
             };
-            let (time_ns, source) = match stamps
-                .socket
-                .and_then(|t| t.duration_since(UNIX_EPOCH).ok())
-            {
-                Some(d) => (
-                    u64::try_from(d.as_nanos()).unwrap_or(u64::MAX),
-                    TimeSource::Kernel,
-                ),
+            let (time_ns, source) = match received.time_ns {
+                Some(t) => (t, TimeSource::Kernel),
                 None => (host_time_ns(), TimeSource::Host),
             };
             return Ok(Some(TimestampedFrame {
