@@ -124,7 +124,7 @@ fn a_lockstep_run_over_vcan0_gives_can_sims_estimates_bit_for_bit_and_candump_se
         scratch.path(),
         900,
         &format!(
-            "candump -L -d vcan0 > /scratch/candump.log &\n\
+            "candump -L -d -r 8388608 vcan0 > /scratch/candump.log &\n\
              dump=$!\n\
              sleep 1\n\
              status=0\n\
@@ -219,7 +219,7 @@ fn garbage_link_flaps_and_a_flood_on_vcan0_are_counted_and_survived() {
         scratch.path(),
         900,
         &format!(
-            "candump -L -d vcan0 > /scratch/candump.log &\n\
+            "candump -L -d -r 8388608 vcan0 > /scratch/candump.log &\n\
              dump=$!\n\
              sleep 1\n\
              {testbed} run --profile {vcan} --paced --seed 9 --duration 40 \
@@ -338,6 +338,67 @@ fn garbage_link_flaps_and_a_flood_on_vcan0_are_counted_and_survived() {
          logger {} frames ({flood_recorded} flood, {logger_lost} lost)",
         candump.len(),
         flood.len(),
+        recorded.len()
+    );
+}
+
+/// The `platform` profile itself (gateways, estimator, controller; no plant) on vcan0, with the
+/// plant and the simulated node of `vcan-node` as the far side of the interface: two runs on
+/// two iceoryx2 buses that meet only on vcan0, as the computer and the smart node do on can0.
+#[test]
+fn the_platform_profile_runs_against_a_simulated_node_on_the_far_side_of_vcan0() {
+    if !vm::ready_or_skip("platform on vcan0") {
+        return;
+    }
+    let scratch = Scratch::new("vcan-platform");
+    let (testbed, _) = testbed_in_vm();
+    let root = workspace_root().display().to_string();
+    let run = vm::run(
+        scratch.path(),
+        900,
+        &format!(
+            "{testbed} run --profile {root}/launch/profiles/vcan-node.toml --duration 25 \
+               --log /scratch/node.mcap --json > /scratch/node.json 2> /scratch/node.err &\n\
+             node=$!\n\
+             status=0\n\
+             {testbed} run --profile {root}/launch/profiles/platform.toml \
+               --config {root}/launch/run-configs/platform-vcan.run.toml --max-wall 30 \
+               --log /scratch/platform.mcap --json > /scratch/platform.json 2> /scratch/platform.err || status=$?\n\
+             node_status=0; wait $node || node_status=$?\n\
+             tail -5 /scratch/node.err /scratch/platform.err\n\
+             echo platform status $status node status $node_status\n\
+             [ $node_status = 0 ] || exit $node_status\n\
+             exit $status\n"
+        ),
+    );
+    let dir = scratch.path();
+    assert_eq!(run.status, 0, "{}", run.console);
+    let errors = std::fs::read_to_string(dir.join("platform.err")).unwrap_or_default()
+        + &std::fs::read_to_string(dir.join("node.err")).unwrap_or_default();
+    assert!(!errors.contains("panicked"), "{errors}");
+    let platform = dir.join("platform.mcap");
+    // The estimator ran on what came over vcan0, and the controller's commands reached the
+    // plant through the node.
+    let estimates = samples::<AttitudeEstimate>(&platform);
+    assert!(estimates.len() > 50, "{} estimates", estimates.len());
+    let applied = samples::<ipc_types::AppliedWheelCommand>(&dir.join("node.mcap"));
+    assert!(
+        applied.len() > 50,
+        "{} wheel commands applied",
+        applied.len()
+    );
+    let last = last_status(&platform);
+    for source in [can_source::GYRO, can_source::WHEELS, can_source::CMG] {
+        let s = last
+            .get(&source)
+            .unwrap_or_else(|| panic!("no status of CAN link {source}"));
+        assert!(s.frames_ok > 100, "{s:?}");
+    }
+    let recorded = candump_lines(&dir.join("platform.candump.log"));
+    eprintln!(
+        "platform on vcan0: {} estimates, {} wheel commands applied by the node, {} frames recorded",
+        estimates.len(),
+        applied.len(),
         recorded.len()
     );
 }

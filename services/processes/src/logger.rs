@@ -286,6 +286,9 @@ impl BusRecording {
     }
 }
 
+/// Receive queue the interface recording asks for, bytes (capped by `net.core.rmem_max`).
+const RECORDING_QUEUE_BYTES: usize = 8 << 20;
+
 /// A SocketCAN interface written as a `candump -L` file, as `candump -L IFACE` writes it.
 struct InterfaceRecording {
     path: std::path::PathBuf,
@@ -299,8 +302,14 @@ impl InterfaceRecording {
     fn open(path: &std::path::Path, iface: &str) -> anyhow::Result<Self> {
         // Opened before any other process of the run starts (the logger starts first), so the
         // recording holds every frame of the run.
-        let socket = SocketCanTransport::open(iface)
+        let mut socket = SocketCanTransport::open(iface)
             .with_context(|| format!("recording can.interface = {iface:?}"))?;
+        // The logger reads the whole bus between its other work: a deep queue rides out a
+        // burst (what does not fit is counted, see `finish`).
+        let granted = socket
+            .set_receive_buffer(RECORDING_QUEUE_BYTES)
+            .with_context(|| format!("recording can.interface = {iface:?}"))?;
+        tracing::debug!(granted, "receive queue of the {iface} recording");
         let file =
             std::fs::File::create(path).with_context(|| format!("creating {}", path.display()))?;
         let writer = CandumpWriter::new(BufWriter::new(file), iface)

@@ -126,6 +126,37 @@ impl SocketCanTransport {
         })
     }
 
+    /// Asks for a receive queue of `bytes` (`SO_RCVBUF`; the kernel caps it at
+    /// `net.core.rmem_max` and doubles it for its bookkeeping): for a reader of the whole bus
+    /// that may fall behind for a while, e.g. a recorder. The size granted.
+    pub fn set_receive_buffer(&mut self, bytes: usize) -> Result<usize, TransportError> {
+        let want = libc::c_int::try_from(bytes).unwrap_or(libc::c_int::MAX);
+        self.socket
+            .set_socket_option(libc::SOL_SOCKET, libc::SO_RCVBUF, &want)
+            .map_err(|e| {
+                TransportError::io(format!("sizing the receive queue on {}", self.iface), e)
+            })?;
+        let mut got: libc::c_int = 0;
+        let mut len = std::mem::size_of::<libc::c_int>() as libc::socklen_t;
+        // SAFETY: getsockopt writes at most `len` bytes into `got`.
+        let rc = unsafe {
+            libc::getsockopt(
+                self.socket.as_raw_fd(),
+                libc::SOL_SOCKET,
+                libc::SO_RCVBUF,
+                (&mut got as *mut libc::c_int).cast(),
+                &mut len,
+            )
+        };
+        if rc < 0 {
+            return Err(TransportError::io(
+                format!("reading the receive queue size on {}", self.iface),
+                std::io::Error::last_os_error(),
+            ));
+        }
+        Ok(usize::try_from(got).unwrap_or(0))
+    }
+
     /// Frames the kernel dropped so far because this socket's receive queue was full (the
     /// reader too slow for the bus, e.g. under a flood): `SO_RXQ_OVFL`, as of the last frame
     /// received.
