@@ -236,7 +236,7 @@ fn garbage_link_flaps_and_a_flood_on_vcan0_are_counted_and_survived() {
              {testbed} run --profile {vcan} --paced --seed 9 --duration 40 \
                --log /scratch/faults.mcap --json > /scratch/summary.json 2> /scratch/run.err &\n\
              run=$!\n\
-             until grep -q ' 150#' /tmp/candump.log; do sleep 0.5; done\n\
+             until grep -q ' 150#' /tmp/candump.log || ! kill -0 $run 2>/dev/null; do sleep 0.5; done\n\
              sleep 3\n\
              echo garbage\n\
              cangen vcan0 -g 1 -I r -L r -D r -n 300\n\

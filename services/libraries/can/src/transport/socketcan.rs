@@ -342,7 +342,7 @@ fn recv_frame(fd: i32) -> std::io::Result<Received> {
         while !cmsg.is_null() {
             let (level, kind, len) = ((*cmsg).cmsg_level, (*cmsg).cmsg_type, (*cmsg).cmsg_len);
             let data = libc::CMSG_DATA(cmsg);
-            let fits = |size: usize| len as usize >= libc::CMSG_LEN(size as u32) as usize;
+            let fits = |size: usize| len >= libc::CMSG_LEN(size as u32) as usize;
             if level == libc::SOL_SOCKET {
                 if kind == libc::SO_TIMESTAMPNS && fits(std::mem::size_of::<libc::timespec>()) {
                     let t = std::ptr::read_unaligned(data.cast::<libc::timespec>());
