@@ -3,7 +3,8 @@
 #
 #   launch/launch.sh [PROFILE] [testbed run options...]
 #
-# PROFILE is a name from launch/profiles (simulation, can-sim, replay, can-replay, platform, mixed)
+# PROFILE is a name from launch/profiles (simulation, can-sim, replay, can-replay, platform, mixed,
+# vcan)
 # or a path to a TOML file; default: simulation. Options go to `testbed run` (see
 # `testbed run --help`), e.g. --duration 60, --seed 7, --log out/run.mcap, --paced (or
 # --mode paced), --max-wall 600, --check, --config FILE, --json. The build is only what a run

@@ -60,6 +60,11 @@ impl Scratch {
 
 impl Drop for Scratch {
     fn drop(&mut self) {
+        if std::thread::panicking() {
+            // A failed test's files are the evidence: kept, and said where.
+            eprintln!("scratch directory kept: {}", self.0.display());
+            return;
+        }
         let _ = std::fs::remove_dir_all(&self.0);
     }
 }
@@ -99,4 +104,95 @@ pub fn testbed_run(args: &[&str]) -> serde_json::Value {
             String::from_utf8_lossy(&out.stdout)
         )
     })
+}
+
+/// The CAN test VM of `tests/vm/run.sh`: Debian's kernel with SocketCAN and `vcan0` up, the
+/// workspace shared read-only at its host path, a scratch directory shared read-write.
+pub mod vm {
+    use std::path::Path;
+    use std::process::Command;
+
+    /// What a command run in the VM gave.
+    #[derive(Debug)]
+    pub struct VmRun {
+        /// The command's exit status inside the VM.
+        pub status: i32,
+        /// The serial console: the kernel's messages, then the command's stdout and stderr.
+        pub console: String,
+        /// The harness's own report (boot accelerator, time).
+        pub harness: String,
+    }
+
+    /// Whether this machine can run the VM. `Err` says why not: the caller skips the test then,
+    /// except under CI (`CI=true`), where a VM test that cannot run fails: a CI machine without
+    /// KVM would otherwise pass the SocketCAN tests without running them.
+    pub fn available() -> Result<(), String> {
+        let kvm = Path::new("/dev/kvm");
+        let tcg = std::env::var("TESTBED_VM_ACCEL").is_ok_and(|a| a == "tcg");
+        if !tcg && !kvm.exists() {
+            return Err("/dev/kvm is missing: no KVM on this machine".into());
+        }
+        let tools = ["qemu-system-x86_64", "busybox", "candump", "cangen"];
+        for tool in tools {
+            let found = Command::new("sh")
+                .args(["-c", &format!("command -v {tool}")])
+                .output()
+                .is_ok_and(|o| o.status.success());
+            if !found {
+                return Err(format!(
+                    "{tool} is not installed (.ci/run installs qemu-system-x86, linux-image-amd64, busybox-static, can-utils, iproute2)"
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// True when the VM can run; otherwise says why on stderr and returns false, or panics
+    /// under CI (see [`available`]).
+    pub fn ready_or_skip(test: &str) -> bool {
+        match available() {
+            Ok(()) => true,
+            Err(why) if std::env::var("CI").is_ok_and(|ci| ci == "true") => {
+                panic!("{test}: CI=true and the CAN test VM cannot run here: {why}")
+            }
+            Err(why) => {
+                eprintln!("SKIPPED {test}: the CAN test VM cannot run here: {why}");
+                false
+            }
+        }
+    }
+
+    /// Runs `script` (busybox sh, working directory: the VM's view of `scratch`) in the VM,
+    /// giving up after `timeout_s` seconds of the script's run time.
+    pub fn run(scratch: &Path, timeout_s: u32, script: &str) -> VmRun {
+        // The project's binaries are run in the VM from the shared workspace: built first.
+        let _ = super::binary("testbed");
+        std::fs::write(scratch.join("script.sh"), script).expect("writing the VM script");
+        let out = Command::new(super::workspace_root().join("tests/vm/run.sh"))
+            .args([
+                "--scratch",
+                scratch.to_str().expect("scratch path is UTF-8"),
+            ])
+            .args(["--timeout", &timeout_s.to_string()])
+            .args(["--", "sh", "/scratch/script.sh"])
+            .output()
+            .expect("running tests/vm/run.sh");
+        let harness = String::from_utf8_lossy(&out.stderr).into_owned();
+        let console = String::from_utf8_lossy(&out.stdout).into_owned();
+        let status = out.status.code().unwrap_or(-1);
+        assert_ne!(
+            status, 77,
+            "tests/vm/run.sh cannot run the VM here:\n{harness}"
+        );
+        assert!(
+            status != 124 && status != 125,
+            "the VM failed (status {status}):\n{harness}\n{console}"
+        );
+        eprintln!("{}", harness.trim_end());
+        VmRun {
+            status,
+            console,
+            harness,
+        }
+    }
 }

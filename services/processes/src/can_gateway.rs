@@ -20,6 +20,8 @@ use testbed_runtime::{ClockMode, Context, Io, Node, WakeOn};
 /// How often a gateway polls a link that cannot wake its event loop (SocketCAN, serial,
 /// candump file).
 pub const POLL_PERIOD: Duration = Duration::from_millis(2);
+/// How often a gateway on SocketCAN checks that its interface is up.
+pub const LINK_CHECK_PERIOD: Duration = Duration::from_millis(100);
 /// Without a node heartbeat for this long a free-running gateway reports itself `Degraded`
 /// (PROTOCOL.md: the node is lost after 3 s).
 pub const NODE_LOST_AFTER: Duration = Duration::from_secs(3);
@@ -87,6 +89,18 @@ pub struct CanGateway {
     command_source: Option<SourceId>,
     /// No command came for two periods: the device has been commanded zero.
     zeroed: bool,
+    /// The link's state: down since the last check found it down.
+    link: LinkState,
+}
+
+/// A SocketCAN interface's up/down state as the gateway last saw it.
+struct LinkState {
+    down: bool,
+    /// Times the link was found down after being up.
+    losses: u64,
+    /// Times it came back.
+    recoveries: u64,
+    last_check: Instant,
 }
 
 impl CanGateway {
@@ -102,9 +116,12 @@ impl CanGateway {
         let link =
             Link::open(bus, config, device).with_context(|| format!("{name}: opening its link"))?;
         let describe = link.describe();
-        if tick_sync && !matches!(link, Link::Bus(_)) {
+        // A bus (software or SocketCAN, e.g. vcan0 with the simulated node on it) delivers the
+        // node's tick syncs in order with the frames; a file or a serial line cannot wait for the
+        // simulation clock.
+        if tick_sync && !matches!(link, Link::Bus(_) | Link::SocketCan(_)) {
             bail!(
-                "{name}: a lockstep run needs the software CAN bus (can.link = \"software_bus\"); a {describe} cannot \
+                "{name}: a lockstep run needs a CAN bus (can.link = \"software_bus\" or \"socketcan\"); a {describe} cannot \
                  wait for the simulation clock (run paced, or replay a candump file with can-replay)"
             );
         }
@@ -138,6 +155,12 @@ impl CanGateway {
             period: Duration::from_nanos(schedule.period_ns),
             command_source: None,
             zeroed: false,
+            link: LinkState {
+                down: false,
+                losses: 0,
+                recoveries: 0,
+                last_check: Instant::now(),
+            },
         };
         Ok((node, ports))
     }
@@ -148,10 +171,64 @@ impl CanGateway {
         io: &Io,
         t_ns: u64,
     ) -> anyhow::Result<()> {
-        if let Some(s) = self.tracker.due(t_ns, self.gateway.status()) {
+        if let Some(mut s) = self.tracker.due(t_ns, self.gateway.status()) {
+            if self.link.down {
+                // While the link is down the status is not VALID: what a consumer (the
+                // controller's safe mode) watches for "the devices are unreachable".
+                s.header.flags &= !ipc_types::SampleHeader::VALID;
+            }
             ports.status.publish(&s)?;
         }
         self.counters.update(io.heartbeat, &self.gateway.status());
+        Ok(())
+    }
+
+    /// Checks (every [`LINK_CHECK_PERIOD`]) whether a SocketCAN interface is up; reports the
+    /// loss and the return of the link, and counts them.
+    fn check_link(&mut self, ports: &CanGatewayPorts, io: &Io) -> anyhow::Result<()> {
+        let Some(link) = self.other_link.as_ref() else {
+            return Ok(());
+        };
+        if self.link.last_check.elapsed() < LINK_CHECK_PERIOD {
+            return Ok(());
+        }
+        self.link.last_check = Instant::now();
+        let up = match link.is_up() {
+            Ok(up) => up,
+            Err(e) => {
+                // The interface removed altogether: as good as down.
+                tracing::warn!("{}: {e}", io.name);
+                false
+            }
+        };
+        let name = io.name;
+        match (self.link.down, up) {
+            (false, false) => {
+                self.link.down = true;
+                self.link.losses += 1;
+                // A transport error, so that the status goes out now (a change of troubles).
+                self.gateway.count_transport_error();
+                tracing::warn!(
+                    losses = self.link.losses,
+                    "{name}: CAN interface {} is down: link lost",
+                    link.name()
+                );
+                io.heartbeat.set_state(ProcessState::Degraded);
+                self.publish_status(ports, io, self.latest_ns)?;
+            }
+            (true, true) => {
+                self.link.down = false;
+                self.link.recoveries += 1;
+                tracing::info!(
+                    recoveries = self.link.recoveries,
+                    "{name}: CAN interface {} is up again: link back",
+                    link.name()
+                );
+                io.heartbeat.set_state(ProcessState::Running);
+                self.publish_status(ports, io, self.latest_ns)?;
+            }
+            _ => {}
+        }
         Ok(())
     }
 
@@ -331,6 +408,7 @@ impl Node for CanGateway {
         {
             self.command_zero(ports, io);
         }
+        self.check_link(ports, io)?;
         let name = io.name;
         if self.gateway.node_heartbeats() != self.node_seen.0 {
             if self.node_seen.2 {
@@ -369,6 +447,10 @@ impl Node for CanGateway {
             refused = s.commands_refused,
             late_messages,
             foreign,
+            transport_errors = s.transport_errors,
+            link_losses = self.link.losses,
+            queue_drops = self.other_link.as_ref().map_or(0, Link::queue_drops),
+            link_recoveries = self.link.recoveries,
             "{} stopping",
             io.name
         );

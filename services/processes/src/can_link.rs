@@ -58,6 +58,9 @@ impl Link {
                 transport
                     .set_device_filters(protocol.ids(), &[device.can_device(), Device::Node])
                     .with_context(|| format!("filters on {}", can.interface))?;
+                transport
+                    .report_error_frames()
+                    .with_context(|| format!("error frames on {}", can.interface))?;
                 Link::SocketCan(transport)
             }
             CanLink::Candump => {
@@ -108,6 +111,33 @@ impl Link {
             Link::SocketCan(t) => t.error_frames(),
             Link::Candump(t) => t.stats().malformed,
             Link::Serial(t) => t.stats().dropped(),
+        }
+    }
+
+    /// Frames lost in the receive queue of a SocketCAN socket (`SO_RXQ_OVFL`); 0 for the other
+    /// links.
+    pub fn queue_drops(&self) -> u64 {
+        match self {
+            Link::SocketCan(t) => t.queue_drops(),
+            _ => 0,
+        }
+    }
+
+    /// Whether the link is up: false while a SocketCAN interface is down (`ip link set IFACE
+    /// down`, or a controller that went bus-off and was not restarted); always true for the
+    /// other links, whose loss shows as a transport error or their end.
+    pub fn is_up(&self) -> Result<bool, TransportError> {
+        match self {
+            Link::SocketCan(t) => t.is_up(),
+            _ => Ok(true),
+        }
+    }
+
+    /// The interface or path of the link, for messages.
+    pub fn name(&self) -> String {
+        match self {
+            Link::SocketCan(t) => t.iface().to_string(),
+            other => other.describe().to_string(),
         }
     }
 

@@ -1,23 +1,28 @@
 //! The simulated smart CAN node process: the plant's truth through the device models onto the
-//! software CAN bus as sensor frames and tick syncs; command frames from the bus to the plant
-//! as applied commands ([`SimCanNode`]).
+//! CAN bus as sensor frames and tick syncs; command frames from the bus to the plant as applied
+//! commands ([`SimCanNode`]). The bus is the software CAN bus, or with `can.link = "socketcan"`
+//! the SocketCAN interface `can.interface` (e.g. `vcan0`), the far side of the real gateways.
 
+use crate::can_gateway::POLL_PERIOD;
 use crate::can_link::BUS_BUFFER;
 use anyhow::Context as _;
 use ipc_types::{
     AppliedCmgCommand, AppliedWheelCommand, CanLinkStatus, SampleHeader, SimTruth, can_source,
 };
 use testbed_bus::{Flow, LoopExit, TopicPublisher, TopicSubscriber, Wake};
+use testbed_can::transport::SocketCanTransport;
+use testbed_can::{CanTransport, Device, TimestampedFrame};
 use testbed_gateways::bus_transport::SoftwareBusTransport;
 use testbed_gateways::node::{SimCanNode, TxFrame};
 use testbed_gateways::status::{HeartbeatCounters, StatusTracker};
-use testbed_runtime::run_config::Actuation;
+use testbed_runtime::run_config::{Actuation, CanLink};
 use testbed_runtime::{Context, Io, Node, WakeOn};
 
-/// The node's ports: truth in, the software CAN bus both ways, applied commands out.
+/// The node's ports: truth in, the software CAN bus both ways (when it is the link), applied
+/// commands out.
 pub struct CanNodePorts {
     truth: TopicSubscriber<SimTruth>,
-    link: SoftwareBusTransport,
+    link: Option<SoftwareBusTransport>,
     wheel: TopicPublisher<AppliedWheelCommand>,
     cmg: TopicPublisher<AppliedCmgCommand>,
     status: TopicPublisher<CanLinkStatus>,
@@ -29,6 +34,11 @@ pub struct CanNodeProcess {
     tracker: StatusTracker,
     counters: HeartbeatCounters,
     truths: Vec<SimTruth>,
+    /// The SocketCAN interface when it is the link (polled: it cannot wake the event loop).
+    socketcan: Option<SocketCanTransport>,
+    /// Deliberately corrupted frames not sent: on a real bus every receiver's CAN controller
+    /// drops a frame whose CRC fails, so SocketCAN never delivers one.
+    corrupt_not_sent: u64,
 }
 
 impl CanNodeProcess {
@@ -41,14 +51,36 @@ impl CanNodeProcess {
             );
         }
         let node = SimCanNode::new(config).context("the simulated CAN node")?;
+        let (link, socketcan) = match config.can.link {
+            CanLink::SoftwareBus => (
+                Some(SoftwareBusTransport::open(
+                    bus,
+                    can_source::NODE,
+                    SampleHeader::VALID | SampleHeader::SIMULATED,
+                    BUS_BUFFER,
+                )?),
+                None,
+            ),
+            CanLink::Socketcan => {
+                let iface = &config.can.interface;
+                let mut transport = SocketCanTransport::open(iface)
+                    .with_context(|| format!("{}: can.interface = {iface:?}", cx.name))?;
+                // The node hears the computer's commands only: the wheel and CMG blocks (its own
+                // telemetry in those blocks never comes back: no CAN_RAW_RECV_OWN_MSGS).
+                let protocol = testbed_gateways::node::protocol(config)?;
+                transport
+                    .set_device_filters(protocol.ids(), &[Device::Wheels, Device::Cmg])
+                    .with_context(|| format!("{}: filters on {iface}", cx.name))?;
+                (None, Some(transport))
+            }
+            CanLink::Candump => anyhow::bail!(
+                "{}: the simulated node needs a bus (can.link = \"software_bus\" or \"socketcan\"), not a candump file",
+                cx.name
+            ),
+        };
         let ports = CanNodePorts {
             truth: bus.subscriber()?,
-            link: SoftwareBusTransport::open(
-                bus,
-                can_source::NODE,
-                SampleHeader::VALID | SampleHeader::SIMULATED,
-                BUS_BUFFER,
-            )?,
+            link,
             wheel: bus.publisher()?,
             cmg: bus.publisher()?,
             status: bus.publisher()?,
@@ -58,6 +90,8 @@ impl CanNodeProcess {
             tracker: StatusTracker::new(can_source::NODE),
             counters: HeartbeatCounters::default(),
             truths: Vec::new(),
+            socketcan,
+            corrupt_not_sent: 0,
         };
         Ok((process, ports))
     }
@@ -72,22 +106,33 @@ impl Node for CanNodeProcess {
         wake: &mut WakeOn<'_, '_, 'a>,
     ) -> anyhow::Result<()> {
         wake.data(&ports.truth)?;
-        wake.data(ports.link.subscriber())?;
+        match &ports.link {
+            Some(link) => wake.data(link.subscriber())?,
+            None => wake.interval(POLL_PERIOD)?,
+        };
         Ok(())
     }
 
     fn on_wake(&mut self, ports: &CanNodePorts, _wake: Wake, io: &Io) -> anyhow::Result<Flow> {
-        let (node, link) = (&mut self.node, &ports.link);
+        let node = &mut self.node;
         self.truths.clear();
         ports.truth.drain_into(&mut self.truths)?;
         for t in &self.truths {
             io.heartbeat.add_samples_in(1);
             io.heartbeat.set_time_ns(t.header.time_ns);
-            link.set_time_ns(t.header.time_ns);
+            if let Some(link) = &ports.link {
+                link.set_time_ns(t.header.time_ns);
+            }
             for frame in node.on_truth(t) {
-                let sent = match frame {
-                    TxFrame::Send(f) => link.send_frame(&f),
-                    TxFrame::Corrupt(f, bit) => link.send_corrupted(&f, bit),
+                let sent = match (frame, &ports.link, self.socketcan.as_mut()) {
+                    (TxFrame::Send(f), Some(link), _) => link.send_frame(&f),
+                    (TxFrame::Corrupt(f, bit), Some(link), _) => link.send_corrupted(&f, bit),
+                    (TxFrame::Send(f), None, Some(socket)) => socket.send(&f),
+                    (TxFrame::Corrupt(..), None, Some(_)) => {
+                        self.corrupt_not_sent += 1;
+                        Ok(())
+                    }
+                    (_, None, None) => Ok(()),
                 };
                 if let Err(e) = sent {
                     node.count_transport_error();
@@ -95,8 +140,31 @@ impl Node for CanNodeProcess {
                 }
             }
         }
-        while let Some(frame) = link.poll().context("receiving from the software CAN bus")? {
-            node.set_link_check_errors(link.stats().check_errors + link.stats().invalid);
+        loop {
+            let frame: Option<TimestampedFrame> = match (&ports.link, self.socketcan.as_mut()) {
+                (Some(link), _) => {
+                    let frame = link.poll().context("receiving from the software CAN bus")?;
+                    node.set_link_check_errors(link.stats().check_errors + link.stats().invalid);
+                    frame
+                }
+                (None, Some(socket)) => match socket.recv(std::time::Duration::ZERO) {
+                    Ok(frame) => {
+                        node.set_link_check_errors(socket.error_frames());
+                        frame
+                    }
+                    Err(e) => {
+                        // The interface down (ENETDOWN) and the like: counted, the node keeps
+                        // going and hears the bus again when it is back.
+                        node.count_transport_error();
+                        tracing::warn!("{}: receiving: {e}", io.name);
+                        None
+                    }
+                },
+                (None, None) => None,
+            };
+            let Some(frame) = frame else {
+                break;
+            };
             let Some(applied) = node.on_frame(&frame.frame) else {
                 continue;
             };
@@ -126,6 +194,7 @@ impl Node for CanNodeProcess {
             rx_delay = s.injected_rx_delay,
             rx_duplicate = s.injected_rx_duplicate,
             overdue_ticks = self.node.overdue_ticks(),
+            corrupt_not_sent = self.corrupt_not_sent,
             "{} stopping",
             io.name
         );

@@ -12,15 +12,20 @@
 //!
 //! A logger restarted by the launcher (paced runs) never truncates: it writes the segment
 //! `<log stem>.segment-<n>.mcap` ([`segment_path`]), and `testbed run` summarises them all.
+//!
+//! With `can.link = "socketcan"` the recording is of the interface itself, as `candump -L`
+//! makes it: a raw socket without filters, every frame in the kernel's order with its kernel
+//! receive time stamp (the run's frames and anything else on the bus).
 
 use anyhow::Context as _;
 use ipc_types::*;
 use std::collections::BTreeMap;
 use std::io::BufWriter;
 use testbed_bus::{Bus, Flow, LoopExit, SubscriberOptions, TopicSubscriber, Wake};
-use testbed_can::CanFrame;
-use testbed_can::transport::CandumpWriter;
+use testbed_can::transport::{CandumpWriter, SocketCanTransport};
+use testbed_can::{CanFrame, CanTransport};
 use testbed_log::{LogEncode, LogRecord, RunInfo, RunLogWriter, WriterOptions};
+use testbed_runtime::run_config::CanLink;
 use testbed_runtime::{ClockMode, Context, Io, Node, WakeOn};
 
 /// A subscriber whose samples go to the log, whatever their type.
@@ -61,6 +66,8 @@ pub struct LoggerProcess {
     candump: Option<BusRecording>,
     /// The clock tick before the newest one seen (lockstep ordering).
     previous_tick_ns: Option<u64>,
+    /// The SocketCAN recording (`can.link = "socketcan"` with `can.record_candump`).
+    interface: Option<InterfaceRecording>,
 }
 
 impl LoggerProcess {
@@ -113,12 +120,20 @@ impl LoggerProcess {
         };
         let writer = RunLogWriter::create_with(&path, &info, options)
             .with_context(|| format!("creating the log {}", path.display()))?;
-        let candump = match config.can.record_candump {
-            true => Some(BusRecording::create(
-                &path.with_extension("candump.log"),
-                &config.can.interface,
-            )?),
-            false => None,
+        let candump_path = path.with_extension("candump.log");
+        let (candump, interface) = match (config.can.record_candump, config.can.link) {
+            (true, CanLink::Socketcan) => (
+                None,
+                Some(InterfaceRecording::open(
+                    &candump_path,
+                    &config.can.interface,
+                )?),
+            ),
+            (true, _) => (
+                Some(BusRecording::create(&candump_path, &config.can.interface)?),
+                None,
+            ),
+            (false, _) => (None, None),
         };
         Ok((
             Self {
@@ -127,6 +142,7 @@ impl LoggerProcess {
                 writer: Some(writer),
                 candump,
                 previous_tick_ns: None,
+                interface,
             },
             LoggerPorts { topics },
         ))
@@ -170,10 +186,16 @@ impl Node for LoggerProcess {
         for topic in &ports.topics {
             topic.attach(wake)?;
         }
+        if self.interface.is_some() {
+            wake.interval(crate::can_gateway::POLL_PERIOD)?;
+        }
         Ok(())
     }
 
     fn on_wake(&mut self, ports: &LoggerPorts, _wake: Wake, io: &Io) -> anyhow::Result<Flow> {
+        if let Some(recording) = self.interface.as_mut() {
+            recording.drain()?;
+        }
         match self.write_pass(ports, io)? {
             // Everything published before tick k's clock sample is queued by now; one more pass
             // collects what landed in subscribers drained before the clock's.
@@ -223,6 +245,9 @@ impl Node for LoggerProcess {
         }
         if let Some(candump) = self.candump.take() {
             candump.finish()?;
+        }
+        if let Some(recording) = self.interface.take() {
+            recording.finish()?;
         }
         last.map(|_| ())
     }
@@ -299,6 +324,84 @@ impl BusRecording {
             .flush()
             .with_context(|| format!("writing {}", self.path.display()))?;
         tracing::info!(candump = %self.path.display(), frames = self.written, corrupted_left_out = self.corrupted, "bus recording finalised");
+        Ok(())
+    }
+}
+
+/// Receive queue the interface recording asks for, bytes (capped by `net.core.rmem_max`).
+const RECORDING_QUEUE_BYTES: usize = 8 << 20;
+
+/// A SocketCAN interface written as a `candump -L` file, as `candump -L IFACE` writes it.
+struct InterfaceRecording {
+    path: std::path::PathBuf,
+    socket: SocketCanTransport,
+    writer: CandumpWriter<BufWriter<std::fs::File>>,
+    written: u64,
+    receive_errors: u64,
+}
+
+impl InterfaceRecording {
+    fn open(path: &std::path::Path, iface: &str) -> anyhow::Result<Self> {
+        // Opened before any other process of the run starts (the logger starts first), so the
+        // recording holds every frame of the run.
+        let mut socket = SocketCanTransport::open(iface)
+            .with_context(|| format!("recording can.interface = {iface:?}"))?;
+        // The logger reads the whole bus between its other work: a deep queue rides out a
+        // burst (what does not fit is counted, see `finish`).
+        let granted = socket
+            .set_receive_buffer(RECORDING_QUEUE_BYTES)
+            .with_context(|| format!("recording can.interface = {iface:?}"))?;
+        tracing::debug!(granted, "receive queue of the {iface} recording");
+        let file =
+            std::fs::File::create(path).with_context(|| format!("creating {}", path.display()))?;
+        let writer = CandumpWriter::new(BufWriter::new(file), iface)
+            .with_context(|| format!("can.interface for {}", path.display()))?;
+        Ok(Self {
+            path: path.to_path_buf(),
+            socket,
+            writer,
+            written: 0,
+            receive_errors: 0,
+        })
+    }
+
+    /// Writes every frame the socket holds.
+    fn drain(&mut self) -> anyhow::Result<()> {
+        loop {
+            match self.socket.recv(std::time::Duration::ZERO) {
+                Ok(Some(frame)) => {
+                    self.writer
+                        .write(frame.time_ns, &frame.frame)
+                        .with_context(|| format!("writing {}", self.path.display()))?;
+                    self.written += 1;
+                }
+                Ok(None) => return Ok(()),
+                Err(e) => {
+                    // The interface going down reports ENETDOWN once; the recording goes on
+                    // when it is back.
+                    self.receive_errors += 1;
+                    tracing::warn!("recording {}: {e}", self.socket.iface());
+                    return Ok(());
+                }
+            }
+        }
+    }
+
+    fn finish(mut self) -> anyhow::Result<()> {
+        self.drain()?;
+        self.writer
+            .flush()
+            .with_context(|| format!("writing {}", self.path.display()))?;
+        let drops = self.socket.queue_drops();
+        if drops > 0 {
+            // The recording misses frames: say how many (a flood the logger could not keep up with).
+            tracing::warn!(
+                "recording {}: {drops} frames lost in the socket's receive queue; {} recorded",
+                self.socket.iface(),
+                self.written
+            );
+        }
+        tracing::info!(candump = %self.path.display(), frames = self.written, queue_drops = drops, receive_errors = self.receive_errors, "interface recording finalised");
         Ok(())
     }
 }

@@ -3,9 +3,9 @@
 use super::{CanTransport, TransportError};
 use crate::frame::{CanFrame, CanId, TimeSource, TimestampedFrame, host_time_ns};
 use crate::protocol::{Device, IdMap};
-use socketcan::{EmbeddedFrame, ExtendedId, Id, Socket, SocketOptions, StandardId};
+use socketcan::{EmbeddedFrame, ExtendedId, Frame as _, Id, Socket, SocketOptions, StandardId};
 use std::os::fd::AsRawFd;
-use std::time::{Duration, UNIX_EPOCH};
+use std::time::Duration;
 
 /// What [`probe_socketcan`] found.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -60,14 +60,25 @@ pub fn probe_socketcan(iface: &str) -> SocketCanSupport {
 /// A raw CAN socket bound to one interface, with kernel receive time stamps.
 ///
 /// Receives every frame by default; narrow with [`set_device_filters`](Self::set_device_filters)
-/// or [`set_filters`](Self::set_filters). Error frames are not requested from the kernel; if
-/// any arrive they are dropped and counted ([`error_frames`](Self::error_frames)).
+/// or [`set_filters`](Self::set_filters). Error frames are requested from the kernel with
+/// [`report_error_frames`](Self::report_error_frames); they are never returned as frames but
+/// counted ([`error_frames`](Self::error_frames), [`bus_off`](Self::bus_off)) and the last one
+/// kept ([`last_error`](Self::last_error)).
 #[derive(Debug)]
 pub struct SocketCanTransport {
     socket: socketcan::CanSocket,
     iface: String,
     error_frames: u64,
+    bus_off: u64,
+    last_error: Option<u32>,
+    /// Frames the kernel dropped because this socket's receive queue was full (`SO_RXQ_OVFL`).
+    queue_drops: u64,
 }
+
+/// `CAN_ERR_BUSOFF` of `linux/can/error.h`: the controller went bus-off.
+pub const CAN_ERR_BUSOFF: u32 = 0x0000_0040;
+/// `CAN_ERR_MASK`: every error class.
+pub const CAN_ERR_MASK: u32 = 0x1FFF_FFFF;
 
 fn open_error(iface: &str, e: std::io::Error) -> TransportError {
     match e.raw_os_error() {
@@ -102,11 +113,109 @@ impl SocketCanTransport {
         socket
             .set_recv_timestamp(true)
             .map_err(|e| TransportError::io(format!("enabling time stamps on {iface}"), e))?;
+        socket
+            .set_socket_option(libc::SOL_SOCKET, libc::SO_RXQ_OVFL, &(1 as libc::c_int))
+            .map_err(|e| TransportError::io(format!("enabling drop counts on {iface}"), e))?;
         Ok(Self {
             socket,
             iface: iface.to_string(),
             error_frames: 0,
+            bus_off: 0,
+            last_error: None,
+            queue_drops: 0,
         })
+    }
+
+    /// Asks for a receive queue of `bytes` (`SO_RCVBUF`; the kernel caps it at
+    /// `net.core.rmem_max` and doubles it for its bookkeeping): for a reader of the whole bus
+    /// that may fall behind for a while, e.g. a recorder. The size granted.
+    pub fn set_receive_buffer(&mut self, bytes: usize) -> Result<usize, TransportError> {
+        let want = libc::c_int::try_from(bytes).unwrap_or(libc::c_int::MAX);
+        self.socket
+            .set_socket_option(libc::SOL_SOCKET, libc::SO_RCVBUF, &want)
+            .map_err(|e| {
+                TransportError::io(format!("sizing the receive queue on {}", self.iface), e)
+            })?;
+        let mut got: libc::c_int = 0;
+        let mut len = std::mem::size_of::<libc::c_int>() as libc::socklen_t;
+        // SAFETY: getsockopt writes at most `len` bytes into `got`.
+        let rc = unsafe {
+            libc::getsockopt(
+                self.socket.as_raw_fd(),
+                libc::SOL_SOCKET,
+                libc::SO_RCVBUF,
+                (&mut got as *mut libc::c_int).cast(),
+                &mut len,
+            )
+        };
+        if rc < 0 {
+            return Err(TransportError::io(
+                format!("reading the receive queue size on {}", self.iface),
+                std::io::Error::last_os_error(),
+            ));
+        }
+        Ok(usize::try_from(got).unwrap_or(0))
+    }
+
+    /// Frames the kernel dropped so far because this socket's receive queue was full (the
+    /// reader too slow for the bus, e.g. under a flood): `SO_RXQ_OVFL`, as of the last frame
+    /// received.
+    pub fn queue_drops(&self) -> u64 {
+        self.queue_drops
+    }
+
+    /// Asks the kernel for error frames of every class (`CAN_RAW_ERR_FILTER = CAN_ERR_MASK`):
+    /// bus errors, controller problems, bus-off, restarts. They are counted, not returned.
+    pub fn report_error_frames(&mut self) -> Result<(), TransportError> {
+        self.socket.set_error_filter(CAN_ERR_MASK).map_err(|e| {
+            TransportError::io(format!("requesting error frames on {}", self.iface), e)
+        })
+    }
+
+    /// Error frames that went bus-off (`CAN_ERR_BUSOFF`).
+    pub fn bus_off(&self) -> u64 {
+        self.bus_off
+    }
+
+    /// The error class bits (`can_id & CAN_ERR_MASK`) of the last error frame.
+    pub fn last_error(&self) -> Option<u32> {
+        self.last_error
+    }
+
+    /// Whether the interface is administratively up (`IFF_UP` of `SIOCGIFFLAGS`): `ip link set
+    /// IFACE down` clears it, and no frame goes out or comes in until it is up again.
+    pub fn is_up(&self) -> Result<bool, TransportError> {
+        // SAFETY: ifreq is plain data; zeroed is a valid value.
+        let mut req: libc::ifreq = unsafe { std::mem::zeroed() };
+        let name = self.iface.as_bytes();
+        if name.len() >= req.ifr_name.len() {
+            return Err(TransportError::Config(format!(
+                "interface name {:?} longer than {} bytes",
+                self.iface,
+                req.ifr_name.len() - 1
+            )));
+        }
+        for (dst, &src) in req.ifr_name.iter_mut().zip(name) {
+            *dst = src as libc::c_char;
+        }
+        // SAFETY: SIOCGIFFLAGS reads the name and writes the flags of one valid ifreq; a CAN
+        // socket passes the request to the network device layer.
+        let rc = unsafe {
+            libc::ioctl(
+                self.socket.as_raw_fd(),
+                libc::SIOCGIFFLAGS as _,
+                &mut req as *mut libc::ifreq,
+            )
+        };
+        if rc < 0 {
+            return Err(TransportError::io(
+                format!("reading the flags of {}", self.iface),
+                std::io::Error::last_os_error(),
+            ));
+        }
+        // SAFETY: SIOCGIFFLAGS filled the flags member of the union.
+        let flags = unsafe { req.ifr_ifru.ifru_flags };
+        Ok(i32::from(flags) & libc::IFF_UP != 0)
     }
 
     /// The interface name.
@@ -184,6 +293,73 @@ pub(crate) fn from_socketcan(frame: &socketcan::CanFrame) -> Option<CanFrame> {
     }
 }
 
+/// One frame as `recvmsg` returned it, with its ancillary data.
+struct Received {
+    frame: libc::can_frame,
+    /// The kernel's receive time stamp (`SO_TIMESTAMPNS`), ns since the Unix epoch.
+    time_ns: Option<u64>,
+    /// The socket's drop counter (`SO_RXQ_OVFL`), cumulative, wrapping at 2³².
+    drops: Option<u32>,
+}
+
+/// Reads one classic frame from raw CAN socket `fd` with `recvmsg`, parsing the time stamp and
+/// the drop counter (the `socketcan` crate's reader skips the latter).
+fn recv_frame(fd: i32) -> std::io::Result<Received> {
+    // SAFETY: can_frame is plain data; zeroed is a valid value.
+    let mut frame: libc::can_frame = unsafe { std::mem::zeroed() };
+    let mut iov = libc::iovec {
+        iov_base: (&mut frame as *mut libc::can_frame).cast(),
+        iov_len: std::mem::size_of::<libc::can_frame>(),
+    };
+    // u64 elements: cmsghdr alignment. Room for a timespec and a u32 control message.
+    let mut control = [0u64; 16];
+    // SAFETY: msghdr is plain data; zeroed is a valid value.
+    let mut msg: libc::msghdr = unsafe { std::mem::zeroed() };
+    msg.msg_iov = &mut iov;
+    msg.msg_iovlen = 1;
+    msg.msg_control = control.as_mut_ptr().cast();
+    msg.msg_controllen = std::mem::size_of_val(&control) as _;
+    // SAFETY: msg points at a valid iovec and control buffer that outlive the call.
+    let n = unsafe { libc::recvmsg(fd, &mut msg, 0) };
+    if n < 0 {
+        return Err(std::io::Error::last_os_error());
+    }
+    if n as usize != std::mem::size_of::<libc::can_frame>() {
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            format!("a read of {n} bytes is not a classic CAN frame"),
+        ));
+    }
+    let mut received = Received {
+        frame,
+        time_ns: None,
+        drops: None,
+    };
+    // SAFETY: the CMSG_* macros walk the control buffer recvmsg filled, within msg_controllen;
+    // each payload is read unaligned and only when the message is long enough for it.
+    unsafe {
+        let mut cmsg = libc::CMSG_FIRSTHDR(&msg);
+        while !cmsg.is_null() {
+            let (level, kind, len) = ((*cmsg).cmsg_level, (*cmsg).cmsg_type, (*cmsg).cmsg_len);
+            let data = libc::CMSG_DATA(cmsg);
+            let fits = |size: usize| len >= libc::CMSG_LEN(size as u32) as usize;
+            if level == libc::SOL_SOCKET {
+                if kind == libc::SO_TIMESTAMPNS && fits(std::mem::size_of::<libc::timespec>()) {
+                    let t = std::ptr::read_unaligned(data.cast::<libc::timespec>());
+                    received.time_ns = u64::try_from(t.tv_sec)
+                        .ok()
+                        .and_then(|s| s.checked_mul(1_000_000_000))
+                        .and_then(|s| s.checked_add(u64::try_from(t.tv_nsec).ok()?));
+                } else if kind == libc::SO_RXQ_OVFL && fits(std::mem::size_of::<u32>()) {
+                    received.drops = Some(std::ptr::read_unaligned(data.cast::<u32>()));
+                }
+            }
+            cmsg = libc::CMSG_NXTHDR(&msg, cmsg);
+        }
+    }
+    Ok(received)
+}
+
 /// Wait up to `timeout` for `fd` to be readable; Ok(false) on time-out.
 fn poll_readable(fd: i32, timeout: Duration) -> std::io::Result<bool> {
     let ms = timeout.as_nanos().div_ceil(1_000_000).min(i32::MAX as u128) as i32;
@@ -225,22 +401,21 @@ impl CanTransport for SocketCanTransport {
             if !readable {
                 return Ok(None);
             }
-            let (frame, stamps) = self
-                .socket
-                .read_frame_with_timestamps()
+            let received = recv_frame(self.socket.as_raw_fd())
                 .map_err(|e| TransportError::io(format!("receiving on {}", self.iface), e))?;
+            if let Some(drops) = received.drops {
+                self.queue_drops = u64::from(drops);
+            }
+            let frame = socketcan::CanFrame::from(received.frame);
             let Some(frame) = from_socketcan(&frame) else {
+                let class = frame.id_word() & CAN_ERR_MASK;
                 self.error_frames += 1;
+                self.bus_off += u64::from(class & CAN_ERR_BUSOFF != 0);
+                self.last_error = Some(class);
                 continue;
             };
-            let (time_ns, source) = match stamps
-                .socket
-                .and_then(|t| t.duration_since(UNIX_EPOCH).ok())
-            {
-                Some(d) => (
-                    u64::try_from(d.as_nanos()).unwrap_or(u64::MAX),
-                    TimeSource::Kernel,
-                ),
+            let (time_ns, source) = match received.time_ns {
+                Some(t) => (t, TimeSource::Kernel),
                 None => (host_time_ns(), TimeSource::Host),
             };
             return Ok(Some(TimestampedFrame {
