@@ -256,6 +256,46 @@ pub struct EffectsConfig {
     pub wheel_torque_scale: Option<WheelTorqueScale>,
     pub actuator_delay: Option<ActuatorDelay>,
     pub magnetic_disturbance: Option<MagneticDisturbance>,
+    /// Effects outside identification's cause library (the simulator can produce them so tests
+    /// can check that `testbed identify` reports them as unexplained rather than absorbing
+    /// them into library causes). Off unless configured.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub com_drift: Option<ComDrift>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub soft_iron: Option<SoftIron>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub heading_torque: Option<HeadingTorque>,
+}
+
+/// The centre of mass moves at a constant rate (thermal expansion, a draining tank): the offset
+/// of `com_offset` plus `rate_m_per_s · t`, `t` the plant's time from its start, s. Not in
+/// identification's library.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ComDrift {
+    /// Drift of the centre of mass, body axes, m/s (thermal: ~1 µm per 10 min = 1.7e-9 m/s).
+    pub rate_m_per_s: [f64; 3],
+}
+
+/// Soft-iron distortion of the magnetometer: `M_meas = (1 + S) A(q) M_L + M_hard`, `S` the
+/// matrix given (rows = body axes of the reading). Not in identification's library.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SoftIron {
+    /// `S`, dimensionless, row-major (a few percent for nearby steel).
+    pub matrix: [[f64; 3]; 3],
+}
+
+/// A torque that varies with the heading ψ: `M = cos_nm cos ψ + sin_nm sin ψ`, body axes (a
+/// cable that winds up, a body dipole in the lab's horizontal field). Not in identification's
+/// library.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct HeadingTorque {
+    /// Amplitude of the `cos ψ` part per body axis, Nm.
+    pub cos_nm: [f64; 3],
+    /// Amplitude of the `sin ψ` part per body axis, Nm.
+    pub sin_nm: [f64; 3],
 }
 
 /// Centre of mass offset from the bearing's centre of rotation. Gravity torque on the platform:
@@ -512,6 +552,20 @@ impl ModelConfig {
                 "effects.magnetic_disturbance.hard_iron_gauss",
                 &x.hard_iron_gauss,
             );
+        }
+        if let Some(x) = &e.com_drift {
+            v.finite_all("effects.com_drift.rate_m_per_s", &x.rate_m_per_s);
+        }
+        if let Some(x) = &e.soft_iron {
+            for (i, row) in x.matrix.iter().enumerate() {
+                for (j, m) in row.iter().enumerate() {
+                    v.within(&format!("effects.soft_iron.matrix[{i}][{j}]"), *m, -0.5, 0.5);
+                }
+            }
+        }
+        if let Some(x) = &e.heading_torque {
+            v.finite_all("effects.heading_torque.cos_nm", &x.cos_nm);
+            v.finite_all("effects.heading_torque.sin_nm", &x.sin_nm);
         }
         v.finish()
     }

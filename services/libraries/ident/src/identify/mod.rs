@@ -26,12 +26,17 @@
 //! The report's types and its tables of curves are in `report`; the residual series after a
 //! fit, what remains and what it correlates with in `residuals`.
 
+mod falsify;
 mod report;
 mod residuals;
+mod unexplained;
+
+pub use falsify::{CauseTest, Consistency};
+pub use unexplained::UnexplainedEffect;
 
 pub use report::{
     CandidateRow, CauseReport, ComponentReport, Correlation, Curve, DataSummary, FigureData,
-    Identification, Remaining, Report, ResidualReport, RmsReport,
+    Identification, Remaining, Report, ResidualReport, RmsReport, round_to, with_error,
 };
 
 use report::{prediction_curves, rms_report, window_curves};
@@ -42,6 +47,7 @@ use crate::effects::{Cause, Kind};
 use crate::error::IdentError;
 use crate::fit::{FitOptions, Problem, SetFit};
 use crate::predict::{self, COMPONENTS};
+use crate::sparse::SparseOptions;
 use crate::stats::chi_square_quantile;
 use serde::Serialize;
 use std::collections::{BTreeMap, HashMap};
@@ -65,6 +71,12 @@ pub struct Options {
     pub candidates: Vec<Cause>,
     /// Normalised RMS of an equation-error channel above which residual is said to remain.
     pub remaining_rms: f64,
+    /// The search for unexplained effects (sparse regression on the candidate functions).
+    pub sparse: SparseOptions,
+    /// Disjoint time blocks of the consistency test of a named cause.
+    pub consistency_blocks: usize,
+    /// Level of the consistency test (a cause fails at p below it).
+    pub consistency_alpha: f64,
 }
 
 impl Default for Options {
@@ -78,6 +90,9 @@ impl Default for Options {
             alpha: 1e-6,
             candidates: Cause::ALL.to_vec(),
             remaining_rms: 1.3,
+            sparse: SparseOptions::default(),
+            consistency_blocks: 4,
+            consistency_alpha: 1e-3,
         }
     }
 }
@@ -110,6 +125,27 @@ impl Options {
         }
         if !(self.alpha > 0.0 && self.alpha < 0.5) {
             return bad("alpha", self.alpha.to_string(), "must be within (0, 0.5)");
+        }
+        if self.consistency_blocks < 2 {
+            return bad(
+                "consistency_blocks",
+                self.consistency_blocks.to_string(),
+                "must be >= 2",
+            );
+        }
+        if !(self.consistency_alpha > 0.0 && self.consistency_alpha < 0.5) {
+            return bad(
+                "consistency_alpha",
+                self.consistency_alpha.to_string(),
+                "must be within (0, 0.5)",
+            );
+        }
+        if self.sparse.folds < 2 || !(self.sparse.alpha > 0.0 && self.sparse.alpha < 0.5) {
+            return bad(
+                "sparse",
+                format!("{:?}", self.sparse),
+                "needs at least 2 folds and alpha within (0, 0.5)",
+            );
         }
         if !(self.fit.torque_segment_s > 0.0 && self.fit.max_delay_s > 0.0) {
             return bad("fit", format!("{:?}", self.fit), "intervals must be > 0");
@@ -248,10 +284,77 @@ pub fn identify(
         problem.trim_cache(&[&current.config]);
     }
 
+    // Falsify the named causes and search what remains (see `falsify`, `unexplained`).
+    let candidates = unexplained::TorqueCandidates::new(&problem, &current);
+    let mut named = selected.clone();
+    let mut effects = unexplained::search_all(
+        &problem,
+        &current,
+        &named,
+        &candidates,
+        options.block_s,
+        &options.sparse,
+    );
+    let run_tests = |fit: &SetFit, named: &[Cause], effects: &[UnexplainedEffect]| {
+        falsify::test_causes(
+            &problem,
+            fit,
+            named,
+            effects,
+            &candidates,
+            options.consistency_blocks,
+            options.consistency_alpha,
+            options.alpha,
+            n_fit,
+        )
+    };
+    let (mut tests, mut joint) = run_tests(&current, &named, &effects);
+    let mut cause_tests: Vec<CauseTest> = Vec::new();
+    for _ in 0..3 {
+        let dropped: Vec<Cause> = tests
+            .iter()
+            .filter(|t| !t.kept)
+            .filter_map(|t| Cause::from_name(t.name))
+            .collect();
+        if dropped.is_empty() {
+            break;
+        }
+        cause_tests.extend(tests.iter().filter(|t| !t.kept).cloned());
+        named.retain(|c| !dropped.contains(c));
+        current = problem.fit(&named, &warm)?;
+        effects = unexplained::search_all(
+            &problem,
+            &current,
+            &named,
+            &candidates,
+            options.block_s,
+            &options.sparse,
+        );
+        (tests, joint) = run_tests(&current, &named, &effects);
+    }
+    cause_tests.extend(tests.iter().cloned());
+    // With unexplained torque terms, the named torque causes take their values from the joint
+    // fit (they no longer absorb part of the new effect).
+    let torque_terms = effects.iter().any(|e| e.equation.starts_with("torque_"));
+    if let (true, Some(joint)) = (torque_terms, &joint) {
+        for (cause, delta, se) in &joint.delta {
+            let mut values = cause.values(&problem.base);
+            for (v, d) in values.iter_mut().zip(delta) {
+                *v += d;
+            }
+            cause.apply(&mut current.config, &values);
+            if let Some(f) = current.causes.iter_mut().find(|f| f.cause == *cause) {
+                f.values = values;
+                f.stderr = se.clone();
+            }
+        }
+    }
+    let selected = named;
+
     let causes: Vec<CauseReport> = selected
         .iter()
-        .zip(&chosen_rows)
-        .filter_map(|(cause, row)| {
+        .filter_map(|cause| {
+            let row = chosen_rows.iter().find(|r| r.name == cause.name())?;
             let f = current.causes.iter().find(|c| c.cause == *cause)?;
             Some(CauseReport {
                 name: cause.name(),
@@ -319,7 +422,7 @@ pub fn identify(
         .filter_map(|(g, a)| extended_rms.groups.get(g).map(|b| (*g, a / b)))
         .collect();
 
-    let remaining = remaining(&problem, &current, options);
+    let remaining = remaining(&problem, &current, options, &effects, &extended_rms);
     let figures = FigureData {
         nominal_prediction: prediction_curves(&nominal_prediction),
         nominal_equation,
@@ -337,7 +440,9 @@ pub fn identify(
     .into_iter()
     .filter_map(|(p, n)| p.then_some(n))
     .collect();
+    let summary = report::summary(&causes, &cause_tests, &effects, &remaining, gain);
     let report = Report {
+        summary,
         data: DataSummary {
             source: data.source.display().to_string(),
             duration_s: data.duration_s(),
@@ -351,6 +456,8 @@ pub fn identify(
         steps,
         causes,
         verdict,
+        cause_tests,
+        unexplained: effects,
         remaining,
         extended_residuals: extended_report,
         baseline_rms,

@@ -43,6 +43,13 @@ pub struct ExternalTorqueModel {
     pub drag_c2: Vector3<f64>,
     /// Constant torque, Nm, body axes.
     pub constant_b: Vector3<f64>,
+    /// `m g ṙ` of `com_drift`, N m/s, body axes: the weight moment grows by this per second of
+    /// plant time ([`ExternalTorqueModel::at_time`]); zero without `com_drift`.
+    pub weight_moment_rate_b: Vector3<f64>,
+    /// `heading_torque`: amplitudes of the `cos ψ` and `sin ψ` parts, Nm, body axes; zero
+    /// without it (then the heading is not computed).
+    pub heading_cos_b: Vector3<f64>,
+    pub heading_sin_b: Vector3<f64>,
 }
 
 impl ExternalTorqueModel {
@@ -66,6 +73,33 @@ impl ExternalTorqueModel {
                 .constant_torque
                 .as_ref()
                 .map_or_else(Vector3::zeros, |c| Vector3::from(c.torque_nm)),
+            weight_moment_rate_b: e
+                .com_drift
+                .as_ref()
+                .map_or_else(Vector3::zeros, |c| Vector3::from(c.rate_m_per_s) * mg),
+            heading_cos_b: e
+                .heading_torque
+                .as_ref()
+                .map_or_else(Vector3::zeros, |h| Vector3::from(h.cos_nm)),
+            heading_sin_b: e
+                .heading_torque
+                .as_ref()
+                .map_or_else(Vector3::zeros, |h| Vector3::from(h.sin_nm)),
+        }
+    }
+
+    /// Whether the torque changes with time (`com_drift`): the plant then re-resolves the model
+    /// with [`ExternalTorqueModel::at_time`] before each substep.
+    pub fn time_dependent(&self) -> bool {
+        self.weight_moment_rate_b != Vector3::zeros()
+    }
+
+    /// The model at plant time `t_s` (s): the weight moment of a drifting centre of mass,
+    /// `m g (r + ṙ t)`, held over the substep. `base` is the model at time 0.
+    pub fn at_time(base: &Self, t_s: f64) -> Self {
+        Self {
+            weight_moment_b: base.weight_moment_b + base.weight_moment_rate_b * t_s,
+            ..*base
         }
     }
 
@@ -77,8 +111,21 @@ impl ExternalTorqueModel {
                 + self
                     .drag_c2
                     .component_mul(&rate_b.component_mul(&rate_b.abs()))),
-            constant_b: self.constant_b,
+            constant_b: self
+                .heading_part(q)
+                .map_or(self.constant_b, |h| self.constant_b + h),
         }
+    }
+
+    /// `heading_torque` at attitude `q`, Nm, body axes (`None`, and no heading computed,
+    /// without it: the default model's arithmetic is unchanged). Counted with the constant part
+    /// in [`ExternalTorque`].
+    fn heading_part(&self, q: &Attitude) -> Option<Vector3<f64>> {
+        if self.heading_cos_b == Vector3::zeros() && self.heading_sin_b == Vector3::zeros() {
+            return None;
+        }
+        let psi = attitude::heading(q);
+        Some(self.heading_cos_b * psi.cos() + self.heading_sin_b * psi.sin())
     }
 }
 
