@@ -18,7 +18,9 @@
 //! 1. forward: add the candidate that most lowers the k-fold cross-validated residual sum;
 //!    keep it only if it lowers it by at least `min_cv_gain` (relative) and its `|z|` beats the
 //!    threshold; repeat;
-//! 2. thresholding: refit, drop the weakest term if its `|z|` is below the threshold; repeat
+//! 2. swaps: replace a term by another candidate while that lowers the cross-validated sum
+//!    (a greedy step can pick a near-collinear stand-in);
+//! 3. thresholding: refit, drop the weakest term if its `|z|` is below the threshold; repeat
 //!    until every term passes.
 //!
 //! Folds are interleaved blocks of time (block b goes to fold `b mod k`), so a fold is held out
@@ -351,7 +353,17 @@ fn erfc(x: f64) -> f64 {
 /// Search one equation (see the module documentation).
 pub fn search(design: &Design, options: &SparseOptions) -> SparseResult {
     let p = design.names.len();
-    let forced: Vec<usize> = (0..design.forced).collect();
+    // Forced columns that are not determined beside the others in this one equation (two
+    // causes' columns proportional on this axis) are left out.
+    let mut forced: Vec<usize> = Vec::new();
+    for j in 0..design.forced {
+        let mut cols = forced.clone();
+        cols.push(j);
+        if design.solve(&cols, |_| true).is_some() {
+            forced = cols;
+        }
+    }
+    let nf = forced.len();
     let candidates = p - design.forced;
     let z_threshold = normal_two_sided_quantile(options.alpha / candidates.max(1) as f64);
     let base_cv = design.cv_rss(&forced).unwrap_or(design.total_rss());
@@ -366,7 +378,7 @@ pub fn search(design: &Design, options: &SparseOptions) -> SparseResult {
             })
             .unwrap_or(0.0)
     };
-    while active.len() - design.forced < options.max_terms {
+    while active.len() - nf < options.max_terms {
         let best = (design.forced..p)
             .filter(|j| !active.contains(j))
             .filter_map(|j| {
@@ -387,13 +399,33 @@ pub fn search(design: &Design, options: &SparseOptions) -> SparseResult {
         active = cols;
         current = cv;
     }
+    // Swaps: greedy forward steps can pick a near-collinear stand-in (sin 2ψ for sin ψ over a
+    // limited heading range); replace a term by another candidate while that lowers the
+    // cross-validated residual sum.
+    for _ in 0..10 {
+        let mut best: Option<(usize, usize, f64)> = None;
+        for i in nf..active.len() {
+            for j in (design.forced..p).filter(|j| !active.contains(j)) {
+                let mut cols = active.clone();
+                cols[i] = j;
+                if let Some(cv) = design.cv_rss(&cols) {
+                    if cv < current * (1.0 - 1e-9) && best.is_none_or(|b| cv < b.2) {
+                        best = Some((i, j, cv));
+                    }
+                }
+            }
+        }
+        let Some((i, j, cv)) = best else { break };
+        active[i] = j;
+        current = cv;
+    }
     // Thresholding: drop the weakest term while it is below the threshold.
     loop {
         let Some((values, se)) = design.fit(&active) else {
-            active.truncate(design.forced);
+            active.truncate(nf);
             break;
         };
-        let weakest = (design.forced..active.len())
+        let weakest = (nf..active.len())
             .map(|i| (i, (values[i] / se[i]).abs()))
             .min_by(|a, b| a.1.total_cmp(&b.1));
         match weakest {
@@ -419,8 +451,8 @@ pub fn search(design: &Design, options: &SparseOptions) -> SparseResult {
         _ => 1.0,
     };
     SparseResult {
-        forced: (0..design.forced).map(term).collect(),
-        terms: (design.forced..active.len()).map(term).collect(),
+        forced: (0..nf).map(term).collect(),
+        terms: (nf..active.len()).map(term).collect(),
         z_threshold,
         cv_gain: if cv > 0.0 { (base_cv / cv).sqrt() } else { 1.0 },
         held_out_gain,

@@ -12,10 +12,13 @@
 //!    the unexplained terms are in the model: a library cause that only stood in for an
 //!    effect of another form is dropped.
 //!
-//! The tests apply to the torque-channel causes, whose model is linear; the sensor and wheel
-//! causes are reported as not tested by the first (see `docs/measured-data.md`).
+//! Torque causes are linear in the torque channel; sensor causes are linearised through the
+//! attitude filter (forward differences, one filter run per parameter) and tested on the
+//! innovations the same way. Wheel causes are not yet tested (reported as such).
 
-use super::unexplained::{TorqueCandidates, UnexplainedEffect};
+use super::unexplained::{
+    INNOVATION_LABELS, InnovationCandidates, SensorLinear, TorqueCandidates, UnexplainedEffect,
+};
 use crate::channels::torque_columns;
 use crate::effects::{Cause, Kind};
 use crate::fit::{Problem, SetFit};
@@ -37,6 +40,24 @@ pub struct CauseTest {
     pub joint_threshold: Option<f64>,
     /// In words: kept, or which test failed.
     pub verdict: String,
+}
+
+impl CauseTest {
+    /// How clearly the cause failed (for dropping the worst first): the consistency statistic
+    /// as a normal score `(χ² − dof)/√(2 dof)`, else how far the likelihood ratio falls short of
+    /// its threshold (relative); negative for a kept cause.
+    pub fn severity(&self) -> f64 {
+        if self.kept {
+            return -1.0;
+        }
+        match (&self.consistency, self.joint_lr, self.joint_threshold) {
+            (Some(c), _, _) if c.p < 1.0 && self.verdict.starts_with("falsified") => {
+                (c.chi2 - c.dof as f64) / (2.0 * c.dof as f64).sqrt()
+            }
+            (_, Some(lr), Some(th)) => 1.0 - lr / th.max(1e-300),
+            _ => 0.0,
+        }
+    }
 }
 
 /// The block-consistency test of one cause.
@@ -140,6 +161,8 @@ pub(super) fn test_causes(
     named: &[Cause],
     effects: &[UnexplainedEffect],
     candidates: &TorqueCandidates,
+    innovation: &InnovationCandidates,
+    linear: Option<&SensorLinear>,
     blocks: usize,
     alpha_consistency: f64,
     alpha: f64,
@@ -195,12 +218,24 @@ pub(super) fn test_causes(
                 }
             }
             let (mut joint_lr, mut joint_threshold) = (None, None);
-            if !extra.is_empty() {
+            {
+                // Beside each unexplained effect its offset: a constant part of the cause on
+                // that axis cannot be told apart from it.
+                let mut extra1 = extra.clone();
+                if let Some(one) = candidates.names.iter().position(|n| *n == "1") {
+                    for axis in 0..3 {
+                        if extra.iter().any(|e| e.0 == axis) && !extra1.contains(&(axis, one)) {
+                            extra1.push((axis, one));
+                        }
+                    }
+                }
+                let (with1, _) = normal_equations(fit, &cols, &extra1, candidates, fit_rows, None);
+                let full = with1.solve().or(full.clone());
                 let (without, _) =
-                    normal_equations(fit, &cols, &extra, candidates, fit_rows, Some(cause));
-                if let (Some(f), Some(w)) = (&full, without.solve()) {
+                    normal_equations(fit, &cols, &extra1, candidates, fit_rows, Some(cause));
+                if let (Some(f), Some(w_rss)) = (&full, rss_of(&without)) {
                     let n = full_ne.rows() as f64;
-                    let lr = n * (w.rss / f.rss.max(1e-300)).ln();
+                    let lr = n * (w_rss / f.rss.max(1e-300)).ln();
                     let k = idx.len();
                     let threshold = (k as f64 * n_fit.ln()).max(
                         chi_square_quantile(1.0 - alpha, k as f64).unwrap_or(f64::INFINITY),
@@ -210,7 +245,7 @@ pub(super) fn test_causes(
                     if lr <= threshold && kept {
                         kept = false;
                         verdict = format!(
-                            "dropped: not significant once the unexplained effect is modelled (likelihood ratio {lr:.1} ≤ threshold {threshold:.1}); it stood in for an effect of another form"
+                            "dropped: not significant beside the other named causes and the unexplained effects (likelihood ratio {lr:.1} ≤ threshold {threshold:.1}); it stood in for an effect of another form or for a dropped cause"
                         );
                     }
                 }
@@ -234,18 +269,214 @@ pub(super) fn test_causes(
             });
         }
     }
-    for &cause in named.iter().filter(|c| c.kind() != Kind::Torque) {
+    out.extend(sensor_tests(
+        problem,
+        fit,
+        named,
+        effects,
+        innovation,
+        linear,
+        blocks,
+        alpha_consistency,
+        alpha,
+        n_fit,
+    ));
+    for &cause in named.iter().filter(|c| c.kind() == Kind::Wheel) {
         out.push(CauseTest {
             name: cause.name(),
             kept: true,
             consistency: None,
             joint_lr: None,
             joint_threshold: None,
-            verdict: "kept (selection test; block consistency is tested for torque causes only)"
+            verdict: "kept (selection test; the falsification tests cover torque and sensor causes, not yet wheel causes)"
                 .into(),
         });
     }
     (out, joint)
+}
+
+/// The same two tests for the sensor causes, on their linearisation ([`SensorLinear`]): per
+/// block one Gauss–Newton step from the fitted values (with the unexplained innovation terms
+/// as extra columns) for the consistency, and the likelihood ratio of the innovations with and
+/// without the cause (its effect removed to first order, `r − J_c Δθ_c`) beside the unexplained
+/// terms for the significance.
+#[allow(clippy::too_many_arguments)]
+fn sensor_tests(
+    problem: &Problem,
+    fit: &SetFit,
+    named: &[Cause],
+    effects: &[UnexplainedEffect],
+    innovation: &InnovationCandidates,
+    linear: Option<&SensorLinear>,
+    blocks: usize,
+    alpha_consistency: f64,
+    alpha: f64,
+    n_fit: f64,
+) -> Vec<CauseTest> {
+    let sensor: Vec<Cause> = named
+        .iter()
+        .copied()
+        .filter(|c| c.kind() == Kind::Sensor)
+        .collect();
+    let not_tested = |cause: Cause, why: &str| CauseTest {
+        name: cause.name(),
+        kept: true,
+        consistency: None,
+        joint_lr: None,
+        joint_threshold: None,
+        verdict: format!("kept (selection test; {why})"),
+    };
+    let Some(lin) = linear else {
+        return sensor
+            .iter()
+            .map(|c| not_tested(*c, "its linearisation through the filter failed"))
+            .collect();
+    };
+    let data = problem.data;
+    let inn = &fit.state.recon.innovations;
+    // Unexplained innovation terms: (component, candidate index).
+    let mut extra: Vec<(usize, usize)> = Vec::new();
+    for e in effects {
+        let Some(c) = INNOVATION_LABELS.iter().position(|l| *l == e.equation) else {
+            continue;
+        };
+        for t in &e.terms {
+            if let Some(j) = innovation.names.iter().position(|n| *n == t.name) {
+                extra.push((c, j));
+            }
+        }
+    }
+    let (Some(first), Some(last)) = (inn.first(), inn.last()) else {
+        return Vec::new();
+    };
+    let (t0, t1) = (data.t[first.tick], data.t[last.tick]);
+    let block_of = |tick: usize| -> usize {
+        (((data.t[tick] - t0) / (t1 - t0).max(1e-9) * blocks as f64) as usize).min(blocks - 1)
+    };
+    // Rows: (innovation index, component, vector row).
+    let rows: Vec<(usize, usize, usize)> = (0..inn.len())
+        .flat_map(|i| {
+            (0..INNOVATION_LABELS.len())
+                .filter(move |&c| innovation.row[i][c] != usize::MAX)
+                .map(move |c| (i, c, innovation.row[i][c]))
+        })
+        .collect();
+    // Normal equations of `y ≈ [J_used, U] β` over the rows `keep` accepts, y the innovation
+    // with the causes in `removed` taken out to first order.
+    let build = |used: &[usize],
+                 removed: &[usize],
+                 keep: &dyn Fn(usize) -> bool,
+                 sign: f64,
+                 extra: &[(usize, usize)]| {
+        let p = used.len() + extra.len();
+        let mut ne = NormalEquations::new(p);
+        let mut x = vec![0.0; p];
+        for &(i, c, r) in &rows {
+            if !keep(inn[i].tick) {
+                continue;
+            }
+            let mut y = inn[i].values[c];
+            for &j in removed {
+                y -= lin.j[j][r] * lin.delta[j].unwrap_or(0.0);
+            }
+            for (a, &j) in used.iter().enumerate() {
+                x[a] = lin.j[j][r];
+            }
+            for (a, &(ec, cand)) in extra.iter().enumerate() {
+                x[used.len() + a] = if ec == c {
+                    innovation.values[i][cand]
+                } else {
+                    0.0
+                };
+            }
+            ne.add(&x, sign * y);
+        }
+        ne
+    };
+    let all: Vec<usize> = (0..lin.cols.len()).collect();
+    // For the significance test, each unexplained effect with its offset (see the torque test).
+    let mut extra1 = extra.clone();
+    if let Some(one) = innovation.names.iter().position(|n| *n == "1") {
+        for c in 0..INNOVATION_LABELS.len() {
+            if extra.iter().any(|e| e.0 == c) && !extra1.contains(&(c, one)) {
+                extra1.push((c, one));
+            }
+        }
+    }
+    let mut out = Vec::new();
+    for cause in sensor {
+        let idx: Vec<usize> = all
+            .iter()
+            .copied()
+            .filter(|&j| lin.cols[j].0 == cause)
+            .collect();
+        // Consistency: per block, δ_b solving J δ ≈ −r (one Gauss–Newton step).
+        let per_block: Vec<Option<crate::stats::LsFit>> = (0..blocks)
+            .map(|b| build(&all, &[], &|tick| block_of(tick) == b, -1.0, &extra).solve())
+            .collect();
+        let consistency = consistency(&per_block, &idx);
+        let mut kept = true;
+        let mut verdict = String::new();
+        if let Some(c) = &consistency {
+            if c.p < alpha_consistency {
+                kept = false;
+                verdict = format!(
+                    "falsified: its parameters differ between {} time blocks (χ² = {:.1} on {} degrees of freedom, p = {:.1e} < {:.0e}); a time- or state-dependent effect, not a constant one",
+                    c.blocks, c.chi2, c.dof, c.p, alpha_consistency
+                );
+            }
+        }
+        let (mut joint_lr, mut joint_threshold) = (None, None);
+        let removable = idx.iter().all(|&j| lin.delta[j].is_some());
+        if !extra.is_empty() && removable {
+            let fit_rows = |tick: usize| !problem.held_out[tick];
+            let others: Vec<usize> = all.iter().copied().filter(|j| !idx.contains(j)).collect();
+            let with = build(&all, &idx, &fit_rows, 1.0, &extra1).solve();
+            let without = rss_of(&build(&others, &idx, &fit_rows, 1.0, &extra1));
+            if let (Some(w), Some(wo)) = (with, without) {
+                let n = w.n as f64;
+                let lr = n * (wo / w.rss.max(1e-300)).ln();
+                let k = idx.len();
+                let threshold = (k as f64 * n_fit.ln())
+                    .max(chi_square_quantile(1.0 - alpha, k as f64).unwrap_or(f64::INFINITY));
+                joint_lr = Some(lr);
+                joint_threshold = Some(threshold);
+                if lr <= threshold && kept {
+                    kept = false;
+                    verdict = format!(
+                        "dropped: not significant once the unexplained effect is modelled (likelihood ratio {lr:.1} ≤ threshold {threshold:.1}); it stood in for an effect of another form"
+                    );
+                }
+            }
+        }
+        if kept {
+            verdict = match &consistency {
+                Some(c) => format!(
+                    "kept: consistent across {} time blocks (p = {:.2}, linearised through the filter)",
+                    c.blocks, c.p
+                ),
+                None => "kept (block consistency not determined)".into(),
+            };
+        }
+        out.push(CauseTest {
+            name: cause.name(),
+            kept,
+            consistency,
+            joint_lr,
+            joint_threshold,
+            verdict,
+        });
+    }
+    out
+}
+
+/// Residual sum at the least-squares solution (`Σ y²` with no unknowns).
+fn rss_of(ne: &NormalEquations) -> Option<f64> {
+    if ne.params() == 0 {
+        Some(ne.yty())
+    } else {
+        ne.solve().map(|f| f.rss)
+    }
 }
 
 /// χ² consistency of the parameters `idx` across the block fits (`None` if a block does not

@@ -285,52 +285,60 @@ pub fn identify(
     }
 
     // Falsify the named causes and search what remains (see `falsify`, `unexplained`).
-    let candidates = unexplained::TorqueCandidates::new(&problem, &current);
     let mut named = selected.clone();
-    let mut effects = unexplained::search_all(
-        &problem,
-        &current,
-        &named,
-        &candidates,
-        options.block_s,
-        &options.sparse,
-    );
-    let run_tests = |fit: &SetFit, named: &[Cause], effects: &[UnexplainedEffect]| {
-        falsify::test_causes(
+    let analyse = |fit: &SetFit, named: &[Cause]| {
+        let torque = unexplained::TorqueCandidates::new(&problem, fit);
+        let innovation = unexplained::InnovationCandidates::new(&problem, fit);
+        let linear = unexplained::SensorLinear::new(&problem, fit, named);
+        let effects = unexplained::search_all(
             &problem,
             fit,
             named,
-            effects,
-            &candidates,
+            &torque,
+            &innovation,
+            linear.as_ref(),
+            options.block_s,
+            &options.sparse,
+        );
+        let (tests, joint) = falsify::test_causes(
+            &problem,
+            fit,
+            named,
+            &effects,
+            &torque,
+            &innovation,
+            linear.as_ref(),
             options.consistency_blocks,
             options.consistency_alpha,
             options.alpha,
             n_fit,
-        )
+        );
+        (effects, tests, joint)
     };
-    let (mut tests, mut joint) = run_tests(&current, &named, &effects);
+    let (mut effects, mut tests, mut joint) = analyse(&current, &named);
     let mut cause_tests: Vec<CauseTest> = Vec::new();
-    for _ in 0..3 {
-        let dropped: Vec<Cause> = tests
+    for _ in 0..=options.max_causes {
+        // Drop the worst failure only, then search and test again: a cause that failed beside
+        // a wrongly named one may pass once that one is gone.
+        let Some(worst) = tests
             .iter()
             .filter(|t| !t.kept)
-            .filter_map(|t| Cause::from_name(t.name))
-            .collect();
-        if dropped.is_empty() {
+            .max_by(|a, b| a.severity().total_cmp(&b.severity()))
+            .cloned()
+        else {
             break;
+        };
+        let Some(dropped) = Cause::from_name(worst.name) else {
+            break;
+        };
+        cause_tests.push(worst);
+        named.retain(|c| *c != dropped);
+        // A dropped sensor cause was fitted jointly with the others: refit them.
+        if dropped.kind() == Kind::Sensor {
+            warm.retain(|c, _| c.kind() != Kind::Sensor);
         }
-        cause_tests.extend(tests.iter().filter(|t| !t.kept).cloned());
-        named.retain(|c| !dropped.contains(c));
         current = problem.fit(&named, &warm)?;
-        effects = unexplained::search_all(
-            &problem,
-            &current,
-            &named,
-            &candidates,
-            options.block_s,
-            &options.sparse,
-        );
-        (tests, joint) = run_tests(&current, &named, &effects);
+        (effects, tests, joint) = analyse(&current, &named);
     }
     cause_tests.extend(tests.iter().cloned());
     // With unexplained torque terms, the named torque causes take their values from the joint

@@ -9,7 +9,7 @@
 //! |---|---|
 //! | `1` | constant |
 //! | `t` | time from the record's start over its duration (0 … 1) |
-//! | `sin tilt_x`, `sin tilt_y`, `cos tilt` | down vector in body axes `G_B` (x, y, −z) |
+//! | `sin tilt_x`, `sin tilt_y` | horizontal components of the down vector in body axes `G_B` (its vertical one is within 1 % of a constant at the test bed's tilts, so it is not a separate candidate) |
 //! | `t·sin tilt_x`, `t·sin tilt_y` | their products with time (a drifting centre of mass) |
 //! | `cos ψ`, `sin ψ`, `cos 2ψ`, `sin 2ψ` | heading harmonics |
 //! | `t·cos ψ`, `t·sin ψ` | (sensor channels) slowly changing heading-fixed errors |
@@ -17,10 +17,12 @@
 //! | `w_x·|w_x|` … | quadratic damping (torque channel) |
 //! | `w_x·w_y`, `w_y·w_z`, `w_z·w_x` | rate products (torque channel) |
 //! | `dw_x/dt` … | angular accelerations, rad/s² (torque channel) |
-//! | `n_x`, `n_y`, `n_z` | wheel speeds, rad/s |
-//! | `dn_x/dt` … | wheel accelerations, rad/s² (torque channel) |
-//! | `u_x`, `u_y`, `u_z` | wheel torque commands, Nm |
+//! | `n_x`, `n_y`, `n_z` | wheel speeds, rad/s (sensor channels: fields of the motors) |
 //! | `B_x`, `B_y`, `B_z` | the model's lab field in body axes over its magnitude (sensor channels) |
+//!
+//! Wheel speeds, wheel accelerations and commands are **not** torque-channel candidates: in
+//! closed loop the controller makes them follow the integral of (or cancel) whatever external
+//! torque acts, so any torque would be "explained" by them without saying its form.
 //!
 //! In the torque channel a function f enters as the channel's regressors do: `∫ f dt` from the
 //! segment's start (rates as instruments, the mean of the neighbouring samples), its segment
@@ -32,7 +34,6 @@ use crate::effects::{Cause, Kind};
 use crate::fit::{Problem, SetFit};
 use crate::reconstruct::INNOVATION_LEN;
 use crate::sparse::{Design, SparseOptions, SparseResult, Term, search};
-use nalgebra::Vector3;
 use serde::Serialize;
 use testbed_model::attitude;
 
@@ -67,12 +68,11 @@ pub(super) struct TorqueCandidates {
     pub values: Vec<Vec<f64>>,
 }
 
-const TORQUE_NAMES: [&str; 32] = [
+const TORQUE_NAMES: [&str; 22] = [
     "1",
     "t",
     "sin tilt_x",
     "sin tilt_y",
-    "cos tilt",
     "t·sin tilt_x",
     "t·sin tilt_y",
     "cos ψ",
@@ -88,21 +88,12 @@ const TORQUE_NAMES: [&str; 32] = [
     "w_x·w_y",
     "w_y·w_z",
     "w_z·w_x",
-    "n_x",
-    "n_y",
-    "n_z",
-    "u_x",
-    "u_y",
-    "u_z",
     "dw_x/dt",
     "dw_y/dt",
     "dw_z/dt",
-    "dn_x/dt",
-    "dn_y/dt",
-    "dn_z/dt",
 ];
 /// Of [`TORQUE_NAMES`], the first index in derivative (direct) form.
-const TORQUE_DIRECT_FROM: usize = 26;
+const TORQUE_DIRECT_FROM: usize = 19;
 
 impl TorqueCandidates {
     pub fn new(problem: &Problem, fit: &SetFit) -> Self {
@@ -111,7 +102,6 @@ impl TorqueCandidates {
         let ch = &s.torque;
         let t0 = data.t.first().copied().unwrap_or(0.0);
         let span = (data.t.last().copied().unwrap_or(1.0) - t0).max(1e-9);
-        let wheels = data.has_wheels();
         let m = TORQUE_NAMES.len();
         let inst = |k: usize| 0.5 * (s.recon.rate[k - 1] + s.recon.rate[k + 1]);
         let integrand = |k: usize| -> Vec<f64> {
@@ -119,22 +109,11 @@ impl TorqueCandidates {
             let g = attitude::gravity_b(&s.recon.q[k]);
             let psi = attitude::heading(&s.recon.q[k]);
             let w = inst(k);
-            let n = if wheels {
-                data.wheel_speed_at(k)
-            } else {
-                Vector3::zeros()
-            };
-            let u = if wheels {
-                data.wheel_cmd_at(data.t[k])
-            } else {
-                Vector3::zeros()
-            };
             vec![
                 1.0,
                 t,
                 g.x,
                 g.y,
-                -g.z,
                 t * g.x,
                 t * g.y,
                 psi.cos(),
@@ -150,22 +129,11 @@ impl TorqueCandidates {
                 w.x * w.y,
                 w.y * w.z,
                 w.z * w.x,
-                n.x,
-                n.y,
-                n.z,
-                u.x,
-                u.y,
-                u.z,
             ]
         };
-        let direct = |k: usize| -> [f64; 6] {
+        let direct = |k: usize| -> [f64; 3] {
             let w = inst(k);
-            let n = if wheels {
-                data.wheel_speed_at(k)
-            } else {
-                Vector3::zeros()
-            };
-            [w.x, w.y, w.z, n.x, n.y, n.z]
+            [w.x, w.y, w.z]
         };
         let mut values = vec![vec![0.0; m]; ch.len()];
         for seg in &ch.segments {
@@ -188,7 +156,7 @@ impl TorqueCandidates {
                 for j in 0..TORQUE_DIRECT_FROM {
                     values[r][j] = acc[j];
                 }
-                for j in 0..6 {
+                for j in 0..3 {
                     values[r][TORQUE_DIRECT_FROM + j] = d[j] - d0[j];
                 }
             }
@@ -218,6 +186,8 @@ pub(super) fn search_all(
     fit: &SetFit,
     named: &[Cause],
     candidates: &TorqueCandidates,
+    innovation: &InnovationCandidates,
+    linear: Option<&SensorLinear>,
     block_s: f64,
     options: &SparseOptions,
 ) -> Vec<UnexplainedEffect> {
@@ -225,7 +195,9 @@ pub(super) fn search_all(
     out.extend(search_torque(
         problem, fit, named, candidates, block_s, options,
     ));
-    out.extend(search_innovations(problem, fit, block_s, options));
+    out.extend(search_innovations(
+        problem, fit, innovation, linear, block_s, options,
+    ));
     out
 }
 
@@ -291,6 +263,13 @@ fn search_torque(
             options.folds,
         );
         let result = search(&design, options);
+        if std::env::var_os("IDENT_DEBUG").is_some() {
+            eprintln!(
+                "torque axis {axis}: forced {:?} base cv {:?} → {result:?}",
+                forced,
+                design.cv_rss(&(0..forced.len()).collect::<Vec<_>>())
+            );
+        }
         if let Some(e) = effect(
             format!("torque_{}", "xyz".as_bytes()[axis] as char),
             "Nm",
@@ -303,61 +282,60 @@ fn search_torque(
     out
 }
 
-fn search_innovations(
-    problem: &Problem,
-    fit: &SetFit,
-    block_s: f64,
-    options: &SparseOptions,
-) -> Vec<UnexplainedEffect> {
-    let data = problem.data;
-    let s = &fit.state;
-    let t0 = data.t.first().copied().unwrap_or(0.0);
-    let span = (data.t.last().copied().unwrap_or(1.0) - t0).max(1e-9);
-    let field = problem.base.platform.field_l_t();
-    let field_n = field / field.norm().max(1e-300);
-    let wheels = data.has_wheels();
-    let mut names: Vec<&str> = vec![
-        "1",
-        "t",
-        "cos ψ",
-        "sin ψ",
-        "cos 2ψ",
-        "sin 2ψ",
-        "t·cos ψ",
-        "t·sin ψ",
-        "sin tilt_x",
-        "sin tilt_y",
-        "B_x",
-        "B_y",
-        "B_z",
-        "w_x",
-        "w_y",
-        "w_z",
-    ];
-    if wheels {
-        names.extend(["n_x", "n_y", "n_z"]);
-    }
-    let labels = [
-        "innovation_tilt_1",
-        "innovation_tilt_2",
-        "innovation_field_x",
-        "innovation_field_y",
-        "innovation_field_z",
-    ];
-    let mut out = Vec::new();
-    for c in 0..INNOVATION_LEN {
-        let rows: Vec<_> = s
+/// Per filter innovation (all ticks, in the reconstruction's order): the sensor-channel
+/// candidates, evaluated at its tick.
+pub(super) struct InnovationCandidates {
+    pub names: Vec<&'static str>,
+    pub values: Vec<Vec<f64>>,
+    /// Per innovation and component: its row in the innovation vector (`usize::MAX`: absent).
+    pub row: Vec<[usize; INNOVATION_LEN]>,
+}
+
+impl InnovationCandidates {
+    pub fn new(problem: &Problem, fit: &SetFit) -> Self {
+        let data = problem.data;
+        let s = &fit.state;
+        let t0 = data.t.first().copied().unwrap_or(0.0);
+        let span = (data.t.last().copied().unwrap_or(1.0) - t0).max(1e-9);
+        let field = problem.base.platform.field_l_t();
+        let field_n = field / field.norm().max(1e-300);
+        let wheels = data.has_wheels();
+        let mut names: Vec<&'static str> = vec![
+            "1",
+            "t",
+            "cos ψ",
+            "sin ψ",
+            "cos 2ψ",
+            "sin 2ψ",
+            "t·cos ψ",
+            "t·sin ψ",
+            "sin tilt_x",
+            "sin tilt_y",
+            "B_x",
+            "B_y",
+            "B_z",
+            "w_x",
+            "w_y",
+            "w_z",
+        ];
+        if wheels {
+            names.extend(["n_x", "n_y", "n_z"]);
+        }
+        let mut next = 0;
+        let mut row = Vec::with_capacity(s.recon.innovations.len());
+        let values = s
             .recon
             .innovations
             .iter()
-            .filter(|i| i.mask & (1 << c) != 0)
-            .collect();
-        if rows.len() < 100 {
-            continue;
-        }
-        let x: Vec<Vec<f64>> = rows
-            .iter()
             .map(|i| {
+                let mut r = [usize::MAX; INNOVATION_LEN];
+                for (c, slot) in r.iter_mut().enumerate() {
+                    if i.mask & (1 << c) != 0 {
+                        *slot = next;
+                        next += 1;
+                    }
+                }
+                row.push(r);
                 let k = i.tick;
                 let q = &s.recon.q[k];
                 let t = (data.t[k] - t0) / span;
@@ -365,7 +343,7 @@ fn search_innovations(
                 let g = attitude::gravity_b(q);
                 let b = q * field_n;
                 let w = s.recon.rate[k];
-                let mut row = vec![
+                let mut v = vec![
                     1.0,
                     t,
                     psi.cos(),
@@ -385,25 +363,130 @@ fn search_innovations(
                 ];
                 if wheels {
                     let n = data.wheel_speed_at(k);
-                    row.extend([n.x, n.y, n.z]);
+                    v.extend([n.x, n.y, n.z]);
                 }
+                v
+            })
+            .collect();
+        Self { names, values, row }
+    }
+}
+
+/// The named sensor causes linearised at their fitted values: `∂(innovation vector)/∂θ_j` by
+/// forward differences through the filter (one filter run per parameter), over all ticks.
+pub(super) struct SensorLinear {
+    /// Per column: cause, value index, name.
+    pub cols: Vec<(Cause, usize, String)>,
+    /// Per column: fitted value minus the value that switches the cause off (`None` for
+    /// `earth_rate`, which has no neutral value).
+    pub delta: Vec<Option<f64>>,
+    /// Per column, per innovation-vector row.
+    pub j: Vec<Vec<f64>>,
+}
+
+impl SensorLinear {
+    pub fn new(problem: &Problem, fit: &SetFit, named: &[Cause]) -> Option<Self> {
+        let sensor: Vec<Cause> = named
+            .iter()
+            .copied()
+            .filter(|c| c.kind() == Kind::Sensor)
+            .collect();
+        if sensor.is_empty() {
+            return None;
+        }
+        let r0 = fit.state.recon.innovation_vector(|_| true);
+        let mut cols = Vec::new();
+        let mut delta = Vec::new();
+        let mut j = Vec::new();
+        for cause in sensor {
+            let values = cause.values(&fit.config);
+            let neutral = cause.values(&problem.base);
+            let mut offset = 0;
+            for spec in cause.params() {
+                for e in 0..spec.len {
+                    let i = offset + e;
+                    let (lo, hi) = cause.bounds(i);
+                    let h = if values[i] + spec.step > hi {
+                        -spec.step
+                    } else {
+                        spec.step
+                    };
+                    let mut v = values.clone();
+                    v[i] = (values[i] + h).clamp(lo, hi);
+                    let taken = v[i] - values[i];
+                    let mut config = fit.config.clone();
+                    cause.apply(&mut config, &v);
+                    let r = problem.run_filter(&config).ok()?.innovation_vector(|_| true);
+                    if r.len() != r0.len() || taken == 0.0 {
+                        return None;
+                    }
+                    j.push(r.iter().zip(&r0).map(|(a, b)| (a - b) / taken).collect());
+                    cols.push((cause, i, cause.value_name(i)));
+                    delta.push((cause != Cause::EarthRate).then(|| values[i] - neutral[i]));
+                }
+                offset += spec.len;
+            }
+        }
+        Some(Self { cols, delta, j })
+    }
+}
+
+fn search_innovations(
+    problem: &Problem,
+    fit: &SetFit,
+    candidates: &InnovationCandidates,
+    linear: Option<&SensorLinear>,
+    block_s: f64,
+    options: &SparseOptions,
+) -> Vec<UnexplainedEffect> {
+    let data = problem.data;
+    let s = &fit.state;
+    let mut out = Vec::new();
+    for c in 0..INNOVATION_LEN {
+        let rows: Vec<usize> = (0..s.recon.innovations.len())
+            .filter(|&i| candidates.row[i][c] != usize::MAX)
+            .collect();
+        if rows.len() < 100 {
+            continue;
+        }
+        // The named sensor causes' own columns (their Jacobian rows of this component) are
+        // forced, so their values re-adjust with any new term.
+        let forced: Vec<usize> = linear.map_or(Vec::new(), |l| {
+            (0..l.cols.len())
+                .filter(|&j| rows.iter().any(|&i| l.j[j][candidates.row[i][c]] != 0.0))
+                .collect()
+        });
+        let mut names: Vec<String> = forced
+            .iter()
+            .filter_map(|&j| linear.map(|l| l.cols[j].2.clone()))
+            .collect();
+        names.extend(candidates.names.iter().map(|n| n.to_string()));
+        let x: Vec<Vec<f64>> = rows
+            .iter()
+            .map(|&i| {
+                let mut row: Vec<f64> = forced
+                    .iter()
+                    .filter_map(|&j| linear.map(|l| l.j[j][candidates.row[i][c]]))
+                    .collect();
+                row.extend(&candidates.values[i]);
                 row
             })
             .collect();
-        let y: Vec<f64> = rows.iter().map(|i| i.values[c]).collect();
+        let inn = &s.recon.innovations;
+        let y: Vec<f64> = rows.iter().map(|&i| inn[i].values[c]).collect();
         // Clusters of a third of a block (never across a fit / held-out change).
         let cluster: Vec<usize> = rows
             .iter()
-            .map(|i| fold_of(data.t[i.tick], block_s / 3.0))
+            .map(|&i| fold_of(data.t[inn[i].tick], block_s / 3.0))
             .collect();
         let fold: Vec<usize> = rows
             .iter()
-            .map(|i| fold_of(data.t[i.tick], block_s))
+            .map(|&i| fold_of(data.t[inn[i].tick], block_s))
             .collect();
-        let held: Vec<bool> = rows.iter().map(|i| problem.held_out[i.tick]).collect();
+        let held: Vec<bool> = rows.iter().map(|&i| problem.held_out[inn[i].tick]).collect();
         let design = Design::new(
-            names.iter().map(|n| n.to_string()).collect(),
-            0,
+            names,
+            forced.len(),
             &x,
             &y,
             &cluster,
@@ -412,12 +495,21 @@ fn search_innovations(
             options.folds,
         );
         let result = search(&design, options);
-        if let Some(e) = effect(labels[c].to_string(), "1 (whitened)", result, &design) {
+        if let Some(e) = effect(INNOVATION_LABELS[c].to_string(), "1 (whitened)", result, &design) {
             out.push(e);
         }
     }
     out
 }
+
+/// Names of the innovation components (the equations of the sensor channel).
+pub(super) const INNOVATION_LABELS: [&str; INNOVATION_LEN] = [
+    "innovation_tilt_1",
+    "innovation_tilt_2",
+    "innovation_field_x",
+    "innovation_field_y",
+    "innovation_field_z",
+];
 
 fn effect(
     equation: String,
