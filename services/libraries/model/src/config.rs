@@ -333,12 +333,16 @@ pub struct ConstantTorque {
     pub torque_nm: [f64; 3],
 }
 
-/// The true inertia differs from the nominal: `I_true = I_nom + diag(fraction ⊙ diag(I_nom))`.
+/// The true inertia differs from the nominal: `I_true = I_nom + diag(fraction ⊙ diag(I_nom)) + P`,
+/// `P` the symmetric matrix of product errors (zero diagonal).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct InertiaError {
     /// Relative error of each principal moment (e.g. 0.03 for +3 %), dimensionless.
     pub fraction: [f64; 3],
+    /// Errors of the products of inertia `[I_xy, I_yz, I_zx]`, kg m² (absent: none).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub products_kgm2: Option<[f64; 3]>,
 }
 
 /// Gyro scale factor error per axis: `w_meas = (1 + s) w`.
@@ -505,6 +509,9 @@ impl ModelConfig {
                     0.5,
                 );
             }
+            if let Some(p) = &x.products_kgm2 {
+                v.finite_all("effects.inertia_error.products_kgm2", p);
+            }
             let nominal = self.platform.inertia();
             let truth = self.true_inertia();
             if nominal.is_some() && truth.is_none() {
@@ -577,6 +584,12 @@ impl ModelConfig {
         if let Some(err) = &self.effects.inertia_error {
             for i in 0..3 {
                 inertia[(i, i)] *= 1.0 + err.fraction[i];
+            }
+            if let Some(p) = err.products_kgm2 {
+                for (k, (a, b)) in [(0, 1), (1, 2), (2, 0)].into_iter().enumerate() {
+                    inertia[(a, b)] += p[k];
+                    inertia[(b, a)] += p[k];
+                }
             }
         }
         is_symmetric_positive_definite(&inertia).then_some(inertia)
@@ -828,6 +841,7 @@ mod tests {
         let mut config = ModelConfig::default();
         config.effects.inertia_error = Some(InertiaError {
             fraction: [0.02, 0.0, -0.03],
+            products_kgm2: None,
         });
         let truth = config.true_inertia().unwrap();
         assert!((truth[(0, 0)] - 45.2 * 1.02).abs() < 1e-12);

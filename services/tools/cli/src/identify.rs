@@ -85,7 +85,7 @@ pub fn run_identify(args: &IdentifyArgs) -> Result<()> {
     // The file must load as it is.
     ModelConfig::load(&model_path)
         .with_context(|| format!("re-reading {}", model_path.display()))?;
-    let figures = write_figures(&args.out, &result.figures)?;
+    let figures = write_figures(&args.out, &result.figures, result.report.options.horizon_s)?;
     let mut value = serde_json::to_value(&result.report)?;
     value["extended_model"] = serde_json::json!(model_path.display().to_string());
     value["figures"] = serde_json::json!(figures);
@@ -139,6 +139,7 @@ pub fn run_experiment(args: &ExperimentArgs) -> Result<()> {
         "model": args.model.as_ref().map(|p| p.display().to_string()),
         "options": options,
         "tilt_stop_strikes": trace.tilt_stops.len(),
+        "wheel_saturated": max_wheel >= 0.97 * model.wheels.max_speed_rad_s(),
         "max_tilt_deg": max_tilt / DEG,
         "max_wheel_speed_rpm": max_wheel / RPM,
     });
@@ -162,6 +163,24 @@ pub fn run_experiment(args: &ExperimentArgs) -> Result<()> {
         trace.tilt_stops.len(),
         max_wheel / RPM
     );
+    // A programme that strikes the stop or saturates a wheel measures the stop and the speed
+    // limiter, not the effects it is meant to excite: say so.
+    if !trace.tilt_stops.is_empty() {
+        eprintln!(
+            "warning: the programme hit the tilt stop {} time(s) (max tilt {:.1}° of {}°): the data near those strikes are left out of the torque channel and the platform was not under control; reduce the tilt steps or look for a large centre-of-mass offset in the model",
+            trace.tilt_stops.len(),
+            max_tilt / DEG,
+            model.platform.tilt_limit_deg
+        );
+    }
+    let speed_limit = model.wheels.max_speed_rad_s();
+    if max_wheel >= 0.97 * speed_limit {
+        eprintln!(
+            "warning: a wheel reached {:.0} rpm of its {:.0} rpm limit (saturated): the controller lost authority about that axis; shorten the programme or lower the heading rate",
+            max_wheel / RPM,
+            speed_limit / RPM
+        );
+    }
     for f in written.iter().chain(std::iter::once(&info_path)) {
         println!("wrote {}", f.display());
     }
@@ -368,6 +387,20 @@ fn print_components(report: &testbed_ident::identify::ResidualReport) {
     );
 }
 
+/// Held-out windows drawn as windows: each (start, value) becomes a horizontal bar over the
+/// window (at most `horizon_s`, ending before the next window), with a gap after it, so the
+/// held-out blocks are not joined across the fit data between them.
+fn window_bars(points: &[(f64, f64)], horizon_s: f64) -> Vec<(f64, f64)> {
+    let mut out = Vec::with_capacity(3 * points.len());
+    for (i, &(t, v)) in points.iter().enumerate() {
+        let end = points
+            .get(i + 1)
+            .map_or(t + horizon_s, |next| (t + horizon_s).min(next.0));
+        out.extend([(t, v), (end, v), (end, f64::NAN)]);
+    }
+    out
+}
+
 /// Display scale and unit of a residual component.
 fn display(label: &str) -> (f64, &'static str) {
     match label {
@@ -417,7 +450,7 @@ fn panel_from<'a>(
     })
 }
 
-fn write_figures(out: &Path, f: &FigureData) -> Result<Vec<String>> {
+fn write_figures(out: &Path, f: &FigureData, horizon_s: f64) -> Result<Vec<String>> {
     let mut written = Vec::new();
     let prediction: Vec<Panel> = [
         ("gyro", "rate residual (µrad/s)"),
@@ -487,12 +520,12 @@ fn write_figures(out: &Path, f: &FigureData) -> Result<Vec<String>> {
                 series: vec![
                     Series {
                         label: "nominal",
-                        points: a.points.clone(),
+                        points: window_bars(&a.points, horizon_s),
                         dashed: false,
                     },
                     Series {
                         label: "extended",
-                        points: b.points.clone(),
+                        points: window_bars(&b.points, horizon_s),
                         dashed: false,
                     },
                 ],
@@ -506,7 +539,7 @@ fn write_figures(out: &Path, f: &FigureData) -> Result<Vec<String>> {
         let path = out.join("gain.svg");
         figure::write_svg(
             &path,
-            "Held-out prediction error per window: nominal vs extended model",
+            "Held-out prediction error per window (bars: the held-out windows; gaps: fit data)",
             &gain,
         )?;
         written.push(path.display().to_string());
