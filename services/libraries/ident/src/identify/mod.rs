@@ -448,7 +448,26 @@ pub fn identify(
     .into_iter()
     .filter_map(|(p, n)| p.then_some(n))
     .collect();
-    let summary = report::summary(&causes, &cause_tests, &effects, &remaining, gain);
+    // Borderline causes: the last step's candidates that did not reach the threshold but are
+    // significant at 1 % and improve the held-out data (not named, but not silently dropped).
+    let possible: Vec<CandidateRow> = steps
+        .last()
+        .map(|rows| {
+            rows.iter()
+                .filter(|r| {
+                    !r.chosen
+                        && !selected.iter().any(|c| c.name() == r.name)
+                        && r.k > 0
+                        && r.lr_held_out > 0.0
+                        && r.lr_fit
+                            > chi_square_quantile(0.99, r.k as f64).unwrap_or(f64::INFINITY)
+                        && !(r.significant && cause_tests.iter().any(|t| t.name == r.name))
+                })
+                .cloned()
+                .collect()
+        })
+        .unwrap_or_default();
+    let summary = report::summary(&causes, &cause_tests, &possible, &effects, &remaining, gain);
     let report = Report {
         summary,
         data: DataSummary {
@@ -462,6 +481,7 @@ pub fn identify(
         options: options.clone(),
         nominal_residuals: nominal_report,
         steps,
+        possible,
         causes,
         verdict,
         cause_tests,

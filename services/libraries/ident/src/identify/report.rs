@@ -124,6 +124,9 @@ pub struct Report {
     pub nominal_residuals: ResidualReport,
     /// Forward selection, one entry per step.
     pub steps: Vec<Vec<CandidateRow>>,
+    /// Borderline causes of the last selection step: below the threshold, but significant at
+    /// the 1 % level (`LR > χ²_k(0.99)`) and improving the held-out data. Listed, not named.
+    pub possible: Vec<CandidateRow>,
     /// Named causes, strongest first (empty: none).
     pub causes: Vec<CauseReport>,
     /// `none`, or the causes joined by ` + `.
@@ -210,6 +213,7 @@ pub fn with_error(value: f64, stderr: f64) -> String {
 pub(super) fn summary(
     causes: &[CauseReport],
     tests: &[super::CauseTest],
+    possible: &[CandidateRow],
     effects: &[super::UnexplainedEffect],
     remaining: &Remaining,
     gain: f64,
@@ -256,6 +260,12 @@ pub(super) fn summary(
     }
     for t in tests.iter().filter(|t| !t.kept) {
         out.push(format!("Not named: {} — {}.", t.name, t.verdict));
+    }
+    for p in possible {
+        out.push(format!(
+            "Possible (below the threshold, not named): {} — likelihood ratio {:.1} against the threshold {:.1}, held-out {:+.1}.",
+            p.name, p.lr_fit, p.threshold, p.lr_held_out
+        ));
     }
     if effects.is_empty() {
         out.push("Unexplained effect: none found (no candidate function carries a significant part of the remaining residuals).".to_string());
