@@ -341,7 +341,9 @@ impl Cause {
             Cause::InertiaError => e
                 .inertia_error
                 .as_ref()
-                .map_or([0.0; 6], |x| cat(&x.fraction, &x.products_kgm2.unwrap_or([0.0; 3])))
+                .map_or([0.0; 6], |x| {
+                    cat(&x.fraction, &x.products_kgm2.unwrap_or([0.0; 3]))
+                })
                 .to_vec(),
             Cause::GyroScale => e.gyro_scale.as_ref().map_or([0.0; 3], |x| x.ppm).to_vec(),
             Cause::GyroMisalignment => e

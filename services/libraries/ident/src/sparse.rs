@@ -182,7 +182,9 @@ impl Design {
         let (lo, hi) = eig
             .eigenvalues
             .iter()
-            .fold((f64::INFINITY, 0.0f64), |(lo, hi), &x| (lo.min(x), hi.max(x)));
+            .fold((f64::INFINITY, 0.0f64), |(lo, hi), &x| {
+                (lo.min(x), hi.max(x))
+            });
         // Collinear with the terms already in (or with the forced columns): not a new term.
         if lo.is_nan() || lo <= hi * 1e-9 {
             return None;
@@ -226,7 +228,10 @@ impl Design {
         let mut meat = DMatrix::<f64>::zeros(p, p);
         for cl in &self.clusters {
             let s = DVector::from_fn(p, |i, _| {
-                cl.xty[cols[i]] - (0..p).map(|j| cl.xtx[(cols[i], cols[j])] * theta[j]).sum::<f64>()
+                cl.xty[cols[i]]
+                    - (0..p)
+                        .map(|j| cl.xtx[(cols[i], cols[j])] * theta[j])
+                        .sum::<f64>()
             });
             meat += &s * s.transpose();
         }

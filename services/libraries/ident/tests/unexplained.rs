@@ -53,7 +53,11 @@ fn check(
     found.sort();
     let mut want: Vec<&str> = library.iter().map(|c| c.name()).collect();
     want.sort();
-    assert_eq!(found, want, "{label}: named causes {:?}", id.report.cause_tests);
+    assert_eq!(
+        found, want,
+        "{label}: named causes {:?}",
+        id.report.cause_tests
+    );
     for cause in library {
         let fitted = cause.values(&id.extended);
         let hidden = cause.values(truth);
@@ -67,7 +71,9 @@ fn check(
     }
     let hit = id.report.unexplained.iter().find(|e| {
         equations.contains(&e.equation.as_str())
-            && e.terms.iter().any(|t| regressors.contains(&t.name.as_str()))
+            && e.terms
+                .iter()
+                .any(|t| regressors.contains(&t.name.as_str()))
     });
     let Some(hit) = hit else {
         panic!(
@@ -187,7 +193,11 @@ fn soft_iron_with_a_com_offset_known_limit() {
         &t,
         &id,
         &[Cause::ComOffset],
-        &["innovation_field_x", "innovation_field_y", "innovation_field_z"],
+        &[
+            "innovation_field_x",
+            "innovation_field_y",
+            "innovation_field_z",
+        ],
         &["B_x", "B_y", "cos ψ", "sin ψ", "cos 2ψ", "sin 2ψ"],
         1.05,
     );
@@ -221,6 +231,9 @@ fn clean_data_give_no_unexplained_effect_on_20_of_20_seeds() {
         }
     }
     println!("unexplained on {found:?}; causes on {named:?}");
-    assert!(found.is_empty(), "unexplained effects on clean data: {found:?}");
+    assert!(
+        found.is_empty(),
+        "unexplained effects on clean data: {found:?}"
+    );
     assert!(named.is_empty(), "causes named on clean data: {named:?}");
 }

@@ -566,7 +566,12 @@ impl ModelConfig {
         if let Some(x) = &e.soft_iron {
             for (i, row) in x.matrix.iter().enumerate() {
                 for (j, m) in row.iter().enumerate() {
-                    v.within(&format!("effects.soft_iron.matrix[{i}][{j}]"), *m, -0.5, 0.5);
+                    v.within(
+                        &format!("effects.soft_iron.matrix[{i}][{j}]"),
+                        *m,
+                        -0.5,
+                        0.5,
+                    );
                 }
             }
         }

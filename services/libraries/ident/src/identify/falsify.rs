@@ -194,7 +194,9 @@ pub(super) fn test_causes(
             let se = f.stderr();
             let mut delta = Vec::new();
             for &cause in named.iter().filter(|c| c.kind() == Kind::Torque) {
-                let idx: Vec<usize> = (0..cols.len()).filter(|&j| cols[j].0 == Some(cause)).collect();
+                let idx: Vec<usize> = (0..cols.len())
+                    .filter(|&j| cols[j].0 == Some(cause))
+                    .collect();
                 delta.push((
                     cause,
                     idx.iter().map(|&j| f.theta[j]).collect(),
@@ -204,7 +206,9 @@ pub(super) fn test_causes(
             joint = Some(JointTorque { delta });
         }
         for &cause in named.iter().filter(|c| c.kind() == Kind::Torque) {
-            let idx: Vec<usize> = (0..cols.len()).filter(|&j| cols[j].0 == Some(cause)).collect();
+            let idx: Vec<usize> = (0..cols.len())
+                .filter(|&j| cols[j].0 == Some(cause))
+                .collect();
             let consistency = consistency(&per_block, &idx);
             let mut verdict = String::new();
             let mut kept = true;
@@ -237,9 +241,8 @@ pub(super) fn test_causes(
                     let n = full_ne.rows() as f64;
                     let lr = n * (w_rss / f.rss.max(1e-300)).ln();
                     let k = idx.len();
-                    let threshold = (k as f64 * n_fit.ln()).max(
-                        chi_square_quantile(1.0 - alpha, k as f64).unwrap_or(f64::INFINITY),
-                    );
+                    let threshold = (k as f64 * n_fit.ln())
+                        .max(chi_square_quantile(1.0 - alpha, k as f64).unwrap_or(f64::INFINITY));
                     joint_lr = Some(lr);
                     joint_threshold = Some(threshold);
                     if lr <= threshold && kept {

@@ -459,8 +459,7 @@ pub fn identify(
                         && !selected.iter().any(|c| c.name() == r.name)
                         && r.k > 0
                         && r.lr_held_out > 0.0
-                        && r.lr_fit
-                            > chi_square_quantile(0.99, r.k as f64).unwrap_or(f64::INFINITY)
+                        && r.lr_fit > chi_square_quantile(0.99, r.k as f64).unwrap_or(f64::INFINITY)
                         && !(r.significant && cause_tests.iter().any(|t| t.name == r.name))
                 })
                 .cloned()

@@ -237,10 +237,7 @@ fn search_torque(
             .copied()
             .filter(|&c| ch.x.iter().any(|row| row[c][axis] != 0.0))
             .collect();
-        let mut names: Vec<String> = forced
-            .iter()
-            .map(|&c| column_name(c))
-            .collect();
+        let mut names: Vec<String> = forced.iter().map(|&c| column_name(c)).collect();
         names.extend(candidates.names.iter().map(|n| n.to_string()));
         let x: Vec<Vec<f64>> = (0..ch.len())
             .map(|r| {
@@ -416,7 +413,10 @@ impl SensorLinear {
                     let taken = v[i] - values[i];
                     let mut config = fit.config.clone();
                     cause.apply(&mut config, &v);
-                    let r = problem.run_filter(&config).ok()?.innovation_vector(|_| true);
+                    let r = problem
+                        .run_filter(&config)
+                        .ok()?
+                        .innovation_vector(|_| true);
                     if r.len() != r0.len() || taken == 0.0 {
                         return None;
                     }
@@ -483,7 +483,10 @@ fn search_innovations(
             .iter()
             .map(|&i| fold_of(data.t[inn[i].tick], block_s))
             .collect();
-        let held: Vec<bool> = rows.iter().map(|&i| problem.held_out[inn[i].tick]).collect();
+        let held: Vec<bool> = rows
+            .iter()
+            .map(|&i| problem.held_out[inn[i].tick])
+            .collect();
         let design = Design::new(
             names,
             forced.len(),
@@ -495,7 +498,12 @@ fn search_innovations(
             options.folds,
         );
         let result = search(&design, options);
-        if let Some(e) = effect(INNOVATION_LABELS[c].to_string(), "1 (whitened)", result, &design) {
+        if let Some(e) = effect(
+            INNOVATION_LABELS[c].to_string(),
+            "1 (whitened)",
+            result,
+            &design,
+        ) {
             out.push(e);
         }
     }
@@ -525,7 +533,11 @@ fn effect(
         result
             .terms
             .iter()
-            .map(|t| format!("{} {unit} × {}", crate::identify::report::round_to(t.value, t.stderr), t.name))
+            .map(|t| format!(
+                "{} {unit} × {}",
+                crate::identify::report::round_to(t.value, t.stderr),
+                t.name
+            ))
             .collect::<Vec<_>>()
             .join(" + ")
     );
