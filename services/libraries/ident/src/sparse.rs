@@ -40,6 +40,18 @@ struct Cluster {
     held_out: bool,
 }
 
+/// The rows of one equation: `x[i]` the regressors of row i, `y[i]` its residual,
+/// `cluster[i]` its cluster (rows of a cluster need not be adjacent); the fold and the
+/// held-out flag of a cluster are those of its first row.
+#[derive(Debug, Clone, Copy)]
+pub struct Rows<'a> {
+    pub x: &'a [Vec<f64>],
+    pub y: &'a [f64],
+    pub cluster: &'a [usize],
+    pub fold: &'a [usize],
+    pub held_out: &'a [bool],
+}
+
 /// The rows of one equation, accumulated per cluster.
 #[derive(Debug, Clone)]
 pub struct Design {
@@ -55,19 +67,15 @@ pub struct Design {
 }
 
 impl Design {
-    /// Build from rows: `x[i]` the regressors of row i (`names.len()` long), `y[i]` its
-    /// residual, `cluster[i]` its cluster (rows of a cluster need not be adjacent), `fold` of
-    /// each cluster's first row decides its fold, `held_out` likewise.
-    pub fn new(
-        names: Vec<String>,
-        forced: usize,
-        x: &[Vec<f64>],
-        y: &[f64],
-        cluster: &[usize],
-        fold: &[usize],
-        held_out: &[bool],
-        folds: usize,
-    ) -> Self {
+    /// Build from `rows` (each `x` row `names.len()` long), with `folds` folds.
+    pub fn new(names: Vec<String>, forced: usize, rows: Rows, folds: usize) -> Self {
+        let Rows {
+            x,
+            y,
+            cluster,
+            fold,
+            held_out,
+        } = rows;
         let p = names.len();
         let mut scale = vec![0.0; p];
         for row in x {
@@ -413,10 +421,11 @@ pub fn search(design: &Design, options: &SparseOptions) -> SparseResult {
             for j in (design.forced..p).filter(|j| !active.contains(j)) {
                 let mut cols = active.clone();
                 cols[i] = j;
-                if let Some(cv) = design.cv_rss(&cols) {
-                    if cv < current * (1.0 - 1e-9) && best.is_none_or(|b| cv < b.2) {
-                        best = Some((i, j, cv));
-                    }
+                if let Some(cv) = design.cv_rss(&cols)
+                    && cv < current * (1.0 - 1e-9)
+                    && best.is_none_or(|b| cv < b.2)
+                {
+                    best = Some((i, j, cv));
                 }
             }
         }
@@ -434,7 +443,8 @@ pub fn search(design: &Design, options: &SparseOptions) -> SparseResult {
             .map(|i| (i, (values[i] / se[i]).abs()))
             .min_by(|a, b| a.1.total_cmp(&b.1));
         match weakest {
-            Some((i, z)) if !(z >= z_threshold) => {
+            // A NaN statistic (undetermined term) is dropped too.
+            Some((i, z)) if z.partial_cmp(&z_threshold) != Some(std::cmp::Ordering::Greater) => {
                 active.remove(i);
             }
             _ => break,
@@ -523,7 +533,18 @@ mod tests {
         }
         let names: Vec<String> = (0..12).map(|j| format!("f{j}")).collect();
         let held: Vec<bool> = (0..n).map(|i| (i / 300) % 3 == 2).collect();
-        let d = Design::new(names.clone(), 0, &x, &y, &cluster, &fold, &held, 5);
+        let d = Design::new(
+            names.clone(),
+            0,
+            Rows {
+                x: &x,
+                y: &y,
+                cluster: &cluster,
+                fold: &fold,
+                held_out: &held,
+            },
+            5,
+        );
         let r = search(&d, &SparseOptions::default());
         let mut found: Vec<&str> = r.terms.iter().map(|t| t.name.as_str()).collect();
         found.sort();
@@ -533,7 +554,18 @@ mod tests {
             assert!((t.value - truth).abs() < 4.0 * t.stderr, "{t:?}");
         }
         assert!(r.held_out_gain > 2.0 && r.cv_gain > 2.0, "{r:?}");
-        let d0 = Design::new(names, 0, &x, &y0, &cluster, &fold, &held, 5);
+        let d0 = Design::new(
+            names,
+            0,
+            Rows {
+                x: &x,
+                y: &y0,
+                cluster: &cluster,
+                fold: &fold,
+                held_out: &held,
+            },
+            5,
+        );
         let r0 = search(&d0, &SparseOptions::default());
         assert!(r0.terms.is_empty(), "{r0:?}");
     }

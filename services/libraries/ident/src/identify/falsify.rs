@@ -16,9 +16,7 @@
 //! attitude filter (forward differences, one filter run per parameter) and tested on the
 //! innovations the same way. Wheel causes are not yet tested (reported as such).
 
-use super::unexplained::{
-    INNOVATION_LABELS, InnovationCandidates, SensorLinear, TorqueCandidates, UnexplainedEffect,
-};
+use super::unexplained::{Candidates, INNOVATION_LABELS, TorqueCandidates, UnexplainedEffect};
 use crate::channels::torque_columns;
 use crate::effects::{Cause, Kind};
 use crate::fit::{Problem, SetFit};
@@ -79,13 +77,17 @@ pub(super) struct JointTorque {
     pub delta: Vec<(Cause, Vec<f64>, Vec<f64>)>,
 }
 
+/// Columns of the joint torque model: (cause, torque column) of the named causes, and (axis,
+/// candidate index) of the unexplained terms.
+type JointColumns = (Vec<(Option<Cause>, usize)>, Vec<(usize, usize)>);
+
 /// The design of the joint torque model: named torque causes' columns, then one column per
-/// unexplained torque term (on its axis). Returns per row the 3 axes' regressor rows.
+/// unexplained torque term (on its axis).
 fn joint_columns(
     named: &[Cause],
     effects: &[UnexplainedEffect],
     candidates: &TorqueCandidates,
-) -> (Vec<(Option<Cause>, usize)>, Vec<(usize, usize)>) {
+) -> JointColumns {
     // (cause, torque column) for named; (axis, candidate index) for the unexplained terms.
     let cols: Vec<(Option<Cause>, usize)> = named
         .iter()
@@ -153,21 +155,34 @@ fn normal_equations(
     (ne, used)
 }
 
+/// Settings of the tests.
+pub(super) struct Levels {
+    /// Disjoint time blocks of the consistency test.
+    pub blocks: usize,
+    /// Level of the consistency test.
+    pub consistency: f64,
+    /// The selection's level (its threshold is `max(k ln N, χ²_k(1 − selection))`).
+    pub selection: f64,
+    /// `N`: scalar residuals in the fit data.
+    pub n_fit: f64,
+}
+
 /// Run both tests on every named cause of `fit`.
-#[allow(clippy::too_many_arguments)]
 pub(super) fn test_causes(
     problem: &Problem,
     fit: &SetFit,
     named: &[Cause],
     effects: &[UnexplainedEffect],
-    candidates: &TorqueCandidates,
-    innovation: &InnovationCandidates,
-    linear: Option<&SensorLinear>,
-    blocks: usize,
-    alpha_consistency: f64,
-    alpha: f64,
-    n_fit: f64,
+    all: &Candidates,
+    levels: &Levels,
 ) -> (Vec<CauseTest>, Option<JointTorque>) {
+    let candidates = &all.torque;
+    let Levels {
+        blocks,
+        consistency: alpha_consistency,
+        selection: alpha,
+        n_fit,
+    } = *levels;
     let ch = &fit.state.torque;
     let data = problem.data;
     let (cols, extra) = joint_columns(named, effects, candidates);
@@ -212,14 +227,11 @@ pub(super) fn test_causes(
             let consistency = consistency(&per_block, &idx);
             let mut verdict = String::new();
             let mut kept = true;
-            if let Some(c) = &consistency {
-                if c.p < alpha_consistency {
-                    kept = false;
-                    verdict = format!(
-                        "falsified: its parameters differ between {} time blocks (χ² = {:.1} on {} degrees of freedom, p = {:.1e} < {:.0e}); a time- or state-dependent effect, not a constant one",
-                        c.blocks, c.chi2, c.dof, c.p, alpha_consistency
-                    );
-                }
+            if let Some(c) = &consistency
+                && c.p < alpha_consistency
+            {
+                kept = false;
+                verdict = falsified_text(c, alpha_consistency);
             }
             let (mut joint_lr, mut joint_threshold) = (None, None);
             {
@@ -272,18 +284,7 @@ pub(super) fn test_causes(
             });
         }
     }
-    out.extend(sensor_tests(
-        problem,
-        fit,
-        named,
-        effects,
-        innovation,
-        linear,
-        blocks,
-        alpha_consistency,
-        alpha,
-        n_fit,
-    ));
+    out.extend(sensor_tests(problem, fit, named, effects, all, levels));
     for &cause in named.iter().filter(|c| c.kind() == Kind::Wheel) {
         out.push(CauseTest {
             name: cause.name(),
@@ -303,19 +304,22 @@ pub(super) fn test_causes(
 /// as extra columns) for the consistency, and the likelihood ratio of the innovations with and
 /// without the cause (its effect removed to first order, `r − J_c Δθ_c`) beside the unexplained
 /// terms for the significance.
-#[allow(clippy::too_many_arguments)]
 fn sensor_tests(
     problem: &Problem,
     fit: &SetFit,
     named: &[Cause],
     effects: &[UnexplainedEffect],
-    innovation: &InnovationCandidates,
-    linear: Option<&SensorLinear>,
-    blocks: usize,
-    alpha_consistency: f64,
-    alpha: f64,
-    n_fit: f64,
+    all_candidates: &Candidates,
+    levels: &Levels,
 ) -> Vec<CauseTest> {
+    let innovation = &all_candidates.innovation;
+    let linear = all_candidates.linear.as_ref();
+    let Levels {
+        blocks,
+        consistency: alpha_consistency,
+        selection: alpha,
+        n_fit,
+    } = *levels;
     let sensor: Vec<Cause> = named
         .iter()
         .copied()
@@ -420,14 +424,11 @@ fn sensor_tests(
         let consistency = consistency(&per_block, &idx);
         let mut kept = true;
         let mut verdict = String::new();
-        if let Some(c) = &consistency {
-            if c.p < alpha_consistency {
-                kept = false;
-                verdict = format!(
-                    "falsified: its parameters differ between {} time blocks (χ² = {:.1} on {} degrees of freedom, p = {:.1e} < {:.0e}); a time- or state-dependent effect, not a constant one",
-                    c.blocks, c.chi2, c.dof, c.p, alpha_consistency
-                );
-            }
+        if let Some(c) = &consistency
+            && c.p < alpha_consistency
+        {
+            kept = false;
+            verdict = falsified_text(c, alpha_consistency);
         }
         let (mut joint_lr, mut joint_threshold) = (None, None);
         let removable = idx.iter().all(|&j| lin.delta[j].is_some());
@@ -471,6 +472,13 @@ fn sensor_tests(
         });
     }
     out
+}
+
+fn falsified_text(c: &Consistency, alpha: f64) -> String {
+    format!(
+        "falsified: its parameters differ between {} time blocks (χ² = {:.1} on {} degrees of freedom, p = {:.1e} < {:.0e}); a time- or state-dependent effect, not a constant one",
+        c.blocks, c.chi2, c.dof, c.p, alpha
+    )
 }
 
 /// Residual sum at the least-squares solution (`Σ y²` with no unknowns).

@@ -287,16 +287,12 @@ pub fn identify(
     // Falsify the named causes and search what remains (see `falsify`, `unexplained`).
     let mut named = selected.clone();
     let analyse = |fit: &SetFit, named: &[Cause]| {
-        let torque = unexplained::TorqueCandidates::new(&problem, fit);
-        let innovation = unexplained::InnovationCandidates::new(&problem, fit);
-        let linear = unexplained::SensorLinear::new(&problem, fit, named);
+        let candidates = unexplained::Candidates::new(&problem, fit, named);
         let effects = unexplained::search_all(
             &problem,
             fit,
             named,
-            &torque,
-            &innovation,
-            linear.as_ref(),
+            &candidates,
             options.block_s,
             &options.sparse,
         );
@@ -305,13 +301,13 @@ pub fn identify(
             fit,
             named,
             &effects,
-            &torque,
-            &innovation,
-            linear.as_ref(),
-            options.consistency_blocks,
-            options.consistency_alpha,
-            options.alpha,
-            n_fit,
+            &candidates,
+            &falsify::Levels {
+                blocks: options.consistency_blocks,
+                consistency: options.consistency_alpha,
+                selection: options.alpha,
+                n_fit,
+            },
         );
         (effects, tests, joint)
     };

@@ -33,7 +33,7 @@ use crate::channels::{TORQUE_COLUMNS, torque_columns};
 use crate::effects::{Cause, Kind};
 use crate::fit::{Problem, SetFit};
 use crate::reconstruct::INNOVATION_LEN;
-use crate::sparse::{Design, SparseOptions, SparseResult, Term, search};
+use crate::sparse::{Design, Rows, SparseOptions, SparseResult, Term, search};
 use serde::Serialize;
 use testbed_model::attitude;
 
@@ -140,7 +140,7 @@ impl TorqueCandidates {
             let first = seg.start;
             let k0 = ch.ticks[first];
             let d0 = direct(k0);
-            let mut acc = vec![0.0; TORQUE_DIRECT_FROM];
+            let mut acc = [0.0; TORQUE_DIRECT_FROM];
             let mut prev = integrand(k0);
             for r in seg.clone() {
                 let k = ch.ticks[r];
@@ -153,9 +153,7 @@ impl TorqueCandidates {
                     prev = f;
                 }
                 let d = direct(k);
-                for j in 0..TORQUE_DIRECT_FROM {
-                    values[r][j] = acc[j];
-                }
+                values[r][..TORQUE_DIRECT_FROM].copy_from_slice(&acc);
                 for j in 0..3 {
                     values[r][TORQUE_DIRECT_FROM + j] = d[j] - d0[j];
                 }
@@ -181,22 +179,48 @@ fn fold_of(t: f64, block_s: f64) -> usize {
 }
 
 /// Search every equation for what the fit `fit` (of the named causes `named`) leaves.
+/// The candidate functions of both channels and the named sensor causes' linearisation, on one
+/// fit.
+pub(super) struct Candidates {
+    pub torque: TorqueCandidates,
+    pub innovation: InnovationCandidates,
+    pub linear: Option<SensorLinear>,
+}
+
+impl Candidates {
+    pub fn new(problem: &Problem, fit: &SetFit, named: &[Cause]) -> Self {
+        Self {
+            torque: TorqueCandidates::new(problem, fit),
+            innovation: InnovationCandidates::new(problem, fit),
+            linear: SensorLinear::new(problem, fit, named),
+        }
+    }
+}
+
 pub(super) fn search_all(
     problem: &Problem,
     fit: &SetFit,
     named: &[Cause],
-    candidates: &TorqueCandidates,
-    innovation: &InnovationCandidates,
-    linear: Option<&SensorLinear>,
+    candidates: &Candidates,
     block_s: f64,
     options: &SparseOptions,
 ) -> Vec<UnexplainedEffect> {
     let mut out = Vec::new();
     out.extend(search_torque(
-        problem, fit, named, candidates, block_s, options,
+        problem,
+        fit,
+        named,
+        &candidates.torque,
+        block_s,
+        options,
     ));
     out.extend(search_innovations(
-        problem, fit, innovation, linear, block_s, options,
+        problem,
+        fit,
+        &candidates.innovation,
+        candidates.linear.as_ref(),
+        block_s,
+        options,
     ));
     out
 }
@@ -249,16 +273,14 @@ fn search_torque(
         let y: Vec<f64> = (0..ch.len())
             .map(|r| ch.whitened(r, &fit.torque_delta)[axis] * ch.sigma[axis])
             .collect();
-        let design = Design::new(
-            names,
-            forced.len(),
-            &x,
-            &y,
-            &segment_of,
-            &fold,
-            &held,
-            options.folds,
-        );
+        let rows = Rows {
+            x: &x,
+            y: &y,
+            cluster: &segment_of,
+            fold: &fold,
+            held_out: &held,
+        };
+        let design = Design::new(names, forced.len(), rows, options.folds);
         let result = search(&design, options);
         if std::env::var_os("IDENT_DEBUG").is_some() {
             eprintln!(
@@ -487,16 +509,14 @@ fn search_innovations(
             .iter()
             .map(|&i| problem.held_out[inn[i].tick])
             .collect();
-        let design = Design::new(
-            names,
-            forced.len(),
-            &x,
-            &y,
-            &cluster,
-            &fold,
-            &held,
-            options.folds,
-        );
+        let rows = Rows {
+            x: &x,
+            y: &y,
+            cluster: &cluster,
+            fold: &fold,
+            held_out: &held,
+        };
+        let design = Design::new(names, forced.len(), rows, options.folds);
         let result = search(&design, options);
         if let Some(e) = effect(
             INNOVATION_LABELS[c].to_string(),
