@@ -246,8 +246,27 @@ pub(super) fn summary(
             };
             parts.push(format!("{key} = {text} {unit}"));
         }
+        // The residual test of the cause's own channel: structure left there is said here.
+        let channel = match crate::effects::Cause::from_name(c.name).map(|c| c.kind()) {
+            Some(crate::effects::Kind::Torque) => Some("torque_"),
+            Some(crate::effects::Kind::Sensor) => Some("innovation_"),
+            _ => None,
+        };
+        let left: Vec<&str> = effects
+            .iter()
+            .filter(|e| channel.is_some_and(|p| e.equation.starts_with(p)))
+            .map(|e| e.equation.as_str())
+            .collect();
+        let residual_test = if left.is_empty() {
+            String::new()
+        } else {
+            format!(
+                " (its channel's residuals fail the structure test in {}: an unexplained effect, fitted beside it)",
+                left.join(", ")
+            )
+        };
         out.push(format!(
-            "Named cause: {} ({}): {}.",
+            "Named cause: {} ({}): {}{residual_test}.",
             c.name,
             c.description,
             parts.join("; ")

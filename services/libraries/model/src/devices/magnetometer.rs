@@ -97,6 +97,22 @@ mod tests {
     use crate::devices::stats::assert_white;
 
     #[test]
+    fn soft_iron_multiplies_the_body_field() {
+        use crate::config::SoftIron;
+        let mut config = ModelConfig::default();
+        let plain = Magnetometer::new(&config, 1);
+        config.effects.soft_iron = Some(SoftIron {
+            matrix: [[0.03, 0.02, 0.0], [0.02, -0.03, 0.0], [0.0, 0.0, 0.01]],
+        });
+        let soft = Magnetometer::new(&config, 1);
+        let q = crate::attitude::from_heading_pitch_roll(0.8, 0.1, -0.05);
+        let body = plain.expected_t(&q);
+        let s = nalgebra::Matrix3::new(0.03, 0.02, 0.0, 0.02, -0.03, 0.0, 0.0, 0.0, 0.01);
+        let want = body + s * body;
+        assert!((soft.expected_t(&q) - want).norm() < 1e-18);
+    }
+
+    #[test]
     fn noise_matches_configured_sigma_about_rotated_field_plus_hard_iron() {
         let mut config = ModelConfig::default();
         config.effects.magnetic_disturbance = Some(MagneticDisturbance {

@@ -146,6 +146,49 @@ mod tests {
     use crate::config::{AeroDrag, ComOffset, ConstantTorque};
 
     #[test]
+    fn heading_torque_and_com_drift_follow_their_formulas() {
+        use crate::config::{ComDrift, HeadingTorque};
+        let mut config = ModelConfig::default();
+        config.effects.heading_torque = Some(HeadingTorque {
+            cos_nm: [0.0, 1e-3, 2e-3],
+            sin_nm: [3e-3, 0.0, -1e-3],
+        });
+        let model = ExternalTorqueModel::from_config(&config);
+        assert!(!model.time_dependent());
+        for psi in [0.0, 0.7, -2.0] {
+            let q = from_heading_pitch_roll(psi, 0.0, 0.0);
+            let t = model.torque(&q, &Vector3::zeros()).total_b();
+            let want = Vector3::new(
+                3e-3 * psi.sin(),
+                1e-3 * psi.cos(),
+                2e-3 * psi.cos() - 1e-3 * psi.sin(),
+            );
+            assert!((t - want).norm() < 1e-15, "{t:?} vs {want:?}");
+        }
+        // The drift: at time t the weight moment is that of r + ṙ t.
+        let mut drift = ModelConfig::default();
+        drift.effects.com_offset = Some(ComOffset {
+            r_m: [1e-6, 0.0, 0.0],
+        });
+        drift.effects.com_drift = Some(ComDrift {
+            rate_m_per_s: [0.0, 2e-9, 0.0],
+        });
+        let base = ExternalTorqueModel::from_config(&drift);
+        assert!(base.time_dependent());
+        let at = ExternalTorqueModel::at_time(&base, 500.0);
+        let mg = drift.platform.mass_kg * drift.platform.gravity_mps2;
+        assert!((at.weight_moment_b - Vector3::new(1e-6, 1e-6, 0.0) * mg).norm() < 1e-15);
+        // Off by default: the nominal model is not time-dependent and has no heading part.
+        let nominal = ExternalTorqueModel::from_config(&ModelConfig::default());
+        assert!(
+            !nominal.time_dependent()
+                && nominal
+                    .heading_part(&from_heading_pitch_roll(1.0, 0.0, 0.0))
+                    .is_none()
+        );
+    }
+
+    #[test]
     fn nominal_platform_feels_no_torque() {
         let q = from_heading_pitch_roll(0.4, 0.2, -0.1);
         let t = external_torque(&ModelConfig::default(), &q, &Vector3::new(0.1, -0.2, 0.3));
