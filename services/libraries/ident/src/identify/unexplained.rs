@@ -548,19 +548,17 @@ fn effect(
     if result.terms.is_empty() {
         return None;
     }
-    let proposed = format!(
-        "{equation} ≈ {}",
-        result
-            .terms
-            .iter()
-            .map(|t| format!(
-                "{} {unit} × {}",
-                crate::identify::report::round_to(t.value, t.stderr),
-                t.name
-            ))
-            .collect::<Vec<_>>()
-            .join(" + ")
-    );
+    let mut proposed = format!("{equation} ≈");
+    for (i, t) in result.terms.iter().enumerate() {
+        let text = super::report::round_to(t.value.abs(), t.stderr);
+        let sign = match (i, t.value < 0.0) {
+            (0, false) => "",
+            (0, true) => "−",
+            (_, false) => "+ ",
+            (_, true) => "− ",
+        };
+        proposed.push_str(&format!(" {sign}{text} {unit} × {}", t.name));
+    }
     Some(UnexplainedEffect {
         equation,
         unit,
