@@ -6,7 +6,8 @@
 //!    ([`crate::predict`]); and the data are checked against its equations of motion
 //!    ([`crate::channels`]: the platform's momentum equation, the wheels' equation) and its
 //!    sensor models (the attitude filter's innovations). Each residual is described by its RMS,
-//!    bias, trend and whiteness.
+//!    bias, trend and lag-1 correlation (no white-noise test: these series are correlated by
+//!    construction).
 //! 2. **Name the cause.** The data are split in time blocks; every `held_out_every`-th block is
 //!    held out of the fits. Forward selection over the candidate library: at each step every
 //!    remaining cause is fitted jointly with those already chosen ([`crate::fit`]); a candidate
@@ -19,9 +20,17 @@
 //! 4. **Measure the gain** on the held-out blocks: multi-step prediction error of the nominal and
 //!    extended model per component and overall; gain = nominal / extended.
 //!
+//! 5. **Falsify the named causes** (`falsify`): each must have the same parameters in disjoint
+//!    time blocks and stay significant beside the other causes and the unexplained effects;
+//!    the worst failure is dropped and the rest refitted and tested again.
+//! 6. **Find the form of what remains** (`unexplained`, [`crate::sparse`]): sparse regression of
+//!    each equation's residual (torque per axis, each innovation component) on a fixed library
+//!    of candidate functions of the state and time, with k-fold cross-validation and
+//!    cluster-robust standard errors; what it finds is reported as an unexplained effect.
+//!
 //! What remains after the chosen causes is checked on the equation-error channels (RMS against
-//! the noise the model expects, whiteness) and, if something remains, correlated with the
-//! signals the candidate effects would produce.
+//! the noise the model expects), by the unexplained-effect search, and, if something remains,
+//! correlated with the signals the candidate effects would produce.
 //!
 //! The report's types and its tables of curves are in `report`; the residual series after a
 //! fit, what remains and what it correlates with in `residuals`.
