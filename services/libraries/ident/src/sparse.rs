@@ -64,6 +64,44 @@ pub struct Design {
     clusters: Vec<Cluster>,
     folds: usize,
     rows: usize,
+    /// Sums over all clusters, over each fold's, and over the held-out ones (every solve reads
+    /// these instead of summing the clusters again).
+    total: Sums,
+    per_fold: Vec<Sums>,
+    held: Sums,
+}
+
+/// `XᵀX`, `Xᵀy`, `yᵀy` of a set of clusters (all columns).
+#[derive(Debug, Clone)]
+struct Sums {
+    xtx: DMatrix<f64>,
+    xty: DVector<f64>,
+    yty: f64,
+}
+
+impl Sums {
+    fn zero(p: usize) -> Self {
+        Self {
+            xtx: DMatrix::zeros(p, p),
+            xty: DVector::zeros(p),
+            yty: 0.0,
+        }
+    }
+    fn add(&mut self, c: &Cluster) {
+        self.xtx += &c.xtx;
+        self.xty += &c.xty;
+        self.yty += c.yty;
+    }
+}
+
+/// The clusters a solve or a residual sum runs over.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Subset {
+    All,
+    Fold(usize),
+    NotFold(usize),
+    Held,
+    NotHeld,
 }
 
 impl Design {
@@ -129,13 +167,27 @@ impl Design {
                 }
             }
         }
+        let folds = folds.max(2);
+        let mut total = Sums::zero(p);
+        let mut per_fold = vec![Sums::zero(p); folds];
+        let mut held = Sums::zero(p);
+        for c in &clusters {
+            total.add(c);
+            per_fold[c.fold % folds].add(c);
+            if c.held_out {
+                held.add(c);
+            }
+        }
         Self {
             names,
             forced,
             scale,
             clusters,
-            folds: folds.max(2),
+            folds,
             rows: x.len(),
+            total,
+            per_fold,
+            held,
         }
     }
 
@@ -147,39 +199,42 @@ impl Design {
         self.clusters.len()
     }
 
-    /// Sums over the clusters that `keep` accepts, restricted to `cols`.
-    fn sums(
-        &self,
-        cols: &[usize],
-        keep: impl Fn(&Cluster) -> bool,
-    ) -> (DMatrix<f64>, DVector<f64>, f64) {
+    /// Sums over the clusters of `subset`, restricted to `cols`.
+    fn sums(&self, cols: &[usize], subset: Subset) -> (DMatrix<f64>, DVector<f64>, f64) {
         let p = cols.len();
-        let mut a = DMatrix::zeros(p, p);
-        let mut b = DVector::zeros(p);
-        let mut c = 0.0;
-        for cl in self.clusters.iter().filter(|cl| keep(cl)) {
+        let pick = |s: &Sums, sign: f64, a: &mut DMatrix<f64>, b: &mut DVector<f64>| {
             for (i, &ci) in cols.iter().enumerate() {
-                b[i] += cl.xty[ci];
+                b[i] += sign * s.xty[ci];
                 for (j, &cj) in cols.iter().enumerate() {
-                    a[(i, j)] += cl.xtx[(ci, cj)];
+                    a[(i, j)] += sign * s.xtx[(ci, cj)];
                 }
             }
-            c += cl.yty;
-        }
+            sign * s.yty
+        };
+        let mut a = DMatrix::zeros(p, p);
+        let mut b = DVector::zeros(p);
+        let c = match subset {
+            Subset::All => pick(&self.total, 1.0, &mut a, &mut b),
+            Subset::Fold(f) => pick(&self.per_fold[f], 1.0, &mut a, &mut b),
+            Subset::Held => pick(&self.held, 1.0, &mut a, &mut b),
+            Subset::NotFold(f) => {
+                pick(&self.total, 1.0, &mut a, &mut b)
+                    + pick(&self.per_fold[f], -1.0, &mut a, &mut b)
+            }
+            Subset::NotHeld => {
+                pick(&self.total, 1.0, &mut a, &mut b) + pick(&self.held, -1.0, &mut a, &mut b)
+            }
+        };
         (a, b, c)
     }
 
-    /// Least squares on the clusters `keep` accepts; `None` if `cols` are (nearly) collinear
+    /// Least squares on the clusters of `subset`; `None` if `cols` are (nearly) collinear
     /// there. Returns θ (scaled columns) and `(XᵀX)⁻¹`.
-    fn solve(
-        &self,
-        cols: &[usize],
-        keep: impl Fn(&Cluster) -> bool,
-    ) -> Option<(DVector<f64>, DMatrix<f64>)> {
+    fn solve(&self, cols: &[usize], subset: Subset) -> Option<(DVector<f64>, DMatrix<f64>)> {
         if cols.is_empty() {
             return Some((DVector::zeros(0), DMatrix::zeros(0, 0)));
         }
-        let (a, b, _) = self.sums(cols, keep);
+        let (a, b, _) = self.sums(cols, subset);
         let d: Vec<f64> = (0..cols.len()).map(|i| a[(i, i)]).collect();
         if d.iter().any(|x| !(x.is_finite() && *x > 0.0)) {
             return None;
@@ -203,9 +258,9 @@ impl Design {
         Some((theta, inv))
     }
 
-    /// Residual sum of the clusters `keep` accepts at θ on `cols`.
-    fn rss(&self, cols: &[usize], theta: &DVector<f64>, keep: impl Fn(&Cluster) -> bool) -> f64 {
-        let (a, b, c) = self.sums(cols, keep);
+    /// Residual sum of the clusters of `subset` at θ on `cols`.
+    fn rss(&self, cols: &[usize], theta: &DVector<f64>, subset: Subset) -> f64 {
+        let (a, b, c) = self.sums(cols, subset);
         if cols.is_empty() {
             return c;
         }
@@ -216,21 +271,21 @@ impl Design {
     pub fn cv_rss(&self, cols: &[usize]) -> Option<f64> {
         let mut total = 0.0;
         for f in 0..self.folds {
-            let (theta, _) = self.solve(cols, |c| c.fold != f)?;
-            total += self.rss(cols, &theta, |c| c.fold == f);
+            let (theta, _) = self.solve(cols, Subset::NotFold(f))?;
+            total += self.rss(cols, &theta, Subset::Fold(f));
         }
         Some(total)
     }
 
     /// Residual sum on the held-out clusters of `cols` fitted on the others.
     pub fn held_out_rss(&self, cols: &[usize]) -> Option<f64> {
-        let (theta, _) = self.solve(cols, |c| !c.held_out)?;
-        Some(self.rss(cols, &theta, |c| c.held_out))
+        let (theta, _) = self.solve(cols, Subset::NotHeld)?;
+        Some(self.rss(cols, &theta, Subset::Held))
     }
 
     /// Fit on all rows: θ in the columns' own units, cluster-robust standard errors.
     pub fn fit(&self, cols: &[usize]) -> Option<(Vec<f64>, Vec<f64>)> {
-        let (theta, inv) = self.solve(cols, |_| true)?;
+        let (theta, inv) = self.solve(cols, Subset::All)?;
         let p = cols.len();
         // Meat: Σ_c s_c s_cᵀ with the cluster scores s_c = X_cᵀ r_c = X_cᵀy_c − X_cᵀX_c θ.
         let mut meat = DMatrix::<f64>::zeros(p, p);
@@ -255,7 +310,7 @@ impl Design {
 
     /// Mean square of the residual with no term at all (for gains).
     pub fn total_rss(&self) -> f64 {
-        self.clusters.iter().map(|c| c.yty).sum()
+        self.total.yty
     }
 }
 
@@ -372,7 +427,7 @@ pub fn search(design: &Design, options: &SparseOptions) -> SparseResult {
     for j in 0..design.forced {
         let mut cols = forced.clone();
         cols.push(j);
-        if design.solve(&cols, |_| true).is_some() {
+        if design.solve(&cols, Subset::All).is_some() {
             forced = cols;
         }
     }

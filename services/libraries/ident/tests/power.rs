@@ -13,7 +13,9 @@ use testbed_ident::Cause;
 #[ignore]
 fn detection_power_table_for_a_20_minute_experiment() {
     let scales = [0.03, 0.1, 0.3, 1.0];
-    let cases: Vec<(Cause, Box<dyn Fn(f64) -> String + Sync>, &str)> = vec![
+    // (cause, its effects table at a scale, the magnitude at scale 1)
+    type Case<'a> = (Cause, Box<dyn Fn(f64) -> String + Sync>, &'a str);
+    let cases: Vec<Case> = vec![
         (
             Cause::ComOffset,
             Box::new(|s| {

@@ -250,7 +250,9 @@ fn out_of_library_checks_over_more_seeds() {
         "innovation_field_z",
     ];
     let field = ["B_x", "B_y", "cos ψ", "sin ψ", "cos 2ψ", "sin 2ψ"];
-    let scenarios: Vec<(&str, String, Vec<Cause>, Vec<&str>, Vec<&str>, f64)> = vec![
+    // (label, hidden effects, library causes, equations, regressors, least held-out gain)
+    type Scenario<'a> = (&'a str, String, Vec<Cause>, Vec<&'a str>, Vec<&'a str>, f64);
+    let scenarios: Vec<Scenario> = vec![
         (
             "com drift",
             COM_DRIFT.into(),
