@@ -295,13 +295,8 @@ pub fn identify(
 
     // Falsify the named causes and search what remains (see `falsify`, `unexplained`).
     let mut named = selected.clone();
-    let debug = std::env::var_os("IDENT_DEBUG").is_some();
-    let clock = std::time::Instant::now();
     let analyse = |fit: &SetFit, named: &[Cause]| {
         let candidates = unexplained::Candidates::new(&problem, fit, named);
-        if debug {
-            eprintln!("{:.2} s: candidates", clock.elapsed().as_secs_f64());
-        }
         let effects = unexplained::search_all(
             &problem,
             fit,
@@ -310,9 +305,6 @@ pub fn identify(
             options.block_s,
             &options.sparse,
         );
-        if debug {
-            eprintln!("{:.2} s: search", clock.elapsed().as_secs_f64());
-        }
         let (tests, joint) = falsify::test_causes(
             &problem,
             fit,
@@ -326,9 +318,6 @@ pub fn identify(
                 n_fit,
             },
         );
-        if debug {
-            eprintln!("{:.2} s: tests {named:?}", clock.elapsed().as_secs_f64());
-        }
         (effects, tests, joint)
     };
     let (mut effects, mut tests, mut joint) = analyse(&current, &named);

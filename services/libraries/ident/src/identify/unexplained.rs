@@ -282,13 +282,6 @@ fn search_torque(
         };
         let design = Design::new(names, forced.len(), rows, options.folds);
         let result = search(&design, options);
-        if std::env::var_os("IDENT_DEBUG").is_some() {
-            eprintln!(
-                "torque axis {axis}: forced {:?} base cv {:?} → {result:?}",
-                forced,
-                design.cv_rss(&(0..forced.len()).collect::<Vec<_>>())
-            );
-        }
         if let Some(e) = effect(
             format!("torque_{}", "xyz".as_bytes()[axis] as char),
             "Nm",
