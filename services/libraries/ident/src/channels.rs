@@ -38,8 +38,8 @@ use testbed_model::physics::{CmgPyramid, ExternalTorqueModel, Wheel, WheelFricti
 
 /// Columns of the torque channel's regressor matrix, in this order: `com_offset.r_m` (3),
 /// `constant_torque.torque_nm` (3), `aero_drag.c1` (3), `aero_drag.c2` (3),
-/// `inertia_error.fraction` (3).
-pub const TORQUE_COLUMNS: usize = 15;
+/// `inertia_error.fraction` (3), `inertia_error.products_kgm2` (3: xy, yz, zx).
+pub const TORQUE_COLUMNS: usize = 18;
 
 /// Column range of a torque-kind cause in the torque regressors.
 pub fn torque_columns(cause: Cause) -> Option<std::ops::Range<usize>> {
@@ -47,7 +47,7 @@ pub fn torque_columns(cause: Cause) -> Option<std::ops::Range<usize>> {
         Cause::ComOffset => Some(0..3),
         Cause::ConstantTorque => Some(3..6),
         Cause::AeroDrag => Some(6..12),
-        Cause::InertiaError => Some(12..15),
+        Cause::InertiaError => Some(12..18),
         _ => None,
     }
 }
@@ -134,6 +134,13 @@ impl TorqueChannel {
                 f[9 + i] = -v[i] * v[i].abs() * e;
                 f[12 + i] = -nominal[(i, i)] * v.cross(&(e * v[i]));
                 m[12 + i] = -nominal[(i, i)] * v[i] * e;
+            }
+            // Products of inertia: ΔI = P (e_a e_bᵀ + e_b e_aᵀ), P in kg m².
+            for (p, (a, b)) in [(0, 1), (1, 2), (2, 0)].into_iter().enumerate() {
+                let (ea, eb) = (Vector3::ith(a, 1.0), Vector3::ith(b, 1.0));
+                let dv = ea * v[b] + eb * v[a];
+                f[15 + p] = -v.cross(&dv);
+                m[15 + p] = -dv;
             }
             (m, f)
         };

@@ -97,14 +97,24 @@ const P_DRAG: &[ParamSpec] = &[
     spec("c2", 3, "Nm/(rad/s)², per body axis", 0.0, INF, 1e-2),
 ];
 const P_CONST: &[ParamSpec] = &[spec("torque_nm", 3, "Nm, body axes", -INF, INF, 1e-4)];
-const P_INERTIA: &[ParamSpec] = &[spec(
-    "fraction",
-    3,
-    "relative error of each principal moment",
-    -0.5,
-    0.5,
-    1e-3,
-)];
+const P_INERTIA: &[ParamSpec] = &[
+    spec(
+        "fraction",
+        3,
+        "relative error of each principal moment",
+        -0.5,
+        0.5,
+        1e-3,
+    ),
+    spec(
+        "products_kgm2",
+        3,
+        "kg m², products of inertia [xy, yz, zx]",
+        -INF,
+        INF,
+        1e-3,
+    ),
+];
 const P_SCALE: &[ParamSpec] = &[spec(
     "ppm",
     3,
@@ -331,7 +341,9 @@ impl Cause {
             Cause::InertiaError => e
                 .inertia_error
                 .as_ref()
-                .map_or([0.0; 3], |x| x.fraction)
+                .map_or([0.0; 6], |x| {
+                    cat(&x.fraction, &x.products_kgm2.unwrap_or([0.0; 3]))
+                })
                 .to_vec(),
             Cause::GyroScale => e.gyro_scale.as_ref().map_or([0.0; 3], |x| x.ppm).to_vec(),
             Cause::GyroMisalignment => e
@@ -390,7 +402,12 @@ impl Cause {
                 })
             }
             Cause::ConstantTorque => e.constant_torque = Some(ConstantTorque { torque_nm: a3(0) }),
-            Cause::InertiaError => e.inertia_error = Some(InertiaError { fraction: a3(0) }),
+            Cause::InertiaError => {
+                e.inertia_error = Some(InertiaError {
+                    fraction: a3(0),
+                    products_kgm2: Some(a3(3)),
+                })
+            }
             Cause::GyroScale => e.gyro_scale = Some(GyroScale { ppm: a3(0) }),
             Cause::GyroMisalignment => {
                 e.gyro_misalignment = Some(GyroMisalignment { angles_rad: a3(0) })

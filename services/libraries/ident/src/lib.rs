@@ -31,6 +31,7 @@ pub mod identify;
 pub mod predict;
 pub mod reconstruct;
 pub mod runlog;
+pub mod sparse;
 pub mod stats;
 
 pub use data::Dataset;

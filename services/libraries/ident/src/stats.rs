@@ -204,10 +204,18 @@ pub struct SeriesStats {
     /// Lag-1 autocorrelation (consecutive samples of the series).
     pub lag1: f64,
     /// Ljung–Box statistic over lags 1..=`lags`.
+    ///
+    /// Not in the report: the residuals described (multi-step prediction errors over a window,
+    /// the integrated momentum residual, filter innovations) are serially correlated by
+    /// construction, so the white-noise null is the wrong one for them (clean data gave
+    /// `white_p` = 0). Structure is judged by the unexplained-effect search instead.
+    #[serde(skip)]
     pub ljung_box: f64,
     /// Lags of the Ljung–Box statistic.
+    #[serde(skip)]
     pub lags: usize,
     /// Probability of a statistic at least this large for white noise (χ² with `lags` dof).
+    #[serde(skip)]
     pub white_p: f64,
 }
 

@@ -127,14 +127,37 @@ fn inertia_error() {
     let truth = truth("[effects.inertia_error]\nfraction = [0.03, -0.02, 0.04]\n");
     for seed in SEEDS {
         let id = identify_blind(&truth, seed, 600.0);
-        // Within 0.3 % of the moment (a tenth of the smallest error).
+        // Within 0.3 % of the moment (a tenth of the smallest error); the products (none
+        // hidden) within 0.1 kg m² (0.2 % of the smallest moment).
         check_single(
             &format!("inertia_error seed {seed}"),
             &truth,
             Cause::InertiaError,
             &id,
             2.0,
-            |_, _| 0.003,
+            |i, _| if i < 3 { 0.003 } else { 0.1 },
+        );
+    }
+}
+
+#[test]
+fn inertia_products() {
+    // Products of inertia of 0.5–0.8 kg m² (1–2 % of the moments: a platform balanced in
+    // position but not in its mass distribution), the moments right.
+    let truth = truth(
+        "[effects.inertia_error]\nfraction = [0.0, 0.0, 0.0]\nproducts_kgm2 = [0.8, -0.5, 0.6]\n",
+    );
+    for seed in SEEDS {
+        let id = identify_blind(&truth, seed, 600.0);
+        // Products within 0.1 kg m², moments within 0.3 %; explained to the noise (no
+        // residual remains, checked by `check_single`).
+        check_single(
+            &format!("inertia_products seed {seed}"),
+            &truth,
+            Cause::InertiaError,
+            &id,
+            1.05,
+            |i, _| if i < 3 { 0.003 } else { 0.1 },
         );
     }
 }
@@ -336,9 +359,13 @@ fn two_hidden_effects_are_both_found() {
 
 #[test]
 fn residual_is_reported_when_the_cause_is_not_among_the_candidates() {
-    // The centre-of-mass offset hidden, but left out of the candidates: something else is named
-    // (a constant torque explains its level part), the tilt-dependent part remains, and the
-    // remaining residual correlates most with the missing effect's signal.
+    // The centre-of-mass offset hidden, but left out of the candidates (so, for the analysis,
+    // an effect outside its library). Before issue 17 a constant torque was named for its
+    // level part; now no library cause may stand in for it: a constant torque fails its
+    // falsification tests, the effect is reported as unexplained in the torque channel with the
+    // tilt terms that carry it, and the remaining residual still correlates most with the
+    // missing effect's signal. (This offset drives the platform into the tilt stop, so its
+    // tilt terms may come with time: `t·sin tilt_y`.)
     let truth = truth("[effects.com_offset]\nr_m = [2.5e-6, -1.5e-6, -1.0e-6]\n");
     let data = experiment_data(&truth, 41, 600.0);
     let options = testbed_ident::Options {
@@ -350,27 +377,42 @@ fn residual_is_reported_when_the_cause_is_not_among_the_candidates() {
     };
     let id = testbed_ident::identify(&data, &nominal(), &options).expect("identification runs");
     let r = &id.report;
-    println!("{}: {}", r.verdict, r.remaining.message);
+    for line in &r.summary {
+        println!("{line}");
+    }
     for c in &r.remaining.correlations {
         println!("  {} ~ {}: {:+.3}", c.residual, c.signal, c.r);
     }
-    assert!(!r.causes.is_empty());
+    assert!(r.causes.is_empty(), "{:?}", r.cause_tests);
     assert!(r.remaining.residual_remains, "{}", r.remaining.message);
     assert!(
         r.remaining.message.contains("torque"),
         "{}",
         r.remaining.message
     );
+    let tilt = r.unexplained.iter().any(|e| {
+        e.equation.starts_with("torque_")
+            && e.terms.iter().any(|t| t.name.contains("sin tilt_"))
+            && e.held_out_gain > 1.5
+    });
+    assert!(tilt, "{:?}", r.unexplained);
+    // With nothing named, the level part correlates as well with a constant torque as with the
+    // offset (r = 1.00 both): the missing effect's signal must be among the top (within 0.01).
     let top = r
         .remaining
         .correlations
         .first()
         .expect("correlations reported");
-    assert!(
-        top.signal.starts_with("com_offset.r_m"),
-        "top correlation {top:?}"
-    );
     assert!(top.r.abs() > 0.5, "{top:?}");
+    assert!(
+        r.remaining
+            .correlations
+            .iter()
+            .take_while(|c| c.r.abs() >= top.r.abs() - 0.01)
+            .any(|c| c.signal.starts_with("com_offset.r_m")),
+        "top correlations {:?}",
+        r.remaining.correlations
+    );
 }
 
 #[test]

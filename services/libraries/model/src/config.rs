@@ -256,6 +256,46 @@ pub struct EffectsConfig {
     pub wheel_torque_scale: Option<WheelTorqueScale>,
     pub actuator_delay: Option<ActuatorDelay>,
     pub magnetic_disturbance: Option<MagneticDisturbance>,
+    /// Effects outside identification's cause library (the simulator can produce them so tests
+    /// can check that `testbed identify` reports them as unexplained rather than absorbing
+    /// them into library causes). Off unless configured.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub com_drift: Option<ComDrift>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub soft_iron: Option<SoftIron>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub heading_torque: Option<HeadingTorque>,
+}
+
+/// The centre of mass moves at a constant rate (thermal expansion, a draining tank): the offset
+/// of `com_offset` plus `rate_m_per_s · t`, `t` the plant's time from its start, s. Not in
+/// identification's library.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ComDrift {
+    /// Drift of the centre of mass, body axes, m/s (thermal: ~1 µm per 10 min = 1.7e-9 m/s).
+    pub rate_m_per_s: [f64; 3],
+}
+
+/// Soft-iron distortion of the magnetometer: `M_meas = (1 + S) A(q) M_L + M_hard`, `S` the
+/// matrix given (rows = body axes of the reading). Not in identification's library.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SoftIron {
+    /// `S`, dimensionless, row-major (a few percent for nearby steel).
+    pub matrix: [[f64; 3]; 3],
+}
+
+/// A torque that varies with the heading ψ: `M = cos_nm cos ψ + sin_nm sin ψ`, body axes (a
+/// cable that winds up, a body dipole in the lab's horizontal field). Not in identification's
+/// library.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct HeadingTorque {
+    /// Amplitude of the `cos ψ` part per body axis, Nm.
+    pub cos_nm: [f64; 3],
+    /// Amplitude of the `sin ψ` part per body axis, Nm.
+    pub sin_nm: [f64; 3],
 }
 
 /// Centre of mass offset from the bearing's centre of rotation. Gravity torque on the platform:
@@ -293,12 +333,16 @@ pub struct ConstantTorque {
     pub torque_nm: [f64; 3],
 }
 
-/// The true inertia differs from the nominal: `I_true = I_nom + diag(fraction ⊙ diag(I_nom))`.
+/// The true inertia differs from the nominal: `I_true = I_nom + diag(fraction ⊙ diag(I_nom)) + P`,
+/// `P` the symmetric matrix of product errors (zero diagonal).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct InertiaError {
     /// Relative error of each principal moment (e.g. 0.03 for +3 %), dimensionless.
     pub fraction: [f64; 3],
+    /// Errors of the products of inertia `[I_xy, I_yz, I_zx]`, kg m² (absent: none).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub products_kgm2: Option<[f64; 3]>,
 }
 
 /// Gyro scale factor error per axis: `w_meas = (1 + s) w`.
@@ -465,6 +509,9 @@ impl ModelConfig {
                     0.5,
                 );
             }
+            if let Some(p) = &x.products_kgm2 {
+                v.finite_all("effects.inertia_error.products_kgm2", p);
+            }
             let nominal = self.platform.inertia();
             let truth = self.true_inertia();
             if nominal.is_some() && truth.is_none() {
@@ -513,6 +560,25 @@ impl ModelConfig {
                 &x.hard_iron_gauss,
             );
         }
+        if let Some(x) = &e.com_drift {
+            v.finite_all("effects.com_drift.rate_m_per_s", &x.rate_m_per_s);
+        }
+        if let Some(x) = &e.soft_iron {
+            for (i, row) in x.matrix.iter().enumerate() {
+                for (j, m) in row.iter().enumerate() {
+                    v.within(
+                        &format!("effects.soft_iron.matrix[{i}][{j}]"),
+                        *m,
+                        -0.5,
+                        0.5,
+                    );
+                }
+            }
+        }
+        if let Some(x) = &e.heading_torque {
+            v.finite_all("effects.heading_torque.cos_nm", &x.cos_nm);
+            v.finite_all("effects.heading_torque.sin_nm", &x.sin_nm);
+        }
         v.finish()
     }
 
@@ -523,6 +589,12 @@ impl ModelConfig {
         if let Some(err) = &self.effects.inertia_error {
             for i in 0..3 {
                 inertia[(i, i)] *= 1.0 + err.fraction[i];
+            }
+            if let Some(p) = err.products_kgm2 {
+                for (k, (a, b)) in [(0, 1), (1, 2), (2, 0)].into_iter().enumerate() {
+                    inertia[(a, b)] += p[k];
+                    inertia[(b, a)] += p[k];
+                }
             }
         }
         is_symmetric_positive_definite(&inertia).then_some(inertia)
@@ -774,6 +846,7 @@ mod tests {
         let mut config = ModelConfig::default();
         config.effects.inertia_error = Some(InertiaError {
             fraction: [0.02, 0.0, -0.03],
+            products_kgm2: None,
         });
         let truth = config.true_inertia().unwrap();
         assert!((truth[(0, 0)] - 45.2 * 1.02).abs() < 1e-12);

@@ -115,16 +115,26 @@ pub struct RmsReport {
 /// The report of `identify`.
 #[derive(Debug, Clone, Serialize)]
 pub struct Report {
+    /// The verdict in a few sentences, first: causes with their parameters rounded to their
+    /// uncertainty, unexplained effects with their form and gain, what remains.
+    pub summary: Vec<String>,
     pub data: DataSummary,
     pub options: Options,
     /// Item 1: the nominal model's residuals.
     pub nominal_residuals: ResidualReport,
     /// Forward selection, one entry per step.
     pub steps: Vec<Vec<CandidateRow>>,
+    /// Borderline causes of the last selection step: below the threshold, but significant at
+    /// the 1 % level (`LR > χ²_k(0.99)`) and improving the held-out data. Listed, not named.
+    pub possible: Vec<CandidateRow>,
     /// Named causes, strongest first (empty: none).
     pub causes: Vec<CauseReport>,
     /// `none`, or the causes joined by ` + `.
     pub verdict: String,
+    /// The falsification tests of every cause the selection named (dropped ones included).
+    pub cause_tests: Vec<super::CauseTest>,
+    /// Effects no named cause explains, with their proposed form (empty: none found).
+    pub unexplained: Vec<super::UnexplainedEffect>,
     pub remaining: Remaining,
     /// The extended model's residuals.
     pub extended_residuals: ResidualReport,
@@ -165,6 +175,128 @@ pub struct Identification {
     /// The extended model (the configuration given plus the named effects).
     pub extended: ModelConfig,
     pub figures: FigureData,
+}
+
+/// `value` rounded to its standard error (two significant digits of the error), in scientific
+/// notation; three significant digits when the error is not known.
+pub fn round_to(value: f64, stderr: f64) -> String {
+    if !value.is_finite() {
+        return value.to_string();
+    }
+    if !(stderr.is_finite() && stderr > 0.0) {
+        return format!("{value:.2e}");
+    }
+    let e_se = stderr.log10().floor() as i32 - 1;
+    let e_v = if value == 0.0 {
+        e_se + 1
+    } else {
+        value.abs().log10().floor() as i32
+    };
+    let digits = (e_v - e_se).clamp(0, 12) as usize;
+    if e_v < e_se {
+        // The value is below its error's last digit: zero within the error.
+        return format!("{:.1e}", 0.0);
+    }
+    format!("{value:.digits$e}")
+}
+
+/// `value ± stderr`, the value rounded to its error (see [`round_to`]).
+pub fn with_error(value: f64, stderr: f64) -> String {
+    if stderr.is_finite() && stderr > 0.0 {
+        format!("{} ± {stderr:.1e}", round_to(value, stderr))
+    } else {
+        round_to(value, stderr)
+    }
+}
+
+/// The verdict in sentences (see [`Report::summary`]).
+pub(super) fn summary(
+    causes: &[CauseReport],
+    tests: &[super::CauseTest],
+    possible: &[CandidateRow],
+    effects: &[super::UnexplainedEffect],
+    remaining: &Remaining,
+    gain: f64,
+) -> Vec<String> {
+    let mut out = Vec::new();
+    if causes.is_empty() {
+        out.push("Named cause: none.".to_string());
+    }
+    for c in causes {
+        let mut parts = Vec::new();
+        for (key, value) in &c.parameters {
+            let se = c.stderr.get(key);
+            let unit = c.units.get(key).and_then(|u| u.as_str()).unwrap_or("");
+            let text = match (value, se) {
+                (serde_json::Value::Array(v), Some(serde_json::Value::Array(e))) => format!(
+                    "[{}]",
+                    v.iter()
+                        .zip(e)
+                        .map(|(v, e)| with_error(
+                            v.as_f64().unwrap_or(f64::NAN),
+                            e.as_f64().unwrap_or(f64::NAN)
+                        ))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+                (v, e) => with_error(
+                    v.as_f64().unwrap_or(f64::NAN),
+                    e.and_then(|e| e.as_f64()).unwrap_or(f64::NAN),
+                ),
+            };
+            parts.push(format!("{key} = {text} {unit}"));
+        }
+        // The residual test of the cause's own channel: structure left there is said here.
+        let channel = match crate::effects::Cause::from_name(c.name).map(|c| c.kind()) {
+            Some(crate::effects::Kind::Torque) => Some("torque_"),
+            Some(crate::effects::Kind::Sensor) => Some("innovation_"),
+            _ => None,
+        };
+        let left: Vec<&str> = effects
+            .iter()
+            .filter(|e| channel.is_some_and(|p| e.equation.starts_with(p)))
+            .map(|e| e.equation.as_str())
+            .collect();
+        let residual_test = if left.is_empty() {
+            String::new()
+        } else {
+            format!(
+                " (its channel's residuals fail the structure test in {}: an unexplained effect, fitted beside it)",
+                left.join(", ")
+            )
+        };
+        out.push(format!(
+            "Named cause: {} ({}): {}{residual_test}.",
+            c.name,
+            c.description,
+            parts.join("; ")
+        ));
+    }
+    if !causes.is_empty() {
+        out.push(format!(
+            "Held-out prediction gain of the extended model: {gain:.2}× (nominal RMS / extended RMS)."
+        ));
+    }
+    for t in tests.iter().filter(|t| !t.kept) {
+        out.push(format!("Not named: {} — {}.", t.name, t.verdict));
+    }
+    for p in possible {
+        out.push(format!(
+            "Possible (below the threshold, not named): {} — likelihood ratio {:.1} against the threshold {:.1}, held-out {:+.1}.",
+            p.name, p.lr_fit, p.threshold, p.lr_held_out
+        ));
+    }
+    if effects.is_empty() {
+        out.push("Unexplained effect: none found (no candidate function carries a significant part of the remaining residuals).".to_string());
+    }
+    for e in effects {
+        out.push(format!(
+            "Unexplained effect (not a library cause): {}; held-out gain {:.2}×, cross-validated {:.2}× in that equation.",
+            e.proposed, e.held_out_gain, e.cv_gain
+        ));
+    }
+    out.push(remaining.message.clone());
+    out
 }
 
 pub(super) fn rms_report(rms: &[Option<ComponentRms>; 11]) -> RmsReport {

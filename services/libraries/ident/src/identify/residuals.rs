@@ -128,8 +128,17 @@ pub(super) fn equation_error(
     )
 }
 
-/// Is there residual left after the chosen causes, and what does it correlate with?
-pub(super) fn remaining(problem: &Problem, fit: &SetFit, options: &Options) -> Remaining {
+/// Is there residual left after the chosen causes, and what does it correlate with? Three
+/// statements, consistent with the numbers the report prints: the equation-error channels'
+/// RMS against the noise the model expects (held-out data), the unexplained effects found, and
+/// the extended model's multi-step prediction error against the sensor noise.
+pub(super) fn remaining(
+    problem: &Problem,
+    fit: &SetFit,
+    options: &Options,
+    effects: &[super::UnexplainedEffect],
+    extended: &super::RmsReport,
+) -> Remaining {
     let e = &fit.evaluation.held_out;
     let channel_rms: BTreeMap<&'static str, f64> = (0..3)
         .filter(|&c| e.n[c] > 0)
@@ -140,11 +149,22 @@ pub(super) fn remaining(problem: &Problem, fit: &SetFit, options: &Options) -> R
         .filter(|(_, v)| **v > options.remaining_rms)
         .map(|(k, _)| *k)
         .collect();
-    if high.is_empty() {
+    // Prediction: the groups (rates, tilt, field, wheel speeds) at their normalised RMS.
+    let groups = extended
+        .groups
+        .iter()
+        .map(|(g, v)| format!("{g} {v:.1}×"))
+        .collect::<Vec<_>>()
+        .join(", ");
+    let prediction = format!(
+        "the extended model's {:.0}-s predictions of the held-out data stay at {groups} the sensor noise (the multi-step error includes the filter's state error at each re-initialisation, so 1× is not expected)",
+        options.horizon_s
+    );
+    if high.is_empty() && effects.is_empty() {
         return Remaining {
             residual_remains: false,
             message: format!(
-                "no residual remains: every equation-error channel is within {:.2}× the noise the model expects on the held-out data",
+                "What remains: no structure — every equation-error channel is within {:.2}× the noise the model expects on the held-out data and no candidate function is significant; {prediction}.",
                 options.remaining_rms
             ),
             channel_rms,
@@ -158,14 +178,29 @@ pub(super) fn remaining(problem: &Problem, fit: &SetFit, options: &Options) -> R
             c.residual, c.signal, c.r
         )
     });
-    Remaining {
-        residual_remains: true,
-        message: format!(
+    let mut parts = Vec::new();
+    if !high.is_empty() {
+        parts.push(format!(
             "residual remains in the {} channel{} (RMS above {:.2}× the expected noise on held-out data){top}",
             high.join(", "),
             if high.len() > 1 { "s" } else { "" },
             options.remaining_rms
-        ),
+        ));
+    }
+    if !effects.is_empty() {
+        parts.push(format!(
+            "structure remains in {} (the unexplained effect{} above)",
+            effects
+                .iter()
+                .map(|e| e.equation.as_str())
+                .collect::<Vec<_>>()
+                .join(", "),
+            if effects.len() > 1 { "s" } else { "" }
+        ));
+    }
+    Remaining {
+        residual_remains: true,
+        message: format!("What remains: {}; {prediction}.", parts.join("; ")),
         channel_rms,
         correlations,
     }

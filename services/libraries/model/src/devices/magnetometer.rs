@@ -3,7 +3,7 @@
 use super::{DeviceId, device_rng, saturate};
 use crate::attitude::Attitude;
 use crate::config::{GAUSS, ModelConfig};
-use nalgebra::Vector3;
+use nalgebra::{Matrix3, Vector3};
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::StandardNormal;
@@ -31,6 +31,8 @@ pub struct Magnetometer {
     period_s: f64,
     field_l_t: Vector3<f64>,
     hard_iron_b_t: Vector3<f64>,
+    /// `1 + S` of `effects.soft_iron`; `None` without it (the reading is then bit-identical).
+    soft_iron: Option<Matrix3<f64>>,
     noise_t: Vector3<f64>,
     range_t: f64,
     rng: ChaCha8Rng,
@@ -49,6 +51,11 @@ impl Magnetometer {
             period_s: 1.0 / c.rate_hz,
             field_l_t: config.platform.field_l_t(),
             hard_iron_b_t,
+            soft_iron: config
+                .effects
+                .soft_iron
+                .as_ref()
+                .map(|s| Matrix3::identity() + Matrix3::from_fn(|i, j| s.matrix[i][j])),
             noise_t: c.noise_t(),
             range_t: c.range_gauss * GAUSS,
             rng: device_rng(seed, DeviceId::Magnetometer),
@@ -62,7 +69,11 @@ impl Magnetometer {
 
     /// The noise-free reading at attitude `q`: lab field in body axes plus hard iron, tesla.
     pub fn expected_t(&self, q: &Attitude) -> Vector3<f64> {
-        q * self.field_l_t + self.hard_iron_b_t
+        let body = q * self.field_l_t;
+        match &self.soft_iron {
+            Some(m) => m * body + self.hard_iron_b_t,
+            None => body + self.hard_iron_b_t,
+        }
     }
 
     /// Read the magnetometer at true attitude `q` (L to B).
@@ -84,6 +95,22 @@ mod tests {
     use crate::attitude::from_heading_pitch_roll;
     use crate::config::MagneticDisturbance;
     use crate::devices::stats::assert_white;
+
+    #[test]
+    fn soft_iron_multiplies_the_body_field() {
+        use crate::config::SoftIron;
+        let mut config = ModelConfig::default();
+        let plain = Magnetometer::new(&config, 1);
+        config.effects.soft_iron = Some(SoftIron {
+            matrix: [[0.03, 0.02, 0.0], [0.02, -0.03, 0.0], [0.0, 0.0, 0.01]],
+        });
+        let soft = Magnetometer::new(&config, 1);
+        let q = crate::attitude::from_heading_pitch_roll(0.8, 0.1, -0.05);
+        let body = plain.expected_t(&q);
+        let s = nalgebra::Matrix3::new(0.03, 0.02, 0.0, 0.02, -0.03, 0.0, 0.0, 0.0, 0.01);
+        let want = body + s * body;
+        assert!((soft.expected_t(&q) - want).norm() < 1e-18);
+    }
 
     #[test]
     fn noise_matches_configured_sigma_about_rotated_field_plus_hard_iron() {

@@ -108,6 +108,14 @@ impl Dynamics {
         &self.external
     }
 
+    /// Re-resolve a time-dependent external torque (`com_drift`) at plant time `t_s` from the
+    /// model at time 0 (`base`). Does nothing for a time-independent one.
+    pub fn set_external_time(&mut self, base: &ExternalTorqueModel, t_s: f64) {
+        if base.time_dependent() {
+            self.external = ExternalTorqueModel::at_time(base, t_s);
+        }
+    }
+
     /// `(I − J·1)⁻¹`, 1/(kg m²): the platform's response to a torque while every wheel slides.
     pub fn free_platform_inverse(&self) -> &Matrix3<f64> {
         &self.locked_inverse[0]

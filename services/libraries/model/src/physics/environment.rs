@@ -43,6 +43,13 @@ pub struct ExternalTorqueModel {
     pub drag_c2: Vector3<f64>,
     /// Constant torque, Nm, body axes.
     pub constant_b: Vector3<f64>,
+    /// `m g ṙ` of `com_drift`, N m/s, body axes: the weight moment grows by this per second of
+    /// plant time ([`ExternalTorqueModel::at_time`]); zero without `com_drift`.
+    pub weight_moment_rate_b: Vector3<f64>,
+    /// `heading_torque`: amplitudes of the `cos ψ` and `sin ψ` parts, Nm, body axes; zero
+    /// without it (then the heading is not computed).
+    pub heading_cos_b: Vector3<f64>,
+    pub heading_sin_b: Vector3<f64>,
 }
 
 impl ExternalTorqueModel {
@@ -66,6 +73,33 @@ impl ExternalTorqueModel {
                 .constant_torque
                 .as_ref()
                 .map_or_else(Vector3::zeros, |c| Vector3::from(c.torque_nm)),
+            weight_moment_rate_b: e
+                .com_drift
+                .as_ref()
+                .map_or_else(Vector3::zeros, |c| Vector3::from(c.rate_m_per_s) * mg),
+            heading_cos_b: e
+                .heading_torque
+                .as_ref()
+                .map_or_else(Vector3::zeros, |h| Vector3::from(h.cos_nm)),
+            heading_sin_b: e
+                .heading_torque
+                .as_ref()
+                .map_or_else(Vector3::zeros, |h| Vector3::from(h.sin_nm)),
+        }
+    }
+
+    /// Whether the torque changes with time (`com_drift`): the plant then re-resolves the model
+    /// with [`ExternalTorqueModel::at_time`] before each substep.
+    pub fn time_dependent(&self) -> bool {
+        self.weight_moment_rate_b != Vector3::zeros()
+    }
+
+    /// The model at plant time `t_s` (s): the weight moment of a drifting centre of mass,
+    /// `m g (r + ṙ t)`, held over the substep. `base` is the model at time 0.
+    pub fn at_time(base: &Self, t_s: f64) -> Self {
+        Self {
+            weight_moment_b: base.weight_moment_b + base.weight_moment_rate_b * t_s,
+            ..*base
         }
     }
 
@@ -77,8 +111,21 @@ impl ExternalTorqueModel {
                 + self
                     .drag_c2
                     .component_mul(&rate_b.component_mul(&rate_b.abs()))),
-            constant_b: self.constant_b,
+            constant_b: self
+                .heading_part(q)
+                .map_or(self.constant_b, |h| self.constant_b + h),
         }
+    }
+
+    /// `heading_torque` at attitude `q`, Nm, body axes (`None`, and no heading computed,
+    /// without it: the default model's arithmetic is unchanged). Counted with the constant part
+    /// in [`ExternalTorque`].
+    fn heading_part(&self, q: &Attitude) -> Option<Vector3<f64>> {
+        if self.heading_cos_b == Vector3::zeros() && self.heading_sin_b == Vector3::zeros() {
+            return None;
+        }
+        let psi = attitude::heading(q);
+        Some(self.heading_cos_b * psi.cos() + self.heading_sin_b * psi.sin())
     }
 }
 
@@ -97,6 +144,49 @@ mod tests {
     use super::*;
     use crate::attitude::from_heading_pitch_roll;
     use crate::config::{AeroDrag, ComOffset, ConstantTorque};
+
+    #[test]
+    fn heading_torque_and_com_drift_follow_their_formulas() {
+        use crate::config::{ComDrift, HeadingTorque};
+        let mut config = ModelConfig::default();
+        config.effects.heading_torque = Some(HeadingTorque {
+            cos_nm: [0.0, 1e-3, 2e-3],
+            sin_nm: [3e-3, 0.0, -1e-3],
+        });
+        let model = ExternalTorqueModel::from_config(&config);
+        assert!(!model.time_dependent());
+        for psi in [0.0, 0.7, -2.0] {
+            let q = from_heading_pitch_roll(psi, 0.0, 0.0);
+            let t = model.torque(&q, &Vector3::zeros()).total_b();
+            let want = Vector3::new(
+                3e-3 * psi.sin(),
+                1e-3 * psi.cos(),
+                2e-3 * psi.cos() - 1e-3 * psi.sin(),
+            );
+            assert!((t - want).norm() < 1e-15, "{t:?} vs {want:?}");
+        }
+        // The drift: at time t the weight moment is that of r + ṙ t.
+        let mut drift = ModelConfig::default();
+        drift.effects.com_offset = Some(ComOffset {
+            r_m: [1e-6, 0.0, 0.0],
+        });
+        drift.effects.com_drift = Some(ComDrift {
+            rate_m_per_s: [0.0, 2e-9, 0.0],
+        });
+        let base = ExternalTorqueModel::from_config(&drift);
+        assert!(base.time_dependent());
+        let at = ExternalTorqueModel::at_time(&base, 500.0);
+        let mg = drift.platform.mass_kg * drift.platform.gravity_mps2;
+        assert!((at.weight_moment_b - Vector3::new(1e-6, 1e-6, 0.0) * mg).norm() < 1e-15);
+        // Off by default: the nominal model is not time-dependent and has no heading part.
+        let nominal = ExternalTorqueModel::from_config(&ModelConfig::default());
+        assert!(
+            !nominal.time_dependent()
+                && nominal
+                    .heading_part(&from_heading_pitch_roll(1.0, 0.0, 0.0))
+                    .is_none()
+        );
+    }
 
     #[test]
     fn nominal_platform_feels_no_torque() {

@@ -22,7 +22,7 @@
 use super::PhysicsError;
 use super::delay::{CommandDelay, TIME_TOLERANCE_S};
 use super::dynamics::{Dynamics, StepInput, WheelMode};
-use super::environment::ExternalTorque;
+use super::environment::{ExternalTorque, ExternalTorqueModel};
 use super::friction::Wheel;
 use super::integrator::rk4_step;
 use super::state::{ActuatorCommand, PlatformState, StateVector};
@@ -79,6 +79,8 @@ pub struct StepReport {
 #[derive(Debug, Clone)]
 pub struct Plant {
     dynamics: Dynamics,
+    /// The external torque model at time 0 (`com_drift` is resolved from it per substep).
+    external_t0: ExternalTorqueModel,
     state: PlatformState,
     time_s: f64,
     max_substep_s: f64,
@@ -129,8 +131,10 @@ impl Plant {
             }
         }
         let effects = &config.effects;
+        let dynamics = Dynamics::from_config(config)?;
         Ok(Self {
-            dynamics: Dynamics::from_config(config)?,
+            external_t0: *dynamics.external(),
+            dynamics,
             state: initial,
             time_s: 0.0,
             max_substep_s: options.max_substep_s,
@@ -283,6 +287,8 @@ impl Plant {
         report: &mut StepReport,
     ) {
         let mut remaining = h;
+        self.dynamics
+            .set_external_time(&self.external_t0, self.time_s);
         for split in 0..MAX_SPLITS {
             let motor = self.speed_limited(delivered, remaining);
             let modes = self.dynamics.wheel_modes(&self.state, &motor, gimbal_rate);

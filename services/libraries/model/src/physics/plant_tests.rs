@@ -455,6 +455,7 @@ fn true_inertia_carries_the_inertia_error() {
     let mut config = diagonal();
     config.effects.inertia_error = Some(InertiaError {
         fraction: [0.0, 0.0, 0.1],
+        products_kgm2: None,
     });
     let p = plant(
         &config,

@@ -1,0 +1,579 @@
+//! What no named cause explains: the candidate-function library, the sparse search per equation
+//! ([`crate::sparse`]) and the report of an **unexplained effect**.
+//!
+//! Equations: the torque channel per body axis (the momentum residual, Nms, in the channel's
+//! integral form) and each filter-innovation component (whitened). The candidate functions are
+//! of the measured and estimated state and of time, and are the same for every data set:
+//!
+//! | name | function |
+//! |---|---|
+//! | `1` | constant |
+//! | `t` | time from the record's start over its duration (0 … 1) |
+//! | `sin tilt_x`, `sin tilt_y` | horizontal components of the down vector in body axes `G_B` (its vertical one is within 1 % of a constant at the test bed's tilts, so it is not a separate candidate) |
+//! | `t·sin tilt_x`, `t·sin tilt_y` | their products with time (a drifting centre of mass) |
+//! | `cos ψ`, `sin ψ`, `cos 2ψ`, `sin 2ψ` | heading harmonics |
+//! | `t·cos ψ`, `t·sin ψ` | (sensor channels) slowly changing heading-fixed errors |
+//! | `w_x`, `w_y`, `w_z` | body rates, rad/s |
+//! | `w_x·|w_x|` … | quadratic damping (torque channel) |
+//! | `w_x·w_y`, `w_y·w_z`, `w_z·w_x` | rate products (torque channel) |
+//! | `dw_x/dt` … | angular accelerations, rad/s² (torque channel) |
+//! | `n_x`, `n_y`, `n_z` | wheel speeds, rad/s (sensor channels: fields of the motors) |
+//! | `B_x`, `B_y`, `B_z` | the model's lab field in body axes over its magnitude (sensor channels) |
+//!
+//! Wheel speeds, wheel accelerations and commands are **not** torque-channel candidates: in
+//! closed loop the controller makes them follow the integral of (or cancel) whatever external
+//! torque acts, so any torque would be "explained" by them without saying its form.
+//!
+//! In the torque channel a function f enters as the channel's regressors do: `∫ f dt` from the
+//! segment's start (rates as instruments, the mean of the neighbouring samples), its segment
+//! mean removed; a derivative `dx/dt` enters as `x − x_start`. The coefficient is then a torque
+//! per unit of f, Nm.
+
+use crate::channels::{TORQUE_COLUMNS, torque_columns};
+use crate::effects::{Cause, Kind};
+use crate::fit::{Problem, SetFit};
+use crate::reconstruct::INNOVATION_LEN;
+use crate::sparse::{Design, Rows, SparseOptions, SparseResult, Term, search};
+use serde::Serialize;
+use testbed_model::attitude;
+
+/// An effect in the residuals that no named cause explains.
+#[derive(Debug, Clone, Serialize)]
+pub struct UnexplainedEffect {
+    /// The equation: `torque_x` … (Nm per unit of the function), `innovation_field_x` …
+    /// (whitened innovation per unit).
+    pub equation: String,
+    /// Unit of the coefficients.
+    pub unit: &'static str,
+    /// The proposed term, e.g. `torque_y ≈ +3.1e-3 Nm × t·sin tilt_x − …`.
+    pub proposed: String,
+    /// The terms found (coefficient, cluster-robust standard error).
+    pub terms: Vec<Term>,
+    /// The named causes' own regressors in this equation, refitted with the terms.
+    pub refitted_named: Vec<Term>,
+    /// Evidence: |z| threshold (Bonferroni over the candidates), k-fold cross-validated RMS
+    /// ratio and held-out RMS ratio of the equation without / with the terms.
+    pub z_threshold: f64,
+    pub cv_gain: f64,
+    pub held_out_gain: f64,
+    /// Rows and clusters (independent units) behind the evidence.
+    pub rows: usize,
+    pub clusters: usize,
+}
+
+/// Per-row values of every torque candidate, already in the channel's integral form.
+pub(super) struct TorqueCandidates {
+    pub names: Vec<&'static str>,
+    /// `rows × names.len()`.
+    pub values: Vec<Vec<f64>>,
+}
+
+const TORQUE_NAMES: [&str; 22] = [
+    "1",
+    "t",
+    "sin tilt_x",
+    "sin tilt_y",
+    "t·sin tilt_x",
+    "t·sin tilt_y",
+    "cos ψ",
+    "sin ψ",
+    "cos 2ψ",
+    "sin 2ψ",
+    "w_x",
+    "w_y",
+    "w_z",
+    "w_x·|w_x|",
+    "w_y·|w_y|",
+    "w_z·|w_z|",
+    "w_x·w_y",
+    "w_y·w_z",
+    "w_z·w_x",
+    "dw_x/dt",
+    "dw_y/dt",
+    "dw_z/dt",
+];
+/// Of [`TORQUE_NAMES`], the first index in derivative (direct) form.
+const TORQUE_DIRECT_FROM: usize = 19;
+
+impl TorqueCandidates {
+    pub fn new(problem: &Problem, fit: &SetFit) -> Self {
+        let data = problem.data;
+        let s = &fit.state;
+        let ch = &s.torque;
+        let t0 = data.t.first().copied().unwrap_or(0.0);
+        let span = (data.t.last().copied().unwrap_or(1.0) - t0).max(1e-9);
+        let m = TORQUE_NAMES.len();
+        let inst = |k: usize| 0.5 * (s.recon.rate[k - 1] + s.recon.rate[k + 1]);
+        let integrand = |k: usize| -> Vec<f64> {
+            let t = (data.t[k] - t0) / span;
+            let g = attitude::gravity_b(&s.recon.q[k]);
+            let psi = attitude::heading(&s.recon.q[k]);
+            let w = inst(k);
+            vec![
+                1.0,
+                t,
+                g.x,
+                g.y,
+                t * g.x,
+                t * g.y,
+                psi.cos(),
+                psi.sin(),
+                (2.0 * psi).cos(),
+                (2.0 * psi).sin(),
+                w.x,
+                w.y,
+                w.z,
+                w.x * w.x.abs(),
+                w.y * w.y.abs(),
+                w.z * w.z.abs(),
+                w.x * w.y,
+                w.y * w.z,
+                w.z * w.x,
+            ]
+        };
+        let direct = |k: usize| -> [f64; 3] {
+            let w = inst(k);
+            [w.x, w.y, w.z]
+        };
+        let mut values = vec![vec![0.0; m]; ch.len()];
+        for seg in &ch.segments {
+            let first = seg.start;
+            let k0 = ch.ticks[first];
+            let d0 = direct(k0);
+            let mut acc = [0.0; TORQUE_DIRECT_FROM];
+            let mut prev = integrand(k0);
+            for r in seg.clone() {
+                let k = ch.ticks[r];
+                if r > first {
+                    let h = 0.5 * (data.t[k] - data.t[ch.ticks[r - 1]]);
+                    let f = integrand(k);
+                    for j in 0..TORQUE_DIRECT_FROM {
+                        acc[j] += h * (prev[j] + f[j]);
+                    }
+                    prev = f;
+                }
+                let d = direct(k);
+                values[r][..TORQUE_DIRECT_FROM].copy_from_slice(&acc);
+                for j in 0..3 {
+                    values[r][TORQUE_DIRECT_FROM + j] = d[j] - d0[j];
+                }
+            }
+            let len = seg.len() as f64;
+            for j in 0..m {
+                let mean = seg.clone().map(|r| values[r][j]).sum::<f64>() / len;
+                for r in seg.clone() {
+                    values[r][j] -= mean;
+                }
+            }
+        }
+        Self {
+            names: TORQUE_NAMES.to_vec(),
+            values,
+        }
+    }
+}
+
+/// Folds and clusters: interleaved blocks of `block_s` (block b in fold `b mod folds`).
+fn fold_of(t: f64, block_s: f64) -> usize {
+    (t / block_s).floor().max(0.0) as usize
+}
+
+/// Search every equation for what the fit `fit` (of the named causes `named`) leaves.
+/// The candidate functions of both channels and the named sensor causes' linearisation, on one
+/// fit.
+pub(super) struct Candidates {
+    pub torque: TorqueCandidates,
+    pub innovation: InnovationCandidates,
+    pub linear: Option<SensorLinear>,
+}
+
+impl Candidates {
+    pub fn new(problem: &Problem, fit: &SetFit, named: &[Cause]) -> Self {
+        Self {
+            torque: TorqueCandidates::new(problem, fit),
+            innovation: InnovationCandidates::new(problem, fit),
+            linear: SensorLinear::new(problem, fit, named),
+        }
+    }
+}
+
+pub(super) fn search_all(
+    problem: &Problem,
+    fit: &SetFit,
+    named: &[Cause],
+    candidates: &Candidates,
+    block_s: f64,
+    options: &SparseOptions,
+) -> Vec<UnexplainedEffect> {
+    let mut out = Vec::new();
+    out.extend(search_torque(
+        problem,
+        fit,
+        named,
+        &candidates.torque,
+        block_s,
+        options,
+    ));
+    out.extend(search_innovations(
+        problem,
+        fit,
+        &candidates.innovation,
+        candidates.linear.as_ref(),
+        block_s,
+        options,
+    ));
+    out
+}
+
+fn search_torque(
+    problem: &Problem,
+    fit: &SetFit,
+    named: &[Cause],
+    candidates: &TorqueCandidates,
+    block_s: f64,
+    options: &SparseOptions,
+) -> Vec<UnexplainedEffect> {
+    let data = problem.data;
+    let ch = &fit.state.torque;
+    if ch.len() < 30 {
+        return Vec::new();
+    }
+    let named_cols: Vec<usize> = named
+        .iter()
+        .filter(|c| c.kind() == Kind::Torque)
+        .flat_map(|c| torque_columns(*c).into_iter().flatten())
+        .collect();
+    let mut segment_of = vec![0; ch.len()];
+    for (s, seg) in ch.segments.iter().enumerate() {
+        for r in seg.clone() {
+            segment_of[r] = s;
+        }
+    }
+    let fold: Vec<usize> = (0..ch.len())
+        .map(|r| fold_of(data.t[ch.ticks[ch.segments[segment_of[r]].start]], block_s))
+        .collect();
+    let held: Vec<bool> = ch.ticks.iter().map(|&k| problem.held_out[k]).collect();
+    let mut out = Vec::new();
+    for axis in 0..3 {
+        // The named causes' columns that act on this axis.
+        let forced: Vec<usize> = named_cols
+            .iter()
+            .copied()
+            .filter(|&c| ch.x.iter().any(|row| row[c][axis] != 0.0))
+            .collect();
+        let mut names: Vec<String> = forced.iter().map(|&c| column_name(c)).collect();
+        names.extend(candidates.names.iter().map(|n| n.to_string()));
+        let x: Vec<Vec<f64>> = (0..ch.len())
+            .map(|r| {
+                let mut row: Vec<f64> = forced.iter().map(|&c| ch.x[r][c][axis]).collect();
+                row.extend(&candidates.values[r]);
+                row
+            })
+            .collect();
+        let y: Vec<f64> = (0..ch.len())
+            .map(|r| ch.whitened(r, &fit.torque_delta)[axis] * ch.sigma[axis])
+            .collect();
+        let rows = Rows {
+            x: &x,
+            y: &y,
+            cluster: &segment_of,
+            fold: &fold,
+            held_out: &held,
+        };
+        let design = Design::new(names, forced.len(), rows, options.folds);
+        let result = search(&design, options);
+        if let Some(e) = effect(
+            format!("torque_{}", "xyz".as_bytes()[axis] as char),
+            "Nm",
+            result,
+            &design,
+        ) {
+            out.push(e);
+        }
+    }
+    out
+}
+
+/// Per filter innovation (all ticks, in the reconstruction's order): the sensor-channel
+/// candidates, evaluated at its tick.
+pub(super) struct InnovationCandidates {
+    pub names: Vec<&'static str>,
+    pub values: Vec<Vec<f64>>,
+    /// Per innovation and component: its row in the innovation vector (`usize::MAX`: absent).
+    pub row: Vec<[usize; INNOVATION_LEN]>,
+}
+
+impl InnovationCandidates {
+    pub fn new(problem: &Problem, fit: &SetFit) -> Self {
+        let data = problem.data;
+        let s = &fit.state;
+        let t0 = data.t.first().copied().unwrap_or(0.0);
+        let span = (data.t.last().copied().unwrap_or(1.0) - t0).max(1e-9);
+        let field = problem.base.platform.field_l_t();
+        let field_n = field / field.norm().max(1e-300);
+        let wheels = data.has_wheels();
+        let mut names: Vec<&'static str> = vec![
+            "1",
+            "t",
+            "cos ψ",
+            "sin ψ",
+            "cos 2ψ",
+            "sin 2ψ",
+            "t·cos ψ",
+            "t·sin ψ",
+            "sin tilt_x",
+            "sin tilt_y",
+            "B_x",
+            "B_y",
+            "B_z",
+            "w_x",
+            "w_y",
+            "w_z",
+        ];
+        if wheels {
+            names.extend(["n_x", "n_y", "n_z"]);
+        }
+        let mut next = 0;
+        let mut row = Vec::with_capacity(s.recon.innovations.len());
+        let values = s
+            .recon
+            .innovations
+            .iter()
+            .map(|i| {
+                let mut r = [usize::MAX; INNOVATION_LEN];
+                for (c, slot) in r.iter_mut().enumerate() {
+                    if i.mask & (1 << c) != 0 {
+                        *slot = next;
+                        next += 1;
+                    }
+                }
+                row.push(r);
+                let k = i.tick;
+                let q = &s.recon.q[k];
+                let t = (data.t[k] - t0) / span;
+                let psi = attitude::heading(q);
+                let g = attitude::gravity_b(q);
+                let b = q * field_n;
+                let w = s.recon.rate[k];
+                let mut v = vec![
+                    1.0,
+                    t,
+                    psi.cos(),
+                    psi.sin(),
+                    (2.0 * psi).cos(),
+                    (2.0 * psi).sin(),
+                    t * psi.cos(),
+                    t * psi.sin(),
+                    g.x,
+                    g.y,
+                    b.x,
+                    b.y,
+                    b.z,
+                    w.x,
+                    w.y,
+                    w.z,
+                ];
+                if wheels {
+                    let n = data.wheel_speed_at(k);
+                    v.extend([n.x, n.y, n.z]);
+                }
+                v
+            })
+            .collect();
+        Self { names, values, row }
+    }
+}
+
+/// The named sensor causes linearised at their fitted values: `∂(innovation vector)/∂θ_j` by
+/// forward differences through the filter (one filter run per parameter), over all ticks.
+pub(super) struct SensorLinear {
+    /// Per column: cause, value index, name.
+    pub cols: Vec<(Cause, usize, String)>,
+    /// Per column: fitted value minus the value that switches the cause off (`None` for
+    /// `earth_rate`, which has no neutral value).
+    pub delta: Vec<Option<f64>>,
+    /// Per column, per innovation-vector row.
+    pub j: Vec<Vec<f64>>,
+}
+
+impl SensorLinear {
+    pub fn new(problem: &Problem, fit: &SetFit, named: &[Cause]) -> Option<Self> {
+        let sensor: Vec<Cause> = named
+            .iter()
+            .copied()
+            .filter(|c| c.kind() == Kind::Sensor)
+            .collect();
+        if sensor.is_empty() {
+            return None;
+        }
+        let r0 = fit.state.recon.innovation_vector(|_| true);
+        let mut cols = Vec::new();
+        let mut delta = Vec::new();
+        let mut j = Vec::new();
+        for cause in sensor {
+            let values = cause.values(&fit.config);
+            let neutral = cause.values(&problem.base);
+            let mut offset = 0;
+            for spec in cause.params() {
+                for e in 0..spec.len {
+                    let i = offset + e;
+                    let (lo, hi) = cause.bounds(i);
+                    let h = if values[i] + spec.step > hi {
+                        -spec.step
+                    } else {
+                        spec.step
+                    };
+                    let mut v = values.clone();
+                    v[i] = (values[i] + h).clamp(lo, hi);
+                    let taken = v[i] - values[i];
+                    let mut config = fit.config.clone();
+                    cause.apply(&mut config, &v);
+                    let r = problem
+                        .run_filter(&config)
+                        .ok()?
+                        .innovation_vector(|_| true);
+                    if r.len() != r0.len() || taken == 0.0 {
+                        return None;
+                    }
+                    j.push(r.iter().zip(&r0).map(|(a, b)| (a - b) / taken).collect());
+                    cols.push((cause, i, cause.value_name(i)));
+                    delta.push((cause != Cause::EarthRate).then(|| values[i] - neutral[i]));
+                }
+                offset += spec.len;
+            }
+        }
+        Some(Self { cols, delta, j })
+    }
+}
+
+fn search_innovations(
+    problem: &Problem,
+    fit: &SetFit,
+    candidates: &InnovationCandidates,
+    linear: Option<&SensorLinear>,
+    block_s: f64,
+    options: &SparseOptions,
+) -> Vec<UnexplainedEffect> {
+    let data = problem.data;
+    let s = &fit.state;
+    let mut out = Vec::new();
+    for c in 0..INNOVATION_LEN {
+        let rows: Vec<usize> = (0..s.recon.innovations.len())
+            .filter(|&i| candidates.row[i][c] != usize::MAX)
+            .collect();
+        if rows.len() < 100 {
+            continue;
+        }
+        // The named sensor causes' own columns (their Jacobian rows of this component) are
+        // forced, so their values re-adjust with any new term.
+        let forced: Vec<usize> = linear.map_or(Vec::new(), |l| {
+            (0..l.cols.len())
+                .filter(|&j| rows.iter().any(|&i| l.j[j][candidates.row[i][c]] != 0.0))
+                .collect()
+        });
+        let mut names: Vec<String> = forced
+            .iter()
+            .filter_map(|&j| linear.map(|l| l.cols[j].2.clone()))
+            .collect();
+        names.extend(candidates.names.iter().map(|n| n.to_string()));
+        let x: Vec<Vec<f64>> = rows
+            .iter()
+            .map(|&i| {
+                let mut row: Vec<f64> = forced
+                    .iter()
+                    .filter_map(|&j| linear.map(|l| l.j[j][candidates.row[i][c]]))
+                    .collect();
+                row.extend(&candidates.values[i]);
+                row
+            })
+            .collect();
+        let inn = &s.recon.innovations;
+        let y: Vec<f64> = rows.iter().map(|&i| inn[i].values[c]).collect();
+        // Clusters of a third of a block (never across a fit / held-out change).
+        let cluster: Vec<usize> = rows
+            .iter()
+            .map(|&i| fold_of(data.t[inn[i].tick], block_s / 3.0))
+            .collect();
+        let fold: Vec<usize> = rows
+            .iter()
+            .map(|&i| fold_of(data.t[inn[i].tick], block_s))
+            .collect();
+        let held: Vec<bool> = rows
+            .iter()
+            .map(|&i| problem.held_out[inn[i].tick])
+            .collect();
+        let rows = Rows {
+            x: &x,
+            y: &y,
+            cluster: &cluster,
+            fold: &fold,
+            held_out: &held,
+        };
+        let design = Design::new(names, forced.len(), rows, options.folds);
+        let result = search(&design, options);
+        if let Some(e) = effect(
+            INNOVATION_LABELS[c].to_string(),
+            "1 (whitened)",
+            result,
+            &design,
+        ) {
+            out.push(e);
+        }
+    }
+    out
+}
+
+/// Names of the innovation components (the equations of the sensor channel).
+pub(super) const INNOVATION_LABELS: [&str; INNOVATION_LEN] = [
+    "innovation_tilt_1",
+    "innovation_tilt_2",
+    "innovation_field_x",
+    "innovation_field_y",
+    "innovation_field_z",
+];
+
+fn effect(
+    equation: String,
+    unit: &'static str,
+    result: SparseResult,
+    design: &Design,
+) -> Option<UnexplainedEffect> {
+    if result.terms.is_empty() {
+        return None;
+    }
+    let mut proposed = format!("{equation} ≈");
+    for (i, t) in result.terms.iter().enumerate() {
+        let text = super::report::round_to(t.value.abs(), t.stderr);
+        let sign = match (i, t.value < 0.0) {
+            (0, false) => "",
+            (0, true) => "−",
+            (_, false) => "+ ",
+            (_, true) => "− ",
+        };
+        proposed.push_str(&format!(" {sign}{text} {unit} × {}", t.name));
+    }
+    Some(UnexplainedEffect {
+        equation,
+        unit,
+        proposed,
+        terms: result.terms,
+        refitted_named: result.forced,
+        z_threshold: result.z_threshold,
+        cv_gain: result.cv_gain,
+        held_out_gain: result.held_out_gain,
+        rows: design.rows(),
+        clusters: design.clusters(),
+    })
+}
+
+/// Name of a torque column (`com_offset.r_m[0]` …).
+pub(super) fn column_name(col: usize) -> String {
+    debug_assert!(col < TORQUE_COLUMNS);
+    let (cause, off) = match col {
+        0..3 => (Cause::ComOffset, col),
+        3..6 => (Cause::ConstantTorque, col - 3),
+        6..12 => (Cause::AeroDrag, col - 6),
+        _ => (Cause::InertiaError, col - 12),
+    };
+    cause.value_name(off)
+}

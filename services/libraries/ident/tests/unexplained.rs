@@ -1,0 +1,318 @@
+//! Effects outside the cause library, simulated by the project (off-by-default effects of the
+//! model crate): a centre of mass drifting with time (thermal), a soft-iron magnetometer matrix,
+//! a torque that varies with the heading. Hidden alone and together with a library cause, then
+//! identified blind against the nominal model: the library cause must still be named with its
+//! parameters, the out-of-library effect reported as **unexplained** in the right equation with
+//! the regressors that carry it and a held-out gain, and no library cause named for it.
+//!
+//! Seeds are fixed; 600 s of the identification experiment each.
+
+mod common;
+use common::*;
+use testbed_ident::Cause;
+use testbed_ident::identify::Identification;
+
+/// 2.5 µm and 1.5 µm of horizontal drift in 1000 s: 3 mNm of torque after 600 s, growing
+/// linearly (a horizontal offset r gives `m g r × G_B`, mostly about the other horizontal axis).
+const COM_DRIFT: &str = "[effects.com_drift]\nrate_m_per_s = [2.5e-9, -1.5e-9, 0.0]\n";
+/// Horizontal soft iron of a few percent (the column acting on the vertical field is left at
+/// zero: on a platform that tilts by a few degrees it is indistinguishable from hard iron).
+const SOFT_IRON: &str =
+    "[effects.soft_iron]\nmatrix = [[0.03, 0.02, 0.0], [0.02, -0.03, 0.0], [0.0, 0.0, 0.0]]\n";
+/// 1–1.5 mNm about Z varying with the heading (a cable winding up, a dipole in the lab field).
+const HEADING: &str =
+    "[effects.heading_torque]\ncos_nm = [0.0, 0.0, 1.0e-3]\nsin_nm = [0.0, 0.0, 1.5e-3]\n";
+const COM: &str = "[effects.com_offset]\nr_m = [2.5e-6, -1.5e-6, -1.0e-6]\n";
+const WHEEL_SCALE: &str = "[effects.wheel_torque_scale]\nscale = [0.95, 1.04, 0.97]\n";
+const HARD_IRON: &str = "[effects.magnetic_disturbance]\nhard_iron_gauss = [0.08, -0.05, 0.1]\n";
+
+fn print(label: &str, id: &Identification) {
+    println!("{label}:");
+    for line in &id.report.summary {
+        println!("    {line}");
+    }
+    for t in &id.report.cause_tests {
+        println!("    test {}: {}", t.name, t.verdict);
+    }
+}
+
+/// The unexplained effect must be found in one of `equations`, with one of `regressors` among
+/// its terms and a held-out gain above `min_gain`; the named causes must be exactly `library`,
+/// each value within 10 % (+ `abs_tol`) of the truth.
+fn check(
+    label: &str,
+    truth: &testbed_model::ModelConfig,
+    id: &Identification,
+    library: &[Cause],
+    equations: &[&str],
+    regressors: &[&str],
+    min_gain: f64,
+) {
+    print(label, id);
+    let mut found = names(id);
+    found.sort();
+    let mut want: Vec<&str> = library.iter().map(|c| c.name()).collect();
+    want.sort();
+    assert_eq!(
+        found, want,
+        "{label}: named causes {:?}",
+        id.report.cause_tests
+    );
+    for cause in library {
+        let fitted = cause.values(&id.extended);
+        let hidden = cause.values(truth);
+        for (i, (f, t)) in fitted.iter().zip(&hidden).enumerate() {
+            assert!(
+                (f - t).abs() <= 0.1 * t.abs() + 1e-7,
+                "{label}: {} = {f} vs {t}",
+                cause.value_name(i)
+            );
+        }
+    }
+    let hit = id.report.unexplained.iter().find(|e| {
+        equations.contains(&e.equation.as_str())
+            && e.terms
+                .iter()
+                .any(|t| regressors.contains(&t.name.as_str()))
+    });
+    let Some(hit) = hit else {
+        panic!(
+            "{label}: no unexplained effect in {equations:?} with {regressors:?}: {:?}",
+            id.report.unexplained
+        );
+    };
+    assert!(
+        hit.held_out_gain > min_gain,
+        "{label}: held-out gain {} ≤ {min_gain}",
+        hit.held_out_gain
+    );
+    assert!(id.report.remaining.residual_remains, "{label}");
+    assert!(
+        !id.report.remaining.message.contains("no structure"),
+        "{label}: {}",
+        id.report.remaining.message
+    );
+}
+
+#[test]
+fn com_drift_alone_and_with_a_hard_iron() {
+    // (A constant torque beside the drift is not a fair partner: `c + d·t` on an axis does not
+    // say which part is a library cause, and the report then gives the offset with the drift.)
+    for (label, effects, library, seed) in [
+        ("com drift", COM_DRIFT.to_string(), vec![], 51),
+        (
+            "com drift + hard iron",
+            format!("{COM_DRIFT}{HARD_IRON}"),
+            vec![Cause::MagneticDisturbance],
+            52,
+        ),
+    ] {
+        let t = truth(&effects);
+        let id = identify_blind(&t, seed, 600.0);
+        check(
+            label,
+            &t,
+            &id,
+            &library,
+            &["torque_x", "torque_y"],
+            &["t", "t·sin tilt_x", "t·sin tilt_y"],
+            1.5,
+        );
+    }
+}
+
+#[test]
+fn soft_iron_alone_and_with_a_wheel_torque_scale() {
+    // Not yet with a torque cause: the soft iron distorts the heading the filter estimates,
+    // which the torque channel is built on (see `soft_iron_with_a_com_offset_known_limit`).
+    for (label, effects, library, seed) in [
+        ("soft iron", SOFT_IRON.to_string(), vec![], 53),
+        (
+            "soft iron + wheel torque scale",
+            format!("{SOFT_IRON}{WHEEL_SCALE}"),
+            vec![Cause::WheelTorqueScale],
+            54,
+        ),
+    ] {
+        let t = truth(&effects);
+        let id = identify_blind(&t, seed, 600.0);
+        check(
+            label,
+            &t,
+            &id,
+            &library,
+            &[
+                "innovation_field_x",
+                "innovation_field_y",
+                "innovation_field_z",
+            ],
+            &["B_x", "B_y", "cos ψ", "sin ψ", "cos 2ψ", "sin 2ψ"],
+            1.05,
+        );
+    }
+}
+
+#[test]
+fn heading_torque_alone_and_with_a_com_offset() {
+    for (label, effects, library, seed) in [
+        ("heading torque", HEADING.to_string(), vec![], 55),
+        (
+            "heading torque + com offset",
+            format!("{HEADING}{COM}"),
+            vec![Cause::ComOffset],
+            56,
+        ),
+    ] {
+        let t = truth(&effects);
+        let id = identify_blind(&t, seed, 600.0);
+        check(
+            label,
+            &t,
+            &id,
+            &library,
+            &["torque_z"],
+            // Over the experiment's ±60° of heading the first and second harmonics can stand
+            // in for each other; the form required is a heading-dependent torque about Z.
+            &["cos ψ", "sin ψ", "cos 2ψ", "sin 2ψ"],
+            1.5,
+        );
+    }
+}
+
+/// Known limit (ignored; run with `--ignored`): soft iron with a centre-of-mass offset. The
+/// soft iron distorts the estimated heading; the torque channel is built on that estimate, so
+/// the com offset fails its consistency test and a gyro scale error is kept in its place.
+/// Carrying the found sensor term into the filter and analysing again would be the fix.
+#[test]
+#[ignore]
+fn soft_iron_with_a_com_offset_known_limit() {
+    let t = truth(&format!("{SOFT_IRON}{COM}"));
+    let id = identify_blind(&t, 54, 600.0);
+    check(
+        "soft iron + com offset",
+        &t,
+        &id,
+        &[Cause::ComOffset],
+        &[
+            "innovation_field_x",
+            "innovation_field_y",
+            "innovation_field_z",
+        ],
+        &["B_x", "B_y", "cos ψ", "sin ψ", "cos 2ψ", "sin 2ψ"],
+        1.05,
+    );
+}
+
+/// Clean data (the nominal model simulated, seeds 100–119, as the library's own clean-data
+/// test): no unexplained effect on any seed. The search's family-wise level is 1e-4 per
+/// equation (8 equations), so the expected number of false finds in 20 records is about 0.02
+/// if its null (no structure; clusters independent) holds; 20/20 clean is the bound checked.
+#[test]
+fn clean_data_give_no_unexplained_effect_on_20_of_20_seeds() {
+    let clean = nominal();
+    let mut found = Vec::new();
+    let mut named = Vec::new();
+    for seed in 100..120 {
+        let id = identify_blind(&clean, seed, 600.0);
+        println!(
+            "clean seed {seed}: {} ; unexplained: {:?}",
+            id.report.verdict,
+            id.report
+                .unexplained
+                .iter()
+                .map(|e| (&e.proposed, e.held_out_gain))
+                .collect::<Vec<_>>()
+        );
+        if !id.report.unexplained.is_empty() {
+            found.push(seed);
+        }
+        if !id.report.causes.is_empty() {
+            named.push(seed);
+        }
+    }
+    println!("unexplained on {found:?}; causes on {named:?}");
+    assert!(
+        found.is_empty(),
+        "unexplained effects on clean data: {found:?}"
+    );
+    assert!(named.is_empty(), "causes named on clean data: {named:?}");
+}
+
+/// How often the checks above hold on other seeds (ignored: 24 identifications; prints the
+/// share per scenario; run with `--ignored --nocapture`).
+#[test]
+#[ignore]
+fn out_of_library_checks_over_more_seeds() {
+    let heading = ["cos ψ", "sin ψ", "cos 2ψ", "sin 2ψ"];
+    let field_eq = [
+        "innovation_field_x",
+        "innovation_field_y",
+        "innovation_field_z",
+    ];
+    let field = ["B_x", "B_y", "cos ψ", "sin ψ", "cos 2ψ", "sin 2ψ"];
+    // (label, hidden effects, library causes, equations, regressors, least held-out gain)
+    type Scenario<'a> = (&'a str, String, Vec<Cause>, Vec<&'a str>, Vec<&'a str>, f64);
+    let scenarios: Vec<Scenario> = vec![
+        (
+            "com drift",
+            COM_DRIFT.into(),
+            vec![],
+            vec!["torque_x", "torque_y"],
+            vec!["t", "t·sin tilt_x", "t·sin tilt_y"],
+            1.5,
+        ),
+        (
+            "com drift + hard iron",
+            format!("{COM_DRIFT}{HARD_IRON}"),
+            vec![Cause::MagneticDisturbance],
+            vec!["torque_x", "torque_y"],
+            vec!["t", "t·sin tilt_x", "t·sin tilt_y"],
+            1.5,
+        ),
+        (
+            "soft iron",
+            SOFT_IRON.into(),
+            vec![],
+            field_eq.to_vec(),
+            field.to_vec(),
+            1.05,
+        ),
+        (
+            "soft iron + wheel scale",
+            format!("{SOFT_IRON}{WHEEL_SCALE}"),
+            vec![Cause::WheelTorqueScale],
+            field_eq.to_vec(),
+            field.to_vec(),
+            1.05,
+        ),
+        (
+            "heading torque",
+            HEADING.into(),
+            vec![],
+            vec!["torque_z"],
+            heading.to_vec(),
+            1.5,
+        ),
+        (
+            "heading torque + com",
+            format!("{HEADING}{COM}"),
+            vec![Cause::ComOffset],
+            vec!["torque_z"],
+            heading.to_vec(),
+            1.5,
+        ),
+    ];
+    for (label, effects, library, equations, regressors, gain) in &scenarios {
+        let t = truth(effects);
+        let mut ok = 0;
+        for seed in 61..65 {
+            let id = identify_blind(&t, seed, 600.0);
+            let pass = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                check(label, &t, &id, library, equations, regressors, *gain)
+            }))
+            .is_ok();
+            ok += pass as usize;
+        }
+        println!("ROBUSTNESS {label}: {ok}/4 seeds pass");
+    }
+}
