@@ -110,7 +110,7 @@ fn ten_minutes_of_random_kills_and_hangs_keep_the_platform_within_a_degree() {
     let tmp_before = entries("/tmp", "tb");
 
     let duration = SETTLE_S + chaos_s;
-    let mut child = Command::new(testbed)
+    let child = Command::new(testbed)
         .args(["run", "--json", "--seed", "11"])
         .arg("--profile")
         .arg(&profile)

@@ -322,7 +322,7 @@ impl ControllerNode {
             && telemetry
                 .wheel_speed_rad_s
                 .iter()
-                .any(|n| !(n.abs() < limit));
+                .any(|n| n.is_nan() || n.abs() >= limit);
         SafeReasons::NONE
             .with(
                 SafeReason::EstimateLost,
