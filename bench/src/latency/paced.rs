@@ -63,12 +63,14 @@ impl Ctx {
             .spawn()
             .context("starting testbed run")?;
         let pid = child.id();
-        // The bus `testbed run` creates for its run (see services/tools/cli/src/run.rs).
+        // The private bus `testbed run` creates for its run: `/tmp/tb<pid>_<random>/`, prefix
+        // `tb<pid>_<random>_` (see testbed_bus::PrivateRun; same user, so readable here).
+        let name = run_bus_name(pid)?;
         let spec = WorkerSpec {
             role: Role::Observer,
             transport: Transport::BUS,
-            bus_prefix: format!("tb{pid}_"),
-            bus_root: format!("/tmp/tb{pid}/"),
+            bus_prefix: format!("{name}_"),
+            bus_root: format!("/tmp/{name}/"),
             addrs: Vec::new(),
             size: 0,
             warmup: 0,
@@ -182,5 +184,26 @@ impl Ctx {
             );
         }
         Ok(())
+    }
+}
+
+/// The name of the private bus directory `testbed run` (pid `pid`) created in `/tmp`, waiting
+/// up to 10 s for it to appear.
+fn run_bus_name(pid: u32) -> Result<String> {
+    let start = format!("tb{pid}_");
+    let deadline = Instant::now() + Duration::from_secs(10);
+    loop {
+        let found = std::fs::read_dir("/tmp")?
+            .flatten()
+            .map(|e| e.file_name().to_string_lossy().into_owned())
+            .find(|n| n.starts_with(&start));
+        if let Some(name) = found {
+            return Ok(name);
+        }
+        anyhow::ensure!(
+            Instant::now() < deadline,
+            "testbed run (pid {pid}) created no bus directory /tmp/{start}…"
+        );
+        std::thread::sleep(Duration::from_millis(20));
     }
 }
