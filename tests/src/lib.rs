@@ -196,3 +196,32 @@ pub mod vm {
         }
     }
 }
+
+/// The pid of a descendant of `root` (up to 8 generations down) running `program` (its
+/// `/proc/<pid>/comm`), if any: the fault tests find the pipeline's processes under `testbed`.
+pub fn descendant(root: u32, program: &str) -> Option<u32> {
+    let parent_of = |pid: u32| -> Option<u32> {
+        let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).ok()?;
+        // pid (comm) state ppid …: comm may hold spaces, so split after the last ')'.
+        let rest = &stat[stat.rfind(')')? + 2..];
+        rest.split(' ').nth(1)?.parse().ok()
+    };
+    std::fs::read_dir("/proc")
+        .ok()?
+        .flatten()
+        .find_map(|entry| {
+            let pid: u32 = entry.file_name().to_str()?.parse().ok()?;
+            let comm = std::fs::read_to_string(format!("/proc/{pid}/comm")).ok()?;
+            if comm.trim_end() != program {
+                return None;
+            }
+            let mut p = pid;
+            for _ in 0..8 {
+                p = parent_of(p)?;
+                if p == root {
+                    return Some(pid);
+                }
+            }
+            None
+        })
+}

@@ -15,7 +15,7 @@ use std::collections::BTreeSet;
 use std::path::Path;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
-use testbed_e2e::{Scratch, binary, profile};
+use testbed_e2e::{Scratch, binary, descendant, profile};
 use testbed_flight::convert::quaternion_from_array;
 use testbed_log::RunLog;
 use testbed_model::attitude;
@@ -43,33 +43,6 @@ fn entries(dir: &str, prefix: &str) -> BTreeSet<String> {
                 .collect()
         })
         .unwrap_or_default()
-}
-
-fn parent_of(pid: u32) -> Option<u32> {
-    let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).ok()?;
-    let rest = &stat[stat.rfind(')')? + 2..];
-    rest.split(' ').nth(1)?.parse().ok()
-}
-
-fn descendant(root: u32, program: &str) -> Option<u32> {
-    std::fs::read_dir("/proc")
-        .ok()?
-        .flatten()
-        .find_map(|entry| {
-            let pid: u32 = entry.file_name().to_str()?.parse().ok()?;
-            let comm = std::fs::read_to_string(format!("/proc/{pid}/comm")).ok()?;
-            if comm.trim_end() != program {
-                return None;
-            }
-            let mut p = pid;
-            for _ in 0..8 {
-                p = parent_of(p)?;
-                if p == root {
-                    return Some(pid);
-                }
-            }
-            None
-        })
 }
 
 fn chaos_profile(dir: &Path) -> std::path::PathBuf {

@@ -15,7 +15,7 @@ use ipc_types::{AttitudeEstimate, HealthEvent, HealthEventKind, SimTruth, WheelC
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
-use testbed_e2e::{Scratch, binary, profile};
+use testbed_e2e::{Scratch, binary, descendant, profile};
 use testbed_log::RunLog;
 
 /// The control period of the default configuration, s.
@@ -68,34 +68,6 @@ fn fault_profile(dir: &Path, mode: Mode) -> PathBuf {
     path
 }
 
-/// The pid of the descendant of `root` running `program`, if any.
-fn descendant(root: u32, program: &str) -> Option<u32> {
-    let parent_of = |pid: u32| -> Option<u32> {
-        let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).ok()?;
-        // pid (comm) state ppid …: comm may hold spaces, so split after the last ')'.
-        let rest = &stat[stat.rfind(')')? + 2..];
-        rest.split(' ').nth(1)?.parse().ok()
-    };
-    std::fs::read_dir("/proc")
-        .ok()?
-        .flatten()
-        .find_map(|entry| {
-            let pid: u32 = entry.file_name().to_str()?.parse().ok()?;
-            let comm = std::fs::read_to_string(format!("/proc/{pid}/comm")).ok()?;
-            if comm.trim_end() != program {
-                return None;
-            }
-            let mut p = pid;
-            for _ in 0..8 {
-                p = parent_of(p)?;
-                if p == root {
-                    return Some(pid);
-                }
-            }
-            None
-        })
-}
-
 struct Outcome {
     success: bool,
     stderr: String,
@@ -111,8 +83,10 @@ fn run_with_fault(
     program: &str,
     fault: Fault,
 ) -> Outcome {
+    // Resolved first: `binary` may build the workspace, which is not the run's wall time.
+    let testbed = binary("testbed");
     let started = Instant::now();
-    let mut child = Command::new(binary("testbed"))
+    let mut child = Command::new(testbed)
         .args(["run", "--json", "--seed", "5", "--max-wall", "120"])
         .arg("--profile")
         .arg(profile)

@@ -121,9 +121,6 @@ impl Node for ControllerProcess {
                         .report(t_ns, HealthEventKind::SafeModeLeft, io.name, 0, 0.0)
                 }
             }
-            if let SafeTransition::Entered(reasons) = transition {
-                tracing::warn!("safe mode: {}", reasons.describe());
-            }
         }
         Ok(Flow::Continue)
     }

@@ -47,7 +47,7 @@ struct InputTimes {
 
 impl InputTimes {
     fn saw(&mut self, t_ns: u64) {
-        self.newest_ns = Some(self.newest_ns.map_or(t_ns, |n| n.max(t_ns)));
+        newest(&mut self.newest_ns, t_ns);
     }
 
     /// Whether an input whose newest sample is `own_ns` is lost: the freshest input is
@@ -57,6 +57,11 @@ impl InputTimes {
         let newest = self.newest_ns.unwrap_or(0);
         newest >= own_ns.unwrap_or(first_ns) + LOST_AFTER_PERIODS * period_ns
     }
+}
+
+/// Keeps in `slot` the newest of its time and `t_ns`.
+fn newest(slot: &mut Option<u64>, t_ns: u64) {
+    *slot = Some(slot.map_or(t_ns, |n| n.max(t_ns)));
 }
 
 /// The wheels' limits the safe torque respects.
@@ -161,7 +166,7 @@ impl ControllerNode {
     pub fn on_estimate(&mut self, e: &AttitudeEstimate) {
         let t_ns = e.header.time_ns;
         self.saw(t_ns);
-        self.inputs.estimate_ns = Some(self.inputs.estimate_ns.map_or(t_ns, |n| n.max(t_ns)));
+        newest(&mut self.inputs.estimate_ns, t_ns);
         if let Some(p) = self.slot(t_ns) {
             p.estimate = Some(*e);
         }
@@ -170,7 +175,7 @@ impl ControllerNode {
     pub fn on_wheel_telemetry(&mut self, t: &WheelTelemetry) {
         let t_ns = t.header.time_ns;
         self.saw(t_ns);
-        self.inputs.wheels_ns = Some(self.inputs.wheels_ns.map_or(t_ns, |n| n.max(t_ns)));
+        newest(&mut self.inputs.wheels_ns, t_ns);
         if let Some(p) = self.slot(t_ns) {
             p.wheels = Some(*t);
         }
@@ -179,7 +184,7 @@ impl ControllerNode {
     pub fn on_cmg_telemetry(&mut self, t: &CmgTelemetry) {
         let t_ns = t.header.time_ns;
         self.saw(t_ns);
-        self.inputs.cmg_ns = Some(self.inputs.cmg_ns.map_or(t_ns, |n| n.max(t_ns)));
+        newest(&mut self.inputs.cmg_ns, t_ns);
         if let Some(p) = self.slot(t_ns) {
             p.cmg = Some(*t);
         }
