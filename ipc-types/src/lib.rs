@@ -36,6 +36,7 @@
 mod actuators;
 mod can;
 mod gnc;
+mod ground;
 mod header;
 mod run;
 mod sensors;
@@ -49,6 +50,7 @@ mod tests;
 pub use actuators::{CmgCommand, CmgTelemetry, WheelCommand, WheelTelemetry};
 pub use can::{AppliedCmgCommand, AppliedWheelCommand, CanBusFrame, CanLinkStatus, can_source};
 pub use gnc::{AttitudeEstimate, ControllerMode, ControllerStatus};
+pub use ground::{GroundAckStatus, GroundCommand, GroundCommandAck, GroundCommandKind};
 pub use header::SampleHeader;
 pub use run::{ClockMode, Device, ENV_RESTART_COUNT, restart_count};
 pub use sensors::{GyroSample, InclinometerSample, MagnetometerSample};
@@ -102,4 +104,6 @@ impl_topic! {
     AppliedWheelCommand => WHEEL_APPLIED / WHEEL_APPLIED_EVENT,
     AppliedCmgCommand => CMG_APPLIED / CMG_APPLIED_EVENT,
     HealthEvent => HEALTH / HEALTH_EVENT,
+    GroundCommand => GROUND_COMMAND / GROUND_COMMAND_EVENT,
+    GroundCommandAck => GROUND_COMMAND_ACK / GROUND_COMMAND_ACK_EVENT,
 }

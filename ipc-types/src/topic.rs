@@ -57,6 +57,12 @@ topics! {
     /// [`HealthEvent`](crate::HealthEvent): faults and recoveries (lost inputs, hung or dead
     /// processes, safe mode, zeroed actuators), published when they happen.
     HEALTH, HEALTH_EVENT = "testbed/system/health";
+    /// [`GroundCommand`](crate::GroundCommand): commands from the ground station, accepted by
+    /// the ground link, applied by the controller.
+    GROUND_COMMAND, GROUND_COMMAND_EVENT = "testbed/ground/command";
+    /// [`GroundCommandAck`](crate::GroundCommandAck): each ground command applied or rejected,
+    /// with the reason.
+    GROUND_COMMAND_ACK, GROUND_COMMAND_ACK_EVENT = "testbed/ground/command_ack";
 }
 
 /// Name of the event service paired with the data service `topic` (`topic` + [`EVENT_SUFFIX`]).

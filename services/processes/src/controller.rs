@@ -5,8 +5,8 @@
 //! lost or invalid or a wheel nears its speed limit; its changes go to the health topic.
 
 use ipc_types::{
-    AttitudeEstimate, CmgCommand, CmgTelemetry, ControllerStatus, GyroSample, HealthEventKind,
-    WheelCommand, WheelTelemetry,
+    AttitudeEstimate, CmgCommand, CmgTelemetry, ControllerStatus, GroundAckStatus, GroundCommand,
+    GroundCommandAck, GyroSample, HealthEventKind, SampleHeader, WheelCommand, WheelTelemetry,
 };
 use std::time::Duration;
 use testbed_bus::{Flow, LoopExit, SourceId, TopicPublisher, TopicSubscriber, Wake};
@@ -25,6 +25,11 @@ pub struct ControllerPorts {
     status: TopicPublisher<ControllerStatus>,
     wheel_command: TopicPublisher<WheelCommand>,
     cmg_command: TopicPublisher<CmgCommand>,
+    /// Commands from the ground station (through the ground link), read on every wake-up:
+    /// the only way a ground command reaches an actuator.
+    ground: TopicSubscriber<GroundCommand>,
+    /// The controller's answer to each ground command.
+    ground_ack: TopicPublisher<GroundCommandAck>,
 }
 
 /// The controller process: [`ControllerNode`] on the bus.
@@ -36,6 +41,8 @@ pub struct ControllerProcess {
     period: Duration,
     /// The estimate's attachment (its missed deadlines are missed control cycles).
     estimate_source: Option<SourceId>,
+    /// Ground-command acknowledgements published.
+    ack_sequence: u64,
 }
 
 impl ControllerProcess {
@@ -55,6 +62,8 @@ impl ControllerProcess {
             status: cx.bus.publisher()?,
             wheel_command: cx.bus.publisher()?,
             cmg_command: cx.bus.publisher()?,
+            ground: cx.bus.subscriber()?,
+            ground_ack: cx.bus.publisher()?,
         };
         Ok((
             Self {
@@ -62,6 +71,7 @@ impl ControllerProcess {
                 deadline,
                 period,
                 estimate_source: None,
+                ack_sequence: 0,
             },
             ports,
         ))
@@ -100,6 +110,34 @@ impl Node for ControllerProcess {
             + ports.cmg.drain(|t| node.on_cmg_telemetry(&t))?
             + ports.gyro.drain(|g| node.on_gyro(&g))?;
         io.heartbeat.add_samples_in(received as u64);
+        // Ground commands take effect from the next cycle on.
+        let mut commands = Vec::new();
+        ports.ground.drain_into(&mut commands)?;
+        for command in commands {
+            let outcome = node.ground_command(&command);
+            let t_ns = node.last_cycle_ns().unwrap_or(0);
+            let (status, reason) = match &outcome {
+                Ok(what) => (GroundAckStatus::Applied, what.as_str()),
+                Err(why) => (GroundAckStatus::Rejected, why.as_str()),
+            };
+            tracing::info!(
+                id = command.command_id,
+                kind = command.kind,
+                ?status,
+                reason,
+                "ground command"
+            );
+            self.ack_sequence += 1;
+            ports.ground_ack.publish(&GroundCommandAck::new(
+                SampleHeader::new(t_ns, self.ack_sequence, SampleHeader::VALID),
+                command.command_id,
+                command.kind,
+                status,
+                command.client_id,
+                GroundCommandAck::BY_CONTROLLER,
+                reason,
+            ))?;
+        }
         for cycle in node.ready() {
             io.heartbeat.set_time_ns(cycle.status.header.time_ns);
             ports.status.publish(&cycle.status)?;

@@ -2,12 +2,13 @@
 //! telemetry of that tick.
 
 use crate::convert::{Sequence, a3, a4, quaternion_from_array, seconds, v3, v4};
+use crate::safe_mode::SafeWheels;
 use crate::safe_mode::{SafeMode, SafeReason, SafeReasons, SafeTransition, safe_wheel_torque};
 use crate::schedule::Schedule;
 use crate::tasks::{ActuatorTelemetry, Actuators, ControllerConfig, ControllerTask};
 use ipc_types::{
-    AttitudeEstimate, CmgCommand, CmgTelemetry, ControllerMode, ControllerStatus, GyroSample,
-    SampleHeader, WheelCommand, WheelTelemetry,
+    AttitudeEstimate, CmgCommand, CmgTelemetry, ControllerMode, ControllerStatus, GroundCommand,
+    GroundCommandKind, GyroSample, SampleHeader, WheelCommand, WheelTelemetry,
 };
 use nalgebra::Vector3;
 use std::collections::BTreeMap;
@@ -90,6 +91,8 @@ pub struct ControllerNode {
     safe: SafeMode,
     wheel_limits: WheelLimits,
     transitions: Vec<(u64, SafeTransition)>,
+    /// The mode the ground asked for, when it is not the configured law (idle, rate damping).
+    ground_mode: Option<ControllerMode>,
 }
 
 impl ControllerNode {
@@ -121,6 +124,7 @@ impl ControllerNode {
                 max_speed_rad_s: wheels.max_speed_rad_s(),
             },
             transitions: Vec::new(),
+            ground_mode: None,
         }
     }
 
@@ -132,6 +136,81 @@ impl ControllerNode {
     /// A ground command: `true` enters and holds safe mode, `false` releases it.
     pub fn ground_safe_mode(&mut self, safe: bool) {
         self.safe.ground_command(safe);
+    }
+
+    /// Applies a command from the ground (validated by the ground link; checked again here):
+    /// what was applied, or why it was refused. Mode: idle (zero commands), rate damping (the
+    /// wheels damp the estimated body rate, as safe mode does on the gyro), the configured
+    /// pointing law (wheel pointing or CMG slew, whichever `controller.actuators` names), or
+    /// safe (held until another mode is commanded). Target: the attitude the pointing law
+    /// holds from the next cycle on. Experiments: refused, no runner exists on the platform.
+    pub fn ground_command(&mut self, command: &GroundCommand) -> Result<String, String> {
+        match command.kind() {
+            Some(GroundCommandKind::Mode) => {
+                let mode = ControllerMode::from_u32(command.mode)
+                    .ok_or_else(|| format!("unknown mode {}", command.mode))?;
+                let law = match self.actuators {
+                    Actuators::Wheels => ControllerMode::WheelPointing,
+                    Actuators::Cmg => ControllerMode::CmgSlew,
+                };
+                match mode {
+                    ControllerMode::Safe => {
+                        self.ground_safe_mode(true);
+                        return Ok("safe mode held by the ground".into());
+                    }
+                    ControllerMode::Idle | ControllerMode::RateDamping => {
+                        self.ground_mode = Some(mode)
+                    }
+                    m if m == law => self.ground_mode = None,
+                    ControllerMode::WheelPointing | ControllerMode::CmgSlew => {
+                        return Err(format!(
+                            "{mode:?} needs controller.actuators = {}",
+                            if mode == ControllerMode::CmgSlew {
+                                "cmg"
+                            } else {
+                                "wheels"
+                            }
+                        ));
+                    }
+                    ControllerMode::Fault => return Err("Fault is not a mode to command".into()),
+                }
+                self.ground_safe_mode(false);
+                Ok(format!("mode {mode:?}"))
+            }
+            Some(GroundCommandKind::Target) => {
+                let angles = [
+                    command.target_heading_rad,
+                    command.target_pitch_rad,
+                    command.target_roll_rad,
+                ];
+                if !angles.iter().all(|a| a.is_finite()) {
+                    return Err("target angles must be finite".into());
+                }
+                let half_pi = std::f64::consts::FRAC_PI_2;
+                if angles[1].abs() >= half_pi || angles[2].abs() >= half_pi {
+                    return Err("target tilt must be below 90°".into());
+                }
+                self.task
+                    .set_target(testbed_model::attitude::from_heading_pitch_roll(
+                        angles[0], angles[1], angles[2],
+                    ));
+                Ok("target set".into())
+            }
+            Some(GroundCommandKind::ExperimentStart | GroundCommandKind::ExperimentAbort) => {
+                Err("no identification experiment runner on the platform yet".into())
+            }
+            _ => Err(format!("unknown command kind {}", command.kind)),
+        }
+    }
+
+    /// The mode the ground holds the controller in instead of its configured law, if any.
+    pub fn ground_mode(&self) -> Option<ControllerMode> {
+        self.ground_mode
+    }
+
+    /// The time of the newest control cycle, ns.
+    pub fn last_cycle_ns(&self) -> Option<u64> {
+        self.last_cycle_ns
     }
 
     /// Safe-mode changes since the last call, with their run times (ns).
@@ -262,7 +341,7 @@ impl ControllerNode {
         if self.safe.is_active() {
             return self.safe_cycle(t_ns, period, &telemetry);
         }
-        let (command, error, mode, saturated) = match attitude {
+        let (mut command, error, mut mode, saturated) = match attitude {
             Some((q, rate)) => match self.task.command(seconds(t_ns), &q, &rate, &telemetry) {
                 Ok(o) => {
                     let mode = match self.actuators {
@@ -292,6 +371,32 @@ impl ControllerNode {
                 false,
             ),
         };
+        // A mode commanded from the ground replaces the law's command (the error is still
+        // reported against the target).
+        if let (Some(ground), Some((_, rate))) = (self.ground_mode, attitude.as_ref())
+            && mode != ControllerMode::Fault
+        {
+            let wheel_torque_nm = if ground == ControllerMode::RateDamping {
+                let config = crate::safe_mode::SafeModeConfig {
+                    wheels: SafeWheels::RateDamping,
+                    ..self.safe.config().clone()
+                };
+                safe_wheel_torque(
+                    &config,
+                    Some(rate),
+                    &telemetry.wheel_speed_rad_s,
+                    self.wheel_limits.max_torque_nm,
+                    self.wheel_limits.max_speed_rad_s,
+                )
+            } else {
+                Vector3::zeros()
+            };
+            command = ActuatorCommand {
+                wheel_torque_nm,
+                gimbal_rate_rad_s: Default::default(),
+            };
+            mode = ground;
+        }
         let mut status = ControllerStatus {
             header: self.status_seq.header(
                 t_ns,
@@ -510,5 +615,104 @@ mod tests {
         assert_eq!(cycle.status.mode(), Some(ControllerMode::Safe));
         // +K·ω would speed up the +0.8-limit wheels: refused.
         assert_eq!(cycle.wheels.torque, [0.0; 3]);
+    }
+
+    fn ground(kind: GroundCommandKind, mode: ControllerMode) -> GroundCommand {
+        GroundCommand {
+            kind: kind as u32,
+            mode: mode as u32,
+            ..GroundCommand::default()
+        }
+    }
+
+    fn step(node: &mut ControllerNode, k: u64, rate: [f64; 3]) -> ControlCycle {
+        node.on_estimate(&AttitudeEstimate {
+            rate,
+            ..estimate(k)
+        });
+        telemetry(node, k, 0.0);
+        let cycles = node.ready();
+        assert_eq!(cycles.len(), 1);
+        cycles[0]
+    }
+
+    #[test]
+    fn ground_modes_replace_the_law_and_pointing_restores_it() {
+        let mut node = node();
+        let rate = [0.01, -0.02, 0.005];
+        assert_eq!(
+            step(&mut node, 0, rate).status.mode(),
+            Some(ControllerMode::WheelPointing)
+        );
+        node.ground_command(&ground(GroundCommandKind::Mode, ControllerMode::Idle))
+            .unwrap();
+        let idle = step(&mut node, 1, rate);
+        assert_eq!(idle.status.mode(), Some(ControllerMode::Idle));
+        assert_eq!(idle.wheels.torque, [0.0; 3]);
+
+        node.ground_command(&ground(
+            GroundCommandKind::Mode,
+            ControllerMode::RateDamping,
+        ))
+        .unwrap();
+        let damping = step(&mut node, 2, rate);
+        assert_eq!(damping.status.mode(), Some(ControllerMode::RateDamping));
+        // Platform torque −K·ω (K = 5 N m s from the safe-mode gain): wheel torque +K·ω.
+        assert_eq!(damping.wheels.torque, rate.map(|w| 5.0 * w));
+
+        node.ground_command(&ground(GroundCommandKind::Mode, ControllerMode::Safe))
+            .unwrap();
+        assert_eq!(
+            step(&mut node, 3, rate).status.mode(),
+            Some(ControllerMode::Safe)
+        );
+        node.ground_command(&ground(
+            GroundCommandKind::Mode,
+            ControllerMode::WheelPointing,
+        ))
+        .unwrap();
+        assert_eq!(
+            step(&mut node, 4, rate).status.mode(),
+            Some(ControllerMode::WheelPointing)
+        );
+    }
+
+    #[test]
+    fn ground_commands_the_controller_cannot_follow_are_refused_with_the_reason() {
+        let mut node = node();
+        let cmg = node.ground_command(&ground(GroundCommandKind::Mode, ControllerMode::CmgSlew));
+        assert!(cmg.unwrap_err().contains("actuators = cmg"));
+        assert!(
+            node.ground_command(&ground(GroundCommandKind::Mode, ControllerMode::Fault))
+                .is_err()
+        );
+        let start = node.ground_command(&ground(
+            GroundCommandKind::ExperimentStart,
+            ControllerMode::Idle,
+        ));
+        assert!(start.unwrap_err().contains("experiment"));
+        let bad_target = GroundCommand {
+            kind: GroundCommandKind::Target as u32,
+            target_pitch_rad: f64::NAN,
+            ..GroundCommand::default()
+        };
+        assert!(node.ground_command(&bad_target).is_err());
+        assert_eq!(node.ground_mode(), None);
+    }
+
+    #[test]
+    fn a_ground_target_moves_the_attitude_error() {
+        let mut node = node();
+        assert_eq!(step(&mut node, 0, [0.0; 3]).status.attitude_error, [0.0; 3]);
+        let target = GroundCommand {
+            kind: GroundCommandKind::Target as u32,
+            target_heading_rad: 0.1,
+            ..GroundCommand::default()
+        };
+        node.ground_command(&target).unwrap();
+        let error = step(&mut node, 1, [0.0; 3]).status.attitude_error;
+        // Level attitude, target heading 0.1 rad: the error is about z only.
+        assert!((error[2].abs() - 0.1).abs() < 1e-3, "{error:?}");
+        assert!(error[0].abs() < 1e-12 && error[1].abs() < 1e-12);
     }
 }

@@ -264,11 +264,13 @@ impl<const N: usize> Field for [f64; N] {
     }
 }
 
+macro_rules! name_field {
+    ($n:literal) => {
 /// NUL-padded UTF-8 name ([`ipc_types::Heartbeat::name`]).
 ///
 /// Written as a JSON string when the bytes are canonical (valid UTF-8 up to the first NUL, only
 /// NULs after it), otherwise as an array of the 32 raw bytes, so decoding is always exact.
-impl Field for [u8; 32] {
+impl Field for [u8; $n] {
     fn write(&self, out: &mut Vec<u8>) {
         let len = self.iter().position(|&b| b == 0).unwrap_or(self.len());
         let (text, rest) = self.split_at(len);
@@ -279,14 +281,14 @@ impl Field for [u8; 32] {
     }
 
     fn read(value: &Value, field: &str) -> Result<Self, DecodeError> {
-        let mut out = [0u8; 32];
+        let mut out = [0u8; $n];
         match value {
             Value::String(s) => {
                 let bytes = s.as_bytes();
                 if bytes.len() > out.len() || bytes.contains(&0) {
                     return Err(DecodeError::Type {
                         field: field.to_owned(),
-                        expected: "a string of at most 32 UTF-8 bytes without NUL",
+                        expected: concat!("a string of at most ", $n, " UTF-8 bytes without NUL"),
                     });
                 }
                 out[..bytes.len()].copy_from_slice(bytes);
@@ -313,7 +315,7 @@ impl Field for [u8; 32] {
             }
             _ => Err(DecodeError::Type {
                 field: field.to_owned(),
-                expected: "a string or an array of 32 bytes",
+                expected: concat!("a string or an array of ", $n, " bytes"),
             }),
         }
     }
@@ -325,17 +327,24 @@ impl Field for [u8; 32] {
                 {
                     "type": "array",
                     "items": {"type": "integer", "minimum": 0, "maximum": 255},
-                    "minItems": 32,
-                    "maxItems": 32,
+                    "minItems": $n,
+                    "maxItems": $n,
                 },
             ],
             "description": format!(
-                "{description} A string when the 32 bytes are UTF-8 padded with NULs, otherwise \
-                 the raw bytes."
+                "{description} A string when the {} bytes are UTF-8 padded with NULs, otherwise \
+                 the raw bytes.", $n
             ),
         })
     }
 }
+
+    };
+}
+
+name_field!(32);
+// The reason of a ground command's acknowledgement.
+name_field!(64);
 
 /// The flag bits of [`SampleHeader::flags`], for the schema description.
 const FLAGS_DESCRIPTION: &str = "Bit set of validity flags: bit 0 VALID (data may be used), \

@@ -3,9 +3,9 @@
 use crate::json::{DecodeError, Field, as_object, check_no_extra, member, object_schema};
 use ipc_types::{
     AppliedCmgCommand, AppliedWheelCommand, AttitudeEstimate, CanBusFrame, CanLinkStatus,
-    CmgCommand, CmgTelemetry, ControllerStatus, GyroSample, HealthEvent, Heartbeat,
-    InclinometerSample, MagnetometerSample, SampleHeader, SimClockTick, SimTruth, Topic,
-    WheelCommand, WheelTelemetry,
+    CmgCommand, CmgTelemetry, ControllerStatus, GroundCommand, GroundCommandAck, GyroSample,
+    HealthEvent, Heartbeat, InclinometerSample, MagnetometerSample, SampleHeader, SimClockTick,
+    SimTruth, Topic, WheelCommand, WheelTelemetry,
 };
 use serde_json::Value;
 
@@ -454,6 +454,35 @@ log_types! {
                  reason bits (6: 1 estimate lost, 2 estimate invalid, 4 wheel telemetry lost, \
                  8 CMG telemetry lost, 16 wheel near its speed limit, 32 ground command).",
         value: "Kind-specific: time since the last sample or heartbeat, or outage length, s.",
+    } pad [];
+
+    /// [`GroundCommand`] on [`topic::GROUND_COMMAND`](ipc_types::topic::GROUND_COMMAND).
+    GroundCommand(GroundCommand) = "testbed::GroundCommand.v1",
+    "A command from the ground station, accepted by the ground link (token, limits, rate) for \
+     the controller." {
+        header: "Common header; time_ns is the run's clock as the link last saw it, sequence \
+                 counts the link's commands.",
+        kind: "Command: 1 mode, 2 target, 3 experiment start, 4 experiment abort.",
+        mode: "With kind 1: controller mode asked for (0 Idle, 1 RateDamping, 2 WheelPointing, \
+               3 CmgSlew, 5 Safe).",
+        target_heading_rad: "With kind 2: target heading, rad.",
+        target_pitch_rad: "With kind 2: target tilt about body y, rad.",
+        target_roll_rad: "With kind 2: target tilt about body x, rad.",
+        command_id: "Identifier the viewer gave the command.",
+        client_id: "The link's number for the viewer's connection.",
+    } pad [_pad0];
+
+    /// [`GroundCommandAck`] on
+    /// [`topic::GROUND_COMMAND_ACK`](ipc_types::topic::GROUND_COMMAND_ACK).
+    GroundCommandAck(GroundCommandAck) = "testbed::GroundCommandAck.v1",
+    "The outcome of a ground command: applied by the controller or rejected, with the reason." {
+        header: "Common header; time_ns is the run's clock of the decision.",
+        command_id: "The command's identifier (0 if the message had none).",
+        kind: "The command's kind (0 if it could not be read).",
+        status: "1 applied, 2 rejected.",
+        client_id: "The viewer's connection.",
+        decided_by: "1 the ground link, 2 the controller.",
+        reason: "Why it was rejected, or what was applied (UTF-8, at most 64 bytes).",
     } pad [];
 }
 

@@ -73,7 +73,7 @@ pub struct LogStats {
 /// # File layout
 ///
 /// Header, then one JSON Schema (`jsonschema`) and one channel (`json` messages) per topic of
-/// [`LogRecord::TOPICS`], in that order (channel ids 1 to 17), the configuration as attachment
+/// [`LogRecord::TOPICS`], in that order (channel ids 1 to 19), the configuration as attachment
 /// [`CONFIG_ATTACHMENT`], the run metadata record [`RUN_METADATA`], then the messages, and on
 /// [`finish`](Self::finish) the summary section (schemas, channels, statistics, attachment and
 /// metadata indexes) and footer. Every message's `log_time` and `publish_time` is the sample's

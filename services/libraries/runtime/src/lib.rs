@@ -3,6 +3,7 @@
 
 #![forbid(unsafe_code)]
 
+pub mod ground;
 pub mod health;
 pub mod node;
 pub mod process;

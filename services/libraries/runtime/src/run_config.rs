@@ -72,6 +72,8 @@ pub struct RunConfig {
     pub manoeuvre: Manoeuvre,
     /// The CAN gateways' links and the simulated CAN node (unused without CAN gateways).
     pub can: CanSection,
+    /// The ground link (ground station server and command limits).
+    pub ground: crate::ground::GroundConfig,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -198,6 +200,14 @@ impl RunConfig {
                 key,
                 value,
                 reason: reason.to_string(),
+            })?;
+        self.ground
+            .validate(self.model.platform.tilt_limit_deg)
+            .map_err(|(key, value, reason)| RunConfigError::Invalid {
+                path: origin.to_string(),
+                key,
+                value,
+                reason,
             })?;
         Ok(())
     }
