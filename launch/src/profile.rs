@@ -29,6 +29,7 @@
 //! max_restarts = 0           # with on_exit = "restart" only (then at least 1)
 //! depends_on = ["plant"]     # started after these
 //! ends_run = false           # its successful exit ends the run
+//! observer = false           # takes no part in lockstep ticks (the ground link)
 //! device = "gyro"            # optional, with `source`: the device this process serves
 //! source = "simulated"
 //! ```
@@ -216,6 +217,10 @@ pub struct ProcessSpec {
     /// A successful exit ends the run.
     #[serde(default)]
     pub ends_run: bool,
+    /// A pure observer (the ground link): not a participant of the lockstep start barrier or
+    /// of any tick, so in lockstep its exit does not end the run (its `on_exit` applies).
+    #[serde(default)]
+    pub observer: bool,
     /// The device this process serves.
     pub device: Option<Device>,
     /// Whether that device is real or simulated.

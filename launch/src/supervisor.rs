@@ -461,7 +461,7 @@ impl<'p> Supervisor<'p> {
             ExitHow::Signal(signal) => 128 + signal as u32,
         };
         self.report(HealthEventKind::ProcessExited, name, status, 0.0);
-        if self.plan.run.mode == ClockMode::Lockstep {
+        if self.plan.run.mode == ClockMode::Lockstep && !spec.observer {
             // In lockstep every process takes part in every tick: without this one the run
             // would wait for it forever. End it, named, rather than freeze.
             let at = self.watchdog.as_ref().map_or(String::new(), |w| {

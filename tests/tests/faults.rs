@@ -57,8 +57,10 @@ fn fault_profile(dir: &Path, mode: Mode) -> PathBuf {
         if line == "[supervision]" {
             out.push_str("tolerate_safe_mode = true\nrestart_delay_s = 0.5\n");
         }
+        // The ground link has its own restart policy in the profile.
         if let Some(name) = line.strip_prefix("name = ")
             && name != "\"plant\""
+            && name != "\"ground-link\""
         {
             out.push_str("on_exit = \"restart\"\nmax_restarts = 3\n");
         }

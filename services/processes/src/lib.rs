@@ -19,6 +19,7 @@
 //! | `gyro-gateway`, …, `cmg-gateway` | [`can_gateway::CanGateway`] | `testbed_gateways::gateway` |
 //! | `sim-can-node` | [`can_node::CanNodeProcess`] | `testbed_gateways::node` |
 //! | `can-replay` | [`can_replay::CanReplayProcess`] | `testbed_can::transport` |
+//! | `ground-link` | [`ground_link::GroundLinkProcess`] | [`ground_link::command`], [`ground_link::protocol`] |
 //!
 //! # Lockstep protocol
 //!
@@ -44,6 +45,7 @@ pub mod can_node;
 pub mod can_replay;
 pub mod controller;
 pub mod estimator;
+pub mod ground_link;
 pub mod logger;
 pub mod plant;
 pub mod replay;

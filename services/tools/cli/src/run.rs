@@ -154,7 +154,7 @@ pub fn run(args: &RunArgs) -> Result<()> {
     config.run.participants = profile
         .processes
         .iter()
-        .filter(|p| !p.ends_run)
+        .filter(|p| !p.ends_run && !p.observer)
         .map(|p| p.name.clone())
         .collect();
     config.validate("command line")?;
@@ -422,7 +422,22 @@ fn launch(
         .args(["--bus-prefix", &private.bus.prefix])
         .arg("--bus-root")
         .arg(&private.bus.root);
-    let result = supervise_launcher(&mut command, &launcher, follow, run_lock);
+    // The ground link (issue 13): a command token for this run unless one is configured, and
+    // the address it serves printed once it listens.
+    let ground_info = Profile::load(profile)
+        .ok()
+        .filter(|p| p.processes.iter().any(|p| p.command == "ground-link"))
+        .map(|_| config.run.log.with_extension("ground.json"));
+    if let Some(info) = &ground_info {
+        let _ = std::fs::remove_file(info);
+        if config.ground.token.is_none() {
+            command.env(
+                testbed_runtime::ground::ENV_GROUND_TOKEN,
+                random_token().context("making the ground command token")?,
+            );
+        }
+    }
+    let result = supervise_launcher(&mut command, &launcher, follow, run_lock, ground_info);
     // Every process of the run has been reaped: leave no shared memory, socket or directory.
     if let Err(e) = private.remove() {
         eprintln!("warning: removing the run's iceoryx2 resources: {e}");
@@ -434,6 +449,36 @@ fn launch(
         );
     }
     Ok(())
+}
+
+/// 128 random bits from the OS, hex: the run's ground command token.
+fn random_token() -> std::io::Result<String> {
+    use std::io::Read as _;
+    let mut bytes = [0u8; 16];
+    std::fs::File::open("/dev/urandom")?.read_exact(&mut bytes)?;
+    Ok(bytes.iter().map(|b| format!("{b:02x}")).collect())
+}
+
+/// Waits (up to a minute) for the ground link's `<log>.ground.json` and prints the ground
+/// page's address and the command token on stderr.
+fn print_ground_info(info: &Path) {
+    let start = std::time::Instant::now();
+    while start.elapsed() < std::time::Duration::from_secs(60) {
+        if let Some(v) = std::fs::read(info)
+            .ok()
+            .and_then(|b| serde_json::from_slice::<serde_json::Value>(&b).ok())
+        {
+            let field = |k: &str| v[k].as_str().unwrap_or("?").to_owned();
+            eprintln!(
+                "ground station: {}  (Foxglove WebSocket {}; command token {})",
+                field("url"),
+                field("ws"),
+                field("token")
+            );
+            return;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(200));
+    }
 }
 
 /// Directory of the runs' private bus roots, and the start of their names (`/tmp/tb<pid>_…`).
@@ -449,6 +494,7 @@ fn supervise_launcher(
     launcher: &Path,
     follow: Option<progress::Follow>,
     run_lock: Option<&RunLock>,
+    ground_info: Option<PathBuf>,
 ) -> Result<std::process::ExitStatus> {
     use std::os::unix::process::CommandExt as _;
     use testbed_launch::sys::{self, SignalSet};
@@ -495,6 +541,12 @@ fn supervise_launcher(
     };
     let launcher_pid = libc::pid_t::try_from(child.id()).unwrap_or(libc::pid_t::MAX);
     let progress = follow.map(progress::Progress::start);
+    if let Some(info) = ground_info {
+        // Detached: it ends by itself once it printed, or after a minute.
+        let _ = std::thread::Builder::new()
+            .name("ground-info".into())
+            .spawn(move || print_ground_info(&info));
+    }
     let status = loop {
         match signals.wait(Some(std::time::Duration::from_millis(200))) {
             Ok(Some(signal)) if signal != sys::SIGCHLD => {

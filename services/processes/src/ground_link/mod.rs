@@ -1,0 +1,481 @@
+//! The ground link (issue 13): the platform side of the ground supervision station. A pure
+//! observer of the pipeline — it takes no part in the lockstep start barrier or in any tick —
+//! that serves the pipeline's topics to any number of viewers over the Foxglove WebSocket
+//! protocol, serves the project's ground page over HTTP from the same port, and passes the
+//! ground's commands, once checked, to the controller (`testbed/ground/command`).
+//!
+//! Threads: the bus stays on the node's thread (iceoryx2 ports are not `Send`); the server
+//! ([`server`]) has its own threads and exchanges only bounded queues with the node, so a
+//! slow or vanished viewer never holds up the pipeline (what does not fit is dropped and
+//! counted). See `docs/ground.md` for the channels, the commands and their limits.
+
+pub mod command;
+pub mod protocol;
+pub mod server;
+
+use anyhow::Context as _;
+use ipc_types::*;
+use protocol::Channel;
+use serde_json::json;
+use server::{Server, Settings, ToBus};
+use std::collections::HashMap;
+use std::path::PathBuf;
+use std::sync::atomic::Ordering;
+use std::sync::mpsc::Receiver;
+use std::time::{Duration, Instant};
+use testbed_bus::{Bus, Flow, LoopExit, SubscriberOptions, TopicPublisher, TopicSubscriber, Wake};
+use testbed_log::{LogEncode, LogRecord};
+use testbed_model::attitude::{self, Attitude};
+use testbed_model::config::DEG;
+use testbed_model::physics::cmg_pyramid::CmgPyramid;
+use testbed_runtime::ground::ENV_GROUND_TOKEN;
+use testbed_runtime::{Context, Io, Node, WakeOn};
+
+/// How often the node looks at the viewers' commands and sends the link's own status.
+const SERVICE_PERIOD: Duration = Duration::from_millis(100);
+/// Period of `testbed/ground/link`.
+const STATUS_PERIOD: Duration = Duration::from_secs(1);
+
+/// Channel ids of what the link derives itself (after the bus topics, 1 to 13).
+pub const CH_TF_ESTIMATE: u32 = 14;
+pub const CH_TF_TRUTH: u32 = 15;
+pub const CH_CMG: u32 = 16;
+pub const CH_LINK: u32 = 17;
+pub const CH_EVENTS: u32 = 18;
+
+/// The bus topics served: channel id, whether viewers get it decimated (streams) or whole
+/// (events, heartbeats, commands).
+fn bus_channel(record: &LogRecord) -> Option<(u32, bool)> {
+    Some(match record {
+        LogRecord::AttitudeEstimate(_) => (1, true),
+        LogRecord::ControllerStatus(_) => (2, true),
+        LogRecord::SimTruth(_) => (3, true),
+        LogRecord::WheelTelemetry(_) => (4, true),
+        LogRecord::WheelCommand(_) => (5, true),
+        LogRecord::CmgTelemetry(_) => (6, true),
+        LogRecord::CmgCommand(_) => (7, true),
+        LogRecord::Gyro(_) => (8, true),
+        LogRecord::Heartbeat(_) => (9, false),
+        LogRecord::Health(_) => (10, false),
+        LogRecord::CanStatus(_) => (11, true),
+        LogRecord::GroundCommand(_) => (12, false),
+        LogRecord::GroundCommandAck(_) => (13, false),
+        _ => return None,
+    })
+}
+
+fn bus_channel_spec<T: LogEncode>(id: u32) -> Channel {
+    Channel {
+        id,
+        topic: T::NAME,
+        schema_name: T::SCHEMA_NAME,
+        schema: T::json_schema(),
+    }
+}
+
+/// JSON Schema of `foxglove.FrameTransform` (the fields the link fills).
+fn frame_transform_schema() -> String {
+    let vector = |names: &[&str]| {
+        let props: serde_json::Map<String, serde_json::Value> = names
+            .iter()
+            .map(|n| ((*n).to_owned(), json!({"type": "number"})))
+            .collect();
+        json!({"type": "object", "properties": props})
+    };
+    json!({
+        "title": "foxglove.FrameTransform",
+        "type": "object",
+        "properties": {
+            "timestamp": {"type": "object", "properties": {"sec": {"type": "integer"}, "nsec": {"type": "integer"}}},
+            "parent_frame_id": {"type": "string"},
+            "child_frame_id": {"type": "string"},
+            "translation": vector(&["x", "y", "z"]),
+            "rotation": vector(&["x", "y", "z", "w"]),
+        }
+    })
+    .to_string()
+}
+
+/// Every channel the link advertises.
+pub fn channels() -> Vec<Channel> {
+    let own = |id, topic, schema_name, schema: String| Channel {
+        id,
+        topic,
+        schema_name,
+        schema,
+    };
+    vec![
+        bus_channel_spec::<AttitudeEstimate>(1),
+        bus_channel_spec::<ControllerStatus>(2),
+        bus_channel_spec::<SimTruth>(3),
+        bus_channel_spec::<WheelTelemetry>(4),
+        bus_channel_spec::<WheelCommand>(5),
+        bus_channel_spec::<CmgTelemetry>(6),
+        bus_channel_spec::<CmgCommand>(7),
+        bus_channel_spec::<GyroSample>(8),
+        bus_channel_spec::<Heartbeat>(9),
+        bus_channel_spec::<HealthEvent>(10),
+        bus_channel_spec::<CanLinkStatus>(11),
+        bus_channel_spec::<GroundCommand>(12),
+        bus_channel_spec::<GroundCommandAck>(13),
+        own(
+            CH_TF_ESTIMATE,
+            "testbed/tf/estimate",
+            "foxglove.FrameTransform",
+            frame_transform_schema(),
+        ),
+        own(
+            CH_TF_TRUTH,
+            "testbed/tf/truth",
+            "foxglove.FrameTransform",
+            frame_transform_schema(),
+        ),
+        own(
+            CH_CMG,
+            "testbed/ground/cmg",
+            "testbed::ground::Cmg",
+            json!({"type": "object", "description": "CMG gimbal angles (rad), rates (rad/s) and the singularity measure sqrt(det(J J^T))/h0^3 (dimensionless) from the CMG telemetry."}).to_string(),
+        ),
+        own(
+            CH_LINK,
+            "testbed/ground/link",
+            "testbed::ground::Link",
+            json!({"type": "object", "description": "The ground link's counters and the controller's target attitude (degrees), every second."}).to_string(),
+        ),
+        own(
+            CH_EVENTS,
+            "testbed/ground/events",
+            "testbed::ground::Event",
+            json!({"type": "object", "description": "Controller mode changes seen by the link: time_ns, text."}).to_string(),
+        ),
+    ]
+}
+
+/// A subscriber whose samples go to the viewers, whatever their type.
+trait Streamed {
+    fn attach<'a>(&'a self, wake: &mut WakeOn<'_, '_, 'a>) -> anyhow::Result<()>;
+    fn drain(&self, sink: &mut dyn FnMut(LogRecord)) -> anyhow::Result<usize>;
+}
+
+struct Stream<T: Topic>(TopicSubscriber<T>);
+
+impl<T: Topic + LogEncode> Streamed for Stream<T> {
+    fn attach<'a>(&'a self, wake: &mut WakeOn<'_, '_, 'a>) -> anyhow::Result<()> {
+        wake.data(&self.0)?;
+        Ok(())
+    }
+    fn drain(&self, sink: &mut dyn FnMut(LogRecord)) -> anyhow::Result<usize> {
+        Ok(self.0.drain(|s| sink(s.into_record()))?)
+    }
+}
+
+fn stream<T: Topic + LogEncode>(bus: &Bus) -> anyhow::Result<Box<dyn Streamed>> {
+    // Deep buffers: in lockstep (lossless delivery) a publisher waits only if the link falls
+    // 256 samples behind, and the link's thread does nothing but copy samples to queues.
+    Ok(Box::new(Stream(
+        bus.subscriber_with::<T>(SubscriberOptions::buffer(256))?,
+    )))
+}
+
+/// The ground link's ports.
+pub struct GroundLinkPorts {
+    streams: Vec<Box<dyn Streamed>>,
+    command: TopicPublisher<GroundCommand>,
+    ack: TopicPublisher<GroundCommandAck>,
+}
+
+/// The ground link process.
+pub struct GroundLinkProcess {
+    server: Server,
+    from_viewers: Receiver<ToBus>,
+    /// `<log>.ground.json`: the actual URL and the token, for `testbed run` and tests.
+    info_path: PathBuf,
+    pyramid: CmgPyramid,
+    /// The controller's target as the link knows it (configured, then commanded): heading,
+    /// tilt θ, tilt φ, rad.
+    target_hpr: [f64; 3],
+    /// Target commands sent and not yet answered, by (viewer, command id).
+    pending_targets: HashMap<(u32, u64), [f64; 3]>,
+    last_mode: Option<u32>,
+    last_status: Instant,
+    buffer: Vec<u8>,
+}
+
+/// The run's command token: configured, given by `testbed run`, or made here.
+fn token(configured: Option<&String>) -> anyhow::Result<String> {
+    if let Some(t) = configured {
+        return Ok(t.clone());
+    }
+    if let Ok(t) = std::env::var(ENV_GROUND_TOKEN)
+        && t.len() >= 16
+    {
+        return Ok(t);
+    }
+    random_token()
+}
+
+/// 128 random bits from the OS, hex.
+pub fn random_token() -> anyhow::Result<String> {
+    use std::io::Read as _;
+    let mut bytes = [0u8; 16];
+    std::fs::File::open("/dev/urandom")
+        .and_then(|mut f| f.read_exact(&mut bytes))
+        .context("reading /dev/urandom for the ground token")?;
+    Ok(bytes.iter().map(|b| format!("{b:02x}")).collect())
+}
+
+/// Heading and the inclinometer's tilt angles θ (body x) and φ (body y) of `q`, rad: what the
+/// ground page shows for the estimate and the truth too.
+fn hpr(q: &Attitude) -> [f64; 3] {
+    let [pitch, roll] = attitude::tilt_angles(q);
+    [attitude::heading(q), pitch, roll]
+}
+
+impl GroundLinkProcess {
+    pub fn open(cx: &Context) -> anyhow::Result<(Self, GroundLinkPorts)> {
+        let (config, bus) = (cx.config, cx.bus);
+        let ground = &config.ground;
+        let token = token(ground.token.as_ref())?;
+        let (to_bus, from_viewers) = std::sync::mpsc::sync_channel(64);
+        let settings = Settings {
+            channels: channels(),
+            metadata: json!({
+                "profile": config.run.profile,
+                "mode": config.run.mode.as_str(),
+                "seed": config.run.seed,
+                "duration_s": config.run.duration_s,
+                "max_target_tilt_deg": ground.max_target_tilt_deg,
+            }),
+            limits: command::Limits {
+                token: token.clone(),
+                max_tilt_rad: ground.max_target_tilt_deg * DEG,
+            },
+            viewer_rate_hz: ground.viewer_rate_hz,
+            max_viewer_rate_hz: ground.max_viewer_rate_hz,
+            max_viewers: ground.max_viewers,
+            viewer_queue: ground.viewer_queue,
+            max_message_bytes: ground.max_message_bytes,
+            command_burst: ground.command_burst,
+            command_rate_hz: ground.command_rate_hz,
+            to_bus,
+            command_topic: topic::GROUND_COMMAND,
+        };
+        let server = Server::start(&ground.bind, ground.port, settings)
+            .with_context(|| format!("listening on {}:{}", ground.bind, ground.port))?;
+        let addr = server.addr;
+        let info_path = config.run.log.with_extension("ground.json");
+        let info = json!({
+            "url": format!("http://{addr}/"),
+            "ws": format!("ws://{addr}/"),
+            "token": token,
+        });
+        write_private(&info_path, info.to_string().as_bytes())
+            .with_context(|| format!("writing {}", info_path.display()))?;
+        tracing::info!("ground station on http://{addr}/ (Foxglove WebSocket ws://{addr}/)");
+        let streams = vec![
+            stream::<AttitudeEstimate>(bus)?,
+            stream::<ControllerStatus>(bus)?,
+            stream::<SimTruth>(bus)?,
+            stream::<WheelTelemetry>(bus)?,
+            stream::<WheelCommand>(bus)?,
+            stream::<CmgTelemetry>(bus)?,
+            stream::<CmgCommand>(bus)?,
+            stream::<GyroSample>(bus)?,
+            stream::<Heartbeat>(bus)?,
+            stream::<HealthEvent>(bus)?,
+            stream::<CanLinkStatus>(bus)?,
+            stream::<GroundCommand>(bus)?,
+            stream::<GroundCommandAck>(bus)?,
+        ];
+        let ports = GroundLinkPorts {
+            streams,
+            command: bus.publisher()?,
+            ack: bus.publisher()?,
+        };
+        Ok((
+            Self {
+                server,
+                from_viewers,
+                info_path,
+                pyramid: CmgPyramid::from_config(&config.model.cmg),
+                target_hpr: hpr(&config.manoeuvre.target()),
+                pending_targets: HashMap::new(),
+                last_mode: None,
+                last_status: Instant::now() - STATUS_PERIOD,
+                buffer: Vec::with_capacity(1024),
+            },
+            ports,
+        ))
+    }
+
+    fn serve(&mut self, record: &LogRecord) {
+        let Some((channel, decimate)) = bus_channel(record) else {
+            return;
+        };
+        let shared = &self.server.shared;
+        let header = *record.header();
+        if !matches!(record, LogRecord::Heartbeat(_)) {
+            shared.now_ns.fetch_max(header.time_ns, Ordering::Relaxed);
+        }
+        self.buffer.clear();
+        record.encode_json(&mut self.buffer);
+        shared.broadcast(
+            channel,
+            header.source_id,
+            decimate,
+            header.time_ns,
+            &self.buffer,
+        );
+        let t = header.time_ns;
+        let transform = |child: &str, q: &[f64; 4]| {
+            // q maps level-frame components to body components; the body's pose in the level
+            // frame (parent level, child body) is its conjugate.
+            json!({
+                "timestamp": {"sec": t / 1_000_000_000, "nsec": t % 1_000_000_000},
+                "parent_frame_id": "level",
+                "child_frame_id": child,
+                "translation": {"x": 0.0, "y": 0.0, "z": 0.0},
+                "rotation": {"x": -q[0], "y": -q[1], "z": -q[2], "w": q[3]},
+            })
+            .to_string()
+        };
+        match record {
+            LogRecord::AttitudeEstimate(e) if e.header.is_valid() => {
+                let text = transform("body", &e.quaternion);
+                shared.broadcast(CH_TF_ESTIMATE, 0, true, t, text.as_bytes());
+            }
+            LogRecord::SimTruth(s) => {
+                let text = transform("body_truth", &s.quaternion);
+                shared.broadcast(CH_TF_TRUTH, 0, true, t, text.as_bytes());
+            }
+            LogRecord::CmgTelemetry(c) => {
+                let measure = testbed_flight::cmg_steering::singularity_measure(
+                    &self.pyramid,
+                    &nalgebra::Vector4::from(c.gimbal_angle),
+                );
+                let text = json!({
+                    "time_ns": t,
+                    "gimbal_angle": c.gimbal_angle,
+                    "gimbal_rate": c.gimbal_rate,
+                    "singularity_measure": measure,
+                })
+                .to_string();
+                shared.broadcast(CH_CMG, 0, true, t, text.as_bytes());
+            }
+            LogRecord::ControllerStatus(s) if self.last_mode != Some(s.mode) => {
+                let name = |m: u32| {
+                    ControllerMode::from_u32(m)
+                        .map_or_else(|| format!("mode {m}"), |m| format!("{m:?}"))
+                };
+                let text = match self.last_mode {
+                    Some(old) => format!("controller mode {} → {}", name(old), name(s.mode)),
+                    None => format!("controller mode {}", name(s.mode)),
+                };
+                self.last_mode = Some(s.mode);
+                let event = json!({"time_ns": t, "text": text}).to_string();
+                shared.broadcast(CH_EVENTS, 0, false, t, event.as_bytes());
+            }
+            LogRecord::GroundCommandAck(a) if a.decided_by == GroundCommandAck::BY_CONTROLLER => {
+                if let Some(target) = self.pending_targets.remove(&(a.client_id, a.command_id))
+                    && a.status() == Some(GroundAckStatus::Applied)
+                {
+                    self.target_hpr = target;
+                }
+            }
+            _ => {}
+        }
+    }
+
+    fn status(&self) {
+        let shared = &self.server.shared;
+        let [h, p, r] = self.target_hpr.map(|a| a / DEG);
+        let mut value = shared.stats.to_json();
+        value["target_deg"] = json!({"heading": h, "tilt_x": p, "tilt_y": r});
+        value["time_ns"] = shared.now_ns.load(Ordering::Relaxed).into();
+        let t = shared.now_ns.load(Ordering::Relaxed);
+        shared.broadcast(CH_LINK, 0, false, t, value.to_string().as_bytes());
+    }
+}
+
+/// Writes `bytes` to `path`, readable by the owner only (it holds the token).
+fn write_private(path: &std::path::Path, bytes: &[u8]) -> std::io::Result<()> {
+    use std::io::Write as _;
+    use std::os::unix::fs::OpenOptionsExt as _;
+    let mut file = std::fs::OpenOptions::new()
+        .write(true)
+        .create(true)
+        .truncate(true)
+        .mode(0o600)
+        .open(path)?;
+    file.write_all(bytes)
+}
+
+impl Node for GroundLinkProcess {
+    type Ports = GroundLinkPorts;
+
+    fn wake_on<'a>(
+        &mut self,
+        ports: &'a GroundLinkPorts,
+        wake: &mut WakeOn<'_, '_, 'a>,
+    ) -> anyhow::Result<()> {
+        for s in &ports.streams {
+            s.attach(wake)?;
+        }
+        wake.interval(SERVICE_PERIOD)?;
+        Ok(())
+    }
+
+    fn on_wake(&mut self, ports: &GroundLinkPorts, _wake: Wake, io: &Io) -> anyhow::Result<Flow> {
+        let mut records = Vec::new();
+        for s in &ports.streams {
+            s.drain(&mut |r| records.push(r))?;
+        }
+        io.heartbeat.add_samples_in(records.len() as u64);
+        for record in &records {
+            self.serve(record);
+        }
+        while let Ok(message) = self.from_viewers.try_recv() {
+            match message {
+                ToBus::Command(command) => {
+                    if command.kind() == Some(GroundCommandKind::Target) {
+                        let target = attitude::from_heading_pitch_roll(
+                            command.target_heading_rad,
+                            command.target_pitch_rad,
+                            command.target_roll_rad,
+                        );
+                        self.pending_targets
+                            .insert((command.client_id, command.command_id), hpr(&target));
+                    }
+                    tracing::info!(
+                        id = command.command_id,
+                        kind = command.kind,
+                        "ground command forwarded"
+                    );
+                    ports.command.publish(&command)?;
+                }
+                ToBus::Ack(ack) => {
+                    tracing::info!(
+                        id = ack.command_id,
+                        reason = ack.reason(),
+                        "ground command rejected"
+                    );
+                    ports.ack.publish(&ack)?;
+                }
+            }
+            io.heartbeat.add_samples_out(1);
+        }
+        if self.last_status.elapsed() >= STATUS_PERIOD {
+            self.last_status = Instant::now();
+            self.status();
+        }
+        Ok(Flow::Continue)
+    }
+
+    fn stop(&mut self, _ports: &GroundLinkPorts, _io: &Io, _exit: LoopExit) -> anyhow::Result<()> {
+        self.server.stop();
+        let stats = self.server.shared.stats.to_json();
+        tracing::info!(%stats, "ground link stopping");
+        let _ = std::fs::remove_file(&self.info_path);
+        Ok(())
+    }
+}
