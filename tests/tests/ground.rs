@@ -1,0 +1,516 @@
+//! The ground station end to end (issue 13): a paced simulation run with the ground link, the
+//! ground page in headless Chromium (Debian's `chromium`, driven over the DevTools protocol), an
+//! independent client of the Foxglove WebSocket protocol (tungstenite), and random input.
+//!
+//! Checked: the page's displayed estimate updates and is a sample of the run log (same time,
+//! same quaternion); a mode command typed in the page changes the controller's mode and is in
+//! the log with its acknowledgement; a wrong token and an out-of-limit target are rejected
+//! with their reasons (in the page and in the log); closing and reopening the page reconnects;
+//! an independent client gets decimated data at the rate it asked for; random frames, wrong
+//! types and huge messages are counted and dropped and the link goes on serving.
+
+use ipc_types::{
+    AttitudeEstimate, ControllerMode, ControllerStatus, GroundAckStatus, GroundCommand,
+    GroundCommandAck, GroundCommandKind,
+};
+use proptest::prelude::*;
+use proptest::strategy::ValueTree;
+use proptest::test_runner::{Config, TestRunner};
+use serde_json::{Value, json};
+use std::io::{BufRead, BufReader, Read, Write};
+use std::net::TcpStream;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+use testbed_e2e::{Scratch, binary, profile};
+use testbed_log::{LogEncode, RunLog};
+use tungstenite::client::IntoClientRequest;
+use tungstenite::stream::MaybeTlsStream;
+use tungstenite::{Message, WebSocket};
+
+type Ws = WebSocket<MaybeTlsStream<TcpStream>>;
+
+/// Waits until `f` gives a value, or panics naming `what`.
+fn wait_for<T>(what: &str, timeout: Duration, mut f: impl FnMut() -> Option<T>) -> T {
+    let start = Instant::now();
+    loop {
+        if let Some(v) = f() {
+            return v;
+        }
+        assert!(start.elapsed() < timeout, "timed out waiting for {what}");
+        std::thread::sleep(Duration::from_millis(200));
+    }
+}
+
+/// A paced run of the simulation profile; its ground link's address and token.
+struct Run {
+    child: Child,
+    log: PathBuf,
+    addr: String,
+    token: String,
+}
+
+fn start_run(dir: &Path, duration_s: u32) -> Run {
+    let log = dir.join("ground.mcap");
+    let child = Command::new(binary("testbed"))
+        .args(["run", "--paced", "--no-progress", "--json", "--profile"])
+        .arg(profile("simulation"))
+        .args(["--duration", &duration_s.to_string(), "--log"])
+        .arg(&log)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("starting testbed run");
+    let info_path = log.with_extension("ground.json");
+    let info: Value = wait_for("the ground link", Duration::from_secs(60), || {
+        serde_json::from_slice(&std::fs::read(&info_path).ok()?).ok()
+    });
+    let url = info["url"].as_str().unwrap();
+    let addr = url
+        .trim_start_matches("http://")
+        .trim_end_matches('/')
+        .to_owned();
+    Run {
+        child,
+        log,
+        addr,
+        token: info["token"].as_str().unwrap().to_owned(),
+    }
+}
+
+fn http_get(addr: &str, path: &str) -> String {
+    let mut s = TcpStream::connect(addr).unwrap();
+    write!(s, "GET {path} HTTP/1.1\r\nHost: {addr}\r\n\r\n").unwrap();
+    let mut out = String::new();
+    s.read_to_string(&mut out).unwrap();
+    out.split_once("\r\n\r\n").map(|(_, b)| b.to_owned()).unwrap_or_default()
+}
+
+fn stats(addr: &str) -> Value {
+    serde_json::from_str(&http_get(addr, "/stats")).unwrap()
+}
+
+/// A Foxglove WebSocket protocol client: connected, `serverInfo` and `advertise` read.
+fn foxglove_client(addr: &str, query: &str) -> (Ws, Value, Vec<Value>) {
+    let mut request = format!("ws://{addr}/{query}").into_client_request().unwrap();
+    request.headers_mut().insert(
+        "Sec-WebSocket-Protocol",
+        "foxglove.websocket.v1".parse().unwrap(),
+    );
+    let (mut ws, response) = tungstenite::connect(request).unwrap();
+    assert_eq!(
+        response.headers()["sec-websocket-protocol"],
+        "foxglove.websocket.v1"
+    );
+    let mut texts = Vec::new();
+    while texts.len() < 2 {
+        if let Message::Text(t) = ws.read().unwrap() {
+            texts.push(serde_json::from_str::<Value>(t.as_str()).unwrap());
+        }
+    }
+    assert_eq!(texts[0]["op"], "serverInfo");
+    assert_eq!(texts[1]["op"], "advertise");
+    let channels = texts[1]["channels"].as_array().unwrap().clone();
+    (ws, texts[0].clone(), channels)
+}
+
+fn channel_id(channels: &[Value], topic: &str) -> u64 {
+    channels
+        .iter()
+        .find(|c| c["topic"] == topic)
+        .unwrap_or_else(|| panic!("{topic} not advertised"))["id"]
+        .as_u64()
+        .unwrap()
+}
+
+/// The next `messageData` of subscription `sub`: (time, JSON).
+fn next_message(ws: &mut Ws, sub: u32) -> (u64, Value) {
+    loop {
+        if let Message::Binary(b) = ws.read().unwrap()
+            && b[0] == 1
+            && u32::from_le_bytes(b[1..5].try_into().unwrap()) == sub
+        {
+            let t = u64::from_le_bytes(b[5..13].try_into().unwrap());
+            return (t, serde_json::from_slice(&b[13..]).unwrap());
+        }
+    }
+}
+
+/// Chromium over the DevTools protocol: one page.
+struct Browser {
+    child: Child,
+    page: Ws,
+    next_id: u64,
+    _profile: Scratch,
+}
+
+impl Browser {
+    fn start() -> Self {
+        let profile = Scratch::new("ground-chromium");
+        let mut child = Command::new("chromium")
+            .args([
+                "--headless=new",
+                "--no-sandbox",
+                "--disable-gpu",
+                "--no-first-run",
+                "--remote-debugging-port=0",
+                "--window-size=1400,1000",
+            ])
+            .arg(format!("--user-data-dir={}", profile.path().display()))
+            .arg("about:blank")
+            .stderr(Stdio::piped())
+            .stdout(Stdio::null())
+            .spawn()
+            .expect("starting chromium (apt-get install chromium; .ci/run installs it)");
+        let stderr = child.stderr.take().unwrap();
+        let mut lines = BufReader::new(stderr).lines();
+        let browser_url = loop {
+            let line = lines.next().expect("chromium exited").unwrap();
+            if let Some(url) = line.strip_prefix("DevTools listening on ") {
+                break url.to_owned();
+            }
+        };
+        // Keep reading chromium's stderr so it never blocks on a full pipe.
+        std::thread::spawn(move || for _ in lines {});
+        let host = browser_url
+            .trim_start_matches("ws://")
+            .split('/')
+            .next()
+            .unwrap()
+            .to_owned();
+        let list: Value = wait_for("the page target", Duration::from_secs(20), || {
+            let list: Value = serde_json::from_str(&http_get(&host, "/json/list")).ok()?;
+            list.as_array()?
+                .iter()
+                .any(|t| t["type"] == "page")
+                .then_some(list)
+        });
+        let page_url = list
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|t| t["type"] == "page")
+            .unwrap()["webSocketDebuggerUrl"]
+            .as_str()
+            .unwrap()
+            .to_owned();
+        let (page, _) = tungstenite::connect(page_url).unwrap();
+        Self {
+            child,
+            page,
+            next_id: 1,
+            _profile: profile,
+        }
+    }
+
+    fn call(&mut self, method: &str, params: Value) -> Value {
+        let id = self.next_id;
+        self.next_id += 1;
+        let request = json!({"id": id, "method": method, "params": params});
+        self.page
+            .send(Message::Text(request.to_string().into()))
+            .unwrap();
+        loop {
+            if let Message::Text(t) = self.page.read().unwrap() {
+                let v: Value = serde_json::from_str(t.as_str()).unwrap();
+                if v["id"] == id {
+                    assert!(v.get("error").is_none(), "{method}: {v}");
+                    return v["result"].clone();
+                }
+            }
+        }
+    }
+
+    /// Evaluates `expression` in the page; its value.
+    fn eval(&mut self, expression: &str) -> Value {
+        let r = self.call(
+            "Runtime.evaluate",
+            json!({"expression": expression, "returnByValue": true}),
+        );
+        r["result"]["value"].clone()
+    }
+
+    fn open(&mut self, url: &str) {
+        self.call("Page.navigate", json!({"url": url}));
+    }
+
+    fn text(&mut self, id: &str) -> String {
+        self.eval(&format!("document.getElementById('{id}').dataset.value || ''"))
+            .as_str()
+            .unwrap_or_default()
+            .to_owned()
+    }
+
+    /// The page's displayed estimate: its time and quaternion.
+    fn estimate(&mut self) -> Option<(u64, [f64; 4])> {
+        let t: u64 = self.text("est-time").parse().ok()?;
+        let q: Vec<f64> = serde_json::from_str(&self.text("est-q")).ok()?;
+        Some((t, q.try_into().ok()?))
+    }
+
+    /// Types a command into the page's form and clicks `button`; the result line it shows.
+    fn command(&mut self, fill: &str, button: &str, expect: &str) -> String {
+        self.eval(&format!(
+            "(() => {{ {fill}; document.getElementById('{button}').click(); }})()"
+        ));
+        wait_for(expect, Duration::from_secs(10), || {
+            let r = self.text("cmd-result");
+            r.contains(expect).then_some(r)
+        })
+    }
+}
+
+impl Drop for Browser {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+fn samples<T: LogEncode>(log: &Path) -> Vec<T> {
+    RunLog::open(log)
+        .unwrap()
+        .samples::<T>()
+        .unwrap()
+        .map(Result::unwrap)
+        .collect()
+}
+
+#[test]
+fn the_ground_page_shows_the_run_and_commands_the_controller() {
+    let scratch = Scratch::new("ground-page");
+    let run = start_run(scratch.path(), 60);
+    let mut browser = Browser::start();
+    let page = format!("http://{}/#token={}", run.addr, run.token);
+    browser.open(&page);
+
+    // The displayed estimate updates.
+    let first = wait_for("an estimate in the page", Duration::from_secs(20), || {
+        browser.estimate()
+    });
+    let second = wait_for("a newer estimate", Duration::from_secs(10), || {
+        browser.estimate().filter(|(t, _)| *t > first.0)
+    });
+    assert_eq!(
+        browser.eval("document.getElementById('link').dataset.state"),
+        "live"
+    );
+
+    // A mode typed in the page: applied by the controller.
+    let applied = browser.command(
+        "document.getElementById('cmd-mode').value = 'rate_damping'",
+        "send-mode",
+        "applied",
+    );
+    assert!(applied.contains("RateDamping"), "{applied}");
+    wait_for("the mode shown", Duration::from_secs(10), || {
+        (browser.text("mode") == (ControllerMode::RateDamping as u32).to_string()).then_some(())
+    });
+    std::thread::sleep(Duration::from_millis(1100));
+
+    // Wrong token, out-of-limit target: rejected with their reasons.
+    let wrong = browser.command(
+        "document.getElementById('token').value = 'not-the-token'; document.getElementById('cmd-mode').value = 'idle'",
+        "send-mode",
+        "rejected",
+    );
+    assert!(wrong.contains("wrong token"), "{wrong}");
+    std::thread::sleep(Duration::from_millis(1100));
+    let tilted = browser.command(
+        &format!(
+            "document.getElementById('token').value = '{}'; document.getElementById('cmd-pitch').value = '25'",
+            run.token
+        ),
+        "send-target",
+        "rejected",
+    );
+    assert!(tilted.contains("pitch 25.0° beyond the ±20.0° tilt limit"), "{tilted}");
+    assert_eq!(
+        browser.text("mode"),
+        (ControllerMode::RateDamping as u32).to_string(),
+        "a rejected command changed the mode"
+    );
+
+    // Closing and reopening the page reconnects.
+    browser.open("about:blank");
+    std::thread::sleep(Duration::from_secs(1));
+    browser.open(&page);
+    let reopened = wait_for("an estimate after reopening", Duration::from_secs(20), || {
+        browser.estimate().filter(|(t, _)| *t > second.0)
+    });
+    drop(browser);
+
+    let out = run.child.wait_with_output().unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains(&format!("ground station: http://{}/", run.addr))
+            && stderr.contains(&run.token),
+        "testbed run did not print the ground page's URL and token: {stderr}"
+    );
+
+    // What the page showed is what the run logged: same time, same quaternion.
+    let estimates = samples::<AttitudeEstimate>(&run.log);
+    for (t, q) in [first, second, reopened] {
+        let logged = estimates
+            .iter()
+            .find(|e| e.header.time_ns == t)
+            .unwrap_or_else(|| panic!("no estimate at {t} ns in the log"));
+        assert_eq!(logged.quaternion, q, "at {t} ns");
+    }
+    // The commands and their answers are in the log; the mode changed after the command.
+    let commands = samples::<GroundCommand>(&run.log);
+    assert_eq!(commands.len(), 1, "{commands:?}");
+    assert_eq!(commands[0].kind(), Some(GroundCommandKind::Mode));
+    assert_eq!(commands[0].mode, ControllerMode::RateDamping as u32);
+    let acks = samples::<GroundCommandAck>(&run.log);
+    let reasons: Vec<(Option<GroundAckStatus>, u32, &str)> = acks
+        .iter()
+        .map(|a| (a.status(), a.decided_by, a.reason()))
+        .collect();
+    assert_eq!(
+        reasons,
+        [
+            (
+                Some(GroundAckStatus::Applied),
+                GroundCommandAck::BY_CONTROLLER,
+                "mode RateDamping"
+            ),
+            (
+                Some(GroundAckStatus::Rejected),
+                GroundCommandAck::BY_LINK,
+                "wrong token"
+            ),
+            (
+                Some(GroundAckStatus::Rejected),
+                GroundCommandAck::BY_LINK,
+                "pitch 25.0° beyond the ±20.0° tilt limit"
+            ),
+        ]
+    );
+    let applied_at = acks[0].header.time_ns;
+    let statuses = samples::<ControllerStatus>(&run.log);
+    assert!(
+        statuses
+            .iter()
+            .filter(|s| s.header.time_ns > applied_at)
+            .all(|s| s.mode() == Some(ControllerMode::RateDamping)),
+        "the controller left rate damping without a command"
+    );
+    assert!(
+        statuses
+            .iter()
+            .any(|s| s.header.time_ns <= applied_at
+                && s.mode() == Some(ControllerMode::WheelPointing)),
+        "the run did not start in wheel pointing"
+    );
+}
+
+#[test]
+fn an_independent_client_gets_decimated_data_and_random_input_is_counted_and_dropped() {
+    let scratch = Scratch::new("ground-client");
+    let mut run = start_run(scratch.path(), 40);
+
+    // A Foxglove client asking for 2 Hz gets the estimate at about 2 Hz (the pipeline
+    // publishes 10 Hz), and the attitude as a foxglove.FrameTransform.
+    let (mut ws, info, channels) = foxglove_client(&run.addr, "?rate_hz=2");
+    assert_eq!(info["metadata"]["viewer_rate_hz"], 2.0);
+    let estimate = channel_id(&channels, "testbed/gnc/attitude_estimate") as u32;
+    let tf = channel_id(&channels, "testbed/tf/estimate") as u32;
+    let tf_channel = channels.iter().find(|c| c["id"] == tf).unwrap();
+    assert_eq!(tf_channel["schemaName"], "foxglove.FrameTransform");
+    let subscribe = json!({"op": "subscribe", "subscriptions": [
+        {"id": 100, "channelId": estimate}, {"id": 101, "channelId": tf}]});
+    ws.send(Message::Text(subscribe.to_string().into())).unwrap();
+    let (t0, _) = next_message(&mut ws, 100);
+    let start = Instant::now();
+    let mut times = vec![t0];
+    while start.elapsed() < Duration::from_secs(3) {
+        let (t, e) = next_message(&mut ws, 100);
+        assert_eq!(e["header"]["time_ns"], t);
+        times.push(t);
+    }
+    let span_s = (times[times.len() - 1] - times[0]) as f64 * 1e-9;
+    let rate = (times.len() - 1) as f64 / span_s;
+    assert!(
+        (1.0..=3.0).contains(&rate),
+        "{} estimates over {span_s} s: {rate} Hz, asked for 2",
+        times.len()
+    );
+    let (_, transform) = next_message(&mut ws, 101);
+    assert_eq!(transform["parent_frame_id"], "level");
+    let w = transform["rotation"]["w"].as_f64().unwrap();
+    assert!(w.abs() <= 1.0 && w.abs() > 0.9, "{transform}");
+
+    // Random input: counted, dropped, and the link goes on.
+    let bad_before = stats(&run.addr)["bad_messages"].as_u64().unwrap();
+    let mut sent_bad = 0u64;
+    let (mut fuzz, _, _) = foxglove_client(&run.addr, "");
+    let advertise = json!({"op": "clientAdvertise", "channels": [
+        {"id": 1, "topic": "testbed/ground/command", "encoding": "json", "schemaName": ""}]});
+    fuzz.send(Message::Text(advertise.to_string().into()))
+        .unwrap();
+    let mut runner = TestRunner::new(Config::default());
+    let frames = prop_oneof![
+        // Random binary frames (a valid client-publish opcode 1 on an unknown channel,
+        // or no valid opcode at all).
+        proptest::collection::vec(any::<u8>(), 0..64).prop_map(|mut b| {
+            if let Some(first) = b.first_mut() {
+                *first = if *first % 2 == 0 { 1 } else { 2 + *first % 200 };
+            }
+            if b.len() >= 5 && b[0] == 1 {
+                b[1] = 9; // channel 9: never advertised
+            }
+            Message::Binary(b.into())
+        }),
+        // Text that is not JSON, or JSON of the wrong shape.
+        "[^{}]{0,40}".prop_map(|s| Message::Text(s.into())),
+        (any::<i64>(), "[a-z]{0,8}").prop_map(|(n, op)| Message::Text(
+            json!({"op": op, "subscriptions": n, "channels": [n]}).to_string().into()
+        )),
+    ];
+    for _ in 0..150 {
+        let frame = frames.new_tree(&mut runner).unwrap().current();
+        fuzz.send(frame).unwrap();
+        sent_bad += 1;
+    }
+    // Commands of the wrong types on the advertised channel (rate-limited ones count too).
+    for payload in [
+        json!({"token": 1, "id": "x", "command": []}),
+        json!({"token": run.token, "id": 5, "command": "mode", "mode": 3.5}),
+        json!({"token": run.token, "id": 6, "command": "target", "heading_deg": "n"}),
+    ] {
+        let mut frame = vec![1, 1, 0, 0, 0];
+        frame.extend_from_slice(payload.to_string().as_bytes());
+        fuzz.send(Message::Binary(frame.into())).unwrap();
+        sent_bad += 1;
+        std::thread::sleep(Duration::from_millis(1100));
+    }
+    fuzz.flush().unwrap();
+    let bad_after = wait_for("the link to count the bad messages", Duration::from_secs(10), || {
+        let bad = stats(&run.addr)["bad_messages"].as_u64()?;
+        (bad >= bad_before + sent_bad).then_some(bad)
+    });
+    assert_eq!(bad_after - bad_before, sent_bad, "every bad message counted once");
+
+    // A huge message: counted as oversized, its sender disconnected.
+    let oversized_before = stats(&run.addr)["oversized"].as_u64().unwrap();
+    let (mut huge, _, _) = foxglove_client(&run.addr, "");
+    let _ = huge.send(Message::Text("x".repeat(1 << 20).into()));
+    wait_for("the oversized message counted", Duration::from_secs(10), || {
+        (stats(&run.addr)["oversized"].as_u64()? > oversized_before).then_some(())
+    });
+
+    // The link still serves the first client.
+    let (t_after, _) = next_message(&mut ws, 100);
+    assert!(t_after > times[times.len() - 1]);
+    drop((ws, fuzz, huge));
+
+    let status = run.child.wait().unwrap();
+    assert!(status.success(), "the run failed: {status}");
+    let _ = &mut run;
+}
