@@ -83,7 +83,9 @@ fn http_get(addr: &str, path: &str) -> String {
     write!(s, "GET {path} HTTP/1.1\r\nHost: {addr}\r\n\r\n").unwrap();
     let mut out = String::new();
     s.read_to_string(&mut out).unwrap();
-    out.split_once("\r\n\r\n").map(|(_, b)| b.to_owned()).unwrap_or_default()
+    out.split_once("\r\n\r\n")
+        .map(|(_, b)| b.to_owned())
+        .unwrap_or_default()
 }
 
 fn stats(addr: &str) -> Value {
@@ -92,7 +94,9 @@ fn stats(addr: &str) -> Value {
 
 /// A Foxglove WebSocket protocol client: connected, `serverInfo` and `advertise` read.
 fn foxglove_client(addr: &str, query: &str) -> (Ws, Value, Vec<Value>) {
-    let mut request = format!("ws://{addr}/{query}").into_client_request().unwrap();
+    let mut request = format!("ws://{addr}/{query}")
+        .into_client_request()
+        .unwrap();
     request.headers_mut().insert(
         "Sec-WebSocket-Protocol",
         "foxglove.websocket.v1".parse().unwrap(),
@@ -235,10 +239,12 @@ impl Browser {
     }
 
     fn text(&mut self, id: &str) -> String {
-        self.eval(&format!("document.getElementById('{id}').dataset.value || ''"))
-            .as_str()
-            .unwrap_or_default()
-            .to_owned()
+        self.eval(&format!(
+            "document.getElementById('{id}').dataset.value || ''"
+        ))
+        .as_str()
+        .unwrap_or_default()
+        .to_owned()
     }
 
     /// The page's displayed estimate: its time and quaternion.
@@ -324,7 +330,10 @@ fn the_ground_page_shows_the_run_and_commands_the_controller() {
         "send-target",
         "rejected",
     );
-    assert!(tilted.contains("pitch 25.0° beyond the ±20.0° tilt limit"), "{tilted}");
+    assert!(
+        tilted.contains("pitch 25.0° beyond the ±20.0° tilt limit"),
+        "{tilted}"
+    );
     assert_eq!(
         browser.text("mode"),
         (ControllerMode::RateDamping as u32).to_string(),
@@ -335,9 +344,11 @@ fn the_ground_page_shows_the_run_and_commands_the_controller() {
     browser.open("about:blank");
     std::thread::sleep(Duration::from_secs(1));
     browser.open(&page);
-    let reopened = wait_for("an estimate after reopening", Duration::from_secs(20), || {
-        browser.estimate().filter(|(t, _)| *t > second.0)
-    });
+    let reopened = wait_for(
+        "an estimate after reopening",
+        Duration::from_secs(20),
+        || browser.estimate().filter(|(t, _)| *t > second.0),
+    );
     drop(browser);
 
     let out = run.child.wait_with_output().unwrap();
@@ -425,7 +436,8 @@ fn an_independent_client_gets_decimated_data_and_random_input_is_counted_and_dro
     assert_eq!(tf_channel["schemaName"], "foxglove.FrameTransform");
     let subscribe = json!({"op": "subscribe", "subscriptions": [
         {"id": 100, "channelId": estimate}, {"id": 101, "channelId": tf}]});
-    ws.send(Message::Text(subscribe.to_string().into())).unwrap();
+    ws.send(Message::Text(subscribe.to_string().into()))
+        .unwrap();
     let (t0, _) = next_message(&mut ws, 100);
     let start = Instant::now();
     let mut times = vec![t0];
@@ -470,7 +482,9 @@ fn an_independent_client_gets_decimated_data_and_random_input_is_counted_and_dro
         // Text that is not JSON, or JSON of the wrong shape.
         "[^{}]{0,40}".prop_map(|s| Message::Text(s.into())),
         (any::<i64>(), "[a-z]{0,8}").prop_map(|(n, op)| Message::Text(
-            json!({"op": op, "subscriptions": n, "channels": [n]}).to_string().into()
+            json!({"op": op, "subscriptions": n, "channels": [n]})
+                .to_string()
+                .into()
         )),
     ];
     for _ in 0..150 {
@@ -491,19 +505,29 @@ fn an_independent_client_gets_decimated_data_and_random_input_is_counted_and_dro
         std::thread::sleep(Duration::from_millis(1100));
     }
     fuzz.flush().unwrap();
-    let bad_after = wait_for("the link to count the bad messages", Duration::from_secs(10), || {
-        let bad = stats(&run.addr)["bad_messages"].as_u64()?;
-        (bad >= bad_before + sent_bad).then_some(bad)
-    });
-    assert_eq!(bad_after - bad_before, sent_bad, "every bad message counted once");
+    let bad_after = wait_for(
+        "the link to count the bad messages",
+        Duration::from_secs(10),
+        || {
+            let bad = stats(&run.addr)["bad_messages"].as_u64()?;
+            (bad >= bad_before + sent_bad).then_some(bad)
+        },
+    );
+    assert_eq!(
+        bad_after - bad_before,
+        sent_bad,
+        "every bad message counted once"
+    );
 
     // A huge message: counted as oversized, its sender disconnected.
     let oversized_before = stats(&run.addr)["oversized"].as_u64().unwrap();
     let (mut huge, _, _) = foxglove_client(&run.addr, "");
     let _ = huge.send(Message::Text("x".repeat(1 << 20).into()));
-    wait_for("the oversized message counted", Duration::from_secs(10), || {
-        (stats(&run.addr)["oversized"].as_u64()? > oversized_before).then_some(())
-    });
+    wait_for(
+        "the oversized message counted",
+        Duration::from_secs(10),
+        || (stats(&run.addr)["oversized"].as_u64()? > oversized_before).then_some(()),
+    );
 
     // The link still serves the first client.
     let (t_after, _) = next_message(&mut ws, 100);
