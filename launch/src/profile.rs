@@ -16,7 +16,7 @@
 //! stop_timeout_s = 2.0       # after SIGINT, wait this long before SIGTERM
 //! term_timeout_s = 2.0       # after SIGTERM, wait this long before SIGKILL
 //! restart_delay_s = 0.5      # delay before restarting a process (on_exit = "restart")
-//! heartbeat_timeout_s = 1.0  # a Running process silent this long is hung: killed (0: off)
+//! heartbeat_timeout_s = 1.5  # a Running process silent this long is hung: killed (0: off)
 //! tolerate_safe_mode = false # testbed run exits 0 even if the controller entered safe mode
 //!
 //! [[process]]
@@ -163,7 +163,7 @@ pub struct Supervision {
     /// Delay before a restart, s.
     pub restart_delay_s: f64,
     /// A running process whose heartbeat (every 0.5 s) stops for this long is hung: it is
-    /// killed and its exit policy applies. Two heartbeat periods by default; 0 turns the
+    /// killed and its exit policy applies. Three heartbeat periods by default; 0 turns the
     /// watchdog off. s.
     pub heartbeat_timeout_s: f64,
     /// `testbed run` exits 0 even if the controller entered safe mode (for fault-injection and
@@ -177,7 +177,7 @@ impl Default for Supervision {
             stop_timeout_s: 2.0,
             term_timeout_s: 2.0,
             restart_delay_s: 0.5,
-            heartbeat_timeout_s: 1.0,
+            heartbeat_timeout_s: 1.5,
             tolerate_safe_mode: false,
         }
     }
