@@ -79,7 +79,10 @@ fn safe_mode_tolerated_vcan_profile(dir: &Path) -> String {
             out.push_str("tolerate_safe_mode = true\nheartbeat_timeout_s = 5.0\n");
         }
     }
-    assert!(out.contains("tolerate_safe_mode"), "no [supervision] in the vcan profile");
+    assert!(
+        out.contains("tolerate_safe_mode"),
+        "no [supervision] in the vcan profile"
+    );
     std::fs::write(dir.join("vcan-faults.toml"), out).expect("writing the fault profile");
     "/scratch/vcan-faults.toml".to_owned()
 }

@@ -106,7 +106,11 @@ mod tests {
                 HeartbeatPublisher::new(&bus, Duration::from_millis(50)).expect("heartbeat");
             let started = Instant::now();
             while !stop.load(Ordering::Relaxed) {
-                let state = if started.elapsed() < switch_after { first } else { then };
+                let state = if started.elapsed() < switch_after {
+                    first
+                } else {
+                    then
+                };
                 heartbeat.set_state(state);
                 heartbeat.publish().expect("publishing a heartbeat");
                 std::thread::sleep(Duration::from_millis(50));
