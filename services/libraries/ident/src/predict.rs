@@ -91,6 +91,48 @@ impl Predictions {
         }
     }
 
+    /// The predictions of disjoint sets of windows (e.g. the folds of a cross-validation, each
+    /// by its own model) as one, windows in time order. The parts share the noise model (the
+    /// first part's `sigma` is kept).
+    pub fn merge(parts: Vec<Predictions>) -> Predictions {
+        let mut out = Predictions {
+            sigma: parts.first().map_or([0.0; 11], |p| p.sigma),
+            ..Predictions::default()
+        };
+        // (window, part, index in the part), sorted by the window's ticks.
+        let mut order: Vec<((usize, usize), usize, usize)> = parts
+            .iter()
+            .enumerate()
+            .flat_map(|(p, part)| {
+                part.windows
+                    .iter()
+                    .enumerate()
+                    .map(move |(i, w)| (*w, p, i))
+            })
+            .collect();
+        order.sort_unstable();
+        let mut index: Vec<Vec<usize>> = parts.iter().map(|p| vec![0; p.windows.len()]).collect();
+        for (new, (w, p, i)) in order.iter().enumerate() {
+            index[*p][*i] = new;
+            out.windows.push(*w);
+        }
+        for c in 0..11 {
+            let mut r: Vec<(f64, f64, usize)> = parts
+                .iter()
+                .enumerate()
+                .flat_map(|(p, part)| {
+                    let index = &index[p];
+                    part.residuals[c]
+                        .iter()
+                        .map(move |&(t, v, w)| (t, v, index[w]))
+                })
+                .collect();
+            r.sort_by(|a, b| a.2.cmp(&b.2).then(a.0.total_cmp(&b.0)));
+            out.residuals[c] = r;
+        }
+        out
+    }
+
     /// Normalised RMS of every component in each window (for figures): per component
     /// `(window start time, normalised RMS)`.
     pub fn per_window(&self, data: &Aligned) -> [Vec<(f64, f64)>; 11] {

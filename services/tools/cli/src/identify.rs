@@ -199,12 +199,14 @@ fn render_report(r: &Report) -> Result<String, std::fmt::Error> {
     writeln!(out, "EVIDENCE")?;
     writeln!(
         out,
-        "data: {} ({:.0} s, {} gyro rows at {:.3} s; {}); {:.0} % held out of the fits",
+        "data: {} ({:.0} s, {} gyro rows at {:.3} s; {}); fits on all the data, {}-fold cross-validation over {:.0}-s blocks ({:.0} % of the ticks predicted out of fold)",
         r.data.source,
         r.data.duration_s,
         r.data.gyro_rows,
         r.data.period_s,
         r.data.devices.join(", "),
+        r.options.folds,
+        r.options.block_s,
         100.0 * r.data.held_out_fraction
     )?;
     writeln!(out)?;
@@ -217,14 +219,14 @@ fn render_report(r: &Report) -> Result<String, std::fmt::Error> {
     writeln!(out)?;
     writeln!(
         out,
-        "2. Candidate causes (forward selection; significant: LR > threshold; chosen: best held-out LR)"
+        "2. Candidate causes (forward selection; significant: LR > threshold; chosen: best cross-validated LR)"
     )?;
     for (i, step) in r.steps.iter().enumerate() {
         writeln!(out, "  step {}", i + 1)?;
         writeln!(
             out,
             "    {:<22} {:>3} {:>12} {:>10} {:>12} {:>12}",
-            "cause", "k", "LR fit", "threshold", "ΔBIC", "LR held-out"
+            "cause", "k", "LR fit", "threshold", "ΔBIC", "LR CV"
         )?;
         for c in step {
             let mark = if c.chosen {
@@ -300,8 +302,8 @@ fn render_report(r: &Report) -> Result<String, std::fmt::Error> {
     for e in &r.unexplained {
         writeln!(
             out,
-            "  {}: {} rows in {} clusters; |z| threshold {:.2}; held-out gain {:.3}, cross-validated gain {:.3}",
-            e.equation, e.rows, e.clusters, e.z_threshold, e.held_out_gain, e.cv_gain
+            "  {}: {} rows in {} clusters; |z| threshold {:.2}; cross-validated gain {:.3}",
+            e.equation, e.rows, e.clusters, e.z_threshold, e.cv_gain
         )?;
         for t in &e.terms {
             writeln!(
@@ -334,7 +336,7 @@ fn render_report(r: &Report) -> Result<String, std::fmt::Error> {
     writeln!(out)?;
     writeln!(
         out,
-        "5. Gain on held-out data (multi-step prediction error, RMS; normalised by the sensor noise)"
+        "5. Cross-validated gain (each fold's multi-step predictions by the model fitted without it; RMS; normalised by the sensor noise)"
     )?;
     writeln!(
         out,

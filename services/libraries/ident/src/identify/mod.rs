@@ -8,17 +8,22 @@
 //!    sensor models (the attitude filter's innovations). Each residual is described by its RMS,
 //!    bias, trend and lag-1 correlation (no white-noise test: these series are correlated by
 //!    construction).
-//! 2. **Name the cause.** The data are split in time blocks; every `held_out_every`-th block is
-//!    held out of the fits. Forward selection over the candidate library: at each step every
-//!    remaining cause is fitted jointly with those already chosen ([`crate::fit`]); a candidate
-//!    is significant when its likelihood ratio on the fit data beats both the information
-//!    criterion (BIC, `k ln N`) and the χ² quantile at `1 − alpha`; among the significant ones
-//!    whose held-out residuals improve, the one that improves them most is chosen. No candidate
-//!    chosen: the cause is `none`.
+//! 2. **Name the cause.** The fits use all the data. The data are also split in time blocks of
+//!    `block_s`, block b in fold `b mod folds` (k-fold cross-validation over contiguous blocks).
+//!    Forward selection over the candidate library: at each step every remaining cause is fitted
+//!    jointly with those already chosen ([`crate::fit`]); a candidate is significant when its
+//!    likelihood ratio on all the data beats both the information criterion (BIC, `k ln N`)
+//!    and the χ² quantile at `1 − alpha`. A candidate significant at 1 % is also fitted k times,
+//!    each time without one fold, and its cross-validated log-likelihood ratio (the sum over
+//!    the folds of the left-out fold's ratio against the set chosen so far, fitted the same
+//!    way) is its held-out statistic; among the significant ones whose cross-validated
+//!    residuals improve, the one that improves them most is chosen. No candidate chosen: the
+//!    cause is `none`.
 //! 3. **Extend the model**: the configuration given plus the chosen effects with their fitted
 //!    values (loadable by `ModelConfig::load`).
-//! 4. **Measure the gain** on the held-out blocks: multi-step prediction error of the nominal and
-//!    extended model per component and overall; gain = nominal / extended.
+//! 4. **Measure the gain** by cross-validation: each fold's blocks are predicted (multi-step) by
+//!    the extended model fitted without them and by the nominal model; the prediction error of
+//!    all folds together per component and overall; gain = nominal / extended.
 //!
 //! 5. **Falsify the named causes** (`falsify`): each must have the same parameters in disjoint
 //!    time blocks and stay significant beside the other causes and the unexplained effects;
@@ -68,10 +73,11 @@ pub struct Options {
     pub fit: FitOptions,
     /// Prediction window: re-initialisation period of the multi-step predictions, s.
     pub horizon_s: f64,
-    /// Length of the time blocks of the fit / held-out split, s.
+    /// Length of the time blocks of the cross-validation's folds, s.
     pub block_s: f64,
-    /// Every this-many-th block is held out (3: a third of the data).
-    pub held_out_every: usize,
+    /// Folds of the cross-validation of the selection and of the gain (block b of `block_s` is
+    /// in fold `b mod folds`).
+    pub folds: usize,
     /// Most causes named.
     pub max_causes: usize,
     /// Significance level of a cause (per candidate and step).
@@ -94,7 +100,7 @@ impl Default for Options {
             fit: FitOptions::default(),
             horizon_s: 10.0,
             block_s: 30.0,
-            held_out_every: 3,
+            folds: 5,
             max_causes: 4,
             alpha: 1e-6,
             candidates: Cause::ALL.to_vec(),
@@ -125,12 +131,8 @@ impl Options {
                 "must be at least the prediction horizon",
             );
         }
-        if self.held_out_every < 2 {
-            return bad(
-                "held_out_every",
-                self.held_out_every.to_string(),
-                "must be >= 2",
-            );
+        if self.folds < 2 {
+            return bad("folds", self.folds.to_string(), "must be >= 2");
         }
         if !(self.alpha > 0.0 && self.alpha < 0.5) {
             return bad("alpha", self.alpha.to_string(), "must be within (0, 0.5)");
@@ -173,20 +175,21 @@ pub fn identify(
     model.validate()?;
     data.check()?;
     let aligned = Aligned::new(data);
-    let block = |t: f64| (t / options.block_s).floor() as usize;
-    let held_out: Vec<bool> = aligned
-        .t
-        .iter()
-        .map(|&t| block(t) % options.held_out_every == options.held_out_every - 1)
-        .collect();
-    let held_fraction =
-        held_out.iter().filter(|h| **h).count() as f64 / held_out.len().max(1) as f64;
+    let fold_of = |t: f64| (t / options.block_s).floor().max(0.0) as usize % options.folds;
+    // The fits use all the data; fold j's problem holds out the blocks of fold j.
     let problem = Problem::new(
         &aligned,
         model.clone(),
-        held_out.clone(),
+        vec![false; aligned.len()],
         options.fit.clone(),
     );
+    let fold_masks: Vec<Vec<bool>> = (0..options.folds)
+        .map(|j| aligned.t.iter().map(|&t| fold_of(t) == j).collect())
+        .collect();
+    let folds: Vec<Problem> = fold_masks
+        .iter()
+        .map(|mask| problem.with_held_out(mask.clone()))
+        .collect();
 
     // Baseline.
     let empty = HashMap::new();
@@ -198,6 +201,18 @@ pub fn identify(
         )));
     }
     let n_fit = nominal.evaluation.fit.total().max(2) as f64;
+    let nominal_folds: Vec<SetFit> = folds
+        .iter()
+        .map(|f| f.fit(&[], &empty))
+        .collect::<Result<_, _>>()?;
+    let mut current_folds = nominal_folds.clone();
+    let sensor_warm = |fit: &SetFit| -> HashMap<Cause, crate::fit::FittedCause> {
+        fit.causes
+            .iter()
+            .filter(|c| c.cause.kind() == Kind::Sensor)
+            .map(|c| (c.cause, c.clone()))
+            .collect()
+    };
 
     // Forward selection.
     let available: Vec<Cause> = options
@@ -213,7 +228,7 @@ pub fn identify(
     let mut warm: HashMap<Cause, crate::fit::FittedCause> = HashMap::new();
     for _ in 0..options.max_causes {
         let mut rows = Vec::new();
-        let mut best: Option<(usize, SetFit)> = None;
+        let mut best: Option<(usize, SetFit, Vec<SetFit>)> = None;
         for &cause in available.iter().filter(|c| !selected.contains(c)) {
             let mut set = selected.clone();
             set.push(cause);
@@ -230,11 +245,14 @@ pub fn identify(
                     let lr = current.evaluation.fit.log_ratio(&fit.evaluation.fit);
                     let k = fit.free().saturating_sub(current.free());
                     let threshold = threshold_for(k);
-                    let lr_held = current
-                        .evaluation
-                        .held_out
-                        .log_ratio(&fit.evaluation.held_out);
                     let significant = k > 0 && lr > threshold;
+                    // Cross-validation of the candidates that can be chosen or listed as
+                    // possible (significant at 1 %); the others' is not computed (NaN).
+                    let cv = (k > 0
+                        && lr > chi_square_quantile(0.99, k as f64).unwrap_or(f64::INFINITY))
+                    .then(|| cross_validate(&folds, &current_folds, &set, &sensor_warm))
+                    .flatten();
+                    let lr_held = cv.as_ref().map_or(f64::NAN, |(lr, _)| *lr);
                     let note = fit
                         .causes
                         .iter()
@@ -252,13 +270,12 @@ pub fn identify(
                         chosen: false,
                         note,
                     });
-                    if significant
-                        && lr_held > 0.0
+                    if let Some((_, fold_fits)) = cv.filter(|_| significant && lr_held > 0.0)
                         && best
                             .as_ref()
-                            .is_none_or(|(i, _)| lr_held > rows[*i].lr_held_out)
+                            .is_none_or(|(i, _, _)| lr_held > rows[*i].lr_held_out)
                     {
-                        best = Some((rows.len() - 1, fit));
+                        best = Some((rows.len() - 1, fit, fold_fits));
                     }
                 }
                 Err(e) => rows.push(CandidateRow {
@@ -267,14 +284,14 @@ pub fn identify(
                     lr_fit: 0.0,
                     threshold: f64::NAN,
                     delta_bic: f64::NAN,
-                    lr_held_out: 0.0,
+                    lr_held_out: f64::NAN,
                     significant: false,
                     chosen: false,
                     note: e.to_string(),
                 }),
             }
         }
-        let Some((i, fit)) = best else {
+        let Some((i, fit, fold_fits)) = best else {
             steps.push(rows);
             break;
         };
@@ -290,7 +307,13 @@ pub fn identify(
             .map(|c| (c.cause, c.clone()))
             .collect();
         current = fit;
-        problem.trim_cache(&[&current.config]);
+        current_folds = fold_fits;
+        let mut keep: Vec<&ModelConfig> = current_folds.iter().map(|f| &f.config).collect();
+        keep.push(&current.config);
+        problem.trim_cache(&keep);
+        for f in &folds {
+            f.trim_cache(&keep);
+        }
     }
 
     // Falsify the named causes and search what remains (see `falsify`, `unexplained`).
@@ -322,6 +345,7 @@ pub fn identify(
     };
     let (mut effects, mut tests, mut joint) = analyse(&current, &named);
     let mut cause_tests: Vec<CauseTest> = Vec::new();
+    let mut sensor_dropped = false;
     for _ in 0..=options.max_causes {
         // Drop the worst failure only, then search and test again: a cause that failed beside
         // a wrongly named one may pass once that one is gone.
@@ -341,6 +365,7 @@ pub fn identify(
         // A dropped sensor cause was fitted jointly with the others: refit them.
         if dropped.kind() == Kind::Sensor {
             warm.retain(|c, _| c.kind() != Kind::Sensor);
+            sensor_dropped = true;
         }
         current = problem.fit(&named, &warm)?;
         (effects, tests, joint) = analyse(&current, &named);
@@ -395,6 +420,50 @@ pub fn identify(
     // The extended model must load as it is written.
     ModelConfig::from_toml_str(&extended.to_toml_string(), "extended model")?;
 
+    // Cross-validated gain: each fold predicted by the named causes fitted without it.
+    let start = nominal.state.recon.start;
+    let fold_windows: Vec<Vec<(usize, usize)>> = fold_masks
+        .iter()
+        .map(|mask| predict::windows(&aligned, &held_out_spans(mask, start), options.horizon_s))
+        .collect();
+    let mut windows: Vec<(usize, usize)> = fold_windows.iter().flatten().copied().collect();
+    windows.sort_unstable();
+    let held_fraction =
+        windows.iter().map(|(a, b)| b + 1 - a).sum::<usize>() as f64 / aligned.len().max(1) as f64;
+    let base_held = predict::predict(&aligned, &nominal.state.recon, model, &windows)?;
+    let mut cv_nominal = crate::fit::ChannelRss::default();
+    let mut cv_extended = crate::fit::ChannelRss::default();
+    let ext_held = if selected.is_empty() {
+        for f in &nominal_folds {
+            cv_nominal.add(&f.evaluation.held_out);
+        }
+        cv_extended = cv_nominal;
+        base_held.clone()
+    } else {
+        let mut parts = Vec::with_capacity(folds.len());
+        for (j, fold) in folds.iter().enumerate() {
+            let warm_j = if sensor_dropped {
+                HashMap::new()
+            } else {
+                sensor_warm(&current_folds[j])
+            };
+            cv_nominal.add(&nominal_folds[j].evaluation.held_out);
+            let fit_j = fold.fit(&selected, &warm_j)?;
+            cv_extended.add(&fit_j.evaluation.held_out);
+            parts.push(predict::predict(
+                &aligned,
+                &fit_j.state.recon,
+                &fit_j.config,
+                &fold_windows[j],
+            )?);
+        }
+        predict::Predictions::merge(parts)
+    };
+    // The held-out channel sums reported are the cross-validated ones.
+    let mut nominal = nominal;
+    nominal.evaluation.held_out = cv_nominal;
+    current.evaluation.held_out = cv_extended;
+
     // Residual reports, nominal and extended.
     let all_spans = [(nominal.state.recon.start, aligned.len())];
     let all_windows = predict::windows(&aligned, &all_spans, options.horizon_s);
@@ -409,15 +478,6 @@ pub fn identify(
     let (extended_equation, extended_report) =
         equation_error(&problem, &current, &extended_prediction);
 
-    // Gain on the held-out blocks.
-    let spans = held_out_spans(&held_out, nominal.state.recon.start);
-    let windows = predict::windows(&aligned, &spans, options.horizon_s);
-    let base_held = predict::predict(&aligned, &nominal.state.recon, model, &windows)?;
-    let ext_held = if selected.is_empty() {
-        base_held.clone()
-    } else {
-        predict::predict(&aligned, &current.state.recon, &extended, &windows)?
-    };
     let base_rms = base_held.rms(|_| true);
     let ext_rms = ext_held.rms(|_| true);
     let baseline_rms = rms_report(&base_rms);
@@ -497,13 +557,34 @@ pub fn identify(
         gain,
         gain_by_component,
         gain_by_group,
-        filter_runs: problem.filter_runs.get(),
+        filter_runs: problem.filter_runs.get()
+            + folds.iter().map(|f| f.filter_runs.get()).sum::<usize>(),
     };
     Ok(Identification {
         report,
         extended,
         figures,
     })
+}
+
+/// Cross-validation of the set `set` over the folds: fitted on each fold's problem (sensor
+/// causes of the fold's current fit warm, `warm_of`), the sum over the folds of the held-out
+/// log-likelihood ratio against `current` (the set chosen so far, fitted the same way), and the
+/// fold fits. `None` when a fold's fit fails (the fold does not determine the set).
+fn cross_validate(
+    folds: &[Problem],
+    current: &[SetFit],
+    set: &[Cause],
+    warm_of: &dyn Fn(&SetFit) -> HashMap<Cause, crate::fit::FittedCause>,
+) -> Option<(f64, Vec<SetFit>)> {
+    let mut lr = 0.0;
+    let mut fits = Vec::with_capacity(folds.len());
+    for (fold, cur) in folds.iter().zip(current) {
+        let fit = fold.fit(set, &warm_of(cur)).ok()?;
+        lr += cur.evaluation.held_out.log_ratio(&fit.evaluation.held_out);
+        fits.push(fit);
+    }
+    Some((lr, fits))
 }
 
 /// Whether the data can say anything about a cause.
