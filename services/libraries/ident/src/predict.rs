@@ -397,3 +397,31 @@ fn command_pieces(data: &Aligned, a: f64, b: f64, delay: f64) -> Vec<(f64, Actua
     }
     out
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn merged_folds_keep_every_residual_in_time_order_of_their_windows() {
+        let part = |windows: Vec<(usize, usize)>, ts: &[(f64, usize)]| {
+            let mut p = Predictions {
+                windows,
+                sigma: [2.0; 11],
+                ..Predictions::default()
+            };
+            p.residuals[0] = ts.iter().map(|&(t, w)| (t, t * 10.0, w)).collect();
+            p
+        };
+        // Fold A predicts windows at ticks 0 and 20, fold B the one at 10.
+        let a = part(vec![(0, 9), (20, 29)], &[(0.0, 0), (0.5, 0), (2.0, 1)]);
+        let b = part(vec![(10, 19)], &[(1.0, 0), (1.5, 0)]);
+        let m = Predictions::merge(vec![a, b]);
+        assert_eq!(m.windows, vec![(0, 9), (10, 19), (20, 29)]);
+        let t: Vec<(f64, usize)> = m.residuals[0].iter().map(|r| (r.0, r.2)).collect();
+        assert_eq!(t, vec![(0.0, 0), (0.5, 0), (1.0, 1), (1.5, 1), (2.0, 2)]);
+        assert!(m.residuals[0].iter().all(|r| r.1 == r.0 * 10.0));
+        assert_eq!(m.sigma, [2.0; 11]);
+        assert!(m.residuals[1].is_empty());
+    }
+}

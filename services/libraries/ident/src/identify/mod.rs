@@ -8,22 +8,23 @@
 //!    sensor models (the attitude filter's innovations). Each residual is described by its RMS,
 //!    bias, trend and lag-1 correlation (no white-noise test: these series are correlated by
 //!    construction).
-//! 2. **Name the cause.** The fits use all the data. The data are also split in time blocks of
-//!    `block_s`, block b in fold `b mod folds` (k-fold cross-validation over contiguous blocks).
+//! 2. **Name the cause.** The data are split in time blocks of `block_s`. By default every
+//!    `held_out_every`-th block is held out of the fits. With `folds` ≥ 2 (k-fold
+//!    cross-validation over contiguous blocks, block b in fold `b mod folds`) the fits use all
+//!    the data instead, and a candidate significant at 1 % is also fitted k times, each time
+//!    without one fold; its held-out statistic is then the sum over the folds of the left-out
+//!    fold's log-likelihood ratio against the set chosen so far (fitted the same way).
 //!    Forward selection over the candidate library: at each step every remaining cause is fitted
 //!    jointly with those already chosen ([`crate::fit`]); a candidate is significant when its
-//!    likelihood ratio on all the data beats both the information criterion (BIC, `k ln N`)
-//!    and the χ² quantile at `1 − alpha`. A candidate significant at 1 % is also fitted k times,
-//!    each time without one fold, and its cross-validated log-likelihood ratio (the sum over
-//!    the folds of the left-out fold's ratio against the set chosen so far, fitted the same
-//!    way) is its held-out statistic; among the significant ones whose cross-validated
-//!    residuals improve, the one that improves them most is chosen. No candidate chosen: the
-//!    cause is `none`.
+//!    likelihood ratio on the fit data beats both the information criterion (BIC, `k ln N`)
+//!    and the χ² quantile at `1 − alpha`; among the significant ones whose held-out (or
+//!    cross-validated) residuals improve, the one that improves them most is chosen. No
+//!    candidate chosen: the cause is `none`.
 //! 3. **Extend the model**: the configuration given plus the chosen effects with their fitted
 //!    values (loadable by `ModelConfig::load`).
-//! 4. **Measure the gain** by cross-validation: each fold's blocks are predicted (multi-step) by
-//!    the extended model fitted without them and by the nominal model; the prediction error of
-//!    all folds together per component and overall; gain = nominal / extended.
+//! 4. **Measure the gain**: multi-step prediction error of the nominal and extended model per
+//!    component and overall on the held-out blocks, or with `folds` ≥ 2 on every fold predicted
+//!    by the extended model fitted without it; gain = nominal / extended.
 //!
 //! 5. **Falsify the named causes** (`falsify`): each must have the same parameters in disjoint
 //!    time blocks and stay significant beside the other causes and the unexplained effects;
@@ -73,10 +74,14 @@ pub struct Options {
     pub fit: FitOptions,
     /// Prediction window: re-initialisation period of the multi-step predictions, s.
     pub horizon_s: f64,
-    /// Length of the time blocks of the cross-validation's folds, s.
+    /// Length of the time blocks (held-out split or cross-validation folds), s.
     pub block_s: f64,
-    /// Folds of the cross-validation of the selection and of the gain (block b of `block_s` is
-    /// in fold `b mod folds`).
+    /// Without cross-validation (`folds` 0): every this-many-th block is held out of the fits
+    /// (3: a third of the data).
+    pub held_out_every: usize,
+    /// Folds of the k-fold cross-validation of the selection and of the gain (block b of
+    /// `block_s` in fold `b mod folds`; the fits then use all the data); 0: off, one held-out
+    /// share (`held_out_every`) instead.
     pub folds: usize,
     /// Most causes named.
     pub max_causes: usize,
@@ -100,7 +105,8 @@ impl Default for Options {
             fit: FitOptions::default(),
             horizon_s: 10.0,
             block_s: 30.0,
-            folds: 5,
+            held_out_every: 3,
+            folds: 0,
             max_causes: 4,
             alpha: 1e-6,
             candidates: Cause::ALL.to_vec(),
@@ -131,8 +137,15 @@ impl Options {
                 "must be at least the prediction horizon",
             );
         }
-        if self.folds < 2 {
-            return bad("folds", self.folds.to_string(), "must be >= 2");
+        if self.held_out_every < 2 {
+            return bad(
+                "held_out_every",
+                self.held_out_every.to_string(),
+                "must be >= 2",
+            );
+        }
+        if self.folds == 1 {
+            return bad("folds", self.folds.to_string(), "must be 0 (off) or >= 2");
         }
         if !(self.alpha > 0.0 && self.alpha < 0.5) {
             return bad("alpha", self.alpha.to_string(), "must be within (0, 0.5)");
@@ -175,16 +188,31 @@ pub fn identify(
     model.validate()?;
     data.check()?;
     let aligned = Aligned::new(data);
-    let fold_of = |t: f64| (t / options.block_s).floor().max(0.0) as usize % options.folds;
-    // The fits use all the data; fold j's problem holds out the blocks of fold j.
+    let block = |t: f64| (t / options.block_s).floor().max(0.0) as usize;
+    let cross_validated = options.folds >= 2;
+    // k-fold: the fits use all the data and fold j's problem holds out the blocks of fold j;
+    // otherwise every `held_out_every`-th block is held out of the fits.
+    let held_out: Vec<bool> = aligned
+        .t
+        .iter()
+        .map(|&t| {
+            !cross_validated && block(t) % options.held_out_every == options.held_out_every - 1
+        })
+        .collect();
     let problem = Problem::new(
         &aligned,
         model.clone(),
-        vec![false; aligned.len()],
+        held_out.clone(),
         options.fit.clone(),
     );
     let fold_masks: Vec<Vec<bool>> = (0..options.folds)
-        .map(|j| aligned.t.iter().map(|&t| fold_of(t) == j).collect())
+        .map(|j| {
+            aligned
+                .t
+                .iter()
+                .map(|&t| block(t) % options.folds == j)
+                .collect()
+        })
         .collect();
     let folds: Vec<Problem> = fold_masks
         .iter()
@@ -193,7 +221,7 @@ pub fn identify(
 
     // Baseline.
     let empty = HashMap::new();
-    let nominal = problem.fit(&[], &empty)?;
+    let mut nominal = problem.fit(&[], &empty)?;
     if nominal.state.recon.start >= aligned.len() {
         return Err(IdentError::Failed(format!(
             "{}: the attitude filter never started (no usable inclinometer/magnetometer sample pair)",
@@ -248,10 +276,17 @@ pub fn identify(
                     let significant = k > 0 && lr > threshold;
                     // Cross-validation of the candidates that can be chosen or listed as
                     // possible (significant at 1 %); the others' is not computed (NaN).
-                    let cv = (k > 0
-                        && lr > chi_square_quantile(0.99, k as f64).unwrap_or(f64::INFINITY))
-                    .then(|| cross_validate(&folds, &current_folds, &set, &sensor_warm))
-                    .flatten();
+                    let cv = if cross_validated {
+                        (k > 0 && lr > chi_square_quantile(0.99, k as f64).unwrap_or(f64::INFINITY))
+                            .then(|| cross_validate(&folds, &current_folds, &set, &sensor_warm))
+                            .flatten()
+                    } else {
+                        let lr_held = current
+                            .evaluation
+                            .held_out
+                            .log_ratio(&fit.evaluation.held_out);
+                        Some((lr_held, Vec::new()))
+                    };
                     let lr_held = cv.as_ref().map_or(f64::NAN, |(lr, _)| *lr);
                     let note = fit
                         .causes
@@ -420,49 +455,64 @@ pub fn identify(
     // The extended model must load as it is written.
     ModelConfig::from_toml_str(&extended.to_toml_string(), "extended model")?;
 
-    // Cross-validated gain: each fold predicted by the named causes fitted without it.
+    // Gain: cross-validated (each fold predicted by the named causes fitted without it) or on
+    // the held-out blocks.
     let start = nominal.state.recon.start;
-    let fold_windows: Vec<Vec<(usize, usize)>> = fold_masks
-        .iter()
-        .map(|mask| predict::windows(&aligned, &held_out_spans(mask, start), options.horizon_s))
-        .collect();
-    let mut windows: Vec<(usize, usize)> = fold_windows.iter().flatten().copied().collect();
-    windows.sort_unstable();
-    let held_fraction =
-        windows.iter().map(|(a, b)| b + 1 - a).sum::<usize>() as f64 / aligned.len().max(1) as f64;
-    let base_held = predict::predict(&aligned, &nominal.state.recon, model, &windows)?;
-    let mut cv_nominal = crate::fit::ChannelRss::default();
-    let mut cv_extended = crate::fit::ChannelRss::default();
-    let ext_held = if selected.is_empty() {
-        for f in &nominal_folds {
-            cv_nominal.add(&f.evaluation.held_out);
-        }
-        cv_extended = cv_nominal;
-        base_held.clone()
+    let (base_held, ext_held, held_fraction) = if !cross_validated {
+        let held_fraction =
+            held_out.iter().filter(|h| **h).count() as f64 / held_out.len().max(1) as f64;
+        let spans = held_out_spans(&held_out, start);
+        let windows = predict::windows(&aligned, &spans, options.horizon_s);
+        let base_held = predict::predict(&aligned, &nominal.state.recon, model, &windows)?;
+        let ext_held = if selected.is_empty() {
+            base_held.clone()
+        } else {
+            predict::predict(&aligned, &current.state.recon, &extended, &windows)?
+        };
+        (base_held, ext_held, held_fraction)
     } else {
-        let mut parts = Vec::with_capacity(folds.len());
-        for (j, fold) in folds.iter().enumerate() {
-            let warm_j = if sensor_dropped {
-                HashMap::new()
-            } else {
-                sensor_warm(&current_folds[j])
-            };
-            cv_nominal.add(&nominal_folds[j].evaluation.held_out);
-            let fit_j = fold.fit(&selected, &warm_j)?;
-            cv_extended.add(&fit_j.evaluation.held_out);
-            parts.push(predict::predict(
-                &aligned,
-                &fit_j.state.recon,
-                &fit_j.config,
-                &fold_windows[j],
-            )?);
-        }
-        predict::Predictions::merge(parts)
+        let fold_windows: Vec<Vec<(usize, usize)>> = fold_masks
+            .iter()
+            .map(|mask| predict::windows(&aligned, &held_out_spans(mask, start), options.horizon_s))
+            .collect();
+        let mut windows: Vec<(usize, usize)> = fold_windows.iter().flatten().copied().collect();
+        windows.sort_unstable();
+        let held_fraction = windows.iter().map(|(a, b)| b + 1 - a).sum::<usize>() as f64
+            / aligned.len().max(1) as f64;
+        let base_held = predict::predict(&aligned, &nominal.state.recon, model, &windows)?;
+        let mut cv_nominal = crate::fit::ChannelRss::default();
+        let mut cv_extended = crate::fit::ChannelRss::default();
+        let ext_held = if selected.is_empty() {
+            for f in &nominal_folds {
+                cv_nominal.add(&f.evaluation.held_out);
+            }
+            cv_extended = cv_nominal;
+            base_held.clone()
+        } else {
+            let mut parts = Vec::with_capacity(folds.len());
+            for (j, fold) in folds.iter().enumerate() {
+                let warm_j = if sensor_dropped {
+                    HashMap::new()
+                } else {
+                    sensor_warm(&current_folds[j])
+                };
+                cv_nominal.add(&nominal_folds[j].evaluation.held_out);
+                let fit_j = fold.fit(&selected, &warm_j)?;
+                cv_extended.add(&fit_j.evaluation.held_out);
+                parts.push(predict::predict(
+                    &aligned,
+                    &fit_j.state.recon,
+                    &fit_j.config,
+                    &fold_windows[j],
+                )?);
+            }
+            predict::Predictions::merge(parts)
+        };
+        // The held-out channel sums reported are the cross-validated ones.
+        nominal.evaluation.held_out = cv_nominal;
+        current.evaluation.held_out = cv_extended;
+        (base_held, ext_held, held_fraction)
     };
-    // The held-out channel sums reported are the cross-validated ones.
-    let mut nominal = nominal;
-    nominal.evaluation.held_out = cv_nominal;
-    current.evaluation.held_out = cv_extended;
 
     // Residual reports, nominal and extended.
     let all_spans = [(nominal.state.recon.start, aligned.len())];
@@ -616,4 +666,25 @@ fn held_out_spans(held: &[bool], start: usize) -> Vec<(usize, usize)> {
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cross_validation_is_off_by_default_and_needs_two_folds() {
+        assert_eq!(Options::default().folds, 0);
+        assert!(Options::default().validate().is_ok());
+        for folds in [1] {
+            let o = Options {
+                folds,
+                ..Options::default()
+            };
+            assert!(
+                matches!(o.validate(), Err(IdentError::Options { ref key, .. }) if key == "folds"),
+                "{folds} folds accepted"
+            );
+        }
+    }
 }

@@ -17,8 +17,8 @@ pub struct DataSummary {
     pub gyro_rows: usize,
     pub period_s: f64,
     pub devices: Vec<&'static str>,
-    /// Fraction of the ticks predicted out of fold (the cross-validation's windows; the fits
-    /// use all the data).
+    /// Fraction of the ticks held out of the fits; with k-fold cross-validation, of the ticks
+    /// predicted out of fold (the fits use all the data).
     pub held_out_fraction: f64,
 }
 
@@ -58,8 +58,9 @@ pub struct CandidateRow {
     pub threshold: f64,
     /// BIC change (negative: better).
     pub delta_bic: f64,
-    /// Cross-validated log-likelihood ratio: the sum over the folds of the left-out fold's ratio
-    /// (positive: predicts them better); NaN when not computed (not significant at 1 %).
+    /// Likelihood ratio on the held-out data (positive: predicts them better); with k-fold
+    /// cross-validation the sum over the folds of the left-out fold's ratio, NaN when not
+    /// computed (not significant at 1 %).
     pub lr_held_out: f64,
     pub significant: bool,
     pub chosen: bool,
@@ -284,7 +285,7 @@ pub(super) fn summary(
     }
     for p in possible {
         out.push(format!(
-            "Possible (below the threshold, not named): {} — likelihood ratio {:.1} against the threshold {:.1}, cross-validated {:+.1}.",
+            "Possible (below the threshold, not named): {} — likelihood ratio {:.1} against the threshold {:.1}, held-out {:+.1}.",
             p.name, p.lr_fit, p.threshold, p.lr_held_out
         ));
     }
@@ -293,8 +294,8 @@ pub(super) fn summary(
     }
     for e in effects {
         out.push(format!(
-            "Unexplained effect (not a library cause): {}; cross-validated gain {:.2}× in that equation.",
-            e.proposed, e.cv_gain
+            "Unexplained effect (not a library cause): {}; held-out gain {:.2}×, cross-validated {:.2}× in that equation.",
+            e.proposed, e.held_out_gain, e.cv_gain
         ));
     }
     out.push(remaining.message.clone());
