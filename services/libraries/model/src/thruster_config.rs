@@ -54,7 +54,7 @@ pub struct ThrusterConfig {
     /// 300 bar holds about 0.7 kg; compressed air similar).
     pub propellant_kg: f64,
     /// Centre of mass of the propellant in the tank, m, body axes, relative to the bearing's
-    /// centre of rotation. Assumed: below the bearing on the vertical axis, 1 cm and 0.5 cm off
+    /// centre of rotation. Assumed: below the bearing on the vertical axis, 2 mm and 1 mm off
     /// it horizontally (a mounting tolerance), so the draining tank moves the centre of mass and
     /// makes a slowly growing gravity torque.
     pub tank_position_m: [f64; 3],
@@ -114,7 +114,7 @@ impl Default for ThrusterConfig {
             noise_seed: 0,
             isp_s: 65.0,
             propellant_kg: 1.0,
-            tank_position_m: [0.01, 0.005, -0.10],
+            tank_position_m: [0.002, 0.001, -0.10],
             stuck_open: None,
         }
     }
@@ -176,7 +176,11 @@ impl ThrusterConfig {
         for i in 0..THRUSTER_COUNT {
             let p = self.position_m[i];
             if p.iter().any(|x| !x.is_finite()) {
-                return fail(&format!("position_m[{i}]"), format!("{p:?}"), "must be finite");
+                return fail(
+                    &format!("position_m[{i}]"),
+                    format!("{p:?}"),
+                    "must be finite",
+                );
             }
             let d = self.direction[i];
             let norm = Vector3::from(d).norm();

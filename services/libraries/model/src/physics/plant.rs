@@ -243,6 +243,11 @@ impl Plant {
         self.thrusters.as_ref()
     }
 
+    /// The thrusters, to shut their latch valve (`None` unless configured).
+    pub fn thrusters_mut(&mut self) -> Option<&mut ThrusterBank> {
+        self.thrusters.as_mut()
+    }
+
     pub fn state(&self) -> &PlatformState {
         &self.state
     }

@@ -37,7 +37,10 @@ fn a_pulse_train_changes_the_platforms_momentum_by_its_closed_form_impulse() {
     }
     let impulse = 5.0 * 0.5 * t.thrust_n * (0.03 + t.close_delay_s - t.open_delay_s);
     let h = plant.angular_momentum_l();
-    assert!((h.z - impulse).abs() < 1e-12 * impulse.max(1.0), "{h:?} vs {impulse}");
+    assert!(
+        (h.z - impulse).abs() < 1e-12 * impulse.max(1.0),
+        "{h:?} vs {impulse}"
+    );
     assert!(h.xy().norm() < 1e-15, "{h:?}");
     // The platform turns at impulse / (I_zz − J): the frictionless Z wheel does not follow it.
     let rate = plant.state().rate_b.z;

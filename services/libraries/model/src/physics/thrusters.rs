@@ -88,6 +88,9 @@ pub struct ThrusterBank {
     pulse_count: [u64; THRUSTER_COUNT],
     gravity_mps2: f64,
     rng: ChaCha8Rng,
+    /// The latch (isolation) valve upstream of the six thruster valves is shut: no thrust, even
+    /// from a stuck-open valve (how the thrusters are disabled).
+    latch_shut: bool,
 }
 
 impl ThrusterBank {
@@ -110,6 +113,7 @@ impl ThrusterBank {
             pulse_count: [0; THRUSTER_COUNT],
             gravity_mps2: config.platform.gravity_mps2,
             rng: ChaCha8Rng::seed_from_u64(t.noise_seed),
+            latch_shut: false,
             config: t,
         })
     }
@@ -152,15 +156,36 @@ impl ThrusterBank {
         self.propellant_used_kg >= self.config.propellant_kg
     }
 
+    /// Shut (`true`) or open the latch valve upstream of all thrusters.
+    pub fn set_latch_shut(&mut self, shut: bool) {
+        self.latch_shut = shut;
+    }
+
+    pub fn latch_shut(&self) -> bool {
+        self.latch_shut
+    }
+
+    /// Whether valve `i` is physically open at `t_s` (what a valve position sensor reads),
+    /// whatever the latch and the tank.
+    pub fn valve_open(&self, i: usize, t_s: f64) -> bool {
+        self.stuck_at(i, t_s)
+            || self.pulses[i]
+                .iter()
+                .any(|p| p.start_s <= t_s + TOL_S && t_s < p.end_s - TOL_S)
+    }
+
+    fn stuck_at(&self, i: usize, t_s: f64) -> bool {
+        self.config
+            .stuck_open
+            .is_some_and(|s| s.thruster == i && t_s >= s.from_s - TOL_S)
+    }
+
     /// Thrust of thruster `i` relative to nominal at time `t_s` (0 when shut).
     fn factor_at(&self, i: usize, t_s: f64) -> f64 {
-        if self.tank_empty() {
+        if self.tank_empty() || self.latch_shut {
             return 0.0;
         }
-        if let Some(s) = &self.config.stuck_open
-            && s.thruster == i
-            && t_s >= s.from_s - TOL_S
-        {
+        if self.stuck_at(i, t_s) {
             return self.scale[i];
         }
         self.pulses[i]
@@ -192,7 +217,9 @@ impl ThrusterBank {
 
     /// Torque of the thrusters at relative thrusts `factors`, Nm, body axes.
     pub fn torque_b(&self, factors: &[f64; THRUSTER_COUNT]) -> Vector3<f64> {
-        (0..THRUSTER_COUNT).fold(Vector3::zeros(), |acc, i| acc + self.torque_nm[i] * factors[i])
+        (0..THRUSTER_COUNT).fold(Vector3::zeros(), |acc, i| {
+            acc + self.torque_nm[i] * factors[i]
+        })
     }
 
     /// Account `h` seconds of thrusting at relative thrusts `factors`: propellant, impulse and
@@ -269,7 +296,11 @@ mod tests {
 
     /// Steps a bank as the plant does: one command per period, integration split at every valve
     /// switch, and returns the angular impulse (Nms, body axes).
-    fn run_pulses(bank: &mut ThrusterBank, commands: &[ThrusterCommand], period_s: f64) -> Vector3<f64> {
+    fn run_pulses(
+        bank: &mut ThrusterBank,
+        commands: &[ThrusterCommand],
+        period_s: f64,
+    ) -> Vector3<f64> {
         let mut t = 0.0;
         let mut angular_impulse = Vector3::zeros();
         for c in commands {
@@ -327,8 +358,15 @@ mod tests {
         let mut bank = ThrusterBank::from_config(&config).unwrap();
         let h = run_pulses(&mut bank, &commands, period);
         let impulse = 7.0 * t.thrust_n * (0.04 + t.close_delay_s - t.open_delay_s);
-        assert!((bank.impulse_ns()[2] - impulse).abs() < 1e-12, "{:?}", bank.impulse_ns());
-        assert!((h - Vector3::new(0.0, 0.5 * impulse, 0.0)).norm() < 1e-12, "{h:?}");
+        assert!(
+            (bank.impulse_ns()[2] - impulse).abs() < 1e-12,
+            "{:?}",
+            bank.impulse_ns()
+        );
+        assert!(
+            (h - Vector3::new(0.0, 0.5 * impulse, 0.0)).norm() < 1e-12,
+            "{h:?}"
+        );
         assert_eq!(bank.pulse_count()[2], 7);
         // Propellant: the impulse over Isp g0.
         let used = impulse / (t.isp_s * crate::thruster_config::G0_MPS2);
@@ -367,7 +405,10 @@ mod tests {
         run_pulses(&mut bank, &commands, 0.1);
         let nominal = 400.0 * t.thrust_n * (0.05 + t.close_delay_s - t.open_delay_s);
         let rel = bank.impulse_ns()[1] / nominal - 1.0;
-        assert!(rel.abs() < 4.0 * 0.02 / 400f64.sqrt(), "relative error {rel}");
+        assert!(
+            rel.abs() < 4.0 * 0.02 / 400f64.sqrt(),
+            "relative error {rel}"
+        );
         assert!(rel != 0.0, "noise is on");
     }
 
