@@ -5,6 +5,7 @@ use crate::convert::{Sequence, a3, a4, quaternion_from_array, seconds, v3, v4};
 use crate::safe_mode::{SafeMode, SafeReason, SafeReasons, SafeTransition, safe_wheel_torque};
 use crate::schedule::Schedule;
 use crate::tasks::{ActuatorTelemetry, Actuators, ControllerConfig, ControllerTask};
+use crate::thruster_control::ThrusterActivity;
 use ipc_types::{
     AttitudeEstimate, CmgCommand, CmgTelemetry, ControllerMode, ControllerStatus, GyroSample,
     SampleHeader, WheelCommand, WheelTelemetry,
@@ -31,6 +32,8 @@ pub struct ControlCycle {
     pub status: ControllerStatus,
     pub wheels: WheelCommand,
     pub cmg: CmgCommand,
+    /// Valve on-times for the next period (`None` without thruster control; issue 14).
+    pub thrusters: Option<ipc_types::ThrusterCommand>,
 }
 
 /// Newest sample times of the controller's inputs (run clock, ns): what tells a lost input.
@@ -83,6 +86,7 @@ pub struct ControllerNode {
     status_seq: Sequence,
     wheel_seq: Sequence,
     cmg_seq: Sequence,
+    thruster_seq: Sequence,
     inputs: InputTimes,
     first_input_ns: Option<u64>,
     /// The latest gyro sample: time (ns) and body rate (rad/s), for rate damping in safe mode.
@@ -112,6 +116,7 @@ impl ControllerNode {
             status_seq: Sequence::default(),
             wheel_seq: Sequence::default(),
             cmg_seq: Sequence::default(),
+            thruster_seq: Sequence::default(),
             inputs: InputTimes::default(),
             first_input_ns: None,
             gyro: None,
@@ -262,12 +267,18 @@ impl ControllerNode {
         if self.safe.is_active() {
             return self.safe_cycle(t_ns, period, &telemetry);
         }
+        let mut thrust = None;
         let (command, error, mode, saturated) = match attitude {
             Some((q, rate)) => match self.task.command(seconds(t_ns), &q, &rate, &telemetry) {
-                Ok(o) => {
-                    let mode = match self.actuators {
-                        Actuators::Wheels => ControllerMode::WheelPointing,
-                        Actuators::Cmg => ControllerMode::CmgSlew,
+                Ok(mut o) => {
+                    thrust = self.task.thrusters(&rate, &telemetry, &mut o);
+                    let mode = match (self.actuators, thrust.map(|t| t.activity)) {
+                        (_, Some(ThrusterActivity::Dumping)) => ControllerMode::MomentumDump,
+                        (_, Some(ThrusterActivity::RateDamping)) => {
+                            ControllerMode::ThrusterRateDamping
+                        }
+                        (Actuators::Wheels, _) => ControllerMode::WheelPointing,
+                        (Actuators::Cmg, _) => ControllerMode::CmgSlew,
                     };
                     (o.command, o.error_rad, mode, o.saturated)
                 }
@@ -310,7 +321,7 @@ impl ControllerNode {
             ..ControllerStatus::default()
         };
         status.set_mode(mode);
-        self.outputs(t_ns, status, &command)
+        self.outputs(t_ns, status, &command, thrust.map(|t| t.command))
     }
 
     /// What is wrong with the inputs of the cycle at `t_ns` (the reasons for safe mode).
@@ -373,10 +384,15 @@ impl ControllerNode {
                 self.wheel_limits.max_speed_rad_s,
             )
         };
-        let command = ActuatorCommand {
+        let mut command = ActuatorCommand {
             wheel_torque_nm,
             gimbal_rate_rad_s: Default::default(),
         };
+        // With thrusters: they alone damp the gyro's rate, the wheels are off (issue 14).
+        let thrust = self.task.thruster_rate_damping(fresh_gyro.as_ref());
+        if thrust.is_some() {
+            command.wheel_torque_nm = Vector3::zeros();
+        }
         let mut status = ControllerStatus {
             header: self.status_seq.header(t_ns, SampleHeader::VALID),
             torque_command: a3(&(-command.wheel_torque_nm)),
@@ -384,8 +400,12 @@ impl ControllerNode {
             loop_period_ns: period,
             ..ControllerStatus::default()
         };
-        status.set_mode(ControllerMode::Safe);
-        self.outputs(t_ns, status, &command)
+        status.set_mode(if thrust.is_some() {
+            ControllerMode::ThrusterRateDamping
+        } else {
+            ControllerMode::Safe
+        });
+        self.outputs(t_ns, status, &command, thrust.map(|t| t.command))
     }
 
     fn outputs(
@@ -393,6 +413,7 @@ impl ControllerNode {
         t_ns: u64,
         status: ControllerStatus,
         command: &ActuatorCommand,
+        thrust: Option<testbed_model::physics::ThrusterCommand>,
     ) -> ControlCycle {
         ControlCycle {
             status,
@@ -404,6 +425,10 @@ impl ControllerNode {
                 header: self.cmg_seq.header(t_ns, SampleHeader::VALID),
                 gimbal_rate: a4(&command.gimbal_rate_rad_s),
             },
+            thrusters: thrust.map(|t| ipc_types::ThrusterCommand {
+                header: self.thruster_seq.header(t_ns, SampleHeader::VALID),
+                on_time: t.on_time_s,
+            }),
         }
     }
 }

@@ -535,6 +535,21 @@ impl ThrusterLaw {
         self.config.usage
     }
 
+    /// Rate damping on the thrusters alone, whatever the configured use (the safe mode);
+    /// without a rate every valve stays shut.
+    pub fn damp(&mut self, rate_b_rad_s: Option<&Vector3<f64>>) -> ThrusterOutput {
+        let requested =
+            rate_b_rad_s.map_or_else(Vector3::zeros, |w| rate_damping_torque(&self.config, w));
+        let (command, expected) = self.modulator.modulate(&requested);
+        ThrusterOutput {
+            command,
+            requested_nm: requested,
+            expected_nm: expected,
+            disturbance_nm: Vector3::zeros(),
+            activity: ThrusterActivity::RateDamping,
+        }
+    }
+
     /// The thrusters' command for one period, from the body rate (rad/s, body axes) and the
     /// wheel speeds (rad/s). With momentum dumping the caller feeds `expected_nm` forward to the
     /// wheels; with rate damping the wheels are off.

@@ -151,6 +151,16 @@ impl ControllerTask {
         })
     }
 
+    /// Safe mode with thrusters: the thrusters alone damp `rate_b` (rad/s, body axes; `None`:
+    /// no rate known, valves shut). `None` without thruster control.
+    pub fn thruster_rate_damping(
+        &mut self,
+        rate_b: Option<&Vector3<f64>>,
+    ) -> Option<ThrusterOutput> {
+        let law = self.thrusters.as_mut()?;
+        Some(law.damp(rate_b))
+    }
+
     /// The thrusters' command for this tick (`None` without thruster control), given the body
     /// rate (rad/s, body axes) and telemetry, adjusting `output`: momentum dumping feeds the
     /// thrusters' expected torque forward to the wheels; rate damping turns the wheels off.
