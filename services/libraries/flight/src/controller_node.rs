@@ -525,6 +525,66 @@ mod tests {
     }
 
     #[test]
+    fn with_thrusters_safe_mode_damps_on_the_thrusters_alone_and_dumping_is_reported() {
+        use crate::thruster_control::ThrusterControlConfig;
+        use testbed_model::thruster_config::ThrusterConfig;
+        let mut model = ModelConfig::default();
+        model.thrusters = Some(ThrusterConfig::default());
+        let mut config = ControllerConfig::default();
+        config.thrusters = Some(ThrusterControlConfig::default());
+        let task = ControllerTask::new(&config, &model, Attitude::identity()).unwrap();
+        let mut node = ControllerNode::new(
+            task,
+            &config,
+            &model.wheels,
+            Schedule::from_model(&model).unwrap(),
+        );
+        // Wheels at 3500 rpm (0.58 Nms, past the 0.5 Nms dump threshold): a dump.
+        let speed = 3500.0 * std::f64::consts::PI / 30.0;
+        for k in 0..=5 {
+            node.on_estimate(&estimate(k));
+            telemetry(&mut node, k, speed);
+            let cycles = node.ready();
+            assert_eq!(cycles.len(), 1);
+            assert_eq!(cycles[0].status.mode(), Some(ControllerMode::MomentumDump));
+            let thrust = cycles[0].thrusters.expect("a thruster command every cycle");
+            // −k h on every axis: the − thrusters (1, 3, 5) fire, the + ones do not.
+            if k == 0 {
+                assert!(
+                    thrust.on_time[1] > 0.0 && thrust.on_time[3] > 0.0 && thrust.on_time[5] > 0.0
+                );
+            }
+            assert_eq!(
+                (thrust.on_time[0], thrust.on_time[2], thrust.on_time[4]),
+                (0.0, 0.0, 0.0)
+            );
+        }
+        // The estimator stops: safe mode damps the gyro's rate on the thrusters, wheels off.
+        let rate = [0.01, -0.02, 0.0];
+        for k in 6..=9 {
+            node.on_gyro(&GyroSample::new(header(k), rate));
+            telemetry(&mut node, k, speed);
+            for cycle in node.ready() {
+                assert_eq!(
+                    cycle.status.mode(),
+                    Some(ControllerMode::ThrusterRateDamping)
+                );
+                assert_eq!(cycle.wheels.torque, [0.0; 3]);
+                let thrust = cycle.thrusters.expect("thrusters in safe mode");
+                // −K w: the − X thruster (1) and the + Y thruster (2), nothing about Z.
+                assert!(
+                    thrust.on_time[1] > 0.0 && thrust.on_time[2] > 0.0,
+                    "{thrust:?}"
+                );
+                assert_eq!(
+                    thrust.on_time[0] + thrust.on_time[3] + thrust.on_time[4] + thrust.on_time[5],
+                    0.0
+                );
+            }
+        }
+    }
+
+    #[test]
     fn a_wheel_near_its_limit_enters_safe_mode_and_is_not_driven_further() {
         let mut node = node();
         let limit = 6000.0 * std::f64::consts::PI / 30.0;
