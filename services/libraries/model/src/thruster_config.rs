@@ -184,7 +184,7 @@ impl ThrusterConfig {
             }
             let d = self.direction[i];
             let norm = Vector3::from(d).norm();
-            if !((norm - 1.0).abs() < 1e-6) {
+            if !norm.is_finite() || (norm - 1.0).abs() >= 1e-6 {
                 return fail(
                     &format!("direction[{i}]"),
                     format!("{d:?}"),
