@@ -528,10 +528,14 @@ mod tests {
     fn with_thrusters_safe_mode_damps_on_the_thrusters_alone_and_dumping_is_reported() {
         use crate::thruster_control::ThrusterControlConfig;
         use testbed_model::thruster_config::ThrusterConfig;
-        let mut model = ModelConfig::default();
-        model.thrusters = Some(ThrusterConfig::default());
-        let mut config = ControllerConfig::default();
-        config.thrusters = Some(ThrusterControlConfig::default());
+        let model = ModelConfig {
+            thrusters: Some(ThrusterConfig::default()),
+            ..ModelConfig::default()
+        };
+        let config = ControllerConfig {
+            thrusters: Some(ThrusterControlConfig::default()),
+            ..ControllerConfig::default()
+        };
         let task = ControllerTask::new(&config, &model, Attitude::identity()).unwrap();
         let mut node = ControllerNode::new(
             task,

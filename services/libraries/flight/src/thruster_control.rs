@@ -371,11 +371,13 @@ mod tests {
     fn the_modulated_pulses_deliver_the_expected_impulse_in_the_valve_model() {
         use testbed_model::ModelConfig;
         use testbed_model::physics::ThrusterBank;
-        let mut model = ModelConfig::default();
-        model.thrusters = Some(ThrusterConfig {
-            thrust_noise_fraction: 0.0,
-            ..ThrusterConfig::default()
-        });
+        let model = ModelConfig {
+            thrusters: Some(ThrusterConfig {
+                thrust_noise_fraction: 0.0,
+                ..ThrusterConfig::default()
+            }),
+            ..ModelConfig::default()
+        };
         let t = model.thrusters.clone().unwrap();
         let mut bank = ThrusterBank::from_config(&model).unwrap();
         let mut m = PulseModulator::new(&t, 0.1).unwrap();

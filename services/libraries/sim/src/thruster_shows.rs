@@ -47,8 +47,10 @@ pub fn momentum_dumping_scenario(thrusters: bool, duration_s: f64, seed: u64) ->
 /// Rate damping show: the platform level, turning at `rate_deg_s` (°/s, body axes), the
 /// thrusters alone damp it (wheels off).
 pub fn rate_damping_scenario(rate_deg_s: [f64; 3], duration_s: f64, seed: u64) -> Scenario {
-    let mut model = ModelConfig::default();
-    model.thrusters = Some(ThrusterConfig::default());
+    let model = ModelConfig {
+        thrusters: Some(ThrusterConfig::default()),
+        ..ModelConfig::default()
+    };
     let mut scenario = Scenario::paper_stabilisation(model, seed);
     scenario.manoeuvre = Manoeuvre {
         initial_heading_deg: 0.0,

@@ -286,11 +286,13 @@ mod tests {
     use super::*;
 
     fn quiet() -> ModelConfig {
-        let mut config = ModelConfig::default();
-        config.thrusters = Some(ThrusterConfig {
-            thrust_noise_fraction: 0.0,
-            ..ThrusterConfig::default()
-        });
+        let config = ModelConfig {
+            thrusters: Some(ThrusterConfig {
+                thrust_noise_fraction: 0.0,
+                ..ThrusterConfig::default()
+            }),
+            ..ModelConfig::default()
+        };
         config
     }
 
@@ -394,8 +396,10 @@ mod tests {
         // 400 pulses of 50 ms with 2 % pulse noise: the mean impulse is nominal within 4 standard
         // errors (σ/√n = 0.1 %; a fixed seed, so the test is deterministic; 4σ leaves it far
         // from flaky for any seed).
-        let mut config = ModelConfig::default();
-        config.thrusters = Some(ThrusterConfig::default());
+        let config = ModelConfig {
+            thrusters: Some(ThrusterConfig::default()),
+            ..ModelConfig::default()
+        };
         let t = config.thrusters.clone().unwrap();
         let mut c = ThrusterCommand::default();
         c.on_time_s[1] = 0.05;
