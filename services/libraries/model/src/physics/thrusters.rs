@@ -286,14 +286,13 @@ mod tests {
     use super::*;
 
     fn quiet() -> ModelConfig {
-        let config = ModelConfig {
+        ModelConfig {
             thrusters: Some(ThrusterConfig {
                 thrust_noise_fraction: 0.0,
                 ..ThrusterConfig::default()
             }),
             ..ModelConfig::default()
-        };
-        config
+        }
     }
 
     /// Steps a bank as the plant does: one command per period, integration split at every valve
