@@ -249,14 +249,18 @@ mod tests {
         c.direction[3] = [0.0, 0.0, 2.0];
         let e = c.validate().unwrap_err().to_string();
         assert!(e.contains("thrusters.direction[3]"), "{e}");
-        let mut c = ThrusterConfig::default();
-        c.thrust_n = f64::NAN;
+        let c = ThrusterConfig {
+            thrust_n: f64::NAN,
+            ..ThrusterConfig::default()
+        };
         assert!(c.validate().unwrap_err().to_string().contains("thrust_n"));
-        let mut c = ThrusterConfig::default();
-        c.stuck_open = Some(StuckOpenValve {
-            thruster: 6,
-            from_s: 0.0,
-        });
+        let c = ThrusterConfig {
+            stuck_open: Some(StuckOpenValve {
+                thruster: 6,
+                from_s: 0.0,
+            }),
+            ..ThrusterConfig::default()
+        };
         assert!(
             c.validate()
                 .unwrap_err()

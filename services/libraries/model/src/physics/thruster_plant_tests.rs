@@ -89,8 +89,9 @@ fn without_the_thrusters_table_commands_do_nothing() {
     let mut c = config();
     c.thrusters = None;
     let mut plant = Plant::new(&c, PlatformState::default()).unwrap();
-    let mut cmd = ThrusterCommand::default();
-    cmd.on_time_s = [0.1; 6];
+    let cmd = ThrusterCommand {
+        on_time_s: [0.1; 6],
+    };
     plant.command_thrusters(&cmd).unwrap();
     plant.step(&ActuatorCommand::default(), 0.1).unwrap();
     assert!(plant.thrusters().is_none());
