@@ -5,6 +5,7 @@ use crate::convert::{Sequence, a3, a4, quaternion_from_array, seconds, v3, v4};
 use crate::safe_mode::{SafeMode, SafeReason, SafeReasons, SafeTransition, safe_wheel_torque};
 use crate::schedule::Schedule;
 use crate::tasks::{ActuatorTelemetry, Actuators, ControllerConfig, ControllerTask};
+use crate::thruster_control::ThrusterActivity;
 use ipc_types::{
     AttitudeEstimate, CmgCommand, CmgTelemetry, ControllerMode, ControllerStatus, GyroSample,
     SampleHeader, WheelCommand, WheelTelemetry,
@@ -31,6 +32,8 @@ pub struct ControlCycle {
     pub status: ControllerStatus,
     pub wheels: WheelCommand,
     pub cmg: CmgCommand,
+    /// Valve on-times for the next period (`None` without thruster control; issue 14).
+    pub thrusters: Option<ipc_types::ThrusterCommand>,
 }
 
 /// Newest sample times of the controller's inputs (run clock, ns): what tells a lost input.
@@ -83,6 +86,7 @@ pub struct ControllerNode {
     status_seq: Sequence,
     wheel_seq: Sequence,
     cmg_seq: Sequence,
+    thruster_seq: Sequence,
     inputs: InputTimes,
     first_input_ns: Option<u64>,
     /// The latest gyro sample: time (ns) and body rate (rad/s), for rate damping in safe mode.
@@ -112,6 +116,7 @@ impl ControllerNode {
             status_seq: Sequence::default(),
             wheel_seq: Sequence::default(),
             cmg_seq: Sequence::default(),
+            thruster_seq: Sequence::default(),
             inputs: InputTimes::default(),
             first_input_ns: None,
             gyro: None,
@@ -262,12 +267,18 @@ impl ControllerNode {
         if self.safe.is_active() {
             return self.safe_cycle(t_ns, period, &telemetry);
         }
+        let mut thrust = None;
         let (command, error, mode, saturated) = match attitude {
             Some((q, rate)) => match self.task.command(seconds(t_ns), &q, &rate, &telemetry) {
-                Ok(o) => {
-                    let mode = match self.actuators {
-                        Actuators::Wheels => ControllerMode::WheelPointing,
-                        Actuators::Cmg => ControllerMode::CmgSlew,
+                Ok(mut o) => {
+                    thrust = self.task.thrusters(&rate, &telemetry, &mut o);
+                    let mode = match (self.actuators, thrust.map(|t| t.activity)) {
+                        (_, Some(ThrusterActivity::Dumping)) => ControllerMode::MomentumDump,
+                        (_, Some(ThrusterActivity::RateDamping)) => {
+                            ControllerMode::ThrusterRateDamping
+                        }
+                        (Actuators::Wheels, _) => ControllerMode::WheelPointing,
+                        (Actuators::Cmg, _) => ControllerMode::CmgSlew,
                     };
                     (o.command, o.error_rad, mode, o.saturated)
                 }
@@ -310,7 +321,7 @@ impl ControllerNode {
             ..ControllerStatus::default()
         };
         status.set_mode(mode);
-        self.outputs(t_ns, status, &command)
+        self.outputs(t_ns, status, &command, thrust.map(|t| t.command))
     }
 
     /// What is wrong with the inputs of the cycle at `t_ns` (the reasons for safe mode).
@@ -373,10 +384,15 @@ impl ControllerNode {
                 self.wheel_limits.max_speed_rad_s,
             )
         };
-        let command = ActuatorCommand {
+        let mut command = ActuatorCommand {
             wheel_torque_nm,
             gimbal_rate_rad_s: Default::default(),
         };
+        // With thrusters: they alone damp the gyro's rate, the wheels are off (issue 14).
+        let thrust = self.task.thruster_rate_damping(fresh_gyro.as_ref());
+        if thrust.is_some() {
+            command.wheel_torque_nm = Vector3::zeros();
+        }
         let mut status = ControllerStatus {
             header: self.status_seq.header(t_ns, SampleHeader::VALID),
             torque_command: a3(&(-command.wheel_torque_nm)),
@@ -384,8 +400,12 @@ impl ControllerNode {
             loop_period_ns: period,
             ..ControllerStatus::default()
         };
-        status.set_mode(ControllerMode::Safe);
-        self.outputs(t_ns, status, &command)
+        status.set_mode(if thrust.is_some() {
+            ControllerMode::ThrusterRateDamping
+        } else {
+            ControllerMode::Safe
+        });
+        self.outputs(t_ns, status, &command, thrust.map(|t| t.command))
     }
 
     fn outputs(
@@ -393,6 +413,7 @@ impl ControllerNode {
         t_ns: u64,
         status: ControllerStatus,
         command: &ActuatorCommand,
+        thrust: Option<testbed_model::physics::ThrusterCommand>,
     ) -> ControlCycle {
         ControlCycle {
             status,
@@ -404,6 +425,10 @@ impl ControllerNode {
                 header: self.cmg_seq.header(t_ns, SampleHeader::VALID),
                 gimbal_rate: a4(&command.gimbal_rate_rad_s),
             },
+            thrusters: thrust.map(|t| ipc_types::ThrusterCommand {
+                header: self.thruster_seq.header(t_ns, SampleHeader::VALID),
+                on_time: t.on_time_s,
+            }),
         }
     }
 }
@@ -497,6 +522,70 @@ mod tests {
             }
         }
         assert_eq!(left_at, Some(60), "healthy from tick 10, left 5 s later");
+    }
+
+    #[test]
+    fn with_thrusters_safe_mode_damps_on_the_thrusters_alone_and_dumping_is_reported() {
+        use crate::thruster_control::ThrusterControlConfig;
+        use testbed_model::thruster_config::ThrusterConfig;
+        let model = ModelConfig {
+            thrusters: Some(ThrusterConfig::default()),
+            ..ModelConfig::default()
+        };
+        let config = ControllerConfig {
+            thrusters: Some(ThrusterControlConfig::default()),
+            ..ControllerConfig::default()
+        };
+        let task = ControllerTask::new(&config, &model, Attitude::identity()).unwrap();
+        let mut node = ControllerNode::new(
+            task,
+            &config,
+            &model.wheels,
+            Schedule::from_model(&model).unwrap(),
+        );
+        // Wheels at 3500 rpm (0.58 Nms, past the 0.5 Nms dump threshold): a dump.
+        let speed = 3500.0 * std::f64::consts::PI / 30.0;
+        for k in 0..=5 {
+            node.on_estimate(&estimate(k));
+            telemetry(&mut node, k, speed);
+            let cycles = node.ready();
+            assert_eq!(cycles.len(), 1);
+            assert_eq!(cycles[0].status.mode(), Some(ControllerMode::MomentumDump));
+            let thrust = cycles[0].thrusters.expect("a thruster command every cycle");
+            // −k h on every axis: the − thrusters (1, 3, 5) fire, the + ones do not.
+            if k == 0 {
+                assert!(
+                    thrust.on_time[1] > 0.0 && thrust.on_time[3] > 0.0 && thrust.on_time[5] > 0.0
+                );
+            }
+            assert_eq!(
+                (thrust.on_time[0], thrust.on_time[2], thrust.on_time[4]),
+                (0.0, 0.0, 0.0)
+            );
+        }
+        // The estimator stops: safe mode damps the gyro's rate on the thrusters, wheels off.
+        let rate = [0.01, -0.02, 0.0];
+        for k in 6..=9 {
+            node.on_gyro(&GyroSample::new(header(k), rate));
+            telemetry(&mut node, k, speed);
+            for cycle in node.ready() {
+                assert_eq!(
+                    cycle.status.mode(),
+                    Some(ControllerMode::ThrusterRateDamping)
+                );
+                assert_eq!(cycle.wheels.torque, [0.0; 3]);
+                let thrust = cycle.thrusters.expect("thrusters in safe mode");
+                // −K w: the − X thruster (1) and the + Y thruster (2), nothing about Z.
+                assert!(
+                    thrust.on_time[1] > 0.0 && thrust.on_time[2] > 0.0,
+                    "{thrust:?}"
+                );
+                assert_eq!(
+                    thrust.on_time[0] + thrust.on_time[3] + thrust.on_time[4] + thrust.on_time[5],
+                    0.0
+                );
+            }
+        }
     }
 
     #[test]

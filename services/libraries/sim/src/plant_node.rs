@@ -32,6 +32,8 @@ pub struct PlantNode {
     last_tick: u64,
     wheel: Option<WheelCommand>,
     cmg: Option<CmgCommand>,
+    /// The thruster command answering the current tick, if any (issue 14).
+    thrusters: Option<ipc_types::ThrusterCommand>,
     held: ActuatorCommand,
     /// Ticks in a row without both commands.
     unanswered: u64,
@@ -56,6 +58,7 @@ impl PlantNode {
             tick: 0,
             wheel: None,
             cmg: None,
+            thrusters: None,
             held: ActuatorCommand::default(),
             unanswered: 0,
             // Whole periods in the timeout, within the clock's tolerance (0.2 s / 0.1 s is 2).
@@ -125,6 +128,13 @@ impl PlantNode {
         }
     }
 
+    /// A thruster command; kept if it answers the current tick (valves shut otherwise).
+    pub fn on_thruster_command(&mut self, c: &ipc_types::ThrusterCommand) {
+        if c.header.time_ns == self.time_ns() {
+            self.thrusters = Some(*c);
+        }
+    }
+
     /// Both commands for the current tick have arrived.
     pub fn answered(&self) -> bool {
         self.wheel.is_some() && self.cmg.is_some()
@@ -170,6 +180,12 @@ impl PlantNode {
         };
         command.gimbal_rate_rad_s = self.stepper.command(&command.gimbal_rate_rad_s).rate_rad_s;
         self.held = command.clone();
+        if let Some(c) = self.thrusters.take() {
+            self.plant
+                .command_thrusters(&testbed_model::physics::ThrusterCommand {
+                    on_time_s: c.on_time,
+                })?;
+        }
         let report = self.plant.step(&command, self.schedule.period_s())?;
         if let Some(event) = &report.tilt_stop {
             self.tilt_stop |= 1 << event.axis.index();

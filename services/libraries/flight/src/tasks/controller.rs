@@ -6,6 +6,7 @@
 use crate::cmg_steering::{CmgSteering, CmgSteeringConfig, SlewConfig, SlewController};
 use crate::control::{ControlError, WheelControlConfig, WheelController};
 use crate::safe_mode::SafeModeConfig;
+use crate::thruster_control::{ThrusterControlConfig, ThrusterLaw, ThrusterOutput, ThrusterUse};
 use nalgebra::{Vector3, Vector4};
 use serde::{Deserialize, Serialize};
 use testbed_model::ModelConfig;
@@ -32,6 +33,9 @@ pub struct ControllerConfig {
     pub steering: CmgSteeringConfig,
     /// When the controller stops trusting its inputs and what it commands then.
     pub safe_mode: SafeModeConfig,
+    /// Thruster control (issue 14); off unless present (needs the model's `[thrusters]`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub thrusters: Option<ThrusterControlConfig>,
 }
 
 impl Default for ControllerConfig {
@@ -42,6 +46,7 @@ impl Default for ControllerConfig {
             slew: SlewConfig::default(),
             steering: CmgSteeringConfig::default(),
             safe_mode: SafeModeConfig::default(),
+            thrusters: None,
         }
     }
 }
@@ -79,6 +84,8 @@ enum Law {
 pub struct ControllerTask {
     law: Law,
     target: Attitude,
+    thrusters: Option<ThrusterLaw>,
+    max_wheel_torque_nm: f64,
 }
 
 impl ControllerTask {
@@ -107,7 +114,74 @@ impl ControllerTask {
                 }
             }
         };
-        Ok(Self { law, target })
+        let thrusters = match (&config.thrusters, &model.thrusters) {
+            (None, _) => None,
+            (Some(c), Some(t)) => {
+                // The nominal inertia: the flight software never knows the true one.
+                let inertia =
+                    model
+                        .platform
+                        .inertia()
+                        .ok_or_else(|| ControlError::InvalidConfig {
+                            key: "platform.inertia_kgm2".into(),
+                            value: format!("{:?}", model.platform.inertia_kgm2),
+                            reason: "must be symmetric positive definite".into(),
+                        })?;
+                Some(ThrusterLaw::new(
+                    c,
+                    t,
+                    &model.wheels,
+                    &inertia,
+                    model.gyro.period_s(),
+                )?)
+            }
+            (Some(_), None) => {
+                return Err(ControlError::InvalidConfig {
+                    key: "controller.thrusters".into(),
+                    value: "present".into(),
+                    reason: "the model has no [thrusters]".into(),
+                });
+            }
+        };
+        Ok(Self {
+            law,
+            target,
+            thrusters,
+            max_wheel_torque_nm: model.wheels.max_torque_nm,
+        })
+    }
+
+    /// Safe mode with thrusters: the thrusters alone damp `rate_b` (rad/s, body axes; `None`:
+    /// no rate known, valves shut). `None` without thruster control.
+    pub fn thruster_rate_damping(
+        &mut self,
+        rate_b: Option<&Vector3<f64>>,
+    ) -> Option<ThrusterOutput> {
+        let law = self.thrusters.as_mut()?;
+        Some(law.damp(rate_b))
+    }
+
+    /// The thrusters' command for this tick (`None` without thruster control), given the body
+    /// rate (rad/s, body axes) and telemetry, adjusting `output`: momentum dumping feeds the
+    /// thrusters' expected torque forward to the wheels; rate damping turns the wheels off.
+    pub fn thrusters(
+        &mut self,
+        rate_b: &Vector3<f64>,
+        telemetry: &ActuatorTelemetry,
+        output: &mut ControlOutput,
+    ) -> Option<ThrusterOutput> {
+        let law = self.thrusters.as_mut()?;
+        let out = law.step(rate_b, &telemetry.wheel_speed_rad_s);
+        let t = self.max_wheel_torque_nm;
+        match law.usage() {
+            ThrusterUse::MomentumDumping => {
+                output.command.wheel_torque_nm =
+                    (output.command.wheel_torque_nm + out.expected_nm + out.disturbance_nm)
+                        .map(|x| x.clamp(-t, t));
+            }
+            ThrusterUse::RateDamping => output.command.wheel_torque_nm = Vector3::zeros(),
+        }
+        Some(out)
     }
 
     pub fn target(&self) -> &Attitude {
