@@ -36,6 +36,8 @@ pub struct ControllerProcess {
     period: Duration,
     /// The estimate's attachment (its missed deadlines are missed control cycles).
     estimate_source: Option<SourceId>,
+    /// Deadlines missed in a row with no input at all (paced runs).
+    silent_deadlines: u64,
 }
 
 impl ControllerProcess {
@@ -62,6 +64,7 @@ impl ControllerProcess {
                 deadline,
                 period,
                 estimate_source: None,
+                silent_deadlines: 0,
             },
             ports,
         ))
@@ -86,9 +89,9 @@ impl Node for ControllerProcess {
 
     fn on_wake(&mut self, ports: &ControllerPorts, wake: Wake, io: &Io) -> anyhow::Result<Flow> {
         let node = &mut self.node;
-        if let Wake::DeadlineMissed(source) = wake
-            && Some(source) == self.estimate_source
-        {
+        let deadline_missed =
+            matches!(wake, Wake::DeadlineMissed(source) if Some(source) == self.estimate_source);
+        if deadline_missed {
             node.count_deadline_miss();
             tracing::warn!(
                 misses = node.deadline_misses(),
@@ -100,7 +103,17 @@ impl Node for ControllerProcess {
             + ports.cmg.drain(|t| node.on_cmg_telemetry(&t))?
             + ports.gyro.drain(|g| node.on_gyro(&g))?;
         io.heartbeat.add_samples_in(received as u64);
-        for cycle in node.ready() {
+        self.silent_deadlines = match (received, deadline_missed) {
+            (0, true) => self.silent_deadlines + 1,
+            (0, false) => self.silent_deadlines,
+            _ => 0,
+        };
+        let silence = if deadline_missed {
+            node.on_silence(self.silent_deadlines)
+        } else {
+            None
+        };
+        for cycle in node.ready().into_iter().chain(silence) {
             io.heartbeat.set_time_ns(cycle.status.header.time_ns);
             ports.status.publish(&cycle.status)?;
             ports.wheel_command.publish(&cycle.wheels)?;

@@ -360,6 +360,35 @@ impl ControllerNode {
             .with(SafeReason::WheelSpeedLimit, wheels_fast)
     }
 
+    /// Every input has gone silent past the control deadline (a paced run's wall-clock deadline:
+    /// a CAN link down, a dead estimator and gateways). The data-driven checks of [`Self::ready`]
+    /// need a sample to notice anything, so the silence itself enters safe mode: once two
+    /// periods have passed since the last cycle, the tick after it runs as a safe cycle, with
+    /// the estimate and the actuators' telemetry counted lost (no wheel torque, gimbals held).
+    /// `missed` is how many deadlines have passed in a row. None before the first cycle.
+    pub fn on_silence(&mut self, missed: u64) -> Option<ControlCycle> {
+        let last = self.last_cycle_ns?;
+        if missed < LOST_AFTER_PERIODS {
+            return None;
+        }
+        let t_ns = last + self.period_ns;
+        let period = self.period_ns;
+        self.last_cycle_ns = Some(t_ns);
+        self.pending.retain(|&t, _| t > t_ns);
+        let wrong = SafeReasons::NONE
+            .with(SafeReason::EstimateLost, true)
+            .with(SafeReason::WheelTelemetryLost, true)
+            .with(SafeReason::CmgTelemetryLost, true);
+        if let Some(transition) = self.safe.update(t_ns, wrong) {
+            self.transitions.push((t_ns, transition));
+        }
+        let unknown = ActuatorTelemetry {
+            wheel_speed_rad_s: Vector3::zeros(),
+            gimbal_rad: Default::default(),
+        };
+        Some(self.safe_cycle(t_ns, period, &unknown))
+    }
+
     /// A safe-mode cycle: safe wheel torque, gimbals held.
     fn safe_cycle(
         &mut self,
@@ -522,6 +551,59 @@ mod tests {
             }
         }
         assert_eq!(left_at, Some(60), "healthy from tick 10, left 5 s later");
+    }
+
+    /// A CAN link down silences every input: the deadlines alone enter safe mode, at the
+    /// second silent deadline, with zero wheel torque (speeds unknown) and gimbals held; data
+    /// again leave it after recovery_s.
+    #[test]
+    fn total_silence_enters_safe_mode_at_the_second_missed_deadline_with_zero_torque() {
+        let mut node = node();
+        assert!(
+            node.on_silence(5).is_none(),
+            "no cycle yet: nothing to hold"
+        );
+        for k in 0..=5 {
+            node.on_estimate(&estimate(k));
+            telemetry(&mut node, k, 10.0);
+            node.on_gyro(&GyroSample::new(header(k), [0.01, 0.0, 0.0]));
+            assert_eq!(node.ready().len(), 1);
+        }
+        assert!(
+            node.on_silence(1).is_none(),
+            "one missed deadline is not yet a loss"
+        );
+        let cycle = node
+            .on_silence(2)
+            .expect("a safe cycle at the second missed deadline");
+        assert_eq!(cycle.status.header.time_ns, 6 * TICK_NS);
+        assert_eq!(cycle.status.mode(), Some(ControllerMode::Safe));
+        assert_eq!(
+            cycle.wheels.torque, [0.0; 3],
+            "wheel speeds unknown: no torque"
+        );
+        assert_eq!(cycle.cmg.gimbal_rate, [0.0; 4], "gimbals held");
+        let next = node
+            .on_silence(3)
+            .expect("one safe cycle per further deadline");
+        assert_eq!(next.status.header.time_ns, 7 * TICK_NS);
+        let transitions = node.take_transitions();
+        assert!(matches!(
+            transitions.as_slice(),
+            [(t, SafeTransition::Entered(r))] if *t == 6 * TICK_NS
+                && r.contains(SafeReason::EstimateLost)
+                && r.contains(SafeReason::WheelTelemetryLost)
+        ));
+        let mut left_at = None;
+        for k in 9..=80 {
+            node.on_estimate(&estimate(k));
+            telemetry(&mut node, k, 10.0);
+            node.ready();
+            if let Some((t, SafeTransition::Left)) = node.take_transitions().first() {
+                left_at = Some(t / TICK_NS);
+            }
+        }
+        assert_eq!(left_at, Some(59), "healthy from tick 9, left 5 s later");
     }
 
     #[test]
