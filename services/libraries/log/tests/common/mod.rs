@@ -4,9 +4,9 @@
 
 use ipc_types::{
     AppliedCmgCommand, AppliedWheelCommand, AttitudeEstimate, CanBusFrame, CanLinkStatus,
-    CmgCommand, CmgTelemetry, ControllerMode, ControllerStatus, GyroSample, Heartbeat,
-    InclinometerSample, MagnetometerSample, ProcessState, SampleHeader, SimClockTick, SimTruth,
-    WheelCommand, WheelTelemetry,
+    CmgCommand, CmgTelemetry, ControllerMode, ControllerStatus, GyroSample, HealthEvent,
+    HealthEventKind, Heartbeat, InclinometerSample, MagnetometerSample, ProcessState, SampleHeader,
+    SimClockTick, SimTruth, WheelCommand, WheelTelemetry,
 };
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -172,6 +172,19 @@ pub fn tick_records(k: u64, rng: &mut Rng) -> Vec<LogRecord> {
             hb.samples_out = k;
             out.push(hb.into());
         }
+    }
+    if matches!(k % 20, 5) {
+        out.push(
+            HealthEvent::new(
+                SampleHeader::new(t, k / 20, SampleHeader::VALID),
+                "controller",
+                "testbed/gnc/attitude_estimate",
+                HealthEventKind::InputLost,
+                0,
+                0.2,
+            )
+            .into(),
+        );
     }
     out
 }
