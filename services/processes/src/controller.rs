@@ -38,6 +38,8 @@ pub struct ControllerProcess {
     estimate_source: Option<SourceId>,
     /// Deadlines missed in a row with no input at all (paced runs).
     silent_deadlines: u64,
+    /// The run's end (`run.duration_s`), ns: silence from then on is the run ending.
+    run_end_ns: u64,
 }
 
 impl ControllerProcess {
@@ -65,6 +67,7 @@ impl ControllerProcess {
                 period,
                 estimate_source: None,
                 silent_deadlines: 0,
+                run_end_ns: (config.run.duration_s * 1e9) as u64,
             },
             ports,
         ))
@@ -109,7 +112,7 @@ impl Node for ControllerProcess {
             _ => 0,
         };
         let silence = if deadline_missed {
-            node.on_silence(self.silent_deadlines)
+            node.on_silence(self.silent_deadlines, self.run_end_ns)
         } else {
             None
         };

@@ -365,13 +365,14 @@ impl ControllerNode {
     /// need a sample to notice anything, so the silence itself enters safe mode: once two
     /// periods have passed since the last cycle, the tick after it runs as a safe cycle, with
     /// the estimate and the actuators' telemetry counted lost (no wheel torque, gimbals held).
-    /// `missed` is how many deadlines have passed in a row. None before the first cycle.
-    pub fn on_silence(&mut self, missed: u64) -> Option<ControlCycle> {
+    /// `missed` is how many deadlines have passed in a row. None before the first cycle, and
+    /// from `run_end_ns` on (the run's end silences every input; that is no fault).
+    pub fn on_silence(&mut self, missed: u64, run_end_ns: u64) -> Option<ControlCycle> {
         let last = self.last_cycle_ns?;
-        if missed < LOST_AFTER_PERIODS {
+        let t_ns = last + self.period_ns;
+        if missed < LOST_AFTER_PERIODS || t_ns >= run_end_ns {
             return None;
         }
-        let t_ns = last + self.period_ns;
         let period = self.period_ns;
         self.last_cycle_ns = Some(t_ns);
         self.pending.retain(|&t, _| t > t_ns);
@@ -560,7 +561,7 @@ mod tests {
     fn total_silence_enters_safe_mode_at_the_second_missed_deadline_with_zero_torque() {
         let mut node = node();
         assert!(
-            node.on_silence(5).is_none(),
+            node.on_silence(5, u64::MAX).is_none(),
             "no cycle yet: nothing to hold"
         );
         for k in 0..=5 {
@@ -570,11 +571,11 @@ mod tests {
             assert_eq!(node.ready().len(), 1);
         }
         assert!(
-            node.on_silence(1).is_none(),
+            node.on_silence(1, u64::MAX).is_none(),
             "one missed deadline is not yet a loss"
         );
         let cycle = node
-            .on_silence(2)
+            .on_silence(2, u64::MAX)
             .expect("a safe cycle at the second missed deadline");
         assert_eq!(cycle.status.header.time_ns, 6 * TICK_NS);
         assert_eq!(cycle.status.mode(), Some(ControllerMode::Safe));
@@ -583,8 +584,12 @@ mod tests {
             "wheel speeds unknown: no torque"
         );
         assert_eq!(cycle.cmg.gimbal_rate, [0.0; 4], "gimbals held");
+        assert!(
+            node.on_silence(3, 7 * TICK_NS).is_none(),
+            "the run's end silences everything: no fault"
+        );
         let next = node
-            .on_silence(3)
+            .on_silence(3, u64::MAX)
             .expect("one safe cycle per further deadline");
         assert_eq!(next.status.header.time_ns, 7 * TICK_NS);
         let transitions = node.take_transitions();
