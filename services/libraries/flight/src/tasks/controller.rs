@@ -7,7 +7,7 @@ use crate::cmg_steering::{CmgSteering, CmgSteeringConfig, SlewConfig, SlewContro
 use crate::control::{ControlError, WheelControlConfig, WheelController};
 use crate::safe_mode::SafeModeConfig;
 use crate::thruster_control::{ThrusterControlConfig, ThrusterLaw, ThrusterOutput, ThrusterUse};
-use nalgebra::{Vector3, Vector4};
+use nalgebra::{Matrix3, Vector3, Vector4};
 use serde::{Deserialize, Serialize};
 use testbed_model::ModelConfig;
 use testbed_model::attitude::Attitude;
@@ -98,16 +98,7 @@ impl ControllerTask {
         let law = match config.actuators {
             Actuators::Wheels => Law::Wheels(WheelController::new(&config.wheels, &model.wheels)?),
             Actuators::Cmg => {
-                // The controller knows the nominal inertia, never the plant's true one.
-                let inertia =
-                    model
-                        .platform
-                        .inertia()
-                        .ok_or_else(|| ControlError::InvalidConfig {
-                            key: "platform.inertia_kgm2".into(),
-                            value: format!("{:?}", model.platform.inertia_kgm2),
-                            reason: "must be symmetric positive definite".into(),
-                        })?;
+                let inertia = nominal_inertia(model)?;
                 Law::Cmg {
                     slew: SlewController::new(&config.slew, inertia)?,
                     steering: CmgSteering::new(&config.steering, &model.cmg)?,
@@ -117,16 +108,7 @@ impl ControllerTask {
         let thrusters = match (&config.thrusters, &model.thrusters) {
             (None, _) => None,
             (Some(c), Some(t)) => {
-                // The nominal inertia: the flight software never knows the true one.
-                let inertia =
-                    model
-                        .platform
-                        .inertia()
-                        .ok_or_else(|| ControlError::InvalidConfig {
-                            key: "platform.inertia_kgm2".into(),
-                            value: format!("{:?}", model.platform.inertia_kgm2),
-                            reason: "must be symmetric positive definite".into(),
-                        })?;
+                let inertia = nominal_inertia(model)?;
                 Some(ThrusterLaw::new(
                     c,
                     t,
@@ -233,4 +215,17 @@ impl ControllerTask {
             }
         }
     }
+}
+
+/// The platform's nominal inertia, kg m² (body frame): the flight software knows it, never the
+/// plant's true one.
+fn nominal_inertia(model: &ModelConfig) -> Result<Matrix3<f64>, ControlError> {
+    model
+        .platform
+        .inertia()
+        .ok_or_else(|| ControlError::InvalidConfig {
+            key: "platform.inertia_kgm2".into(),
+            value: format!("{:?}", model.platform.inertia_kgm2),
+            reason: "must be symmetric positive definite".into(),
+        })
 }
