@@ -114,6 +114,25 @@ mod tests {
         }
     }
 
+    /// Asserts the pipeline's estimate `sample` has the in-process loop's attitude at `tick`
+    /// (bit for bit) and returns the loop's estimate.
+    fn same_attitude<'a>(
+        sample: &AttitudeEstimate,
+        tick: &'a closed_loop::TickRecord,
+    ) -> &'a closed_loop::EstimateRecord {
+        let expected = tick
+            .estimate
+            .as_ref()
+            .expect("estimator initialised at t = 0");
+        assert_eq!(
+            quaternion_from_array(&sample.quaternion).unwrap(),
+            expected.attitude,
+            "t = {}",
+            tick.t_s
+        );
+        expected
+    }
+
     #[test]
     fn the_process_split_computes_exactly_what_the_in_process_loop_computes() {
         let config = config();
@@ -121,16 +140,7 @@ mod tests {
         let trace = closed_loop::run(&closed_loop::Scenario::from_run(&config)).unwrap();
         assert_eq!(pipeline.estimates.len(), trace.ticks.len());
         for (sample, tick) in pipeline.estimates.iter().zip(&trace.ticks) {
-            let expected = tick
-                .estimate
-                .as_ref()
-                .expect("estimator initialised at t = 0");
-            assert_eq!(
-                quaternion_from_array(&sample.quaternion).unwrap(),
-                expected.attitude,
-                "t = {}",
-                tick.t_s
-            );
+            let expected = same_attitude(sample, tick);
             assert_eq!(
                 sample.gyro_bias,
                 [
@@ -168,16 +178,7 @@ mod tests {
             .zip(&pipeline.truths)
             .zip(&trace.ticks)
         {
-            let expected = tick
-                .estimate
-                .as_ref()
-                .expect("estimator initialised at t = 0");
-            assert_eq!(
-                quaternion_from_array(&sample.quaternion).unwrap(),
-                expected.attitude,
-                "t = {}",
-                tick.t_s
-            );
+            same_attitude(sample, tick);
             assert_eq!(
                 truth.wheel_speed,
                 [
