@@ -375,8 +375,8 @@ fn garbage_link_flaps_and_a_flood_on_vcan0_are_counted_and_survived() {
     // The controller's safe state: a flap silences the sensors and the actuators' telemetry, so
     // the controller is in safe mode (wheels at zero torque or rate damping, gimbals held)
     // within 2 s of every reported link loss (detection takes two control periods), and once the
-    // link is back for good it leaves safe mode after `recovery_s` (5 s) of healthy inputs: the
-    // run ends out of safe mode (8 s are left after the last flap before the flood).
+    // link is back for good it leaves safe mode after `recovery_s` (5 s) of healthy inputs (8 s
+    // are left after the last flap before the flood).
     let health = &summary["health"];
     let safe_events: Vec<(String, f64)> = health["events"]
         .as_array()
@@ -411,10 +411,18 @@ fn garbage_link_flaps_and_a_flood_on_vcan0_are_counted_and_survived() {
         );
     }
     assert!(health["safe_mode_entries"].as_u64() >= Some(1), "{health}");
-    assert_eq!(
-        safe_events.last().map(|(k, _)| k.as_str()),
-        Some("safe mode left"),
-        "the run did not recover from safe mode after the last flap: {safe_events:?}"
+    // Recovery: safe mode is left after the last link loss. (The flood that follows may starve
+    // an emulated VM's one CPU so that the sensors fall silent and the controller enters safe
+    // mode again, which is the right response; it is not asked to leave it before the run ends.)
+    let last_loss = link_losses
+        .iter()
+        .copied()
+        .fold(f64::NEG_INFINITY, f64::max);
+    assert!(
+        safe_events
+            .iter()
+            .any(|(k, t)| k == "safe mode left" && *t > last_loss),
+        "the run did not recover from safe mode after the last link loss at {last_loss:.1} s: {safe_events:?}"
     );
 
     // The flood: 10000 frames of identifier 0 (a receiver too slow for it would lose some in
