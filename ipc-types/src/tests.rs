@@ -106,6 +106,8 @@ fn all_names() -> Vec<(&'static str, &'static str, &'static str)> {
         names::<AppliedWheelCommand>(),
         names::<AppliedCmgCommand>(),
         names::<HealthEvent>(),
+        names::<ThrusterCommand>(),
+        names::<ThrusterStatus>(),
     ]
 }
 

@@ -1,8 +1,8 @@
 //! Thruster command and status samples (issue 14): the six on/off cold-gas thrusters.
 //!
 //! Thruster `2a` gives `+` torque about body axis `a`, thruster `2a + 1` `−` torque (the default
-//! layout, `docs/thrusters.md`). Topics are named here ([`THRUSTER_COMMAND`],
-//! [`THRUSTER_STATUS`]), not yet in [`crate::topic::ALL`] (the logger's topic list).
+//! layout, `docs/thrusters.md`). Topics: [`THRUSTER_COMMAND`], [`THRUSTER_STATUS`] (in
+//! [`crate::topic::ALL`], logged).
 
 use crate::{SampleHeader, Topic};
 use iceoryx2::prelude::*;
@@ -10,14 +10,9 @@ use iceoryx2::prelude::*;
 /// Number of thrusters.
 pub const THRUSTERS: usize = 6;
 
-/// Topic of [`ThrusterCommand`].
-pub const THRUSTER_COMMAND: &str = "testbed/actuators/thrusters/command";
-/// Event service paired with [`THRUSTER_COMMAND`].
-pub const THRUSTER_COMMAND_EVENT: &str = "testbed/actuators/thrusters/command/event";
-/// Topic of [`ThrusterStatus`].
-pub const THRUSTER_STATUS: &str = "testbed/actuators/thrusters/status";
-/// Event service paired with [`THRUSTER_STATUS`].
-pub const THRUSTER_STATUS_EVENT: &str = "testbed/actuators/thrusters/status/event";
+pub use crate::topic::{
+    THRUSTER_COMMAND, THRUSTER_COMMAND_EVENT, THRUSTER_STATUS, THRUSTER_STATUS_EVENT,
+};
 
 /// Valve on-times for one control period, from the controller.
 #[derive(Debug, Clone, Copy, PartialEq, Default, ZeroCopySend)]

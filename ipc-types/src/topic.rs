@@ -57,6 +57,12 @@ topics! {
     /// [`HealthEvent`](crate::HealthEvent): faults and recoveries (lost inputs, hung or dead
     /// processes, safe mode, zeroed actuators), published when they happen.
     HEALTH, HEALTH_EVENT = "testbed/system/health";
+    /// [`ThrusterCommand`](crate::ThrusterCommand): valve on-times from the controller (runs
+    /// with thrusters only).
+    THRUSTER_COMMAND, THRUSTER_COMMAND_EVENT = "testbed/actuators/thrusters/command";
+    /// [`ThrusterStatus`](crate::ThrusterStatus): what the thruster drive applied, the valves'
+    /// state and the propellant used (runs with thrusters only).
+    THRUSTER_STATUS, THRUSTER_STATUS_EVENT = "testbed/actuators/thrusters/status";
 }
 
 /// Name of the event service paired with the data service `topic` (`topic` + [`EVENT_SUFFIX`]).

@@ -6,7 +6,7 @@
 
 use ipc_types::{
     AttitudeEstimate, CmgCommand, CmgTelemetry, ControllerStatus, GyroSample, HealthEventKind,
-    WheelCommand, WheelTelemetry,
+    ThrusterCommand, WheelCommand, WheelTelemetry,
 };
 use std::time::Duration;
 use testbed_bus::{Flow, LoopExit, SourceId, TopicPublisher, TopicSubscriber, Wake};
@@ -25,6 +25,8 @@ pub struct ControllerPorts {
     status: TopicPublisher<ControllerStatus>,
     wheel_command: TopicPublisher<WheelCommand>,
     cmg_command: TopicPublisher<CmgCommand>,
+    /// Valve on-times, once per cycle (runs with `controller.thrusters`).
+    thruster_command: Option<TopicPublisher<ThrusterCommand>>,
 }
 
 /// The controller process: [`ControllerNode`] on the bus.
@@ -59,6 +61,10 @@ impl ControllerProcess {
             status: cx.bus.publisher()?,
             wheel_command: cx.bus.publisher()?,
             cmg_command: cx.bus.publisher()?,
+            thruster_command: match config.controller.thrusters {
+                Some(_) => Some(cx.bus.publisher()?),
+                None => None,
+            },
         };
         Ok((
             Self {
@@ -119,6 +125,10 @@ impl Node for ControllerProcess {
         for cycle in node.ready().into_iter().chain(silence) {
             io.heartbeat.set_time_ns(cycle.status.header.time_ns);
             ports.status.publish(&cycle.status)?;
+            if let (Some(port), Some(thrusters)) = (&ports.thruster_command, &cycle.thrusters) {
+                port.publish(thrusters)?;
+                io.heartbeat.add_samples_out(1);
+            }
             ports.wheel_command.publish(&cycle.wheels)?;
             ports.cmg_command.publish(&cycle.cmg)?;
             io.heartbeat.add_samples_out(3);

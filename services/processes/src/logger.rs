@@ -91,6 +91,8 @@ impl LoggerProcess {
             logged::<AppliedWheelCommand>(bus)?,
             logged::<AppliedCmgCommand>(bus)?,
             logged::<HealthEvent>(bus)?,
+            logged::<ThrusterCommand>(bus)?,
+            logged::<ThrusterStatus>(bus)?,
         ];
         if !lockstep {
             topics.push(logged::<Heartbeat>(bus)?);

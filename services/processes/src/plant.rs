@@ -7,15 +7,26 @@
 //! The commands it integrates are the controller's (`run.actuation = "direct"`), or, with
 //! `run.actuation = "can_node"`, the ones the smart CAN node applies after the wheel and CMG
 //! gateways and the CAN bus (`AppliedWheelCommand`, `AppliedCmgCommand`, same time stamps).
+//!
+//! With thrusters (`[model.thrusters]` and `[controller.thrusters]`; direct actuation only, the
+//! CAN protocol has no thruster messages yet) the plant is also the simulated thruster drive:
+//! each tick's [`ThrusterCommand`] is part of the tick's answer, checked as the thruster
+//! gateway checks it ([`ThrusterGuard`]: a bad command is refused, counted, every valve shut),
+//! the valves are sensed at the end of the period (a stuck-open valve shuts the latch valve and
+//! is reported as [`HealthEventKind::ThrustersDisabled`]), and a [`ThrusterStatus`] goes out
+//! every tick.
 
 use ipc_types::{
-    AppliedCmgCommand, AppliedWheelCommand, CmgCommand, HealthEventKind, SimClockTick, SimTruth,
-    WheelCommand,
+    AppliedCmgCommand, AppliedWheelCommand, CmgCommand, HealthEventKind, SampleHeader,
+    SimClockTick, SimTruth, ThrusterCommand, ThrusterStatus, WheelCommand,
 };
 use std::time::{Duration, Instant};
 use testbed_bus::{
     Flow, LoopExit, SourceId, SubscriberOptions, TopicPublisher, TopicSubscriber, Wake,
 };
+use testbed_flight::convert::Sequence;
+use testbed_gateways::thrusters::ThrusterGuard;
+use testbed_model::thruster_config::THRUSTER_COUNT;
 use testbed_runtime::run_config::Actuation;
 use testbed_runtime::{ClockMode, Context, Io, Node, RunConfig, WakeOn};
 use testbed_sim::plant_node::PlantNode;
@@ -38,11 +49,26 @@ pub enum CommandPorts {
     },
 }
 
+/// The thruster drive's ports (runs with thruster control).
+pub struct ThrusterPorts {
+    commands: TopicSubscriber<ThrusterCommand>,
+    status: TopicPublisher<ThrusterStatus>,
+}
+
 /// The plant's ports: truth and clock out, commands in.
 pub struct PlantPorts {
     truth: TopicPublisher<SimTruth>,
     clock: TopicPublisher<SimClockTick>,
     commands: CommandPorts,
+    thrusters: Option<ThrusterPorts>,
+}
+
+/// The simulated thruster drive: the gateway's checks in front of the plant's valves.
+struct ThrusterDrive {
+    guard: ThrusterGuard,
+    /// On-times applied in the current period, s.
+    applied: [f64; THRUSTER_COUNT],
+    status_seq: Sequence,
 }
 
 /// The plant process: [`PlantNode`] as the clock owner of the run.
@@ -54,6 +80,8 @@ pub struct PlantProcess {
     started: Instant,
     /// `run.command_timeout_s` (reported with a zeroing).
     command_timeout_s: f64,
+    /// The thruster drive (runs with thruster control).
+    thrusters: Option<ThrusterDrive>,
 }
 
 impl PlantProcess {
@@ -79,12 +107,42 @@ impl PlantProcess {
                 cmg: bus.subscriber_with(options)?,
             },
         };
+        let (thrusters, thruster_ports) = match (
+            &cx.config.controller.thrusters,
+            &cx.config.model.thrusters,
+        ) {
+            (None, _) => (None, None),
+            (Some(_), None) => {
+                anyhow::bail!("controller.thrusters is set but the model has no [model.thrusters]")
+            }
+            (Some(_), Some(valves)) => {
+                anyhow::ensure!(
+                    cx.config.run.actuation == Actuation::Direct,
+                    "thrusters need run.actuation = \"direct\": the CAN protocol has no thruster messages yet"
+                );
+                let drive = ThrusterDrive {
+                    guard: ThrusterGuard::new(
+                        valves,
+                        period.as_secs_f64(),
+                        valves.stuck_open_confirm_periods,
+                    ),
+                    applied: [0.0; THRUSTER_COUNT],
+                    status_seq: Sequence::default(),
+                };
+                let ports = ThrusterPorts {
+                    commands: bus.subscriber_with(options)?,
+                    status: bus.publisher()?,
+                };
+                (Some(drive), Some(ports))
+            }
+        };
         let process = Self {
             node,
             period,
             pace: None,
             started: Instant::now(),
             command_timeout_s: cx.config.run.command_timeout_s,
+            thrusters,
         };
         Ok((
             process,
@@ -92,6 +150,7 @@ impl PlantProcess {
                 truth,
                 clock,
                 commands,
+                thrusters: thruster_ports,
             },
         ))
     }
@@ -126,6 +185,9 @@ impl Node for PlantProcess {
                 wake.data(cmg)?;
             }
         }
+        if let Some(thrusters) = &ports.thrusters {
+            wake.data(&thrusters.commands)?;
+        }
         if wake.mode() == ClockMode::Paced {
             self.pace = Some(wake.interval(self.period)?);
         }
@@ -150,6 +212,24 @@ impl Node for PlantProcess {
                 cmg.drain(|c| node.on_cmg_command(&CmgCommand::new(c.header, c.gimbal_rate)))?;
             }
         }
+        if let (Some(ports), Some(drive)) = (&ports.thrusters, &mut self.thrusters) {
+            ports.commands.drain(|c| {
+                // Only the current tick's command counts (as in the node): a stale one would
+                // otherwise be checked, and counted if refused, twice.
+                if c.header.time_ns != node.time_ns() {
+                    return;
+                }
+                let (on_time, refusal) = drive.guard.check(&c);
+                if let Some(refusal) = refusal {
+                    tracing::warn!(
+                        t_ns = c.header.time_ns,
+                        "thruster command refused: {refusal}"
+                    );
+                }
+                drive.applied = on_time;
+                node.on_thruster_command(&ThrusterCommand { on_time, ..c });
+            })?;
+        }
         let advance_now = match self.pace {
             None => node.answered(),
             Some(pace) => wake == Wake::Tick(pace),
@@ -163,6 +243,30 @@ impl Node for PlantProcess {
         let was_zeroed = node.commands_zeroed();
         node.advance()?;
         let t_ns = self.node.time_ns();
+        if let (Some(ports), Some(drive)) = (&ports.thrusters, &mut self.thrusters) {
+            let valves_open = self.node.valves_open();
+            if let Some(stuck) = drive.guard.on_valves_sensed(valves_open) {
+                self.node.shut_thruster_latch();
+                tracing::error!(
+                    "thruster {stuck}: valve stuck open; latch valve shut, thrusters disabled"
+                );
+                io.health.report(
+                    t_ns,
+                    HealthEventKind::ThrustersDisabled,
+                    "actuators/thrusters",
+                    stuck as u32,
+                    0.0,
+                );
+            }
+            ports.status.publish(&ThrusterStatus {
+                header: drive.status_seq.header(t_ns, SampleHeader::VALID),
+                applied_on_time: std::mem::take(&mut drive.applied),
+                valves_open,
+                disabled: u32::from(self.node.thruster_latch_shut()),
+                refused: drive.guard.refused().total(),
+                propellant_used: self.node.propellant_used_kg(),
+            })?;
+        }
         match (was_zeroed, self.node.commands_zeroed()) {
             (false, true) => {
                 tracing::warn!(

@@ -32,7 +32,8 @@ pub struct ControlCycle {
     pub status: ControllerStatus,
     pub wheels: WheelCommand,
     pub cmg: CmgCommand,
-    /// Valve on-times for the next period (`None` without thruster control; issue 14).
+    /// Valve on-times for the next period: every cycle with thruster control (all shut when
+    /// the law has none), `None` without (issue 14).
     pub thrusters: Option<ipc_types::ThrusterCommand>,
 }
 
@@ -455,10 +456,14 @@ impl ControllerNode {
                 header: self.cmg_seq.header(t_ns, SampleHeader::VALID),
                 gimbal_rate: a4(&command.gimbal_rate_rad_s),
             },
-            thrusters: thrust.map(|t| ipc_types::ThrusterCommand {
-                header: self.thruster_seq.header(t_ns, SampleHeader::VALID),
-                on_time: t.on_time_s,
-            }),
+            // With thruster control there is a command every cycle (all valves shut when the law
+            // has none), so the thruster drive can tell a late controller from a quiet one.
+            thrusters: thrust
+                .or_else(|| self.task.has_thruster_control().then(Default::default))
+                .map(|t| ipc_types::ThrusterCommand {
+                    header: self.thruster_seq.header(t_ns, SampleHeader::VALID),
+                    on_time: t.on_time_s,
+                }),
         }
     }
 }

@@ -4,8 +4,8 @@ use crate::json::{DecodeError, Field, as_object, check_no_extra, member, object_
 use ipc_types::{
     AppliedCmgCommand, AppliedWheelCommand, AttitudeEstimate, CanBusFrame, CanLinkStatus,
     CmgCommand, CmgTelemetry, ControllerStatus, GyroSample, HealthEvent, Heartbeat,
-    InclinometerSample, MagnetometerSample, SampleHeader, SimClockTick, SimTruth, Topic,
-    WheelCommand, WheelTelemetry,
+    InclinometerSample, MagnetometerSample, SampleHeader, SimClockTick, SimTruth, ThrusterCommand,
+    ThrusterStatus, Topic, WheelCommand, WheelTelemetry,
 };
 use serde_json::Value;
 
@@ -455,6 +455,26 @@ log_types! {
                  8 CMG telemetry lost, 16 wheel near its speed limit, 32 ground command).",
         value: "Kind-specific: time since the last sample or heartbeat, or outage length, s.",
     } pad [];
+
+    /// [`ThrusterCommand`] on [`topic::THRUSTER_COMMAND`](ipc_types::topic::THRUSTER_COMMAND).
+    ThrusterCommand(ThrusterCommand) = "testbed::ThrusterCommand.v1",
+    "Valve on-times of the six thrusters for one control period, from the controller. Thruster \
+     2a gives + torque about body axis a, thruster 2a+1 - torque." {
+        header: "Common header; time_ns is the time of the input the command was computed \
+                 from (the valves open at the start of the period that follows).",
+        on_time: "Electrical on-time of each valve from the start of the period, s (0: shut).",
+    } pad [];
+
+    /// [`ThrusterStatus`] on [`topic::THRUSTER_STATUS`](ipc_types::topic::THRUSTER_STATUS).
+    ThrusterStatus(ThrusterStatus) = "testbed::ThrusterStatus.v1",
+    "What the thruster drive applied and counted, once per period." {
+        header: "Common header; time_ns is the period the status describes (its end).",
+        applied_on_time: "Valve on-times applied in the period, s.",
+        valves_open: "Valves open at the end of the period: bit i for thruster i.",
+        disabled: "1 if the thrusters are disabled (latch valve shut), else 0.",
+        refused: "Commands refused since start (not finite, out of range, too short).",
+        propellant_used: "Propellant used since start, kg.",
+    } pad [];
 }
 
 #[cfg(test)]
@@ -493,6 +513,8 @@ mod tests {
         check::<AppliedWheelCommand>();
         check::<AppliedCmgCommand>();
         check::<HealthEvent>();
+        check::<ThrusterCommand>();
+        check::<ThrusterStatus>();
     }
 
     #[test]
@@ -536,6 +558,8 @@ mod tests {
             TopicKind::WheelApplied => LogRecord::WheelApplied(Default::default()),
             TopicKind::CmgApplied => LogRecord::CmgApplied(Default::default()),
             TopicKind::Health => LogRecord::Health(Default::default()),
+            TopicKind::ThrusterCommand => LogRecord::ThrusterCommand(Default::default()),
+            TopicKind::ThrusterStatus => LogRecord::ThrusterStatus(Default::default()),
         };
         let mut out = Vec::new();
         record.encode_json(&mut out);

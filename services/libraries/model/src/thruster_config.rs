@@ -58,6 +58,11 @@ pub struct ThrusterConfig {
     /// it horizontally (a mounting tolerance), so the draining tank moves the centre of mass and
     /// makes a slowly growing gravity torque.
     pub tank_position_m: [f64; 3],
+    /// Periods in a row a valve must read open when it should be shut before the thruster
+    /// drive declares it stuck open, shuts the latch valve and disables the thrusters.
+    /// Assumed: 3 (0.3 s at 10 Hz): one period's sensor glitch is not a fault, and a stuck
+    /// valve's 0.05 N m torque acts for under half a second before the latch shuts.
+    pub stuck_open_confirm_periods: u32,
     /// Injected fault: one valve stuck open from a time on (off unless present).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub stuck_open: Option<StuckOpenValve>,
@@ -115,6 +120,7 @@ impl Default for ThrusterConfig {
             isp_s: 65.0,
             propellant_kg: 1.0,
             tank_position_m: [0.002, 0.001, -0.10],
+            stuck_open_confirm_periods: 3,
             stuck_open: None,
         }
     }
@@ -165,6 +171,13 @@ impl ThrusterConfig {
             if !(x.is_finite() && x >= 0.0) {
                 return fail(key, format!("{x}"), "must be a finite number >= 0");
             }
+        }
+        if self.stuck_open_confirm_periods == 0 {
+            return fail(
+                "stuck_open_confirm_periods",
+                "0".into(),
+                "must be at least 1",
+            );
         }
         if self.thrust_noise_fraction > 0.5 {
             return fail(

@@ -34,6 +34,8 @@ pub struct PlantNode {
     cmg: Option<CmgCommand>,
     /// The thruster command answering the current tick, if any (issue 14).
     thrusters: Option<ipc_types::ThrusterCommand>,
+    /// Whether each tick's answer includes a thruster command (`controller.thrusters` set).
+    expect_thrusters: bool,
     held: ActuatorCommand,
     /// Ticks in a row without both commands.
     unanswered: u64,
@@ -59,6 +61,7 @@ impl PlantNode {
             wheel: None,
             cmg: None,
             thrusters: None,
+            expect_thrusters: config.controller.thrusters.is_some(),
             held: ActuatorCommand::default(),
             unanswered: 0,
             // Whole periods in the timeout, within the clock's tolerance (0.2 s / 0.1 s is 2).
@@ -135,9 +138,46 @@ impl PlantNode {
         }
     }
 
-    /// Both commands for the current tick have arrived.
+    /// Every command of the current tick has arrived: wheels, CMG and, in a run with thruster
+    /// control, the thrusters.
     pub fn answered(&self) -> bool {
-        self.wheel.is_some() && self.cmg.is_some()
+        self.wheel.is_some()
+            && self.cmg.is_some()
+            && (!self.expect_thrusters || self.thrusters.is_some())
+    }
+
+    /// Whether the platform has thrusters (the model's `[thrusters]`).
+    pub fn has_thrusters(&self) -> bool {
+        self.plant.thrusters().is_some()
+    }
+
+    /// The valves' positions now: bit `i` set if valve `i` is open (0 without thrusters).
+    pub fn valves_open(&self) -> u32 {
+        let t_s = self.plant.time_s();
+        self.plant.thrusters().map_or(0, |bank| {
+            (0..testbed_model::thruster_config::THRUSTER_COUNT)
+                .filter(|&i| bank.valve_open(i, t_s))
+                .fold(0, |bits, i| bits | 1 << i)
+        })
+    }
+
+    /// Propellant used since start, kg (0 without thrusters).
+    pub fn propellant_used_kg(&self) -> f64 {
+        self.plant
+            .thrusters()
+            .map_or(0.0, |bank| bank.propellant_used_kg())
+    }
+
+    /// Whether the thrusters' latch valve is shut (false without thrusters).
+    pub fn thruster_latch_shut(&self) -> bool {
+        self.plant.thrusters().is_some_and(|bank| bank.latch_shut())
+    }
+
+    /// Shuts the latch valve upstream of every thruster (a stuck-open valve was found).
+    pub fn shut_thruster_latch(&mut self) {
+        if let Some(bank) = self.plant.thrusters_mut() {
+            bank.set_latch_shut(true);
+        }
     }
 
     /// The last tick has been published (and, in lockstep, answered): the run is over.

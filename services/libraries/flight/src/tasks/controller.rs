@@ -133,6 +133,11 @@ impl ControllerTask {
         })
     }
 
+    /// Whether the controller commands thrusters (`controller.thrusters` set).
+    pub fn has_thruster_control(&self) -> bool {
+        self.thrusters.is_some()
+    }
+
     /// Safe mode with thrusters: the thrusters alone damp `rate_b` (rad/s, body axes; `None`:
     /// no rate known, valves shut). `None` without thruster control.
     pub fn thruster_rate_damping(

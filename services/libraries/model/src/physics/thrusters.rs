@@ -57,6 +57,18 @@ impl ThrusterCommand {
     }
 }
 
+/// Shift of the centre of mass when `used_kg` of propellant has left a tank at `tank_m`, m,
+/// body axes, for a platform of full mass `mass_kg` whose centre of mass was at `com_m`:
+/// `Δr = −m_u (r_t − r_c) / (M − m_u)`.
+pub fn propellant_com_shift_m(
+    tank_m: &Vector3<f64>,
+    used_kg: f64,
+    mass_kg: f64,
+    com_m: &Vector3<f64>,
+) -> Vector3<f64> {
+    -(tank_m - com_m) * (used_kg / (mass_kg - used_kg))
+}
+
 /// One thrust interval of one thruster, plant time, s.
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct Pulse {
@@ -261,8 +273,12 @@ impl ThrusterBank {
     /// full mass `mass_kg` whose centre of mass was at `com_m`:
     /// `Δr = −m_u (r_t − r_c) / (M − m_u)`.
     pub fn com_shift_m(&self, mass_kg: f64, com_m: &Vector3<f64>) -> Vector3<f64> {
-        let m_u = self.propellant_used_kg;
-        -(Vector3::from(self.config.tank_position_m) - com_m) * (m_u / (mass_kg - m_u))
+        propellant_com_shift_m(
+            &self.config.tank_position_m.into(),
+            self.propellant_used_kg,
+            mass_kg,
+            com_m,
+        )
     }
 
     /// Total impulse delivered per thruster, N s.
