@@ -31,6 +31,9 @@
 //! ends_run = false           # its successful exit ends the run
 //! device = "gyro"            # optional, with `source`: the device this process serves
 //! source = "simulated"
+//! cpus = [0]                 # optional: CPU affinity (every CPU when absent)
+//! scheduling = { policy = "fifo", priority = 10 }   # optional: "other" (with `nice`),
+//!                            # "fifo" or "rr" (with `priority` 1..=99; needs CAP_SYS_NICE)
 //! ```
 //!
 //! Unknown keys are refused. Every error names the file, the key and the value.
@@ -220,6 +223,12 @@ pub struct ProcessSpec {
     pub device: Option<Device>,
     /// Whether that device is real or simulated.
     pub source: Option<Source>,
+    /// CPUs the process may run on (its affinity), e.g. `[0]`; every CPU when absent.
+    #[serde(default)]
+    pub cpus: Option<Vec<usize>>,
+    /// Scheduling policy, e.g. `{ policy = "fifo", priority = 10 }`; inherited when absent.
+    #[serde(default)]
+    pub scheduling: Option<crate::placement::Scheduling>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -441,6 +450,30 @@ impl Profile {
                      at 0 (use \"stop_all\")"
                 ),
             ));
+        }
+        if let Some(cpus) = &p.cpus {
+            let mut seen = std::collections::BTreeSet::new();
+            if cpus.is_empty() {
+                return Err(self.invalid(key("cpus"), cpus, "names no CPU (leave it out for all)"));
+            }
+            if let Some(cpu) = cpus
+                .iter()
+                .find(|&&c| c > crate::placement::MAX_CPU || !seen.insert(c))
+            {
+                return Err(self.invalid(
+                    key("cpus"),
+                    cpus,
+                    format!(
+                        "CPU {cpu} is repeated or beyond {}",
+                        crate::placement::MAX_CPU
+                    ),
+                ));
+            }
+        }
+        if let Some(scheduling) = &p.scheduling
+            && let Err(reason) = scheduling.check()
+        {
+            return Err(self.invalid(key("scheduling"), scheduling, reason));
         }
         match (p.device, p.source) {
             (Some(_), None) => {
