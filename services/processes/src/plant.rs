@@ -71,6 +71,53 @@ struct ThrusterDrive {
     status_seq: Sequence,
 }
 
+impl ThrusterDrive {
+    fn new(valves: &testbed_model::thruster_config::ThrusterConfig, period_s: f64) -> Self {
+        Self {
+            guard: ThrusterGuard::new(valves, period_s, valves.stuck_open_confirm_periods),
+            applied: [0.0; THRUSTER_COUNT],
+            status_seq: Sequence::default(),
+        }
+    }
+
+    /// A command from the bus: checked, and what passes (all valves shut if refused) goes to
+    /// the plant. Only the current tick's command counts (as in the node): a stale one would
+    /// otherwise be checked, and counted if refused, twice.
+    fn on_command(&mut self, c: &ThrusterCommand, node: &mut PlantNode) {
+        if c.header.time_ns != node.time_ns() {
+            return;
+        }
+        let (on_time, refusal) = self.guard.check(c);
+        if let Some(refusal) = refusal {
+            tracing::warn!(
+                t_ns = c.header.time_ns,
+                "thruster command refused: {refusal}"
+            );
+        }
+        self.applied = on_time;
+        node.on_thruster_command(&ThrusterCommand { on_time, ..*c });
+    }
+
+    /// After the plant's step: senses the valves (a valve newly found stuck open shuts the
+    /// latch valve and is returned) and gives the period's status.
+    fn end_of_period(&mut self, node: &mut PlantNode) -> (ThrusterStatus, Option<usize>) {
+        let valves_open = node.valves_open();
+        let stuck = self.guard.on_valves_sensed(valves_open);
+        if stuck.is_some() {
+            node.shut_thruster_latch();
+        }
+        let status = ThrusterStatus {
+            header: self.status_seq.header(node.time_ns(), SampleHeader::VALID),
+            applied_on_time: std::mem::take(&mut self.applied),
+            valves_open,
+            disabled: u32::from(node.thruster_latch_shut()),
+            refused: self.guard.refused().total(),
+            propellant_used: node.propellant_used_kg(),
+        };
+        (status, stuck)
+    }
+}
+
 /// The plant process: [`PlantNode`] as the clock owner of the run.
 pub struct PlantProcess {
     node: PlantNode,
@@ -120,15 +167,7 @@ impl PlantProcess {
                     cx.config.run.actuation == Actuation::Direct,
                     "thrusters need run.actuation = \"direct\": the CAN protocol has no thruster messages yet"
                 );
-                let drive = ThrusterDrive {
-                    guard: ThrusterGuard::new(
-                        valves,
-                        period.as_secs_f64(),
-                        valves.stuck_open_confirm_periods,
-                    ),
-                    applied: [0.0; THRUSTER_COUNT],
-                    status_seq: Sequence::default(),
-                };
+                let drive = ThrusterDrive::new(valves, period.as_secs_f64());
                 let ports = ThrusterPorts {
                     commands: bus.subscriber_with(options)?,
                     status: bus.publisher()?,
@@ -213,22 +252,7 @@ impl Node for PlantProcess {
             }
         }
         if let (Some(ports), Some(drive)) = (&ports.thrusters, &mut self.thrusters) {
-            ports.commands.drain(|c| {
-                // Only the current tick's command counts (as in the node): a stale one would
-                // otherwise be checked, and counted if refused, twice.
-                if c.header.time_ns != node.time_ns() {
-                    return;
-                }
-                let (on_time, refusal) = drive.guard.check(&c);
-                if let Some(refusal) = refusal {
-                    tracing::warn!(
-                        t_ns = c.header.time_ns,
-                        "thruster command refused: {refusal}"
-                    );
-                }
-                drive.applied = on_time;
-                node.on_thruster_command(&ThrusterCommand { on_time, ..c });
-            })?;
+            ports.commands.drain(|c| drive.on_command(&c, node))?;
         }
         let advance_now = match self.pace {
             None => node.answered(),
@@ -244,9 +268,8 @@ impl Node for PlantProcess {
         node.advance()?;
         let t_ns = self.node.time_ns();
         if let (Some(ports), Some(drive)) = (&ports.thrusters, &mut self.thrusters) {
-            let valves_open = self.node.valves_open();
-            if let Some(stuck) = drive.guard.on_valves_sensed(valves_open) {
-                self.node.shut_thruster_latch();
+            let (status, stuck) = drive.end_of_period(&mut self.node);
+            if let Some(stuck) = stuck {
                 tracing::error!(
                     "thruster {stuck}: valve stuck open; latch valve shut, thrusters disabled"
                 );
@@ -258,36 +281,7 @@ impl Node for PlantProcess {
                     0.0,
                 );
             }
-            ports.status.publish(&ThrusterStatus {
-                header: drive.status_seq.header(t_ns, SampleHeader::VALID),
-                applied_on_time: std::mem::take(&mut drive.applied),
-                valves_open,
-                disabled: u32::from(self.node.thruster_latch_shut()),
-                refused: drive.guard.refused().total(),
-                propellant_used: self.node.propellant_used_kg(),
-            })?;
-        }
-        match (was_zeroed, self.node.commands_zeroed()) {
-            (false, true) => {
-                tracing::warn!(
-                    "no wheel and CMG commands for run.command_timeout_s: applying zero torque and gimbal rate"
-                );
-                io.health.report(
-                    t_ns,
-                    HealthEventKind::CommandsZeroed,
-                    "actuators/commands",
-                    0,
-                    self.command_timeout_s,
-                );
-            }
-            (true, false) => io.health.report(
-                t_ns,
-                HealthEventKind::CommandsResumed,
-                "actuators/commands",
-                0,
-                0.0,
-            ),
-            _ => {}
+            ports.status.publish(&status)?;
         }
         self.publish(ports)?;
         io.heartbeat.set_time_ns(self.node.time_ns());
@@ -307,5 +301,112 @@ impl Node for PlantProcess {
             "plant done"
         );
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use testbed_model::thruster_config::{StuckOpenValve, ThrusterConfig};
+
+    /// A run configuration with the default thrusters and thruster control.
+    fn config(stuck_open: Option<StuckOpenValve>) -> RunConfig {
+        let mut config = RunConfig::default();
+        config.model.thrusters = Some(ThrusterConfig {
+            stuck_open,
+            ..ThrusterConfig::default()
+        });
+        config.controller.thrusters = Some(Default::default());
+        config
+    }
+
+    fn command(node: &PlantNode, on_time: [f64; THRUSTER_COUNT]) -> ThrusterCommand {
+        ThrusterCommand {
+            header: SampleHeader::new(node.time_ns(), node.tick(), SampleHeader::VALID),
+            on_time,
+        }
+    }
+
+    fn drive_for(config: &RunConfig) -> ThrusterDrive {
+        ThrusterDrive::new(
+            config.model.thrusters.as_ref().unwrap(),
+            config.schedule().unwrap().period_s(),
+        )
+    }
+
+    #[test]
+    fn bad_commands_are_refused_counted_and_shut_every_valve() {
+        let config = config(None);
+        let mut node = PlantNode::new(&config).unwrap();
+        let mut drive = drive_for(&config);
+        let bad = [
+            [f64::NAN, 0.0, 0.0, 0.0, 0.0, 0.0],
+            [0.0, -0.01, 0.0, 0.0, 0.0, 0.0],
+            [0.0, 0.0, 0.5, 0.0, 0.0, 0.0], // longer than the 0.1 s period
+            [0.0, 0.0, 0.0, 0.01, 0.0, 0.0], // shorter than the 20 ms minimum
+        ];
+        for (k, on_time) in bad.into_iter().enumerate() {
+            let c = command(&node, on_time);
+            drive.on_command(&c, &mut node);
+            assert!(
+                !node.answered(),
+                "no wheel/CMG command, so not answered yet"
+            );
+            node.advance().unwrap();
+            let (status, stuck) = drive.end_of_period(&mut node);
+            assert_eq!(stuck, None);
+            assert_eq!(status.applied_on_time, [0.0; THRUSTER_COUNT], "{on_time:?}");
+            assert_eq!(status.valves_open, 0);
+            assert_eq!(status.refused, k as u64 + 1);
+            assert_eq!(status.propellant_used, 0.0, "no valve opened");
+        }
+        // A good command passes and uses propellant.
+        let c = command(&node, [0.05, 0.0, 0.0, 0.0, 0.0, 0.0]);
+        drive.on_command(&c, &mut node);
+        node.advance().unwrap();
+        let (status, _) = drive.end_of_period(&mut node);
+        assert_eq!(status.applied_on_time[0], 0.05);
+        assert_eq!(status.refused, 4);
+        assert!(status.propellant_used > 0.0);
+        // A command for another tick is ignored, not counted.
+        let mut stale = command(&node, [f64::NAN; THRUSTER_COUNT]);
+        stale.header.time_ns += 1;
+        drive.on_command(&stale, &mut node);
+        node.advance().unwrap();
+        assert_eq!(drive.end_of_period(&mut node).0.refused, 4);
+    }
+
+    #[test]
+    fn a_stuck_open_valve_shuts_the_latch_after_the_confirmation_periods() {
+        // Thruster 2 sticks open at 0.25 s, in the third period; it is confirmed at the end of
+        // the third period that reads it open when it should be shut (0.5 s).
+        let config = config(Some(StuckOpenValve {
+            thruster: 2,
+            from_s: 0.25,
+        }));
+        let mut node = PlantNode::new(&config).unwrap();
+        let mut drive = drive_for(&config);
+        let mut disabled_at = None;
+        for _ in 0..10 {
+            let c = command(&node, [0.0; THRUSTER_COUNT]);
+            drive.on_command(&c, &mut node);
+            node.advance().unwrap();
+            let (status, stuck) = drive.end_of_period(&mut node);
+            if let Some(thruster) = stuck {
+                assert_eq!(thruster, 2);
+                assert!(disabled_at.is_none(), "reported once");
+                disabled_at = Some(node.time_ns());
+                assert_eq!(status.disabled, 1);
+            }
+        }
+        assert_eq!(disabled_at, Some(500_000_000));
+        assert!(node.thruster_latch_shut());
+        // From then on every command that opens a valve is refused.
+        let c = command(&node, [0.05, 0.0, 0.0, 0.0, 0.0, 0.0]);
+        drive.on_command(&c, &mut node);
+        node.advance().unwrap();
+        let (status, _) = drive.end_of_period(&mut node);
+        assert_eq!(status.applied_on_time, [0.0; THRUSTER_COUNT]);
+        assert_eq!(status.refused, 1);
     }
 }
