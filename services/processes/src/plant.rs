@@ -283,6 +283,28 @@ impl Node for PlantProcess {
             }
             ports.status.publish(&status)?;
         }
+        match (was_zeroed, self.node.commands_zeroed()) {
+            (false, true) => {
+                tracing::warn!(
+                    "no wheel and CMG commands for run.command_timeout_s: applying zero torque and gimbal rate"
+                );
+                io.health.report(
+                    t_ns,
+                    HealthEventKind::CommandsZeroed,
+                    "actuators/commands",
+                    0,
+                    self.command_timeout_s,
+                );
+            }
+            (true, false) => io.health.report(
+                t_ns,
+                HealthEventKind::CommandsResumed,
+                "actuators/commands",
+                0,
+                0.0,
+            ),
+            _ => {}
+        }
         self.publish(ports)?;
         io.heartbeat.set_time_ns(self.node.time_ns());
         Ok(Flow::Continue)
