@@ -103,6 +103,10 @@ pub enum ControllerMode {
     /// Safe mode: an input is lost or invalid, a wheel is near its speed limit, or the ground
     /// asked for it; wheels at a safe torque (zero or rate damping on the gyro), gimbals held.
     Safe = 5,
+    /// Wheel pointing while the thrusters unload the wheels (momentum dump, issue 14).
+    MomentumDump = 6,
+    /// Rate damping on the thrusters alone, wheels off (the safe mode with thrusters).
+    ThrusterRateDamping = 7,
 }
 
 impl ControllerMode {
@@ -115,6 +119,8 @@ impl ControllerMode {
             3 => Self::CmgSlew,
             4 => Self::Fault,
             5 => Self::Safe,
+            6 => Self::MomentumDump,
+            7 => Self::ThrusterRateDamping,
             _ => return None,
         })
     }

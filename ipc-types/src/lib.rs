@@ -42,6 +42,7 @@ mod run;
 mod sensors;
 mod sim;
 mod system;
+pub mod thrusters;
 pub mod topic;
 
 #[cfg(test)]
@@ -56,6 +57,7 @@ pub use run::{ClockMode, Device, ENV_RESTART_COUNT, restart_count};
 pub use sensors::{GyroSample, InclinometerSample, MagnetometerSample};
 pub use sim::{SimClockTick, SimTruth};
 pub use system::{HealthEvent, HealthEventKind, Heartbeat, ProcessState};
+pub use thrusters::{ThrusterCommand, ThrusterStatus};
 
 /// The identity attitude quaternion `[x, y, z, w] = [0, 0, 0, 1]` (B coincides with L).
 pub const IDENTITY_QUATERNION: [f64; 4] = [0.0, 0.0, 0.0, 1.0];

@@ -153,6 +153,9 @@ pub enum HealthEventKind {
     /// The run was ended because of the subject (e.g. a lockstep run cannot go on without a
     /// process).
     RunAborted = 10,
+    /// The thruster gateway found a valve stuck open and disabled the thrusters (latch valve
+    /// shut, every command refused); `detail` is the valve (0..6).
+    ThrustersDisabled = 11,
 }
 
 impl HealthEventKind {
@@ -170,6 +173,7 @@ impl HealthEventKind {
             8 => Self::CommandsZeroed,
             9 => Self::CommandsResumed,
             10 => Self::RunAborted,
+            11 => Self::ThrustersDisabled,
             _ => return None,
         })
     }
@@ -184,6 +188,7 @@ impl HealthEventKind {
                 | Self::SafeModeEntered
                 | Self::CommandsZeroed
                 | Self::RunAborted
+                | Self::ThrustersDisabled
         )
     }
 
@@ -201,6 +206,7 @@ impl HealthEventKind {
             Self::CommandsZeroed => "commands zeroed",
             Self::CommandsResumed => "commands resumed",
             Self::RunAborted => "run aborted",
+            Self::ThrustersDisabled => "thrusters disabled",
         }
     }
 }

@@ -108,6 +108,8 @@ fn all_names() -> Vec<(&'static str, &'static str, &'static str)> {
         names::<HealthEvent>(),
         names::<GroundCommand>(),
         names::<GroundCommandAck>(),
+        names::<ThrusterCommand>(),
+        names::<ThrusterStatus>(),
     ]
 }
 
@@ -216,14 +218,14 @@ fn helpers() {
     let t = SimClockTick::new(3, 300, 100);
     assert_eq!((t.header.time_ns, t.header.sequence), (300, 3));
     assert!(t.header.has(SampleHeader::VALID | SampleHeader::SIMULATED));
-    for v in 0..12 {
+    for v in 0..14 {
         assert_eq!(
             ControllerMode::from_u32(v).map(|m| m as u32),
-            (v < 6).then_some(v)
+            (v < 8).then_some(v)
         );
         assert_eq!(
             HealthEventKind::from_u32(v).map(|k| k as u32),
-            (v < 11).then_some(v)
+            (v < 12).then_some(v)
         );
         assert_eq!(
             ProcessState::from_u32(v).map(|s| s as u32),

@@ -63,6 +63,12 @@ topics! {
     /// [`GroundCommandAck`](crate::GroundCommandAck): each ground command applied or rejected,
     /// with the reason.
     GROUND_COMMAND_ACK, GROUND_COMMAND_ACK_EVENT = "testbed/ground/command_ack";
+    /// [`ThrusterCommand`](crate::ThrusterCommand): valve on-times from the controller (runs
+    /// with thrusters only).
+    THRUSTER_COMMAND, THRUSTER_COMMAND_EVENT = "testbed/actuators/thrusters/command";
+    /// [`ThrusterStatus`](crate::ThrusterStatus): what the thruster drive applied, the valves'
+    /// state and the propellant used (runs with thrusters only).
+    THRUSTER_STATUS, THRUSTER_STATUS_EVENT = "testbed/actuators/thrusters/status";
 }
 
 /// Name of the event service paired with the data service `topic` (`topic` + [`EVENT_SUFFIX`]).

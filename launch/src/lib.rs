@@ -4,6 +4,7 @@
 //! See `launch/README.md` for the profile format, the environment children get, the stop
 //! sequence and the exit status.
 
+pub mod placement;
 pub mod profile;
 pub mod supervisor;
 pub mod sys;

@@ -181,6 +181,22 @@ fn main() -> ExitCode {
         }
         return ExitCode::from(EXIT_CONFIG);
     }
+    match plan.unavailable_cpus() {
+        Ok(unavailable) if unavailable.is_empty() => {}
+        Ok(unavailable) => {
+            for (name, cpu, available) in &unavailable {
+                tracing::error!(
+                    "{}: process.{name}.cpus names CPU {cpu}, which this launcher may not use (CPUs {available:?})",
+                    plan.profile.file.display()
+                );
+            }
+            return ExitCode::from(EXIT_CONFIG);
+        }
+        Err(e) => {
+            tracing::error!("reading this launcher's CPU affinity: {e}");
+            return ExitCode::from(EXIT_CONFIG);
+        }
+    }
     if args.check {
         return ExitCode::SUCCESS;
     }

@@ -16,7 +16,7 @@
 //! stop_timeout_s = 2.0       # after SIGINT, wait this long before SIGTERM
 //! term_timeout_s = 2.0       # after SIGTERM, wait this long before SIGKILL
 //! restart_delay_s = 0.5      # delay before restarting a process (on_exit = "restart")
-//! heartbeat_timeout_s = 1.0  # a Running process silent this long is hung: killed (0: off)
+//! heartbeat_timeout_s = 1.5  # a Running process silent this long is hung: killed (0: off)
 //! tolerate_safe_mode = false # testbed run exits 0 even if the controller entered safe mode
 //!
 //! [[process]]
@@ -32,6 +32,9 @@
 //! observer = false           # takes no part in lockstep ticks (the ground link)
 //! device = "gyro"            # optional, with `source`: the device this process serves
 //! source = "simulated"
+//! cpus = [0]                 # optional: CPU affinity (every CPU when absent)
+//! scheduling = { policy = "fifo", priority = 10 }   # optional: "other" (with `nice`),
+//!                            # "fifo" or "rr" (with `priority` 1..=99; needs CAP_SYS_NICE)
 //! ```
 //!
 //! Unknown keys are refused. Every error names the file, the key and the value.
@@ -164,7 +167,7 @@ pub struct Supervision {
     /// Delay before a restart, s.
     pub restart_delay_s: f64,
     /// A running process whose heartbeat (every 0.5 s) stops for this long is hung: it is
-    /// killed and its exit policy applies. Two heartbeat periods by default; 0 turns the
+    /// killed and its exit policy applies. Three heartbeat periods by default; 0 turns the
     /// watchdog off. s.
     pub heartbeat_timeout_s: f64,
     /// `testbed run` exits 0 even if the controller entered safe mode (for fault-injection and
@@ -178,7 +181,7 @@ impl Default for Supervision {
             stop_timeout_s: 2.0,
             term_timeout_s: 2.0,
             restart_delay_s: 0.5,
-            heartbeat_timeout_s: 1.0,
+            heartbeat_timeout_s: 1.5,
             tolerate_safe_mode: false,
         }
     }
@@ -225,6 +228,12 @@ pub struct ProcessSpec {
     pub device: Option<Device>,
     /// Whether that device is real or simulated.
     pub source: Option<Source>,
+    /// CPUs the process may run on (its affinity), e.g. `[0]`; every CPU when absent.
+    #[serde(default)]
+    pub cpus: Option<Vec<usize>>,
+    /// Scheduling policy, e.g. `{ policy = "fifo", priority = 10 }`; inherited when absent.
+    #[serde(default)]
+    pub scheduling: Option<crate::placement::Scheduling>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -446,6 +455,30 @@ impl Profile {
                      at 0 (use \"stop_all\")"
                 ),
             ));
+        }
+        if let Some(cpus) = &p.cpus {
+            let mut seen = std::collections::BTreeSet::new();
+            if cpus.is_empty() {
+                return Err(self.invalid(key("cpus"), cpus, "names no CPU (leave it out for all)"));
+            }
+            if let Some(cpu) = cpus
+                .iter()
+                .find(|&&c| c > crate::placement::MAX_CPU || !seen.insert(c))
+            {
+                return Err(self.invalid(
+                    key("cpus"),
+                    cpus,
+                    format!(
+                        "CPU {cpu} is repeated or beyond {}",
+                        crate::placement::MAX_CPU
+                    ),
+                ));
+            }
+        }
+        if let Some(scheduling) = &p.scheduling
+            && let Err(reason) = scheduling.check()
+        {
+            return Err(self.invalid(key("scheduling"), scheduling, reason));
         }
         match (p.device, p.source) {
             (Some(_), None) => {

@@ -10,6 +10,7 @@ use testbed_bus::{BusConfig, cleanup_dead_nodes};
 
 use ipc_types::HealthEventKind;
 
+use crate::placement;
 use crate::profile::{
     ClockMode, Device, OnExit, ProcessSpec, Profile, RunSettings, Source, Supervision,
 };
@@ -54,6 +55,24 @@ pub struct Plan {
 }
 
 impl Plan {
+    /// CPUs named by a process's `cpus` that this launcher may not run on (so nor may its
+    /// children): `(process, CPU, the CPUs available)`.
+    pub fn unavailable_cpus(&self) -> std::io::Result<Vec<(String, usize, Vec<usize>)>> {
+        let available = placement::available_cpus()?;
+        Ok(self
+            .profile
+            .processes
+            .iter()
+            .flat_map(|spec| {
+                spec.cpus
+                    .iter()
+                    .flatten()
+                    .filter(|cpu| !available.contains(cpu))
+                    .map(|&cpu| (spec.name.clone(), cpu, available.clone()))
+            })
+            .collect())
+    }
+
     /// The executable of `spec`: absolute commands as written, others in [`Plan::bin_dir`].
     pub fn program(&self, spec: &ProcessSpec) -> PathBuf {
         let command = Path::new(&spec.command);
@@ -338,9 +357,20 @@ impl<'p> Supervisor<'p> {
             .process_group(0);
         // SAFETY: getpid is async-signal-safe and called here in the parent.
         let parent = unsafe { libc::getpid() };
-        // SAFETY: prepare_child only makes async-signal-safe system calls.
+        let affinity = spec.cpus.as_deref().map(placement::cpu_set);
+        let scheduling = spec.scheduling;
+        // SAFETY: prepare_child and the placement calls are async-signal-safe system calls.
         unsafe {
-            command.pre_exec(move || sys::prepare_child(parent));
+            command.pre_exec(move || {
+                sys::prepare_child(parent)?;
+                if let Some(set) = &affinity {
+                    placement::apply_affinity(set)?;
+                }
+                if let Some(scheduling) = &scheduling {
+                    scheduling.apply()?;
+                }
+                Ok(())
+            });
         }
         match command.spawn() {
             Ok(child) => {
@@ -356,8 +386,14 @@ impl<'p> Supervisor<'p> {
                 self.procs[index].pid = Some(pid);
             }
             Err(e) => {
+                let placement = if spec.cpus.is_some() || spec.scheduling.is_some() {
+                    " (or apply its cpus/scheduling: a real-time policy or a negative nice value \
+                     needs CAP_SYS_NICE or root)"
+                } else {
+                    ""
+                };
                 tracing::error!(
-                    "cannot start {:?} ({}): {e}",
+                    "cannot start {:?} ({}){placement}: {e}",
                     spec.name,
                     proc.program.display()
                 );

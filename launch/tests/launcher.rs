@@ -587,3 +587,72 @@ fn invalid_profiles_and_missing_binaries_exit_with_status_2() {
         "{all}"
     );
 }
+
+/// `cpus` and `scheduling` of a `[[process]]` are in force when the process runs: a shell
+/// reads its own affinity (`/proc/<pid>/status`) and nice value, real-time priority and policy
+/// (`/proc/<pid>/stat` fields 19, 40, 41).
+#[test]
+fn cpus_and_scheduling_of_a_process_are_applied_before_it_runs() {
+    let probe = "grep Cpus_allowed_list /proc/$$/status > {dir}/placement; \
+                 cut -d' ' -f19,40,41 /proc/$$/stat >> {dir}/placement";
+    let profile = |scheduling: &str| {
+        format!(
+            "[run]\nmode = \"lockstep\"\nseed = 1\n{}
+[[process]]
+name = \"probe\"
+command = \"/bin/sh\"
+args = [\"-c\", \"{probe}\"]
+ends_run = true
+cpus = [0]
+scheduling = {scheduling}
+",
+            supervision(5.0, 5.0)
+        )
+    };
+    // Time-sharing at nice 5 needs no privilege.
+    let mut launch = Launch::start(&profile("{ policy = \"other\", nice = 5 }"), &[]);
+    let placement = launch.path("placement");
+    let (code, log) = launch.finish();
+    assert_eq!(code, 0, "{}", log.join("\n"));
+    let text = std::fs::read_to_string(placement).expect("the probe wrote its placement");
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines[0].split_whitespace().last(), Some("0"), "{text}");
+    assert_eq!(
+        lines[1], "5 0 0",
+        "nice 5, no real-time priority, SCHED_OTHER: {text}"
+    );
+
+    // SCHED_RR priority 7: applied as root, refused with the reason otherwise.
+    let mut launch = Launch::start(&profile("{ policy = \"rr\", priority = 7 }"), &[]);
+    let placement = launch.path("placement");
+    let (code, log) = launch.finish();
+    // SAFETY: geteuid has no preconditions.
+    if unsafe { libc::geteuid() } == 0 {
+        assert_eq!(code, 0, "{}", log.join("\n"));
+        let text = std::fs::read_to_string(placement).expect("placement");
+        assert!(text.ends_with(" 7 2\n"), "priority 7, SCHED_RR (2): {text}");
+    } else {
+        assert_ne!(code, 0);
+        position(&log, &["cannot start \"probe\"", "CAP_SYS_NICE"]);
+    }
+}
+
+#[test]
+fn a_cpu_the_launcher_may_not_use_is_refused_before_anything_starts() {
+    let profile = format!(
+        "[run]\nmode = \"lockstep\"\nseed = 1\n{}
+[[process]]
+name = \"probe\"
+command = \"/bin/sh\"
+args = [\"-c\", \"true\"]
+ends_run = true
+cpus = [1023]
+",
+        supervision(5.0, 5.0)
+    );
+    let mut launch = Launch::start(&profile, &[]);
+    let (code, log) = launch.finish();
+    assert_eq!(code, 2, "{}", log.join("\n"));
+    position(&log, &["process.probe.cpus names CPU 1023"]);
+    assert!(!log.iter().any(|l| l.contains("started \"probe\"")));
+}

@@ -191,6 +191,27 @@ fn bad_values_name_key_and_value() {
         &["process.a.command"],
     );
     error(RUN, &["process", "at least one"]);
+    let process = format!("{RUN}[[process]]\nname = \"a\"\ncommand = \"x\"\n");
+    error(
+        &format!("{process}cpus = []\n"),
+        &["process.a.cpus", "names no CPU"],
+    );
+    error(
+        &format!("{process}cpus = [0, 1, 0]\n"),
+        &["process.a.cpus", "CPU 0 is repeated"],
+    );
+    error(
+        &format!("{process}scheduling = {{ policy = \"fifo\", priority = 0 }}\n"),
+        &["process.a.scheduling", "priority = 0", "1 ..= 99"],
+    );
+    error(
+        &format!("{process}scheduling = {{ policy = \"other\", nice = 30 }}\n"),
+        &["process.a.scheduling", "nice = 30"],
+    );
+    error(
+        &format!("{process}scheduling = {{ policy = \"deadline\" }}\n"),
+        &["scheduling", "deadline"],
+    );
 }
 
 #[test]

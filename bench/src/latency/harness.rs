@@ -50,7 +50,10 @@ struct Args {
     paced_duration: Option<f64>,
     /// Wait strategies of the paced runs (all under load), `;`-separated, each a
     /// `TESTBED_BUS_WAIT` value for the whole pipeline; `+fifo` at the end also gives sim-gyro,
-    /// estimator and controller SCHED_FIFO priority 10 (needs the privilege).
+    /// estimator and controller SCHED_FIFO priority 10 (needs the privilege), set on their pids
+    /// once they run; `+placed` instead places them through the launch profile (`cpus`,
+    /// `scheduling`): plant, sim-gyro, estimator and controller on CPU 0 at SCHED_FIFO 10, the
+    /// other processes on the hog's CPU.
     #[arg(
         long,
         value_delimiter = ';',
@@ -128,7 +131,10 @@ fn run(args: &Args, command: String) -> Result<()> {
         }
     });
     for w in &args.paced_waits {
-        let strategy = w.trim_end_matches("+fifo").to_string();
+        let strategy = w
+            .trim_end_matches("+fifo")
+            .trim_end_matches("+placed")
+            .to_string();
         WaitStrategy::from_lookup(|_| Some(strategy.clone()))
             .with_context(|| format!("--paced-waits: {w}"))?;
     }

@@ -17,6 +17,37 @@ use std::time::{Duration, Instant};
 /// wheel command.
 const FIFO_CHAIN: [&str; 3] = ["sim-gyro", "estimator", "controller"];
 
+/// The processes a `+placed` run puts on CPU 0 at SCHED_FIFO priority 10 through the launch
+/// profile's `cpus`/`scheduling` keys: the plant's truth to the wheel command. Every other
+/// process (logger, the other simulated gateways) goes to the last CPU, which the CPU hog
+/// shares.
+const PLACED_CHAIN: [&str; 4] = ["plant", "sim-gyro", "estimator", "controller"];
+
+/// The `simulation` profile with the placement of a `+placed` run, written to `path`.
+fn placed_profile(path: &std::path::Path, other_cpu: usize) -> Result<()> {
+    let source =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../launch/profiles/simulation.toml");
+    let text = std::fs::read_to_string(&source)
+        .with_context(|| format!("reading {}", source.display()))?;
+    let mut out = String::new();
+    for line in text.lines() {
+        out.push_str(line);
+        out.push('\n');
+        let Some(name) = line
+            .strip_prefix("name = \"")
+            .and_then(|rest| rest.strip_suffix('"'))
+        else {
+            continue;
+        };
+        if PLACED_CHAIN.contains(&name) {
+            out.push_str("cpus = [0]\nscheduling = { policy = \"fifo\", priority = 10 }\n");
+        } else {
+            out.push_str(&format!("cpus = [{other_cpu}]\n"));
+        }
+    }
+    std::fs::write(path, out).with_context(|| format!("writing {}", path.display()))
+}
+
 impl Ctx {
     /// `testbed run --paced` for `duration_s` under load, with `TESTBED_BUS_WAIT=wait`.
     pub fn paced(&mut self, duration_s: f64, wait: &str) -> PacedRun {
@@ -45,11 +76,19 @@ impl Ctx {
             Some(w) => (w, true),
             None => (run.wait.as_str(), false),
         };
+        let (wait, profile) = match wait.strip_suffix("+placed") {
+            Some(w) => {
+                let path = self.scratch.join(format!("placed-{}.toml", self.n));
+                placed_profile(&path, self.hog_cpu)?;
+                (w, path.display().to_string())
+            }
+            None => (wait, "simulation".to_string()),
+        };
         let mut child = Command::new(&testbed)
             .args([
                 "run",
                 "--profile",
-                "simulation",
+                &profile,
                 "--paced",
                 "--json",
                 "--duration",

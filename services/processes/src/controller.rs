@@ -6,7 +6,8 @@
 
 use ipc_types::{
     AttitudeEstimate, CmgCommand, CmgTelemetry, ControllerStatus, GroundAckStatus, GroundCommand,
-    GroundCommandAck, GyroSample, HealthEventKind, SampleHeader, WheelCommand, WheelTelemetry,
+    GroundCommandAck, GyroSample, HealthEventKind, SampleHeader, ThrusterCommand, WheelCommand,
+    WheelTelemetry,
 };
 use std::time::Duration;
 use testbed_bus::{Flow, LoopExit, SourceId, TopicPublisher, TopicSubscriber, Wake};
@@ -30,6 +31,8 @@ pub struct ControllerPorts {
     ground: TopicSubscriber<GroundCommand>,
     /// The controller's answer to each ground command.
     ground_ack: TopicPublisher<GroundCommandAck>,
+    /// Valve on-times, once per cycle (runs with `controller.thrusters`).
+    thruster_command: Option<TopicPublisher<ThrusterCommand>>,
 }
 
 /// The controller process: [`ControllerNode`] on the bus.
@@ -43,6 +46,10 @@ pub struct ControllerProcess {
     estimate_source: Option<SourceId>,
     /// Ground-command acknowledgements published.
     ack_sequence: u64,
+    /// Deadlines missed in a row with no input at all (paced runs).
+    silent_deadlines: u64,
+    /// The run's end (`run.duration_s`), ns: silence from then on is the run ending.
+    run_end_ns: u64,
 }
 
 impl ControllerProcess {
@@ -64,6 +71,10 @@ impl ControllerProcess {
             cmg_command: cx.bus.publisher()?,
             ground: cx.bus.subscriber()?,
             ground_ack: cx.bus.publisher()?,
+            thruster_command: match config.controller.thrusters {
+                Some(_) => Some(cx.bus.publisher()?),
+                None => None,
+            },
         };
         Ok((
             Self {
@@ -72,6 +83,8 @@ impl ControllerProcess {
                 period,
                 estimate_source: None,
                 ack_sequence: 0,
+                silent_deadlines: 0,
+                run_end_ns: (config.run.duration_s * 1e9) as u64,
             },
             ports,
         ))
@@ -96,9 +109,9 @@ impl Node for ControllerProcess {
 
     fn on_wake(&mut self, ports: &ControllerPorts, wake: Wake, io: &Io) -> anyhow::Result<Flow> {
         let node = &mut self.node;
-        if let Wake::DeadlineMissed(source) = wake
-            && Some(source) == self.estimate_source
-        {
+        let deadline_missed =
+            matches!(wake, Wake::DeadlineMissed(source) if Some(source) == self.estimate_source);
+        if deadline_missed {
             node.count_deadline_miss();
             tracing::warn!(
                 misses = node.deadline_misses(),
@@ -138,9 +151,23 @@ impl Node for ControllerProcess {
                 reason,
             ))?;
         }
-        for cycle in node.ready() {
+        self.silent_deadlines = match (received, deadline_missed) {
+            (0, true) => self.silent_deadlines + 1,
+            (0, false) => self.silent_deadlines,
+            _ => 0,
+        };
+        let silence = if deadline_missed {
+            node.on_silence(self.silent_deadlines, self.run_end_ns)
+        } else {
+            None
+        };
+        for cycle in node.ready().into_iter().chain(silence) {
             io.heartbeat.set_time_ns(cycle.status.header.time_ns);
             ports.status.publish(&cycle.status)?;
+            if let (Some(port), Some(thrusters)) = (&ports.thruster_command, &cycle.thrusters) {
+                port.publish(thrusters)?;
+                io.heartbeat.add_samples_out(1);
+            }
             ports.wheel_command.publish(&cycle.wheels)?;
             ports.cmg_command.publish(&cycle.cmg)?;
             io.heartbeat.add_samples_out(3);

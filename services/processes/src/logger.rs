@@ -93,6 +93,8 @@ impl LoggerProcess {
             logged::<HealthEvent>(bus)?,
             logged::<GroundCommand>(bus)?,
             logged::<GroundCommandAck>(bus)?,
+            logged::<ThrusterCommand>(bus)?,
+            logged::<ThrusterStatus>(bus)?,
         ];
         if !lockstep {
             topics.push(logged::<Heartbeat>(bus)?);

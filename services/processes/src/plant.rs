@@ -7,15 +7,26 @@
 //! The commands it integrates are the controller's (`run.actuation = "direct"`), or, with
 //! `run.actuation = "can_node"`, the ones the smart CAN node applies after the wheel and CMG
 //! gateways and the CAN bus (`AppliedWheelCommand`, `AppliedCmgCommand`, same time stamps).
+//!
+//! With thrusters (`[model.thrusters]` and `[controller.thrusters]`; direct actuation only, the
+//! CAN protocol has no thruster messages yet) the plant is also the simulated thruster drive:
+//! each tick's [`ThrusterCommand`] is part of the tick's answer, checked as the thruster
+//! gateway checks it ([`ThrusterGuard`]: a bad command is refused, counted, every valve shut),
+//! the valves are sensed at the end of the period (a stuck-open valve shuts the latch valve and
+//! is reported as [`HealthEventKind::ThrustersDisabled`]), and a [`ThrusterStatus`] goes out
+//! every tick.
 
 use ipc_types::{
-    AppliedCmgCommand, AppliedWheelCommand, CmgCommand, HealthEventKind, SimClockTick, SimTruth,
-    WheelCommand,
+    AppliedCmgCommand, AppliedWheelCommand, CmgCommand, HealthEventKind, SampleHeader,
+    SimClockTick, SimTruth, ThrusterCommand, ThrusterStatus, WheelCommand,
 };
 use std::time::{Duration, Instant};
 use testbed_bus::{
     Flow, LoopExit, SourceId, SubscriberOptions, TopicPublisher, TopicSubscriber, Wake,
 };
+use testbed_flight::convert::Sequence;
+use testbed_gateways::thrusters::ThrusterGuard;
+use testbed_model::thruster_config::THRUSTER_COUNT;
 use testbed_runtime::run_config::Actuation;
 use testbed_runtime::{ClockMode, Context, Io, Node, RunConfig, WakeOn};
 use testbed_sim::plant_node::PlantNode;
@@ -38,11 +49,73 @@ pub enum CommandPorts {
     },
 }
 
+/// The thruster drive's ports (runs with thruster control).
+pub struct ThrusterPorts {
+    commands: TopicSubscriber<ThrusterCommand>,
+    status: TopicPublisher<ThrusterStatus>,
+}
+
 /// The plant's ports: truth and clock out, commands in.
 pub struct PlantPorts {
     truth: TopicPublisher<SimTruth>,
     clock: TopicPublisher<SimClockTick>,
     commands: CommandPorts,
+    thrusters: Option<ThrusterPorts>,
+}
+
+/// The simulated thruster drive: the gateway's checks in front of the plant's valves.
+struct ThrusterDrive {
+    guard: ThrusterGuard,
+    /// On-times applied in the current period, s.
+    applied: [f64; THRUSTER_COUNT],
+    status_seq: Sequence,
+}
+
+impl ThrusterDrive {
+    fn new(valves: &testbed_model::thruster_config::ThrusterConfig, period_s: f64) -> Self {
+        Self {
+            guard: ThrusterGuard::new(valves, period_s, valves.stuck_open_confirm_periods),
+            applied: [0.0; THRUSTER_COUNT],
+            status_seq: Sequence::default(),
+        }
+    }
+
+    /// A command from the bus: checked, and what passes (all valves shut if refused) goes to
+    /// the plant. Only the current tick's command counts (as in the node): a stale one would
+    /// otherwise be checked, and counted if refused, twice.
+    fn on_command(&mut self, c: &ThrusterCommand, node: &mut PlantNode) {
+        if c.header.time_ns != node.time_ns() {
+            return;
+        }
+        let (on_time, refusal) = self.guard.check(c);
+        if let Some(refusal) = refusal {
+            tracing::warn!(
+                t_ns = c.header.time_ns,
+                "thruster command refused: {refusal}"
+            );
+        }
+        self.applied = on_time;
+        node.on_thruster_command(&ThrusterCommand { on_time, ..*c });
+    }
+
+    /// After the plant's step: senses the valves (a valve newly found stuck open shuts the
+    /// latch valve and is returned) and gives the period's status.
+    fn end_of_period(&mut self, node: &mut PlantNode) -> (ThrusterStatus, Option<usize>) {
+        let valves_open = node.valves_open();
+        let stuck = self.guard.on_valves_sensed(valves_open);
+        if stuck.is_some() {
+            node.shut_thruster_latch();
+        }
+        let status = ThrusterStatus {
+            header: self.status_seq.header(node.time_ns(), SampleHeader::VALID),
+            applied_on_time: std::mem::take(&mut self.applied),
+            valves_open,
+            disabled: u32::from(node.thruster_latch_shut()),
+            refused: self.guard.refused().total(),
+            propellant_used: node.propellant_used_kg(),
+        };
+        (status, stuck)
+    }
 }
 
 /// The plant process: [`PlantNode`] as the clock owner of the run.
@@ -54,6 +127,8 @@ pub struct PlantProcess {
     started: Instant,
     /// `run.command_timeout_s` (reported with a zeroing).
     command_timeout_s: f64,
+    /// The thruster drive (runs with thruster control).
+    thrusters: Option<ThrusterDrive>,
 }
 
 impl PlantProcess {
@@ -79,12 +154,34 @@ impl PlantProcess {
                 cmg: bus.subscriber_with(options)?,
             },
         };
+        let (thrusters, thruster_ports) = match (
+            &cx.config.controller.thrusters,
+            &cx.config.model.thrusters,
+        ) {
+            (None, _) => (None, None),
+            (Some(_), None) => {
+                anyhow::bail!("controller.thrusters is set but the model has no [model.thrusters]")
+            }
+            (Some(_), Some(valves)) => {
+                anyhow::ensure!(
+                    cx.config.run.actuation == Actuation::Direct,
+                    "thrusters need run.actuation = \"direct\": the CAN protocol has no thruster messages yet"
+                );
+                let drive = ThrusterDrive::new(valves, period.as_secs_f64());
+                let ports = ThrusterPorts {
+                    commands: bus.subscriber_with(options)?,
+                    status: bus.publisher()?,
+                };
+                (Some(drive), Some(ports))
+            }
+        };
         let process = Self {
             node,
             period,
             pace: None,
             started: Instant::now(),
             command_timeout_s: cx.config.run.command_timeout_s,
+            thrusters,
         };
         Ok((
             process,
@@ -92,6 +189,7 @@ impl PlantProcess {
                 truth,
                 clock,
                 commands,
+                thrusters: thruster_ports,
             },
         ))
     }
@@ -126,6 +224,9 @@ impl Node for PlantProcess {
                 wake.data(cmg)?;
             }
         }
+        if let Some(thrusters) = &ports.thrusters {
+            wake.data(&thrusters.commands)?;
+        }
         if wake.mode() == ClockMode::Paced {
             self.pace = Some(wake.interval(self.period)?);
         }
@@ -150,6 +251,9 @@ impl Node for PlantProcess {
                 cmg.drain(|c| node.on_cmg_command(&CmgCommand::new(c.header, c.gimbal_rate)))?;
             }
         }
+        if let (Some(ports), Some(drive)) = (&ports.thrusters, &mut self.thrusters) {
+            ports.commands.drain(|c| drive.on_command(&c, node))?;
+        }
         let advance_now = match self.pace {
             None => node.answered(),
             Some(pace) => wake == Wake::Tick(pace),
@@ -163,6 +267,22 @@ impl Node for PlantProcess {
         let was_zeroed = node.commands_zeroed();
         node.advance()?;
         let t_ns = self.node.time_ns();
+        if let (Some(ports), Some(drive)) = (&ports.thrusters, &mut self.thrusters) {
+            let (status, stuck) = drive.end_of_period(&mut self.node);
+            if let Some(stuck) = stuck {
+                tracing::error!(
+                    "thruster {stuck}: valve stuck open; latch valve shut, thrusters disabled"
+                );
+                io.health.report(
+                    t_ns,
+                    HealthEventKind::ThrustersDisabled,
+                    "actuators/thrusters",
+                    stuck as u32,
+                    0.0,
+                );
+            }
+            ports.status.publish(&status)?;
+        }
         match (was_zeroed, self.node.commands_zeroed()) {
             (false, true) => {
                 tracing::warn!(
@@ -203,5 +323,112 @@ impl Node for PlantProcess {
             "plant done"
         );
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use testbed_model::thruster_config::{StuckOpenValve, ThrusterConfig};
+
+    /// A run configuration with the default thrusters and thruster control.
+    fn config(stuck_open: Option<StuckOpenValve>) -> RunConfig {
+        let mut config = RunConfig::default();
+        config.model.thrusters = Some(ThrusterConfig {
+            stuck_open,
+            ..ThrusterConfig::default()
+        });
+        config.controller.thrusters = Some(Default::default());
+        config
+    }
+
+    fn command(node: &PlantNode, on_time: [f64; THRUSTER_COUNT]) -> ThrusterCommand {
+        ThrusterCommand {
+            header: SampleHeader::new(node.time_ns(), node.tick(), SampleHeader::VALID),
+            on_time,
+        }
+    }
+
+    fn drive_for(config: &RunConfig) -> ThrusterDrive {
+        ThrusterDrive::new(
+            config.model.thrusters.as_ref().unwrap(),
+            config.schedule().unwrap().period_s(),
+        )
+    }
+
+    #[test]
+    fn bad_commands_are_refused_counted_and_shut_every_valve() {
+        let config = config(None);
+        let mut node = PlantNode::new(&config).unwrap();
+        let mut drive = drive_for(&config);
+        let bad = [
+            [f64::NAN, 0.0, 0.0, 0.0, 0.0, 0.0],
+            [0.0, -0.01, 0.0, 0.0, 0.0, 0.0],
+            [0.0, 0.0, 0.5, 0.0, 0.0, 0.0], // longer than the 0.1 s period
+            [0.0, 0.0, 0.0, 0.01, 0.0, 0.0], // shorter than the 20 ms minimum
+        ];
+        for (k, on_time) in bad.into_iter().enumerate() {
+            let c = command(&node, on_time);
+            drive.on_command(&c, &mut node);
+            assert!(
+                !node.answered(),
+                "no wheel/CMG command, so not answered yet"
+            );
+            node.advance().unwrap();
+            let (status, stuck) = drive.end_of_period(&mut node);
+            assert_eq!(stuck, None);
+            assert_eq!(status.applied_on_time, [0.0; THRUSTER_COUNT], "{on_time:?}");
+            assert_eq!(status.valves_open, 0);
+            assert_eq!(status.refused, k as u64 + 1);
+            assert_eq!(status.propellant_used, 0.0, "no valve opened");
+        }
+        // A good command passes and uses propellant.
+        let c = command(&node, [0.05, 0.0, 0.0, 0.0, 0.0, 0.0]);
+        drive.on_command(&c, &mut node);
+        node.advance().unwrap();
+        let (status, _) = drive.end_of_period(&mut node);
+        assert_eq!(status.applied_on_time[0], 0.05);
+        assert_eq!(status.refused, 4);
+        assert!(status.propellant_used > 0.0);
+        // A command for another tick is ignored, not counted.
+        let mut stale = command(&node, [f64::NAN; THRUSTER_COUNT]);
+        stale.header.time_ns += 1;
+        drive.on_command(&stale, &mut node);
+        node.advance().unwrap();
+        assert_eq!(drive.end_of_period(&mut node).0.refused, 4);
+    }
+
+    #[test]
+    fn a_stuck_open_valve_shuts_the_latch_after_the_confirmation_periods() {
+        // Thruster 2 sticks open at 0.25 s, in the third period; it is confirmed at the end of
+        // the third period that reads it open when it should be shut (0.5 s).
+        let config = config(Some(StuckOpenValve {
+            thruster: 2,
+            from_s: 0.25,
+        }));
+        let mut node = PlantNode::new(&config).unwrap();
+        let mut drive = drive_for(&config);
+        let mut disabled_at = None;
+        for _ in 0..10 {
+            let c = command(&node, [0.0; THRUSTER_COUNT]);
+            drive.on_command(&c, &mut node);
+            node.advance().unwrap();
+            let (status, stuck) = drive.end_of_period(&mut node);
+            if let Some(thruster) = stuck {
+                assert_eq!(thruster, 2);
+                assert!(disabled_at.is_none(), "reported once");
+                disabled_at = Some(node.time_ns());
+                assert_eq!(status.disabled, 1);
+            }
+        }
+        assert_eq!(disabled_at, Some(500_000_000));
+        assert!(node.thruster_latch_shut());
+        // From then on every command that opens a valve is refused.
+        let c = command(&node, [0.05, 0.0, 0.0, 0.0, 0.0, 0.0]);
+        drive.on_command(&c, &mut node);
+        node.advance().unwrap();
+        let (status, _) = drive.end_of_period(&mut node);
+        assert_eq!(status.applied_on_time, [0.0; THRUSTER_COUNT]);
+        assert_eq!(status.refused, 1);
     }
 }

@@ -107,7 +107,8 @@ impl HeartbeatPublisher {
         self.publisher.publish(&hb).map(|_| ())
     }
 
-    pub(crate) fn publish_or_count(&self) {
+    /// Publishes the current heartbeat; a failure is logged and counted in its error counter.
+    pub fn publish_or_count(&self) {
         if let Err(e) = self.publish() {
             self.add_errors(1);
             tracing::warn!(error = %e, "heartbeat not published");

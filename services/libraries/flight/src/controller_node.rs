@@ -6,6 +6,7 @@ use crate::safe_mode::SafeWheels;
 use crate::safe_mode::{SafeMode, SafeReason, SafeReasons, SafeTransition, safe_wheel_torque};
 use crate::schedule::Schedule;
 use crate::tasks::{ActuatorTelemetry, Actuators, ControllerConfig, ControllerTask};
+use crate::thruster_control::ThrusterActivity;
 use ipc_types::{
     AttitudeEstimate, CmgCommand, CmgTelemetry, ControllerMode, ControllerStatus, GroundCommand,
     GroundCommandKind, GyroSample, SampleHeader, WheelCommand, WheelTelemetry,
@@ -32,6 +33,9 @@ pub struct ControlCycle {
     pub status: ControllerStatus,
     pub wheels: WheelCommand,
     pub cmg: CmgCommand,
+    /// Valve on-times for the next period: every cycle with thruster control (all shut when
+    /// the law has none), `None` without (issue 14).
+    pub thrusters: Option<ipc_types::ThrusterCommand>,
 }
 
 /// Newest sample times of the controller's inputs (run clock, ns): what tells a lost input.
@@ -84,6 +88,7 @@ pub struct ControllerNode {
     status_seq: Sequence,
     wheel_seq: Sequence,
     cmg_seq: Sequence,
+    thruster_seq: Sequence,
     inputs: InputTimes,
     first_input_ns: Option<u64>,
     /// The latest gyro sample: time (ns) and body rate (rad/s), for rate damping in safe mode.
@@ -115,6 +120,7 @@ impl ControllerNode {
             status_seq: Sequence::default(),
             wheel_seq: Sequence::default(),
             cmg_seq: Sequence::default(),
+            thruster_seq: Sequence::default(),
             inputs: InputTimes::default(),
             first_input_ns: None,
             gyro: None,
@@ -341,12 +347,18 @@ impl ControllerNode {
         if self.safe.is_active() {
             return self.safe_cycle(t_ns, period, &telemetry);
         }
+        let mut thrust = None;
         let (mut command, error, mut mode, saturated) = match attitude {
             Some((q, rate)) => match self.task.command(seconds(t_ns), &q, &rate, &telemetry) {
-                Ok(o) => {
-                    let mode = match self.actuators {
-                        Actuators::Wheels => ControllerMode::WheelPointing,
-                        Actuators::Cmg => ControllerMode::CmgSlew,
+                Ok(mut o) => {
+                    thrust = self.task.thrusters(&rate, &telemetry, &mut o);
+                    let mode = match (self.actuators, thrust.map(|t| t.activity)) {
+                        (_, Some(ThrusterActivity::Dumping)) => ControllerMode::MomentumDump,
+                        (_, Some(ThrusterActivity::RateDamping)) => {
+                            ControllerMode::ThrusterRateDamping
+                        }
+                        (Actuators::Wheels, _) => ControllerMode::WheelPointing,
+                        (Actuators::Cmg, _) => ControllerMode::CmgSlew,
                     };
                     (o.command, o.error_rad, mode, o.saturated)
                 }
@@ -415,7 +427,7 @@ impl ControllerNode {
             ..ControllerStatus::default()
         };
         status.set_mode(mode);
-        self.outputs(t_ns, status, &command)
+        self.outputs(t_ns, status, &command, thrust.map(|t| t.command))
     }
 
     /// What is wrong with the inputs of the cycle at `t_ns` (the reasons for safe mode).
@@ -454,6 +466,36 @@ impl ControllerNode {
             .with(SafeReason::WheelSpeedLimit, wheels_fast)
     }
 
+    /// Every input has gone silent past the control deadline (a paced run's wall-clock deadline:
+    /// a CAN link down, a dead estimator and gateways). The data-driven checks of [`Self::ready`]
+    /// need a sample to notice anything, so the silence itself enters safe mode: once two
+    /// periods have passed since the last cycle, the tick after it runs as a safe cycle, with
+    /// the estimate and the actuators' telemetry counted lost (no wheel torque, gimbals held).
+    /// `missed` is how many deadlines have passed in a row. None before the first cycle, and
+    /// from `run_end_ns` on (the run's end silences every input; that is no fault).
+    pub fn on_silence(&mut self, missed: u64, run_end_ns: u64) -> Option<ControlCycle> {
+        let last = self.last_cycle_ns?;
+        let t_ns = last + self.period_ns;
+        if missed < LOST_AFTER_PERIODS || t_ns >= run_end_ns {
+            return None;
+        }
+        let period = self.period_ns;
+        self.last_cycle_ns = Some(t_ns);
+        self.pending.retain(|&t, _| t > t_ns);
+        let wrong = SafeReasons::NONE
+            .with(SafeReason::EstimateLost, true)
+            .with(SafeReason::WheelTelemetryLost, true)
+            .with(SafeReason::CmgTelemetryLost, true);
+        if let Some(transition) = self.safe.update(t_ns, wrong) {
+            self.transitions.push((t_ns, transition));
+        }
+        let unknown = ActuatorTelemetry {
+            wheel_speed_rad_s: Vector3::zeros(),
+            gimbal_rad: Default::default(),
+        };
+        Some(self.safe_cycle(t_ns, period, &unknown))
+    }
+
     /// A safe-mode cycle: safe wheel torque, gimbals held.
     fn safe_cycle(
         &mut self,
@@ -478,10 +520,15 @@ impl ControllerNode {
                 self.wheel_limits.max_speed_rad_s,
             )
         };
-        let command = ActuatorCommand {
+        let mut command = ActuatorCommand {
             wheel_torque_nm,
             gimbal_rate_rad_s: Default::default(),
         };
+        // With thrusters: they alone damp the gyro's rate, the wheels are off (issue 14).
+        let thrust = self.task.thruster_rate_damping(fresh_gyro.as_ref());
+        if thrust.is_some() {
+            command.wheel_torque_nm = Vector3::zeros();
+        }
         let mut status = ControllerStatus {
             header: self.status_seq.header(t_ns, SampleHeader::VALID),
             torque_command: a3(&(-command.wheel_torque_nm)),
@@ -489,8 +536,12 @@ impl ControllerNode {
             loop_period_ns: period,
             ..ControllerStatus::default()
         };
-        status.set_mode(ControllerMode::Safe);
-        self.outputs(t_ns, status, &command)
+        status.set_mode(if thrust.is_some() {
+            ControllerMode::ThrusterRateDamping
+        } else {
+            ControllerMode::Safe
+        });
+        self.outputs(t_ns, status, &command, thrust.map(|t| t.command))
     }
 
     fn outputs(
@@ -498,6 +549,7 @@ impl ControllerNode {
         t_ns: u64,
         status: ControllerStatus,
         command: &ActuatorCommand,
+        thrust: Option<testbed_model::physics::ThrusterCommand>,
     ) -> ControlCycle {
         ControlCycle {
             status,
@@ -509,6 +561,14 @@ impl ControllerNode {
                 header: self.cmg_seq.header(t_ns, SampleHeader::VALID),
                 gimbal_rate: a4(&command.gimbal_rate_rad_s),
             },
+            // With thruster control there is a command every cycle (all valves shut when the law
+            // has none), so the thruster drive can tell a late controller from a quiet one.
+            thrusters: thrust
+                .or_else(|| self.task.has_thruster_control().then(Default::default))
+                .map(|t| ipc_types::ThrusterCommand {
+                    header: self.thruster_seq.header(t_ns, SampleHeader::VALID),
+                    on_time: t.on_time_s,
+                }),
         }
     }
 }
@@ -602,6 +662,127 @@ mod tests {
             }
         }
         assert_eq!(left_at, Some(60), "healthy from tick 10, left 5 s later");
+    }
+
+    /// A CAN link down silences every input: the deadlines alone enter safe mode, at the
+    /// second silent deadline, with zero wheel torque (speeds unknown) and gimbals held; data
+    /// again leave it after recovery_s.
+    #[test]
+    fn total_silence_enters_safe_mode_at_the_second_missed_deadline_with_zero_torque() {
+        let mut node = node();
+        assert!(
+            node.on_silence(5, u64::MAX).is_none(),
+            "no cycle yet: nothing to hold"
+        );
+        for k in 0..=5 {
+            node.on_estimate(&estimate(k));
+            telemetry(&mut node, k, 10.0);
+            node.on_gyro(&GyroSample::new(header(k), [0.01, 0.0, 0.0]));
+            assert_eq!(node.ready().len(), 1);
+        }
+        assert!(
+            node.on_silence(1, u64::MAX).is_none(),
+            "one missed deadline is not yet a loss"
+        );
+        let cycle = node
+            .on_silence(2, u64::MAX)
+            .expect("a safe cycle at the second missed deadline");
+        assert_eq!(cycle.status.header.time_ns, 6 * TICK_NS);
+        assert_eq!(cycle.status.mode(), Some(ControllerMode::Safe));
+        assert_eq!(
+            cycle.wheels.torque, [0.0; 3],
+            "wheel speeds unknown: no torque"
+        );
+        assert_eq!(cycle.cmg.gimbal_rate, [0.0; 4], "gimbals held");
+        assert!(
+            node.on_silence(3, 7 * TICK_NS).is_none(),
+            "the run's end silences everything: no fault"
+        );
+        let next = node
+            .on_silence(3, u64::MAX)
+            .expect("one safe cycle per further deadline");
+        assert_eq!(next.status.header.time_ns, 7 * TICK_NS);
+        let transitions = node.take_transitions();
+        assert!(matches!(
+            transitions.as_slice(),
+            [(t, SafeTransition::Entered(r))] if *t == 6 * TICK_NS
+                && r.contains(SafeReason::EstimateLost)
+                && r.contains(SafeReason::WheelTelemetryLost)
+        ));
+        let mut left_at = None;
+        for k in 9..=80 {
+            node.on_estimate(&estimate(k));
+            telemetry(&mut node, k, 10.0);
+            node.ready();
+            if let Some((t, SafeTransition::Left)) = node.take_transitions().first() {
+                left_at = Some(t / TICK_NS);
+            }
+        }
+        assert_eq!(left_at, Some(59), "healthy from tick 9, left 5 s later");
+    }
+
+    #[test]
+    fn with_thrusters_safe_mode_damps_on_the_thrusters_alone_and_dumping_is_reported() {
+        use crate::thruster_control::ThrusterControlConfig;
+        use testbed_model::thruster_config::ThrusterConfig;
+        let model = ModelConfig {
+            thrusters: Some(ThrusterConfig::default()),
+            ..ModelConfig::default()
+        };
+        let config = ControllerConfig {
+            thrusters: Some(ThrusterControlConfig::default()),
+            ..ControllerConfig::default()
+        };
+        let task = ControllerTask::new(&config, &model, Attitude::identity()).unwrap();
+        let mut node = ControllerNode::new(
+            task,
+            &config,
+            &model.wheels,
+            Schedule::from_model(&model).unwrap(),
+        );
+        // Wheels at 3500 rpm (0.58 Nms, past the 0.5 Nms dump threshold): a dump.
+        let speed = 3500.0 * std::f64::consts::PI / 30.0;
+        for k in 0..=5 {
+            node.on_estimate(&estimate(k));
+            telemetry(&mut node, k, speed);
+            let cycles = node.ready();
+            assert_eq!(cycles.len(), 1);
+            assert_eq!(cycles[0].status.mode(), Some(ControllerMode::MomentumDump));
+            let thrust = cycles[0].thrusters.expect("a thruster command every cycle");
+            // −k h on every axis: the − thrusters (1, 3, 5) fire, the + ones do not.
+            if k == 0 {
+                assert!(
+                    thrust.on_time[1] > 0.0 && thrust.on_time[3] > 0.0 && thrust.on_time[5] > 0.0
+                );
+            }
+            assert_eq!(
+                (thrust.on_time[0], thrust.on_time[2], thrust.on_time[4]),
+                (0.0, 0.0, 0.0)
+            );
+        }
+        // The estimator stops: safe mode damps the gyro's rate on the thrusters, wheels off.
+        let rate = [0.01, -0.02, 0.0];
+        for k in 6..=9 {
+            node.on_gyro(&GyroSample::new(header(k), rate));
+            telemetry(&mut node, k, speed);
+            for cycle in node.ready() {
+                assert_eq!(
+                    cycle.status.mode(),
+                    Some(ControllerMode::ThrusterRateDamping)
+                );
+                assert_eq!(cycle.wheels.torque, [0.0; 3]);
+                let thrust = cycle.thrusters.expect("thrusters in safe mode");
+                // −K w: the − X thruster (1) and the + Y thruster (2), nothing about Z.
+                assert!(
+                    thrust.on_time[1] > 0.0 && thrust.on_time[2] > 0.0,
+                    "{thrust:?}"
+                );
+                assert_eq!(
+                    thrust.on_time[0] + thrust.on_time[3] + thrust.on_time[4] + thrust.on_time[5],
+                    0.0
+                );
+            }
+        }
     }
 
     #[test]

@@ -12,6 +12,8 @@
 //! * [`stats`]: the chi-square distribution (the MEKF's gate thresholds, consistency checks).
 //! * [`manoeuvre`]: the experiment programme (initial condition, target).
 //! * [`convert`]: sample arrays to and from nalgebra types.
+//! * [`thruster_control`]: pulse modulator, momentum dumping and rate damping on the six
+//!   thrusters (issue 14; off unless configured).
 
 #![forbid(unsafe_code)]
 
@@ -26,3 +28,4 @@ pub mod safe_mode;
 pub mod schedule;
 pub mod stats;
 pub mod tasks;
+pub mod thruster_control;

@@ -62,6 +62,7 @@ pub mod faults;
 pub mod gateway;
 pub mod node;
 pub mod status;
+pub mod thrusters;
 
 pub use bus_transport::SoftwareBusTransport;
 pub use gateway::{Gateway, GatewayDevice};

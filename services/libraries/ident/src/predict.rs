@@ -91,6 +91,48 @@ impl Predictions {
         }
     }
 
+    /// The predictions of disjoint sets of windows (e.g. the folds of a cross-validation, each
+    /// by its own model) as one, windows in time order. The parts share the noise model (the
+    /// first part's `sigma` is kept).
+    pub fn merge(parts: Vec<Predictions>) -> Predictions {
+        let mut out = Predictions {
+            sigma: parts.first().map_or([0.0; 11], |p| p.sigma),
+            ..Predictions::default()
+        };
+        // (window, part, index in the part), sorted by the window's ticks.
+        let mut order: Vec<((usize, usize), usize, usize)> = parts
+            .iter()
+            .enumerate()
+            .flat_map(|(p, part)| {
+                part.windows
+                    .iter()
+                    .enumerate()
+                    .map(move |(i, w)| (*w, p, i))
+            })
+            .collect();
+        order.sort_unstable();
+        let mut index: Vec<Vec<usize>> = parts.iter().map(|p| vec![0; p.windows.len()]).collect();
+        for (new, (w, p, i)) in order.iter().enumerate() {
+            index[*p][*i] = new;
+            out.windows.push(*w);
+        }
+        for c in 0..11 {
+            let mut r: Vec<(f64, f64, usize)> = parts
+                .iter()
+                .enumerate()
+                .flat_map(|(p, part)| {
+                    let index = &index[p];
+                    part.residuals[c]
+                        .iter()
+                        .map(move |&(t, v, w)| (t, v, index[w]))
+                })
+                .collect();
+            r.sort_by(|a, b| a.2.cmp(&b.2).then(a.0.total_cmp(&b.0)));
+            out.residuals[c] = r;
+        }
+        out
+    }
+
     /// Normalised RMS of every component in each window (for figures): per component
     /// `(window start time, normalised RMS)`.
     pub fn per_window(&self, data: &Aligned) -> [Vec<(f64, f64)>; 11] {
@@ -354,4 +396,32 @@ fn command_pieces(data: &Aligned, a: f64, b: f64, delay: f64) -> Vec<(f64, Actua
         start = end;
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn merged_folds_keep_every_residual_in_time_order_of_their_windows() {
+        let part = |windows: Vec<(usize, usize)>, ts: &[(f64, usize)]| {
+            let mut p = Predictions {
+                windows,
+                sigma: [2.0; 11],
+                ..Predictions::default()
+            };
+            p.residuals[0] = ts.iter().map(|&(t, w)| (t, t * 10.0, w)).collect();
+            p
+        };
+        // Fold A predicts windows at ticks 0 and 20, fold B the one at 10.
+        let a = part(vec![(0, 9), (20, 29)], &[(0.0, 0), (0.5, 0), (2.0, 1)]);
+        let b = part(vec![(10, 19)], &[(1.0, 0), (1.5, 0)]);
+        let m = Predictions::merge(vec![a, b]);
+        assert_eq!(m.windows, vec![(0, 9), (10, 19), (20, 29)]);
+        let t: Vec<(f64, usize)> = m.residuals[0].iter().map(|r| (r.0, r.2)).collect();
+        assert_eq!(t, vec![(0.0, 0), (0.5, 0), (1.0, 1), (1.5, 1), (2.0, 2)]);
+        assert!(m.residuals[0].iter().all(|r| r.1 == r.0 * 10.0));
+        assert_eq!(m.sigma, [2.0; 11]);
+        assert!(m.residuals[1].is_empty());
+    }
 }

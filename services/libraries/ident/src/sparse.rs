@@ -359,7 +359,8 @@ pub struct SparseResult {
     pub z_threshold: f64,
     /// Cross-validated RMS ratio, forced columns only / with the terms (1: nothing found).
     pub cv_gain: f64,
-    /// Held-out RMS ratio (fit on the fit blocks, evaluated on the held-out blocks).
+    /// Held-out RMS ratio (fit on the fit blocks, evaluated on the held-out blocks); with no
+    /// block held out, the cross-validated ratio `cv_gain`.
     pub held_out_gain: f64,
 }
 
@@ -514,17 +515,22 @@ pub fn search(design: &Design, options: &SparseOptions) -> SparseResult {
         stderr: se[i],
     };
     let cv = design.cv_rss(&active).unwrap_or(base_cv);
-    let held_base = design.held_out_rss(&forced);
-    let held = design.held_out_rss(&active);
-    let held_out_gain = match (held_base, held) {
-        (Some(a), Some(b)) if b > 0.0 => (a / b).sqrt(),
-        _ => 1.0,
+    let cv_gain = if cv > 0.0 { (base_cv / cv).sqrt() } else { 1.0 };
+    // No cluster held out (the selection uses all the data): the held-out gain is the
+    // cross-validated one.
+    let held_out_gain = if !design.clusters.iter().any(|c| c.held_out) {
+        cv_gain
+    } else {
+        match (design.held_out_rss(&forced), design.held_out_rss(&active)) {
+            (Some(a), Some(b)) if b > 0.0 => (a / b).sqrt(),
+            _ => 1.0,
+        }
     };
     SparseResult {
         forced: (0..nf).map(term).collect(),
         terms: (nf..active.len()).map(term).collect(),
         z_threshold,
-        cv_gain: if cv > 0.0 { (base_cv / cv).sqrt() } else { 1.0 },
+        cv_gain,
         held_out_gain,
     }
 }

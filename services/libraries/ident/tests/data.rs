@@ -175,7 +175,7 @@ fn bad_data_is_refused_naming_the_file_and_row() {
                         }
                     })
                     .collect();
-                std::fs::write(&p, out.join("\n")).expect("write");
+                std::fs::write(&p, out.join("\n") + "\n").expect("write");
             }),
             vec!["inclinometer.csv", "unknown column `temp`"],
         ),
@@ -229,7 +229,8 @@ fn bad_data_is_refused_naming_the_file_and_row() {
                 let p = d.join("gyro.csv");
                 let text = std::fs::read_to_string(&p).expect("read");
                 let keep: Vec<&str> = text.lines().take(301).collect();
-                std::fs::write(&p, keep.join("\n")).expect("write");
+                // Complete rows (a file ending without a newline is refused as cut).
+                std::fs::write(&p, keep.join("\n") + "\n").expect("write");
             }),
             vec!["gyro.csv", "29.9 s", "at least 60 s"],
         ),
@@ -250,7 +251,7 @@ fn bad_data_is_refused_naming_the_file_and_row() {
                         f.join(",")
                     })
                     .collect();
-                std::fs::write(&p, out.join("\n")).expect("write");
+                std::fs::write(&p, out.join("\n") + "\n").expect("write");
             }),
             vec!["wheels.csv", "one clock"],
         ),

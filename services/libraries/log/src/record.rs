@@ -5,7 +5,7 @@ use ipc_types::{
     AppliedCmgCommand, AppliedWheelCommand, AttitudeEstimate, CanBusFrame, CanLinkStatus,
     CmgCommand, CmgTelemetry, ControllerStatus, GroundCommand, GroundCommandAck, GyroSample,
     HealthEvent, Heartbeat, InclinometerSample, MagnetometerSample, SampleHeader, SimClockTick,
-    SimTruth, Topic, WheelCommand, WheelTelemetry,
+    SimTruth, ThrusterCommand, ThrusterStatus, Topic, WheelCommand, WheelTelemetry,
 };
 use serde_json::Value;
 
@@ -484,6 +484,26 @@ log_types! {
         decided_by: "1 the ground link, 2 the controller.",
         reason: "Why it was rejected, or what was applied (UTF-8, at most 64 bytes).",
     } pad [];
+
+    /// [`ThrusterCommand`] on [`topic::THRUSTER_COMMAND`](ipc_types::topic::THRUSTER_COMMAND).
+    ThrusterCommand(ThrusterCommand) = "testbed::ThrusterCommand.v1",
+    "Valve on-times of the six thrusters for one control period, from the controller. Thruster \
+     2a gives + torque about body axis a, thruster 2a+1 - torque." {
+        header: "Common header; time_ns is the time of the input the command was computed \
+                 from (the valves open at the start of the period that follows).",
+        on_time: "Electrical on-time of each valve from the start of the period, s (0: shut).",
+    } pad [];
+
+    /// [`ThrusterStatus`] on [`topic::THRUSTER_STATUS`](ipc_types::topic::THRUSTER_STATUS).
+    ThrusterStatus(ThrusterStatus) = "testbed::ThrusterStatus.v1",
+    "What the thruster drive applied and counted, once per period." {
+        header: "Common header; time_ns is the period the status describes (its end).",
+        applied_on_time: "Valve on-times applied in the period, s.",
+        valves_open: "Valves open at the end of the period: bit i for thruster i.",
+        disabled: "1 if the thrusters are disabled (latch valve shut), else 0.",
+        refused: "Commands refused since start (not finite, out of range, too short).",
+        propellant_used: "Propellant used since start, kg.",
+    } pad [];
 }
 
 #[cfg(test)]
@@ -522,6 +542,10 @@ mod tests {
         check::<AppliedWheelCommand>();
         check::<AppliedCmgCommand>();
         check::<HealthEvent>();
+        check::<GroundCommand>();
+        check::<GroundCommandAck>();
+        check::<ThrusterCommand>();
+        check::<ThrusterStatus>();
     }
 
     #[test]
@@ -565,6 +589,10 @@ mod tests {
             TopicKind::WheelApplied => LogRecord::WheelApplied(Default::default()),
             TopicKind::CmgApplied => LogRecord::CmgApplied(Default::default()),
             TopicKind::Health => LogRecord::Health(Default::default()),
+            TopicKind::GroundCommand => LogRecord::GroundCommand(Default::default()),
+            TopicKind::GroundCommandAck => LogRecord::GroundCommandAck(Default::default()),
+            TopicKind::ThrusterCommand => LogRecord::ThrusterCommand(Default::default()),
+            TopicKind::ThrusterStatus => LogRecord::ThrusterStatus(Default::default()),
         };
         let mut out = Vec::new();
         record.encode_json(&mut out);

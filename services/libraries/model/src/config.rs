@@ -56,6 +56,9 @@ pub struct ModelConfig {
     pub wheels: WheelConfig,
     pub cmg: CmgConfig,
     pub effects: EffectsConfig,
+    /// The six cold-gas thrusters (issue 14); off unless the table is present.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub thrusters: Option<crate::thruster_config::ThrusterConfig>,
 }
 
 /// The rigid platform on its air bearing.
@@ -265,6 +268,10 @@ pub struct EffectsConfig {
     pub soft_iron: Option<SoftIron>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub heading_torque: Option<HeadingTorque>,
+    /// Thrust of each thruster times a factor (a worn nozzle, a wrong regulator pressure);
+    /// acts only with `[thrusters]`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub thruster_torque_scale: Option<crate::thruster_config::ThrusterTorqueScale>,
 }
 
 /// The centre of mass moves at a constant rate (thermal expansion, a draining tank): the offset
@@ -579,7 +586,14 @@ impl ModelConfig {
             v.finite_all("effects.heading_torque.cos_nm", &x.cos_nm);
             v.finite_all("effects.heading_torque.sin_nm", &x.sin_nm);
         }
-        v.finish()
+        if let Some(x) = &e.thruster_torque_scale {
+            v.positive_all("effects.thruster_torque_scale.scale", &x.scale);
+        }
+        v.finish()?;
+        match &self.thrusters {
+            Some(t) => t.validate(),
+            None => Ok(()),
+        }
     }
 
     /// The platform inertia the plant integrates: nominal, with `effects.inertia_error` applied.

@@ -13,5 +13,6 @@ pub mod attitude;
 pub mod config;
 pub mod devices;
 pub mod physics;
+pub mod thruster_config;
 
 pub use config::{ModelConfig, WheelConfig};

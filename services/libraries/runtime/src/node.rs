@@ -219,7 +219,10 @@ pub fn run<N: Node>(
             }
         }
     }
+    // Said at once, not at the next interval: the launcher stops watching a stopping process,
+    // whose stop and exit may take longer than the heartbeat timeout on a loaded machine.
     heartbeat.set_state(ProcessState::Stopping);
+    heartbeat.publish_or_count();
     let stopped = node.stop(&ports, &io, exit);
     match (error, stopped) {
         (Some(e), _) => Err(e.context(format!("{name} failed"))),

@@ -36,7 +36,7 @@ pub fn start(name: &str) -> anyhow::Result<(RunConfig, Bus)> {
 }
 
 /// The start barrier of a clock owner (plant, replay): block until every process named in
-/// `participants` has published a `Running` heartbeat, so every subscriber exists before the
+/// `participants` has published a `Running` (or `Degraded`) heartbeat, so every subscriber exists before the
 /// first sample.
 pub fn wait_for_participants(bus: &Bus, participants: &[String]) -> anyhow::Result<LoopExit> {
     let mut waiting: BTreeSet<&str> = participants.iter().map(String::as_str).collect();
@@ -59,7 +59,13 @@ pub fn wait_for_participants(bus: &Bus, participants: &[String]) -> anyhow::Resu
         let mut seen = Vec::new();
         let exit = events.run_once(left, |_| {
             let _ = heartbeats.drain(|h| {
-                if h.state() == Some(ProcessState::Running) {
+                // Degraded is running too (its ports exist): a CAN gateway that has not yet
+                // heard its node, slow to start on a loaded machine, reports Degraded and must
+                // not hold the barrier until the node (itself waiting for the barrier) speaks.
+                if matches!(
+                    h.state(),
+                    Some(ProcessState::Running | ProcessState::Degraded)
+                ) {
                     seen.push(h.name().to_string());
                 }
             });
@@ -77,4 +83,68 @@ pub fn wait_for_participants(bus: &Bus, participants: &[String]) -> anyhow::Resu
         "all participants running; starting the clock"
     );
     Ok(LoopExit::Stopped)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::sync::Arc;
+    use std::sync::atomic::{AtomicBool, Ordering};
+    use testbed_bus::HeartbeatPublisher;
+
+    /// A participant on its own thread and bus node publishing a heartbeat every 50 ms: state
+    /// `first`, then `then` from `switch_after` on, until `stop` is set.
+    fn participant(
+        config: BusConfig,
+        name: &'static str,
+        (first, switch_after, then): (ProcessState, Duration, ProcessState),
+        stop: Arc<AtomicBool>,
+    ) -> std::thread::JoinHandle<()> {
+        std::thread::spawn(move || {
+            let bus = Bus::open(name, &config).expect("participant bus");
+            let heartbeat =
+                HeartbeatPublisher::new(&bus, Duration::from_millis(50)).expect("heartbeat");
+            let started = Instant::now();
+            while !stop.load(Ordering::Relaxed) {
+                let state = if started.elapsed() < switch_after {
+                    first
+                } else {
+                    then
+                };
+                heartbeat.set_state(state);
+                heartbeat.publish().expect("publishing a heartbeat");
+                std::thread::sleep(Duration::from_millis(50));
+            }
+        })
+    }
+
+    /// A participant that is up but degraded (a CAN gateway that has not heard its node yet)
+    /// releases the barrier as a running one does; one still starting holds it until it runs.
+    #[test]
+    fn the_start_barrier_counts_running_and_degraded_participants_and_waits_for_starting_ones() {
+        use ProcessState::{Degraded, Running, Starting};
+        let config = BusConfig::isolated();
+        let bus = Bus::open("plant", &config).expect("bus");
+        let stop = Arc::new(AtomicBool::new(false));
+        let now = Duration::ZERO;
+        let late = Duration::from_millis(800);
+        let threads = [
+            participant(config.clone(), "a", (Running, now, Running), stop.clone()),
+            participant(config.clone(), "b", (Degraded, now, Degraded), stop.clone()),
+            participant(config.clone(), "c", (Starting, late, Running), stop.clone()),
+        ];
+        let started = Instant::now();
+        let exit = wait_for_participants(&bus, &["a".into(), "b".into()]).expect("barrier");
+        assert_eq!(exit, LoopExit::Stopped);
+        // "c" says Starting for its first 800 ms: the barrier cannot pass before.
+        wait_for_participants(&bus, &["a".into(), "c".into()]).expect("barrier with c");
+        assert!(started.elapsed() >= late, "{:?}", started.elapsed());
+
+        stop.store(true, Ordering::Relaxed);
+        for handle in threads {
+            handle.join().expect("participant thread");
+        }
+        drop(bus);
+        testbed_bus::remove_all(&config).expect("removing the test's bus files");
+    }
 }

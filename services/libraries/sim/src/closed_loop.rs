@@ -21,6 +21,7 @@ use testbed_model::devices::DeviceSet;
 use testbed_model::physics::{ActuatorCommand, Plant, PlatformState, TiltStopEvent};
 use testbed_runtime::RunConfig;
 
+use crate::thruster_trace::ThrusterTrace;
 use testbed_flight::manoeuvre::Manoeuvre;
 use testbed_flight::schedule::Schedule;
 
@@ -192,6 +193,14 @@ pub fn run(scenario: &Scenario) -> Result<Trace, LoopError> {
 /// Run a scenario to its end and also return what the devices reported at every tick (the
 /// measured data of the run, for identification and export).
 pub fn run_recorded(scenario: &Scenario) -> Result<(Trace, Vec<MeasurementRecord>), LoopError> {
+    run_with_thrusters(scenario).map(|(trace, measured, _)| (trace, measured))
+}
+
+/// Run a scenario to its end and return, besides the trace and the measured data, what the
+/// thrusters did (empty without `[thrusters]`).
+pub fn run_with_thrusters(
+    scenario: &Scenario,
+) -> Result<(Trace, Vec<MeasurementRecord>, ThrusterTrace), LoopError> {
     scenario.model.validate()?;
     if !(scenario.duration_s.is_finite() && scenario.duration_s > 0.0) {
         return Err(LoopError::Scenario(format!(
@@ -226,6 +235,7 @@ pub fn run_recorded(scenario: &Scenario) -> Result<(Trace, Vec<MeasurementRecord
     let mut target = scenario.manoeuvre.target();
     let mut controller = ControllerTask::new(&scenario.controller, model, target)?;
     let mut next_change = 0;
+    let mut thruster_trace = ThrusterTrace::default();
     let mut measurements = Vec::with_capacity(tick_count as usize + 1);
 
     let mut trace = Trace {
@@ -287,9 +297,13 @@ pub fn run_recorded(scenario: &Scenario) -> Result<(Trace, Vec<MeasurementRecord
             (Feedback::Estimate, Some(e)) => Some((e.attitude, e.rate_rad_s)),
             (Feedback::Estimate, None) => None,
         };
-        let output = match feedback {
+        let mut output = match feedback {
             Some((q, rate)) => Some(controller.command(t_s, &q, &rate, &telemetry)?),
             None => None,
+        };
+        let thrust = match (feedback, output.as_mut()) {
+            (Some((_, rate)), Some(o)) => controller.thrusters(&rate, &telemetry, o),
+            _ => None,
         };
         let mut command = output
             .as_ref()
@@ -311,8 +325,14 @@ pub fn run_recorded(scenario: &Scenario) -> Result<(Trace, Vec<MeasurementRecord
             saturated: output.as_ref().is_some_and(|o| o.saturated),
             singularity_measure: output.as_ref().and_then(|o| o.singularity_measure),
         });
+        if let Some(bank) = plant.thrusters() {
+            thruster_trace.record(t_s, thrust.as_ref(), bank, &truth_wheels(&trace), model);
+        }
         if k == tick_count {
             break;
+        }
+        if let Some(t) = &thrust {
+            plant.command_thrusters(&t.command)?;
         }
         let report = plant.step(&command, dt_s)?;
         trace.tilt_stops.extend(report.tilt_stop);
@@ -320,7 +340,18 @@ pub fn run_recorded(scenario: &Scenario) -> Result<(Trace, Vec<MeasurementRecord
     trace.gate_rejections = estimator
         .filter()
         .map_or(0, |f| f.counters().updates_rejected);
-    Ok((trace, measurements))
+    if let Some(bank) = plant.thrusters() {
+        thruster_trace.finish(bank, model);
+    }
+    Ok((trace, measurements, thruster_trace))
+}
+
+/// The true wheel speeds of the last tick recorded, rad/s.
+fn truth_wheels(trace: &Trace) -> Vector3<f64> {
+    trace
+        .ticks
+        .last()
+        .map_or_else(Vector3::zeros, |t| t.truth.wheel_speed)
 }
 
 fn estimate_record(

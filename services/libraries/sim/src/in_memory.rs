@@ -74,6 +74,9 @@ pub fn run(
             cmg.on_command(&cycle.cmg);
             plant.on_wheel_command(&cycle.wheels);
             plant.on_cmg_command(&cycle.cmg);
+            if let Some(t) = &cycle.thrusters {
+                plant.on_thruster_command(t);
+            }
         }
         anyhow::ensure!(plant.answered(), "tick {} was not answered", plant.tick());
         if plant.at_end() {
@@ -111,6 +114,25 @@ mod tests {
         }
     }
 
+    /// Asserts the pipeline's estimate `sample` has the in-process loop's attitude at `tick`
+    /// (bit for bit) and returns the loop's estimate.
+    fn same_attitude<'a>(
+        sample: &AttitudeEstimate,
+        tick: &'a closed_loop::TickRecord,
+    ) -> &'a closed_loop::EstimateRecord {
+        let expected = tick
+            .estimate
+            .as_ref()
+            .expect("estimator initialised at t = 0");
+        assert_eq!(
+            quaternion_from_array(&sample.quaternion).unwrap(),
+            expected.attitude,
+            "t = {}",
+            tick.t_s
+        );
+        expected
+    }
+
     #[test]
     fn the_process_split_computes_exactly_what_the_in_process_loop_computes() {
         let config = config();
@@ -118,22 +140,51 @@ mod tests {
         let trace = closed_loop::run(&closed_loop::Scenario::from_run(&config)).unwrap();
         assert_eq!(pipeline.estimates.len(), trace.ticks.len());
         for (sample, tick) in pipeline.estimates.iter().zip(&trace.ticks) {
-            let expected = tick
-                .estimate
-                .as_ref()
-                .expect("estimator initialised at t = 0");
-            assert_eq!(
-                quaternion_from_array(&sample.quaternion).unwrap(),
-                expected.attitude,
-                "t = {}",
-                tick.t_s
-            );
+            let expected = same_attitude(sample, tick);
             assert_eq!(
                 sample.gyro_bias,
                 [
                     expected.bias_rad_s.x,
                     expected.bias_rad_s.y,
                     expected.bias_rad_s.z
+                ]
+            );
+        }
+    }
+
+    #[test]
+    fn with_thrusters_the_process_split_still_computes_exactly_the_in_process_loop() {
+        use testbed_flight::thruster_control::ThrusterControlConfig;
+        use testbed_model::thruster_config::ThrusterConfig;
+        let mut config = config();
+        config.model.thrusters = Some(ThrusterConfig::default());
+        config.controller.thrusters = Some(ThrusterControlConfig::default());
+        // Wheels just past the dump threshold (0.5 Nms = 3000 rpm), the Z wheel spun against the
+        // heading slew so that no wheel reaches the safe-mode limit (the in-process loop has no
+        // safe mode): the thrusters fire from the first ticks.
+        config.manoeuvre.initial_wheel_speed_rpm = [3100.0, -3100.0, -3100.0];
+        let pipeline = run(&config, scrambled(7)).unwrap();
+        let (trace, _, thrusters) =
+            closed_loop::run_with_thrusters(&closed_loop::Scenario::from_run(&config)).unwrap();
+        assert!(
+            thrusters.pulses.iter().sum::<u64>() > 10,
+            "{:?}",
+            thrusters.pulses
+        );
+        assert_eq!(pipeline.estimates.len(), trace.ticks.len());
+        for ((sample, truth), tick) in pipeline
+            .estimates
+            .iter()
+            .zip(&pipeline.truths)
+            .zip(&trace.ticks)
+        {
+            same_attitude(sample, tick);
+            assert_eq!(
+                truth.wheel_speed,
+                [
+                    tick.truth.wheel_speed.x,
+                    tick.truth.wheel_speed.y,
+                    tick.truth.wheel_speed.z
                 ]
             );
         }

@@ -17,3 +17,5 @@ pub mod metrics;
 pub mod paper;
 pub mod plant_node;
 pub mod sim_devices;
+pub mod thruster_shows;
+pub mod thruster_trace;

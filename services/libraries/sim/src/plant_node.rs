@@ -32,6 +32,10 @@ pub struct PlantNode {
     last_tick: u64,
     wheel: Option<WheelCommand>,
     cmg: Option<CmgCommand>,
+    /// The thruster command answering the current tick, if any (issue 14).
+    thrusters: Option<ipc_types::ThrusterCommand>,
+    /// Whether each tick's answer includes a thruster command (`controller.thrusters` set).
+    expect_thrusters: bool,
     held: ActuatorCommand,
     /// Ticks in a row without both commands.
     unanswered: u64,
@@ -56,6 +60,8 @@ impl PlantNode {
             tick: 0,
             wheel: None,
             cmg: None,
+            thrusters: None,
+            expect_thrusters: config.controller.thrusters.is_some(),
             held: ActuatorCommand::default(),
             unanswered: 0,
             // Whole periods in the timeout, within the clock's tolerance (0.2 s / 0.1 s is 2).
@@ -125,9 +131,53 @@ impl PlantNode {
         }
     }
 
-    /// Both commands for the current tick have arrived.
+    /// A thruster command; kept if it answers the current tick (valves shut otherwise).
+    pub fn on_thruster_command(&mut self, c: &ipc_types::ThrusterCommand) {
+        if c.header.time_ns == self.time_ns() {
+            self.thrusters = Some(*c);
+        }
+    }
+
+    /// Every command of the current tick has arrived: wheels, CMG and, in a run with thruster
+    /// control, the thrusters.
     pub fn answered(&self) -> bool {
-        self.wheel.is_some() && self.cmg.is_some()
+        self.wheel.is_some()
+            && self.cmg.is_some()
+            && (!self.expect_thrusters || self.thrusters.is_some())
+    }
+
+    /// Whether the platform has thrusters (the model's `[thrusters]`).
+    pub fn has_thrusters(&self) -> bool {
+        self.plant.thrusters().is_some()
+    }
+
+    /// The valves' positions now: bit `i` set if valve `i` is open (0 without thrusters).
+    pub fn valves_open(&self) -> u32 {
+        let t_s = self.plant.time_s();
+        self.plant.thrusters().map_or(0, |bank| {
+            (0..testbed_model::thruster_config::THRUSTER_COUNT)
+                .filter(|&i| bank.valve_open(i, t_s))
+                .fold(0, |bits, i| bits | 1 << i)
+        })
+    }
+
+    /// Propellant used since start, kg (0 without thrusters).
+    pub fn propellant_used_kg(&self) -> f64 {
+        self.plant
+            .thrusters()
+            .map_or(0.0, |bank| bank.propellant_used_kg())
+    }
+
+    /// Whether the thrusters' latch valve is shut (false without thrusters).
+    pub fn thruster_latch_shut(&self) -> bool {
+        self.plant.thrusters().is_some_and(|bank| bank.latch_shut())
+    }
+
+    /// Shuts the latch valve upstream of every thruster (a stuck-open valve was found).
+    pub fn shut_thruster_latch(&mut self) {
+        if let Some(bank) = self.plant.thrusters_mut() {
+            bank.set_latch_shut(true);
+        }
     }
 
     /// The last tick has been published (and, in lockstep, answered): the run is over.
@@ -170,6 +220,12 @@ impl PlantNode {
         };
         command.gimbal_rate_rad_s = self.stepper.command(&command.gimbal_rate_rad_s).rate_rad_s;
         self.held = command.clone();
+        if let Some(c) = self.thrusters.take() {
+            self.plant
+                .command_thrusters(&testbed_model::physics::ThrusterCommand {
+                    on_time_s: c.on_time,
+                })?;
+        }
         let report = self.plant.step(&command, self.schedule.period_s())?;
         if let Some(event) = &report.tilt_stop {
             self.tilt_stop |= 1 << event.axis.index();

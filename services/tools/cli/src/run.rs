@@ -8,6 +8,7 @@ use crate::figure::{self, Panel, Series};
 use crate::progress;
 use crate::summary::{self, RunSeries, RunSummary};
 use anyhow::{Context, Result, bail};
+use nalgebra::Vector3;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use testbed_launch::profile::Profile;
@@ -784,6 +785,27 @@ fn print_summary(s: &RunSummary, figures: &[PathBuf]) {
         println!(
             "  estimator 3σ         {}   (the filter's own attitude 3σ at the end, deg)",
             xyz(sigma, 4)
+        );
+    }
+    if let Some(t) = &s.thrusters {
+        let on = t.on_time_s.map(|x| format!("{x:.1}")).join(" ");
+        let c = Vector3::from(t.com_shift_m) * 1e6;
+        println!(
+            "  thrusters            fired in {} periods, on-time [{on}] s per thruster, {} commands refused{}",
+            t.firing_periods,
+            t.refused,
+            if t.disabled {
+                ", DISABLED (stuck-open valve)"
+            } else {
+                ""
+            }
+        );
+        println!(
+            "  propellant used      {:.2} g; CoM shift ({:.3}, {:.3}, {:.3}) µm (body axes)",
+            t.propellant_used_kg * 1e3,
+            c.x,
+            c.y,
+            c.z
         );
     }
     println!("  deadline misses      {}", s.deadline_misses);

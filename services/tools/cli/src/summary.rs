@@ -9,7 +9,7 @@
 use anyhow::Context;
 use ipc_types::{
     AttitudeEstimate, CanLinkStatus, ControllerMode, ControllerStatus, HealthEvent,
-    HealthEventKind, SimTruth, WheelCommand, WheelTelemetry,
+    HealthEventKind, SimTruth, ThrusterStatus, WheelCommand, WheelTelemetry,
 };
 use nalgebra::Vector3;
 use serde::Serialize;
@@ -73,6 +73,70 @@ pub struct RunSummary {
     pub estimate_3sigma_deg: Option<[f64; 3]>,
     /// Faults and recoveries of the run.
     pub health: HealthSummary,
+    /// What the thrusters did (runs with thrusters: the log's thruster status).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub thrusters: Option<ThrusterSummary>,
+}
+
+/// The thrusters over a run, from the thruster drive's status samples.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ThrusterSummary {
+    /// Periods in which at least one valve was open for some time.
+    pub firing_periods: u64,
+    /// Valve on-time applied per thruster over the run, s.
+    pub on_time_s: [f64; 6],
+    /// Commands the thruster drive refused (not finite, out of range, too short).
+    pub refused: u64,
+    /// The thrusters were disabled (a stuck-open valve shut the latch valve).
+    pub disabled: bool,
+    /// Propellant used over the run, kg.
+    pub propellant_used_kg: f64,
+    /// The centre of mass's resulting shift, m, body axes: a gravity torque on the bearing
+    /// (`model.thrusters.tank_position_m`, `platform.mass_kg`, `effects.com_offset`).
+    pub com_shift_m: [f64; 3],
+}
+
+/// The thruster summary of a log (`None`: no thruster status in it).
+fn thruster_summary(
+    log: &RunLog,
+    path: &Path,
+    config: &RunConfig,
+) -> anyhow::Result<Option<ThrusterSummary>> {
+    let mut summary: Option<ThrusterSummary> = None;
+    for status in log.samples::<ThrusterStatus>()? {
+        let status = status.with_context(|| format!("reading {}", path.display()))?;
+        let s = summary.get_or_insert(ThrusterSummary {
+            firing_periods: 0,
+            on_time_s: [0.0; 6],
+            refused: 0,
+            disabled: false,
+            propellant_used_kg: 0.0,
+            com_shift_m: [0.0; 3],
+        });
+        s.firing_periods += u64::from(status.applied_on_time.iter().any(|t| *t > 0.0));
+        for (total, t) in s.on_time_s.iter_mut().zip(status.applied_on_time) {
+            *total += t;
+        }
+        s.refused = s.refused.max(status.refused);
+        s.disabled |= status.disabled != 0;
+        s.propellant_used_kg = s.propellant_used_kg.max(status.propellant_used);
+    }
+    if let (Some(s), Some(valves)) = (&mut summary, &config.model.thrusters) {
+        let com = config
+            .model
+            .effects
+            .com_offset
+            .as_ref()
+            .map_or_else(Vector3::zeros, |c| Vector3::from(c.r_m));
+        s.com_shift_m = testbed_model::physics::thrusters::propellant_com_shift_m(
+            &valves.tank_position_m.into(),
+            s.propellant_used_kg,
+            config.model.platform.mass_kg,
+            &com,
+        )
+        .into();
+    }
+    Ok(summary)
 }
 
 /// What went wrong during a run, and what recovered: from the health events, the controller's
@@ -371,6 +435,7 @@ pub fn summarise(
         attitude_from: attitude_from.to_owned(),
         estimate_3sigma_deg,
         health: health(&log, path)?,
+        thrusters: thruster_summary(&log, path, &config)?,
     };
     Ok((summary, series, config))
 }

@@ -6,7 +6,8 @@
 use crate::cmg_steering::{CmgSteering, CmgSteeringConfig, SlewConfig, SlewController};
 use crate::control::{ControlError, WheelControlConfig, WheelController};
 use crate::safe_mode::SafeModeConfig;
-use nalgebra::{Vector3, Vector4};
+use crate::thruster_control::{ThrusterControlConfig, ThrusterLaw, ThrusterOutput, ThrusterUse};
+use nalgebra::{Matrix3, Vector3, Vector4};
 use serde::{Deserialize, Serialize};
 use testbed_model::ModelConfig;
 use testbed_model::attitude::Attitude;
@@ -32,6 +33,9 @@ pub struct ControllerConfig {
     pub steering: CmgSteeringConfig,
     /// When the controller stops trusting its inputs and what it commands then.
     pub safe_mode: SafeModeConfig,
+    /// Thruster control (issue 14); off unless present (needs the model's `[thrusters]`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub thrusters: Option<ThrusterControlConfig>,
 }
 
 impl Default for ControllerConfig {
@@ -42,6 +46,7 @@ impl Default for ControllerConfig {
             slew: SlewConfig::default(),
             steering: CmgSteeringConfig::default(),
             safe_mode: SafeModeConfig::default(),
+            thrusters: None,
         }
     }
 }
@@ -79,6 +84,8 @@ enum Law {
 pub struct ControllerTask {
     law: Law,
     target: Attitude,
+    thrusters: Option<ThrusterLaw>,
+    max_wheel_torque_nm: f64,
 }
 
 impl ControllerTask {
@@ -91,23 +98,77 @@ impl ControllerTask {
         let law = match config.actuators {
             Actuators::Wheels => Law::Wheels(WheelController::new(&config.wheels, &model.wheels)?),
             Actuators::Cmg => {
-                // The controller knows the nominal inertia, never the plant's true one.
-                let inertia =
-                    model
-                        .platform
-                        .inertia()
-                        .ok_or_else(|| ControlError::InvalidConfig {
-                            key: "platform.inertia_kgm2".into(),
-                            value: format!("{:?}", model.platform.inertia_kgm2),
-                            reason: "must be symmetric positive definite".into(),
-                        })?;
+                let inertia = nominal_inertia(model)?;
                 Law::Cmg {
                     slew: SlewController::new(&config.slew, inertia)?,
                     steering: CmgSteering::new(&config.steering, &model.cmg)?,
                 }
             }
         };
-        Ok(Self { law, target })
+        let thrusters = match (&config.thrusters, &model.thrusters) {
+            (None, _) => None,
+            (Some(c), Some(t)) => {
+                let inertia = nominal_inertia(model)?;
+                Some(ThrusterLaw::new(
+                    c,
+                    t,
+                    &model.wheels,
+                    &inertia,
+                    model.gyro.period_s(),
+                )?)
+            }
+            (Some(_), None) => {
+                return Err(ControlError::InvalidConfig {
+                    key: "controller.thrusters".into(),
+                    value: "present".into(),
+                    reason: "the model has no [thrusters]".into(),
+                });
+            }
+        };
+        Ok(Self {
+            law,
+            target,
+            thrusters,
+            max_wheel_torque_nm: model.wheels.max_torque_nm,
+        })
+    }
+
+    /// Whether the controller commands thrusters (`controller.thrusters` set).
+    pub fn has_thruster_control(&self) -> bool {
+        self.thrusters.is_some()
+    }
+
+    /// Safe mode with thrusters: the thrusters alone damp `rate_b` (rad/s, body axes; `None`:
+    /// no rate known, valves shut). `None` without thruster control.
+    pub fn thruster_rate_damping(
+        &mut self,
+        rate_b: Option<&Vector3<f64>>,
+    ) -> Option<ThrusterOutput> {
+        let law = self.thrusters.as_mut()?;
+        Some(law.damp(rate_b))
+    }
+
+    /// The thrusters' command for this tick (`None` without thruster control), given the body
+    /// rate (rad/s, body axes) and telemetry, adjusting `output`: momentum dumping feeds the
+    /// thrusters' expected torque forward to the wheels; rate damping turns the wheels off.
+    pub fn thrusters(
+        &mut self,
+        rate_b: &Vector3<f64>,
+        telemetry: &ActuatorTelemetry,
+        output: &mut ControlOutput,
+    ) -> Option<ThrusterOutput> {
+        let law = self.thrusters.as_mut()?;
+        let out = law.step(rate_b, &telemetry.wheel_speed_rad_s);
+        let t = self.max_wheel_torque_nm;
+        match law.usage() {
+            ThrusterUse::MomentumDumping => {
+                output.command.wheel_torque_nm =
+                    (output.command.wheel_torque_nm + out.expected_nm + out.disturbance_nm)
+                        .map(|x| x.clamp(-t, t));
+            }
+            ThrusterUse::RateDamping => output.command.wheel_torque_nm = Vector3::zeros(),
+        }
+        Some(out)
     }
 
     pub fn target(&self) -> &Attitude {
@@ -159,4 +220,17 @@ impl ControllerTask {
             }
         }
     }
+}
+
+/// The platform's nominal inertia, kg m² (body frame): the flight software knows it, never the
+/// plant's true one.
+fn nominal_inertia(model: &ModelConfig) -> Result<Matrix3<f64>, ControlError> {
+    model
+        .platform
+        .inertia()
+        .ok_or_else(|| ControlError::InvalidConfig {
+            key: "platform.inertia_kgm2".into(),
+            value: format!("{:?}", model.platform.inertia_kgm2),
+            reason: "must be symmetric positive definite".into(),
+        })
 }

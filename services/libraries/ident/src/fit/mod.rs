@@ -64,6 +64,13 @@ impl ChannelRss {
             .map(|c| self.n[c] as f64 * (self.rss[c] / better.rss[c]).ln())
             .sum()
     }
+    /// Add the sums of `other` (e.g. the held-out sums of the folds of a cross-validation).
+    pub fn add(&mut self, other: &ChannelRss) {
+        for c in 0..3 {
+            self.rss[c] += other.rss[c];
+            self.n[c] += other.n[c];
+        }
+    }
     /// Scalar residuals in all channels.
     pub fn total(&self) -> usize {
         self.n.iter().sum()
@@ -172,7 +179,9 @@ pub struct Problem<'a> {
     pub held_out: Vec<bool>,
     pub options: FitOptions,
     cache: RefCell<HashMap<SensorKey, Rc<State>>>,
-    recons: RefCell<HashMap<SensorKey, Rc<Reconstruction>>>,
+    /// Filter runs, shared with the problems made by [`Problem::with_held_out`] (a filter run
+    /// does not depend on which ticks are held out).
+    recons: Rc<RefCell<HashMap<SensorKey, Rc<Reconstruction>>>>,
     /// Filter runs so far (for the benchmark and the report).
     pub filter_runs: Cell<usize>,
     sphere: RefCell<Option<Option<[f64; 3]>>>,
@@ -214,9 +223,25 @@ impl<'a> Problem<'a> {
             held_out,
             options,
             cache: RefCell::new(HashMap::new()),
-            recons: RefCell::new(HashMap::new()),
+            recons: Rc::new(RefCell::new(HashMap::new())),
             filter_runs: Cell::new(0),
             sphere: RefCell::new(None),
+        }
+    }
+
+    /// The same data and configuration with other ticks held out (a fold of the
+    /// cross-validation): it shares this problem's filter runs, not its states (the torque
+    /// channel's segments end at held-out boundaries).
+    pub fn with_held_out(&self, held_out: Vec<bool>) -> Problem<'a> {
+        Problem {
+            data: self.data,
+            base: self.base.clone(),
+            held_out,
+            options: self.options.clone(),
+            cache: RefCell::new(HashMap::new()),
+            recons: Rc::clone(&self.recons),
+            filter_runs: Cell::new(0),
+            sphere: RefCell::new(*self.sphere.borrow()),
         }
     }
 

@@ -167,6 +167,18 @@ pub(super) struct Levels {
     pub n_fit: f64,
 }
 
+impl Levels {
+    /// The test of a cause beside the others: the likelihood ratio `n ln(RSS_without /
+    /// RSS_with)` of `n` residuals, and the selection's threshold for its `k` parameters,
+    /// `max(k ln N, χ²_k(1 − selection))`.
+    fn joint(&self, n: f64, rss_without: f64, rss_with: f64, k: usize) -> (f64, f64) {
+        let lr = n * (rss_without / rss_with.max(1e-300)).ln();
+        let threshold = (k as f64 * self.n_fit.ln())
+            .max(chi_square_quantile(1.0 - self.selection, k as f64).unwrap_or(f64::INFINITY));
+        (lr, threshold)
+    }
+}
+
 /// Run both tests on every named cause of `fit`.
 pub(super) fn test_causes(
     problem: &Problem,
@@ -180,8 +192,7 @@ pub(super) fn test_causes(
     let Levels {
         blocks,
         consistency: alpha_consistency,
-        selection: alpha,
-        n_fit,
+        ..
     } = *levels;
     let ch = &fit.state.torque;
     let data = problem.data;
@@ -250,11 +261,8 @@ pub(super) fn test_causes(
                 let (without, _) =
                     normal_equations(fit, &cols, &extra1, candidates, fit_rows, Some(cause));
                 if let (Some(f), Some(w_rss)) = (&full, rss_of(&without)) {
-                    let n = full_ne.rows() as f64;
-                    let lr = n * (w_rss / f.rss.max(1e-300)).ln();
-                    let k = idx.len();
-                    let threshold = (k as f64 * n_fit.ln())
-                        .max(chi_square_quantile(1.0 - alpha, k as f64).unwrap_or(f64::INFINITY));
+                    let (lr, threshold) =
+                        levels.joint(full_ne.rows() as f64, w_rss, f.rss, idx.len());
                     joint_lr = Some(lr);
                     joint_threshold = Some(threshold);
                     if lr <= threshold && kept {
@@ -317,8 +325,7 @@ fn sensor_tests(
     let Levels {
         blocks,
         consistency: alpha_consistency,
-        selection: alpha,
-        n_fit,
+        ..
     } = *levels;
     let sensor: Vec<Cause> = named
         .iter()
@@ -438,11 +445,7 @@ fn sensor_tests(
             let with = build(&all, &idx, &fit_rows, 1.0, &extra1).solve();
             let without = rss_of(&build(&others, &idx, &fit_rows, 1.0, &extra1));
             if let (Some(w), Some(wo)) = (with, without) {
-                let n = w.n as f64;
-                let lr = n * (wo / w.rss.max(1e-300)).ln();
-                let k = idx.len();
-                let threshold = (k as f64 * n_fit.ln())
-                    .max(chi_square_quantile(1.0 - alpha, k as f64).unwrap_or(f64::INFINITY));
+                let (lr, threshold) = levels.joint(w.n as f64, wo, w.rss, idx.len());
                 joint_lr = Some(lr);
                 joint_threshold = Some(threshold);
                 if lr <= threshold && kept {

@@ -8,17 +8,23 @@
 //!    sensor models (the attitude filter's innovations). Each residual is described by its RMS,
 //!    bias, trend and lag-1 correlation (no white-noise test: these series are correlated by
 //!    construction).
-//! 2. **Name the cause.** The data are split in time blocks; every `held_out_every`-th block is
-//!    held out of the fits. Forward selection over the candidate library: at each step every
-//!    remaining cause is fitted jointly with those already chosen ([`crate::fit`]); a candidate
-//!    is significant when its likelihood ratio on the fit data beats both the information
-//!    criterion (BIC, `k ln N`) and the χ² quantile at `1 − alpha`; among the significant ones
-//!    whose held-out residuals improve, the one that improves them most is chosen. No candidate
-//!    chosen: the cause is `none`.
+//! 2. **Name the cause.** The data are split in time blocks of `block_s`. By default every
+//!    `held_out_every`-th block is held out of the fits. With `folds` ≥ 2 (k-fold
+//!    cross-validation over contiguous blocks, block b in fold `b mod folds`) the fits use all
+//!    the data instead, and a candidate significant at 1 % is also fitted k times, each time
+//!    without one fold; its held-out statistic is then the sum over the folds of the left-out
+//!    fold's log-likelihood ratio against the set chosen so far (fitted the same way).
+//!    Forward selection over the candidate library: at each step every remaining cause is fitted
+//!    jointly with those already chosen ([`crate::fit`]); a candidate is significant when its
+//!    likelihood ratio on the fit data beats both the information criterion (BIC, `k ln N`)
+//!    and the χ² quantile at `1 − alpha`; among the significant ones whose held-out (or
+//!    cross-validated) residuals improve, the one that improves them most is chosen. No
+//!    candidate chosen: the cause is `none`.
 //! 3. **Extend the model**: the configuration given plus the chosen effects with their fitted
 //!    values (loadable by `ModelConfig::load`).
-//! 4. **Measure the gain** on the held-out blocks: multi-step prediction error of the nominal and
-//!    extended model per component and overall; gain = nominal / extended.
+//! 4. **Measure the gain**: multi-step prediction error of the nominal and extended model per
+//!    component and overall on the held-out blocks, or with `folds` ≥ 2 on every fold predicted
+//!    by the extended model fitted without it; gain = nominal / extended.
 //!
 //! 5. **Falsify the named causes** (`falsify`): each must have the same parameters in disjoint
 //!    time blocks and stay significant beside the other causes and the unexplained effects;
@@ -68,10 +74,15 @@ pub struct Options {
     pub fit: FitOptions,
     /// Prediction window: re-initialisation period of the multi-step predictions, s.
     pub horizon_s: f64,
-    /// Length of the time blocks of the fit / held-out split, s.
+    /// Length of the time blocks (held-out split or cross-validation folds), s.
     pub block_s: f64,
-    /// Every this-many-th block is held out (3: a third of the data).
+    /// Without cross-validation (`folds` 0): every this-many-th block is held out of the fits
+    /// (3: a third of the data).
     pub held_out_every: usize,
+    /// Folds of the k-fold cross-validation of the selection and of the gain (block b of
+    /// `block_s` in fold `b mod folds`; the fits then use all the data); 0: off, one held-out
+    /// share (`held_out_every`) instead.
+    pub folds: usize,
     /// Most causes named.
     pub max_causes: usize,
     /// Significance level of a cause (per candidate and step).
@@ -95,6 +106,7 @@ impl Default for Options {
             horizon_s: 10.0,
             block_s: 30.0,
             held_out_every: 3,
+            folds: 0,
             max_causes: 4,
             alpha: 1e-6,
             candidates: Cause::ALL.to_vec(),
@@ -131,6 +143,9 @@ impl Options {
                 self.held_out_every.to_string(),
                 "must be >= 2",
             );
+        }
+        if self.folds == 1 {
+            return bad("folds", self.folds.to_string(), "must be 0 (off) or >= 2");
         }
         if !(self.alpha > 0.0 && self.alpha < 0.5) {
             return bad("alpha", self.alpha.to_string(), "must be within (0, 0.5)");
@@ -173,24 +188,40 @@ pub fn identify(
     model.validate()?;
     data.check()?;
     let aligned = Aligned::new(data);
-    let block = |t: f64| (t / options.block_s).floor() as usize;
+    let block = |t: f64| (t / options.block_s).floor().max(0.0) as usize;
+    let cross_validated = options.folds >= 2;
+    // k-fold: the fits use all the data and fold j's problem holds out the blocks of fold j;
+    // otherwise every `held_out_every`-th block is held out of the fits.
     let held_out: Vec<bool> = aligned
         .t
         .iter()
-        .map(|&t| block(t) % options.held_out_every == options.held_out_every - 1)
+        .map(|&t| {
+            !cross_validated && block(t) % options.held_out_every == options.held_out_every - 1
+        })
         .collect();
-    let held_fraction =
-        held_out.iter().filter(|h| **h).count() as f64 / held_out.len().max(1) as f64;
     let problem = Problem::new(
         &aligned,
         model.clone(),
         held_out.clone(),
         options.fit.clone(),
     );
+    let fold_masks: Vec<Vec<bool>> = (0..options.folds)
+        .map(|j| {
+            aligned
+                .t
+                .iter()
+                .map(|&t| block(t) % options.folds == j)
+                .collect()
+        })
+        .collect();
+    let folds: Vec<Problem> = fold_masks
+        .iter()
+        .map(|mask| problem.with_held_out(mask.clone()))
+        .collect();
 
     // Baseline.
     let empty = HashMap::new();
-    let nominal = problem.fit(&[], &empty)?;
+    let mut nominal = problem.fit(&[], &empty)?;
     if nominal.state.recon.start >= aligned.len() {
         return Err(IdentError::Failed(format!(
             "{}: the attitude filter never started (no usable inclinometer/magnetometer sample pair)",
@@ -198,6 +229,18 @@ pub fn identify(
         )));
     }
     let n_fit = nominal.evaluation.fit.total().max(2) as f64;
+    let nominal_folds: Vec<SetFit> = folds
+        .iter()
+        .map(|f| f.fit(&[], &empty))
+        .collect::<Result<_, _>>()?;
+    let mut current_folds = nominal_folds.clone();
+    let sensor_warm = |fit: &SetFit| -> HashMap<Cause, crate::fit::FittedCause> {
+        fit.causes
+            .iter()
+            .filter(|c| c.cause.kind() == Kind::Sensor)
+            .map(|c| (c.cause, c.clone()))
+            .collect()
+    };
 
     // Forward selection.
     let available: Vec<Cause> = options
@@ -213,7 +256,7 @@ pub fn identify(
     let mut warm: HashMap<Cause, crate::fit::FittedCause> = HashMap::new();
     for _ in 0..options.max_causes {
         let mut rows = Vec::new();
-        let mut best: Option<(usize, SetFit)> = None;
+        let mut best: Option<(usize, SetFit, Vec<SetFit>)> = None;
         for &cause in available.iter().filter(|c| !selected.contains(c)) {
             let mut set = selected.clone();
             set.push(cause);
@@ -230,11 +273,21 @@ pub fn identify(
                     let lr = current.evaluation.fit.log_ratio(&fit.evaluation.fit);
                     let k = fit.free().saturating_sub(current.free());
                     let threshold = threshold_for(k);
-                    let lr_held = current
-                        .evaluation
-                        .held_out
-                        .log_ratio(&fit.evaluation.held_out);
                     let significant = k > 0 && lr > threshold;
+                    // Cross-validation of the candidates that can be chosen or listed as
+                    // possible (significant at 1 %); the others' is not computed (NaN).
+                    let cv = if cross_validated {
+                        (k > 0 && lr > chi_square_quantile(0.99, k as f64).unwrap_or(f64::INFINITY))
+                            .then(|| cross_validate(&folds, &current_folds, &set, &sensor_warm))
+                            .flatten()
+                    } else {
+                        let lr_held = current
+                            .evaluation
+                            .held_out
+                            .log_ratio(&fit.evaluation.held_out);
+                        Some((lr_held, Vec::new()))
+                    };
+                    let lr_held = cv.as_ref().map_or(f64::NAN, |(lr, _)| *lr);
                     let note = fit
                         .causes
                         .iter()
@@ -252,13 +305,12 @@ pub fn identify(
                         chosen: false,
                         note,
                     });
-                    if significant
-                        && lr_held > 0.0
+                    if let Some((_, fold_fits)) = cv.filter(|_| significant && lr_held > 0.0)
                         && best
                             .as_ref()
-                            .is_none_or(|(i, _)| lr_held > rows[*i].lr_held_out)
+                            .is_none_or(|(i, _, _)| lr_held > rows[*i].lr_held_out)
                     {
-                        best = Some((rows.len() - 1, fit));
+                        best = Some((rows.len() - 1, fit, fold_fits));
                     }
                 }
                 Err(e) => rows.push(CandidateRow {
@@ -267,14 +319,14 @@ pub fn identify(
                     lr_fit: 0.0,
                     threshold: f64::NAN,
                     delta_bic: f64::NAN,
-                    lr_held_out: 0.0,
+                    lr_held_out: f64::NAN,
                     significant: false,
                     chosen: false,
                     note: e.to_string(),
                 }),
             }
         }
-        let Some((i, fit)) = best else {
+        let Some((i, fit, fold_fits)) = best else {
             steps.push(rows);
             break;
         };
@@ -290,7 +342,13 @@ pub fn identify(
             .map(|c| (c.cause, c.clone()))
             .collect();
         current = fit;
-        problem.trim_cache(&[&current.config]);
+        current_folds = fold_fits;
+        let mut keep: Vec<&ModelConfig> = current_folds.iter().map(|f| &f.config).collect();
+        keep.push(&current.config);
+        problem.trim_cache(&keep);
+        for f in &folds {
+            f.trim_cache(&keep);
+        }
     }
 
     // Falsify the named causes and search what remains (see `falsify`, `unexplained`).
@@ -322,6 +380,7 @@ pub fn identify(
     };
     let (mut effects, mut tests, mut joint) = analyse(&current, &named);
     let mut cause_tests: Vec<CauseTest> = Vec::new();
+    let mut sensor_dropped = false;
     for _ in 0..=options.max_causes {
         // Drop the worst failure only, then search and test again: a cause that failed beside
         // a wrongly named one may pass once that one is gone.
@@ -341,6 +400,7 @@ pub fn identify(
         // A dropped sensor cause was fitted jointly with the others: refit them.
         if dropped.kind() == Kind::Sensor {
             warm.retain(|c, _| c.kind() != Kind::Sensor);
+            sensor_dropped = true;
         }
         current = problem.fit(&named, &warm)?;
         (effects, tests, joint) = analyse(&current, &named);
@@ -395,6 +455,65 @@ pub fn identify(
     // The extended model must load as it is written.
     ModelConfig::from_toml_str(&extended.to_toml_string(), "extended model")?;
 
+    // Gain: cross-validated (each fold predicted by the named causes fitted without it) or on
+    // the held-out blocks.
+    let start = nominal.state.recon.start;
+    let (base_held, ext_held, held_fraction) = if !cross_validated {
+        let held_fraction =
+            held_out.iter().filter(|h| **h).count() as f64 / held_out.len().max(1) as f64;
+        let spans = held_out_spans(&held_out, start);
+        let windows = predict::windows(&aligned, &spans, options.horizon_s);
+        let base_held = predict::predict(&aligned, &nominal.state.recon, model, &windows)?;
+        let ext_held = if selected.is_empty() {
+            base_held.clone()
+        } else {
+            predict::predict(&aligned, &current.state.recon, &extended, &windows)?
+        };
+        (base_held, ext_held, held_fraction)
+    } else {
+        let fold_windows: Vec<Vec<(usize, usize)>> = fold_masks
+            .iter()
+            .map(|mask| predict::windows(&aligned, &held_out_spans(mask, start), options.horizon_s))
+            .collect();
+        let mut windows: Vec<(usize, usize)> = fold_windows.iter().flatten().copied().collect();
+        windows.sort_unstable();
+        let held_fraction = windows.iter().map(|(a, b)| b + 1 - a).sum::<usize>() as f64
+            / aligned.len().max(1) as f64;
+        let base_held = predict::predict(&aligned, &nominal.state.recon, model, &windows)?;
+        let mut cv_nominal = crate::fit::ChannelRss::default();
+        let mut cv_extended = crate::fit::ChannelRss::default();
+        let ext_held = if selected.is_empty() {
+            for f in &nominal_folds {
+                cv_nominal.add(&f.evaluation.held_out);
+            }
+            cv_extended = cv_nominal;
+            base_held.clone()
+        } else {
+            let mut parts = Vec::with_capacity(folds.len());
+            for (j, fold) in folds.iter().enumerate() {
+                let warm_j = if sensor_dropped {
+                    HashMap::new()
+                } else {
+                    sensor_warm(&current_folds[j])
+                };
+                cv_nominal.add(&nominal_folds[j].evaluation.held_out);
+                let fit_j = fold.fit(&selected, &warm_j)?;
+                cv_extended.add(&fit_j.evaluation.held_out);
+                parts.push(predict::predict(
+                    &aligned,
+                    &fit_j.state.recon,
+                    &fit_j.config,
+                    &fold_windows[j],
+                )?);
+            }
+            predict::Predictions::merge(parts)
+        };
+        // The held-out channel sums reported are the cross-validated ones.
+        nominal.evaluation.held_out = cv_nominal;
+        current.evaluation.held_out = cv_extended;
+        (base_held, ext_held, held_fraction)
+    };
+
     // Residual reports, nominal and extended.
     let all_spans = [(nominal.state.recon.start, aligned.len())];
     let all_windows = predict::windows(&aligned, &all_spans, options.horizon_s);
@@ -409,15 +528,6 @@ pub fn identify(
     let (extended_equation, extended_report) =
         equation_error(&problem, &current, &extended_prediction);
 
-    // Gain on the held-out blocks.
-    let spans = held_out_spans(&held_out, nominal.state.recon.start);
-    let windows = predict::windows(&aligned, &spans, options.horizon_s);
-    let base_held = predict::predict(&aligned, &nominal.state.recon, model, &windows)?;
-    let ext_held = if selected.is_empty() {
-        base_held.clone()
-    } else {
-        predict::predict(&aligned, &current.state.recon, &extended, &windows)?
-    };
     let base_rms = base_held.rms(|_| true);
     let ext_rms = ext_held.rms(|_| true);
     let baseline_rms = rms_report(&base_rms);
@@ -497,13 +607,34 @@ pub fn identify(
         gain,
         gain_by_component,
         gain_by_group,
-        filter_runs: problem.filter_runs.get(),
+        filter_runs: problem.filter_runs.get()
+            + folds.iter().map(|f| f.filter_runs.get()).sum::<usize>(),
     };
     Ok(Identification {
         report,
         extended,
         figures,
     })
+}
+
+/// Cross-validation of the set `set` over the folds: fitted on each fold's problem (sensor
+/// causes of the fold's current fit warm, `warm_of`), the sum over the folds of the held-out
+/// log-likelihood ratio against `current` (the set chosen so far, fitted the same way), and the
+/// fold fits. `None` when a fold's fit fails (the fold does not determine the set).
+fn cross_validate(
+    folds: &[Problem],
+    current: &[SetFit],
+    set: &[Cause],
+    warm_of: &dyn Fn(&SetFit) -> HashMap<Cause, crate::fit::FittedCause>,
+) -> Option<(f64, Vec<SetFit>)> {
+    let mut lr = 0.0;
+    let mut fits = Vec::with_capacity(folds.len());
+    for (fold, cur) in folds.iter().zip(current) {
+        let fit = fold.fit(set, &warm_of(cur)).ok()?;
+        lr += cur.evaluation.held_out.log_ratio(&fit.evaluation.held_out);
+        fits.push(fit);
+    }
+    Some((lr, fits))
 }
 
 /// Whether the data can say anything about a cause.
@@ -535,4 +666,23 @@ fn held_out_spans(held: &[bool], start: usize) -> Vec<(usize, usize)> {
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cross_validation_is_off_by_default_and_needs_two_folds() {
+        assert_eq!(Options::default().folds, 0);
+        assert!(Options::default().validate().is_ok());
+        let one = Options {
+            folds: 1,
+            ..Options::default()
+        };
+        assert!(
+            matches!(one.validate(), Err(IdentError::Options { ref key, .. }) if key == "folds"),
+            "1 fold accepted"
+        );
+    }
 }

@@ -17,7 +17,8 @@ pub struct DataSummary {
     pub gyro_rows: usize,
     pub period_s: f64,
     pub devices: Vec<&'static str>,
-    /// Fraction of the ticks held out of the fits.
+    /// Fraction of the ticks held out of the fits; with k-fold cross-validation, of the ticks
+    /// predicted out of fold (the fits use all the data).
     pub held_out_fraction: f64,
 }
 
@@ -57,7 +58,9 @@ pub struct CandidateRow {
     pub threshold: f64,
     /// BIC change (negative: better).
     pub delta_bic: f64,
-    /// Likelihood ratio on the held-out data (positive: predicts them better).
+    /// Likelihood ratio on the held-out data (positive: predicts them better); with k-fold
+    /// cross-validation the sum over the folds of the left-out fold's ratio, NaN when not
+    /// computed (not significant at 1 %).
     pub lr_held_out: f64,
     pub significant: bool,
     pub chosen: bool,

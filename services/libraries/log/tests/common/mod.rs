@@ -4,9 +4,9 @@
 
 use ipc_types::{
     AppliedCmgCommand, AppliedWheelCommand, AttitudeEstimate, CanBusFrame, CanLinkStatus,
-    CmgCommand, CmgTelemetry, ControllerMode, ControllerStatus, GyroSample, Heartbeat,
-    InclinometerSample, MagnetometerSample, ProcessState, SampleHeader, SimClockTick, SimTruth,
-    WheelCommand, WheelTelemetry,
+    CmgCommand, CmgTelemetry, ControllerMode, ControllerStatus, GyroSample, HealthEvent,
+    HealthEventKind, Heartbeat, InclinometerSample, MagnetometerSample, ProcessState, SampleHeader,
+    SimClockTick, SimTruth, ThrusterCommand, ThrusterStatus, WheelCommand, WheelTelemetry,
 };
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -173,6 +173,38 @@ pub fn tick_records(k: u64, rng: &mut Rng) -> Vec<LogRecord> {
             out.push(hb.into());
         }
     }
+    if matches!(k % 20, 5) {
+        out.push(
+            HealthEvent::new(
+                SampleHeader::new(t, k / 20, SampleHeader::VALID),
+                "controller",
+                "testbed/gnc/attitude_estimate",
+                HealthEventKind::InputLost,
+                0,
+                0.2,
+            )
+            .into(),
+        );
+    }
+    let seq = k;
+    out.push(
+        ThrusterCommand {
+            header: SampleHeader::new(t, seq, SampleHeader::VALID),
+            on_time: [0.0, 0.025 * (k % 3) as f64, 0.0, 0.0, 0.1, 1e-3 * k as f64],
+        }
+        .into(),
+    );
+    out.push(
+        ThrusterStatus {
+            header: SampleHeader::new(t, seq, SampleHeader::VALID),
+            applied_on_time: [0.0, 0.025 * (k % 3) as f64, 0.0, 0.0, 0.1, 0.0],
+            valves_open: (k % 64) as u32,
+            disabled: u32::from(k > 30),
+            refused: k / 7,
+            propellant_used: 1.5e-5 * k as f64,
+        }
+        .into(),
+    );
     out
 }
 

@@ -58,6 +58,9 @@ pub struct Dynamics {
     external: ExternalTorqueModel,
     /// `(I − J·1 + J P_S)⁻¹` for each set S of stuck wheels (bit i = wheel i).
     locked_inverse: [Matrix3<f64>; 8],
+    /// Torque of the thrusters over the current substep, Nm, body axes (`None` without
+    /// thrusters: the arithmetic of a platform without them is unchanged).
+    thruster_torque_b: Option<Vector3<f64>>,
 }
 
 impl Dynamics {
@@ -83,6 +86,7 @@ impl Dynamics {
             friction: Wheel::ALL.map(|w| WheelFrictionModel::from_config(config, w)),
             external: ExternalTorqueModel::from_config(config),
             locked_inverse,
+            thruster_torque_b: None,
         })
     }
 
@@ -114,6 +118,16 @@ impl Dynamics {
         if base.time_dependent() {
             self.external = ExternalTorqueModel::at_time(base, t_s);
         }
+    }
+
+    /// Replace the external torque model (the plant's thrusters move the centre of mass).
+    pub fn set_external_model(&mut self, model: ExternalTorqueModel) {
+        self.external = model;
+    }
+
+    /// The thrusters' torque for the next substep, Nm, body axes (`None`: no thrusters).
+    pub fn set_thruster_torque(&mut self, torque_b: Option<Vector3<f64>>) {
+        self.thruster_torque_b = torque_b;
     }
 
     /// `(I − J·1)⁻¹`, 1/(kg m²): the platform's response to a torque while every wheel slides.
@@ -177,6 +191,9 @@ impl Dynamics {
         let mut rhs = self.external.torque(q, rate_b).total_b()
             - rate_b.cross(&(self.inertia * rate_b + h))
             - self.cmg.jacobian(gimbal) * input.gimbal_rate_rad_s;
+        if let Some(thrust) = &self.thruster_torque_b {
+            rhs += thrust;
+        }
         let mut net = Vector3::zeros();
         let mut mask = 0;
         for i in 0..3 {

@@ -9,6 +9,8 @@
 //! * [`tilt_stop`]: the bearing's ±30° mechanical stop;
 //! * [`delay`]: actuator command delay;
 //! * [`integrator`]: fixed-step RK4;
+//! * [`thrusters`]: the six cold-gas thrusters, their valves, propellant and tank (off unless
+//!   configured);
 //! * [`plant`]: all of it stepped in time, with actuator limits and stick–slip.
 
 pub mod cmg_pyramid;
@@ -20,10 +22,13 @@ pub mod friction;
 pub mod integrator;
 pub mod plant;
 pub mod state;
+pub mod thrusters;
 pub mod tilt_stop;
 
 #[cfg(test)]
 mod plant_tests;
+#[cfg(test)]
+mod thruster_plant_tests;
 
 pub use cmg_pyramid::CmgPyramid;
 pub use dynamics::{Dynamics, StepInput, WheelMode};
@@ -33,4 +38,5 @@ pub use friction::{Wheel, WheelFrictionModel, wheel_breakaway_torque, wheel_fric
 pub use integrator::rk4_step;
 pub use plant::{AppliedActuation, IntegratorOptions, Plant, StepReport};
 pub use state::{ActuatorCommand, PlatformState, StateVector};
+pub use thrusters::{ThrusterBank, ThrusterCommand};
 pub use tilt_stop::{TiltAxis, TiltStopEvent};

@@ -26,6 +26,7 @@ use super::environment::{ExternalTorque, ExternalTorqueModel};
 use super::friction::Wheel;
 use super::integrator::rk4_step;
 use super::state::{ActuatorCommand, PlatformState, StateVector};
+use super::thrusters::{ThrusterBank, ThrusterCommand};
 use super::tilt_stop::{self, TiltAxis, TiltStopEvent};
 use crate::attitude;
 use crate::config::ModelConfig;
@@ -92,6 +93,9 @@ pub struct Plant {
     max_speed_rad_s: f64,
     max_gimbal_rate_rad_s: f64,
     applied: AppliedActuation,
+    /// The thrusters (`None` unless configured) and the command for the next step.
+    thrusters: Option<ThrusterBank>,
+    thruster_command: Option<ThrusterCommand>,
 }
 
 impl Plant {
@@ -152,6 +156,8 @@ impl Plant {
                 wheel_motor_torque_nm: Vector3::zeros(),
                 gimbal_rate_rad_s: Vector4::zeros(),
             },
+            thrusters: ThrusterBank::from_config(config),
+            thruster_command: None,
         })
     }
 
@@ -179,6 +185,9 @@ impl Plant {
             substeps: 0,
         };
         self.delay.push(self.time_s, command.clone());
+        if let (Some(bank), Some(c)) = (&mut self.thrusters, self.thruster_command.take()) {
+            bank.command(self.time_s, &c, dt_s);
+        }
         let t_end = self.time_s + dt_s;
         while t_end - self.time_s > TIME_TOLERANCE_S {
             let acting = self.delay.in_effect(self.time_s);
@@ -186,6 +195,11 @@ impl Plant {
                 .delay
                 .next_change_after(self.time_s)
                 .map_or(t_end, |t| t.min(t_end));
+            let segment_end = self
+                .thrusters
+                .as_ref()
+                .and_then(|b| b.next_switch_after(self.time_s))
+                .map_or(segment_end, |t| t.min(segment_end));
             let (motor, gimbal_rate) = self.actuation(&acting);
             // A whole number of substeps often divides with a rounding error above it
             // (0.1 / 0.01 = 10.000000000000002): allow the clock's tolerance before rounding up,
@@ -204,9 +218,34 @@ impl Plant {
         }
         self.time_s = t_end;
         self.delay.discard_before(self.time_s);
+        if let Some(bank) = &mut self.thrusters {
+            bank.discard_before(self.time_s);
+        }
         report.at_tilt_stop = self.in_contact.iter().any(|c| *c);
         report.applied = self.applied.clone();
         Ok(report)
+    }
+
+    /// Valve on-times for the next [`Plant::step`] (issued at its start; ignored without
+    /// thrusters). Refuses a non-finite command.
+    pub fn command_thrusters(&mut self, command: &ThrusterCommand) -> Result<(), PhysicsError> {
+        if !command.is_finite() {
+            return Err(PhysicsError::NonFinite {
+                what: "thruster command",
+            });
+        }
+        self.thruster_command = Some(*command);
+        Ok(())
+    }
+
+    /// The thrusters, their valves and tank (`None` unless configured).
+    pub fn thrusters(&self) -> Option<&ThrusterBank> {
+        self.thrusters.as_ref()
+    }
+
+    /// The thrusters, to shut their latch valve (`None` unless configured).
+    pub fn thrusters_mut(&mut self) -> Option<&mut ThrusterBank> {
+        self.thrusters.as_mut()
     }
 
     pub fn state(&self) -> &PlatformState {
@@ -289,6 +328,16 @@ impl Plant {
         let mut remaining = h;
         self.dynamics
             .set_external_time(&self.external_t0, self.time_s);
+        // Thrusters: their torque over the substep (valve switches are segment boundaries),
+        // and the weight moment of the propellant used so far.
+        let factors = self.thrusters.as_ref().map(|bank| {
+            let mut external = ExternalTorqueModel::at_time(&self.external_t0, self.time_s);
+            external.weight_moment_b += bank.weight_moment_change_b();
+            self.dynamics.set_external_model(external);
+            let f = bank.factors_at(self.time_s);
+            self.dynamics.set_thruster_torque(Some(bank.torque_b(&f)));
+            f
+        });
         for split in 0..MAX_SPLITS {
             let motor = self.speed_limited(delivered, remaining);
             let modes = self.dynamics.wheel_modes(&self.state, &motor, gimbal_rate);
@@ -331,6 +380,9 @@ impl Plant {
             if crossing.is_none() || remaining <= 1e-12 * h {
                 break;
             }
+        }
+        if let (Some(bank), Some(f)) = (&mut self.thrusters, factors) {
+            bank.consume(&f, h);
         }
         // Once per substep, not per piece: contact resolved between the pieces of a split would
         // feed impact and friction stop into each other in ever shorter pieces.

@@ -1,0 +1,96 @@
+//! Thruster command and status samples (issue 14): the six on/off cold-gas thrusters.
+//!
+//! Thruster `2a` gives `+` torque about body axis `a`, thruster `2a + 1` `−` torque (the default
+//! layout, `docs/thrusters.md`). Topics: [`THRUSTER_COMMAND`], [`THRUSTER_STATUS`] (in
+//! [`crate::topic::ALL`], logged).
+
+use crate::{SampleHeader, Topic};
+use iceoryx2::prelude::*;
+
+/// Number of thrusters.
+pub const THRUSTERS: usize = 6;
+
+pub use crate::topic::{
+    THRUSTER_COMMAND, THRUSTER_COMMAND_EVENT, THRUSTER_STATUS, THRUSTER_STATUS_EVENT,
+};
+
+/// Valve on-times for one control period, from the controller.
+#[derive(Debug, Clone, Copy, PartialEq, Default, ZeroCopySend)]
+#[type_name("testbed::ThrusterCommand.v1")]
+#[repr(C)]
+pub struct ThrusterCommand {
+    /// Common header; `time_ns` is the time of the input the command was computed from (the
+    /// valves open at the start of the period that follows).
+    pub header: SampleHeader,
+    /// Electrical on-time of each valve from the start of the period, s (0: shut). A positive
+    /// value below the valves' minimum on-time, above the period, or not finite is refused.
+    pub on_time: [f64; THRUSTERS],
+}
+
+/// What the thruster gateway applied and counted.
+#[derive(Debug, Clone, Copy, PartialEq, Default, ZeroCopySend)]
+#[type_name("testbed::ThrusterStatus.v1")]
+#[repr(C)]
+pub struct ThrusterStatus {
+    /// Common header; `time_ns` is the period the status describes.
+    pub header: SampleHeader,
+    /// Valve on-times applied this period, s.
+    pub applied_on_time: [f64; THRUSTERS],
+    /// Valve state sensed at the end of the period: bit `i` set if valve `i` is open.
+    pub valves_open: u32,
+    /// 1 if the thrusters are disabled (a stuck-open valve was detected), else 0.
+    pub disabled: u32,
+    /// Commands refused since start (NaN, out of range, shorter than the minimum on-time).
+    pub refused: u64,
+    /// Propellant used since start as the gateway integrates it, kg.
+    pub propellant_used: f64,
+}
+
+impl Topic for ThrusterCommand {
+    const NAME: &'static str = THRUSTER_COMMAND;
+    const EVENT_NAME: &'static str = THRUSTER_COMMAND_EVENT;
+    fn header(&self) -> &SampleHeader {
+        &self.header
+    }
+    fn header_mut(&mut self) -> &mut SampleHeader {
+        &mut self.header
+    }
+}
+
+impl Topic for ThrusterStatus {
+    const NAME: &'static str = THRUSTER_STATUS;
+    const EVENT_NAME: &'static str = THRUSTER_STATUS_EVENT;
+    fn header(&self) -> &SampleHeader {
+        &self.header
+    }
+    fn header_mut(&mut self) -> &mut SampleHeader {
+        &mut self.header
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use core::mem::{align_of, offset_of, size_of};
+
+    #[test]
+    fn layouts_are_pinned_and_names_pair() {
+        assert_eq!(size_of::<ThrusterCommand>(), 72);
+        assert_eq!(align_of::<ThrusterCommand>(), 8);
+        assert_eq!(offset_of!(ThrusterCommand, on_time), 24);
+        assert_eq!(size_of::<ThrusterStatus>(), 96);
+        assert_eq!(offset_of!(ThrusterStatus, applied_on_time), 24);
+        assert_eq!(offset_of!(ThrusterStatus, valves_open), 72);
+        assert_eq!(offset_of!(ThrusterStatus, disabled), 76);
+        assert_eq!(offset_of!(ThrusterStatus, refused), 80);
+        assert_eq!(offset_of!(ThrusterStatus, propellant_used), 88);
+        assert_eq!(
+            crate::topic::event_service_name(THRUSTER_COMMAND),
+            THRUSTER_COMMAND_EVENT
+        );
+        assert_eq!(
+            crate::topic::event_service_name(THRUSTER_STATUS),
+            THRUSTER_STATUS_EVENT
+        );
+    }
+}
