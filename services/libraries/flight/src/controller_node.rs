@@ -179,6 +179,11 @@ impl ControllerNode {
                         ));
                     }
                     ControllerMode::Fault => return Err("Fault is not a mode to command".into()),
+                    ControllerMode::MomentumDump | ControllerMode::ThrusterRateDamping => {
+                        return Err(format!(
+                            "{mode:?} is chosen by the thruster law (controller.thrusters), not commanded"
+                        ));
+                    }
                 }
                 self.ground_safe_mode(false);
                 Ok(format!("mode {mode:?}"))
