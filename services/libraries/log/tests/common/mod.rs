@@ -8,6 +8,7 @@ use ipc_types::{
     HealthEventKind, Heartbeat, InclinometerSample, MagnetometerSample, ProcessState, SampleHeader,
     SimClockTick, SimTruth, ThrusterCommand, ThrusterStatus, WheelCommand, WheelTelemetry,
 };
+use ipc_types::{GroundAckStatus, GroundCommand, GroundCommandAck};
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 use testbed_log::{LogRecord, RunInfo};
@@ -182,6 +183,34 @@ pub fn tick_records(k: u64, rng: &mut Rng) -> Vec<LogRecord> {
                 HealthEventKind::InputLost,
                 0,
                 0.2,
+            )
+            .into(),
+        );
+    }
+    if matches!(k % 20, 7) {
+        let header = SampleHeader::new(t, k / 20, SampleHeader::VALID);
+        out.push(
+            GroundCommand {
+                header,
+                kind: 2,
+                target_heading_rad: 0.25,
+                target_pitch_rad: -0.05,
+                target_roll_rad: 1e-3,
+                command_id: k,
+                client_id: 3,
+                ..GroundCommand::default()
+            }
+            .into(),
+        );
+        out.push(
+            GroundCommandAck::new(
+                header,
+                k,
+                2,
+                GroundAckStatus::Applied,
+                3,
+                GroundCommandAck::BY_CONTROLLER,
+                "target set",
             )
             .into(),
         );
