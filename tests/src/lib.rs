@@ -164,7 +164,15 @@ pub mod vm {
 
     /// Runs `script` (busybox sh, working directory: the VM's view of `scratch`) in the VM,
     /// giving up after `timeout_s` seconds of the script's run time.
+    ///
+    /// One VM at a time per test binary: the VMs may be emulated (TCG, no KVM), and several at
+    /// once on a 2-core machine starve each other's pipelines (a lockstep run over vcan0 then
+    /// misses a frame's tick sync and is no longer bit for bit can-sim's; seen in CI).
     pub fn run(scratch: &Path, timeout_s: u32, script: &str) -> VmRun {
+        static ONE_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
+        let _turn = ONE_AT_A_TIME
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
         // The project's binaries are run in the VM from the shared workspace: built first.
         let _ = super::binary("testbed");
         std::fs::write(scratch.join("script.sh"), script).expect("writing the VM script");
