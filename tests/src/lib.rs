@@ -233,3 +233,28 @@ pub fn descendant(root: u32, program: &str) -> Option<u32> {
             None
         })
 }
+
+/// Asserts that the logged `estimates` are, bit for bit, the in-process loop's `trace`: same
+/// count, and at every tick the same attitude and gyro bias (same code, same inputs, same
+/// order).
+pub fn assert_estimates_equal_the_in_process_loop(
+    estimates: &[ipc_types::AttitudeEstimate],
+    trace: &testbed_sim::closed_loop::Trace,
+) {
+    assert_eq!(estimates.len(), trace.ticks.len());
+    for (sample, tick) in estimates.iter().zip(&trace.ticks) {
+        let expected = tick.estimate.as_ref().expect("initialised at t = 0");
+        assert_eq!(
+            testbed_flight::convert::quaternion_from_array(&sample.quaternion),
+            Some(expected.attitude),
+            "t = {} s",
+            tick.t_s
+        );
+        assert_eq!(
+            sample.gyro_bias,
+            <[f64; 3]>::from(expected.bias_rad_s),
+            "t = {} s",
+            tick.t_s
+        );
+    }
+}
