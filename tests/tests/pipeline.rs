@@ -5,8 +5,9 @@ use ipc_types::AttitudeEstimate;
 use std::os::unix::process::CommandExt;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
-use testbed_e2e::{Scratch, binary, profile, testbed_run};
-use testbed_flight::convert::quaternion_from_array;
+use testbed_e2e::{
+    Scratch, assert_estimates_equal_the_in_process_loop, binary, profile, testbed_run,
+};
 use testbed_log::RunLog;
 use testbed_runtime::RunConfig;
 use testbed_sim::closed_loop;
@@ -49,24 +50,9 @@ fn simulation_profile_stabilises_and_its_estimates_equal_the_in_process_loop() {
         .unwrap()
         .map(Result::unwrap)
         .collect();
-    assert_eq!(estimates.len(), trace.ticks.len());
-    for (sample, tick) in estimates.iter().zip(&trace.ticks) {
-        let expected = tick.estimate.as_ref().expect("initialised at t = 0");
-        // Same code, same inputs, same order: the processes compute bit for bit what the
-        // in-process loop computes.
-        assert_eq!(
-            quaternion_from_array(&sample.quaternion).unwrap(),
-            expected.attitude,
-            "t = {} s",
-            tick.t_s
-        );
-        assert_eq!(
-            sample.gyro_bias,
-            <[f64; 3]>::from(expected.bias_rad_s),
-            "t = {} s",
-            tick.t_s
-        );
-    }
+    // Same code, same inputs, same order: the processes compute bit for bit what the
+    // in-process loop computes.
+    assert_estimates_equal_the_in_process_loop(&estimates, &trace);
 }
 
 #[test]
