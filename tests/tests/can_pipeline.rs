@@ -266,6 +266,9 @@ fn can_sim_with_faults_is_byte_identical_run_to_run() {
             "40",
             "--seed",
             "12",
+            // The log's times are the run's wall-clock start plus the run clock: pin the start.
+            "--start-time-ns",
+            "1795503600000000000",
             "--log",
             log.to_str().unwrap(),
         ]);

@@ -463,12 +463,21 @@ fn an_independent_client_gets_decimated_data_and_random_input_is_counted_and_dro
         {"id": 100, "channelId": estimate}, {"id": 101, "channelId": tf}]});
     ws.send(Message::Text(subscribe.to_string().into()))
         .unwrap();
+    // Message times are the run's wall-clock start plus the sample's run-clock time.
+    let start_time_ns: u64 = info["metadata"]["start_time_ns"]
+        .as_str()
+        .and_then(|s| s.parse().ok())
+        .expect("start_time_ns in the server info");
+    assert!(start_time_ns > 1_700_000_000_000_000_000, "a real epoch");
     let (t0, _) = next_message(&mut ws, 100);
     let start = Instant::now();
     let mut times = vec![t0];
     while start.elapsed() < Duration::from_secs(3) {
         let (t, e) = next_message(&mut ws, 100);
-        assert_eq!(e["header"]["time_ns"], t);
+        assert_eq!(
+            e["header"]["time_ns"].as_u64().map(|h| start_time_ns + h),
+            Some(t)
+        );
         times.push(t);
     }
     let span_s = (times[times.len() - 1] - times[0]) as f64 * 1e-9;

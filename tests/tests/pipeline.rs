@@ -70,12 +70,19 @@ fn two_lockstep_runs_with_the_same_seed_give_byte_identical_logs() {
             "40",
             "--seed",
             "11",
+            // The log's times are the run's wall-clock start plus the run clock: pin the start.
+            "--start-time-ns",
+            "1795503600000000000",
             "--log",
             log.to_str().unwrap(),
         ]);
         bytes.push(std::fs::read(&log).unwrap());
     }
     assert!(bytes[0].len() > 10_000, "the log holds the run");
+    // The log's times are on the pinned start (testbed-log's tests check the indexing).
+    let opened = RunLog::open(&log).unwrap();
+    assert_eq!(opened.info().start_time_ns, 1_795_503_600_000_000_000);
+    assert!(opened.is_complete());
     assert!(
         bytes[0] == bytes[1],
         "lockstep logs differ ({} vs {} bytes)",

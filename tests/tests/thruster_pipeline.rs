@@ -122,6 +122,9 @@ fn two_lockstep_runs_with_thrusters_give_byte_identical_logs() {
             "40",
             "--seed",
             "12",
+            // The log's times are the run's wall-clock start plus the run clock: pin the start.
+            "--start-time-ns",
+            "1795503600000000000",
             "--log",
             log.to_str().unwrap(),
         ]);

@@ -17,10 +17,21 @@ from mcap.reader import make_reader
 
 
 def load(path):
+    """Messages per topic as (time on the run clock, data). Log times are the run's wall-clock
+    start plus the run clock; the start (metadata `start_time_ns`, absent in older logs) is
+    taken off so two runs compare. The Foxglove transforms (`testbed/tf/*`) are left out: they
+    are derived from the estimate and truth samples, and their timestamp carries the start."""
     per_topic = defaultdict(list)
     with open(path, "rb") as f:
-        for _, channel, message in make_reader(f).iter_messages(log_time_order=False):
-            per_topic[channel.topic].append((message.log_time, message.data))
+        reader = make_reader(f)
+        start = 0
+        for m in reader.iter_metadata():
+            if m.name == "testbed.run":
+                start = int(m.metadata.get("start_time_ns", "0"))
+        for _, channel, message in reader.iter_messages(log_time_order=False):
+            if channel.topic.startswith("testbed/tf/"):
+                continue
+            per_topic[channel.topic].append((message.log_time - start, message.data))
     return per_topic
 
 

@@ -104,6 +104,10 @@ impl LoggerProcess {
             seed: config.run.seed,
             mode: if lockstep { "lockstep" } else { "paced" }.to_string(),
             config_toml: config.to_toml_string(),
+            start_time_ns: config
+                .run
+                .start_time_ns
+                .unwrap_or_else(testbed_log::unix_time_ns),
             extra: Default::default(),
         };
         let path = segment_path(&config.run.log, ipc_types::restart_count());

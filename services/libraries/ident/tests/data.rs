@@ -294,6 +294,7 @@ fn mcap_run_log_reads_like_the_csv_directory() {
         seed: 6,
         mode: "lockstep".into(),
         config_toml: String::new(),
+        start_time_ns: 0,
         extra: Default::default(),
     };
     let mut log = RunLogWriter::create(&path, &info).expect("create log");

@@ -21,15 +21,23 @@
 //!   `"-Infinity"`; [`Heartbeat::name`](ipc_types::Heartbeat::name) as a string (or as its 32
 //!   raw bytes if they are not NUL-padded UTF-8). Decoding gives back the exact sample, except
 //!   that NaN payloads are not kept.
-//! - `log_time = publish_time = header.time_ns` (run clock, never the wall clock).
+//! - `log_time = publish_time = start_time_ns + header.time_ns`: the run's wall-clock start
+//!   ([`RunInfo::start_time_ns`]) plus the run clock, so viewers show the real date; the
+//!   sample's header keeps the run clock.
+//! - Attitude as Foxglove's well-known `foxglove.FrameTransform` (JSON), derived from the
+//!   estimate and the simulation truth ([`foxglove`]), so the 3D panel shows the platform.
+//! - Indexed when the run ends ([`index`]): chunks, message indexes and a chunk index, so
+//!   viewers seek by time.
 //! - The configuration text is the attachment [`CONFIG_ATTACHMENT`] (`application/toml`);
 //!   profile, seed and mode are the string map of the metadata record [`RUN_METADATA`].
 //!
 //! # Crash safety
 //!
-//! See [`RunLogWriter`]: records are unchunked, so a file cut at any byte keeps every complete
-//! record, and [`RunLog`] reports where the file was cut.
+//! See [`RunLogWriter`]: during the run records are unchunked, so a file cut at any byte keeps
+//! every complete record, and [`RunLog`] reports where the file was cut; the indexed rewrite at
+//! the end replaces the file atomically.
 
+pub mod foxglove;
 mod json;
 mod reader;
 mod record;
@@ -40,12 +48,20 @@ mod writer;
 pub use json::DecodeError;
 pub use reader::{LogEnd, Records, RunLog, Samples};
 pub use record::{LogEncode, LogRecord};
-pub use repair::{RepairReport, repair};
+pub use repair::{INDEXED_CHUNK_BYTES, RepairReport, index, repair};
 pub use sorter::{EncodedRecord, TickSorter};
 pub use writer::{LogStats, RecordOrder, RunLogWriter, WriterOptions};
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
+
+/// Wall-clock time, ns since the Unix epoch (0 if the clock is before it): the usual
+/// [`RunInfo::start_time_ns`].
+pub fn unix_time_ns() -> u64 {
+    std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| u64::try_from(d.as_nanos()).unwrap_or(u64::MAX))
+}
 
 /// Name of the attachment holding the run's configuration.
 pub const CONFIG_ATTACHMENT: &str = "config.toml";
@@ -70,9 +86,21 @@ pub mod keys {
     pub const SEED: &str = "seed";
     /// [`RunInfo::mode`](crate::RunInfo::mode).
     pub const MODE: &str = "mode";
+    /// [`RunInfo::start_time_ns`](crate::RunInfo::start_time_ns), decimal (absent in logs
+    /// written before it existed: read as 0).
+    pub const START_TIME_NS: &str = "start_time_ns";
+    /// The same start time in RFC 3339 (UTC), for people reading the metadata.
+    pub const START_TIME: &str = "start_time";
 }
 
-const RESERVED_KEYS: &[&str] = &[keys::FORMAT, keys::PROFILE, keys::SEED, keys::MODE];
+const RESERVED_KEYS: &[&str] = &[
+    keys::FORMAT,
+    keys::PROFILE,
+    keys::SEED,
+    keys::MODE,
+    keys::START_TIME_NS,
+    keys::START_TIME,
+];
 
 /// What the log records about the run besides its samples.
 #[derive(Debug, Clone, PartialEq, Eq, Default)]
@@ -85,6 +113,10 @@ pub struct RunInfo {
     pub mode: String,
     /// The run's full configuration, as TOML text (stored verbatim).
     pub config_toml: String,
+    /// Wall-clock start of the run, ns since the Unix epoch: every message's MCAP `log_time`
+    /// and `publish_time` is this plus the sample's `header.time_ns` (run clock). 0: the log
+    /// times are the run clock itself.
+    pub start_time_ns: u64,
     /// Further metadata entries (keys must not be one of [`keys`]).
     pub extra: BTreeMap<String, String>,
 }

@@ -75,10 +75,26 @@ pub(crate) enum Next {
 }
 
 /// Reads MCAP record framing (opcode, length) from a file of known length.
+///
+/// Chunks are opened transparently: the records inside an (uncompressed) chunk are returned
+/// one by one as if they were in the data section, each with the chunk's offset.
 pub(crate) struct Framing {
     reader: BufReader<File>,
     pos: u64,
     file_len: u64,
+    chunk: Option<ChunkCursor>,
+}
+
+/// The records of the chunk being read.
+struct ChunkCursor {
+    /// Offset of the chunk record in the file.
+    offset: u64,
+    /// The chunk's records.
+    records: Vec<u8>,
+    /// Start of the next record in `records`.
+    next: usize,
+    /// Body of the record last returned by [`Framing::next`], if it came from this chunk.
+    body: Option<std::ops::Range<usize>>,
 }
 
 impl Framing {
@@ -103,6 +119,7 @@ impl Framing {
             reader,
             pos: magic_len,
             file_len,
+            chunk: None,
         }))
     }
 
@@ -128,7 +145,76 @@ impl Framing {
         })
     }
 
+    /// Whether the last record returned by [`next`](Self::next) came from inside a chunk
+    /// (the file position is then past the whole chunk).
+    pub(crate) fn in_chunk(&self) -> bool {
+        self.chunk.as_ref().is_some_and(|c| c.body.is_some())
+    }
+
     pub(crate) fn next(&mut self) -> Result<Next, LogError> {
+        loop {
+            if let Some(chunk) = &mut self.chunk {
+                chunk.body = None;
+                let rest = chunk.records.get(chunk.next..).unwrap_or_default();
+                if !rest.is_empty() {
+                    let frame = rest.get(..9).ok_or(LogError::Unsupported {
+                        offset: chunk.offset,
+                        what: "a chunk whose last record is cut",
+                    })?;
+                    let opcode = frame[0];
+                    let mut len_bytes = [0u8; 8];
+                    len_bytes.copy_from_slice(&frame[1..9]);
+                    let len = u64::from_le_bytes(len_bytes);
+                    let start = chunk.next + 9;
+                    let end = usize::try_from(len)
+                        .ok()
+                        .and_then(|len| start.checked_add(len))
+                        .filter(|end| *end <= chunk.records.len())
+                        .ok_or(LogError::Unsupported {
+                            offset: chunk.offset,
+                            what: "a chunk whose records overrun it",
+                        })?;
+                    chunk.next = end;
+                    chunk.body = Some(start..end);
+                    return Ok(Next::Record {
+                        opcode,
+                        offset: chunk.offset,
+                        len,
+                    });
+                }
+                self.chunk = None;
+            }
+            let next = self.next_in_file()?;
+            match next {
+                Next::Record {
+                    opcode: op::CHUNK,
+                    offset,
+                    len,
+                } => {
+                    let mut body = Vec::new();
+                    self.body(len, &mut body)?;
+                    let Record::Chunk { header, data } = parse(op::CHUNK, offset, &body)? else {
+                        continue;
+                    };
+                    if !header.compression.is_empty() {
+                        return Err(LogError::Unsupported {
+                            offset,
+                            what: "a compressed chunk",
+                        });
+                    }
+                    self.chunk = Some(ChunkCursor {
+                        offset,
+                        records: data.into_owned(),
+                        next: 0,
+                        body: None,
+                    });
+                }
+                other => return Ok(other),
+            }
+        }
+    }
+
+    fn next_in_file(&mut self) -> Result<Next, LogError> {
         let offset = self.pos;
         if self.file_len - offset < 9 {
             return Ok(Next::Cut { offset });
@@ -152,6 +238,15 @@ impl Framing {
 
     pub(crate) fn body(&mut self, len: u64, buf: &mut Vec<u8>) -> Result<(), LogError> {
         buf.clear();
+        if let Some(ChunkCursor {
+            records,
+            body: Some(range),
+            ..
+        }) = &self.chunk
+        {
+            buf.extend_from_slice(records.get(range.clone()).unwrap_or_default());
+            return Ok(());
+        }
         // `len` fits the file (checked in `next`), so it fits memory as a file read would.
         buf.resize(
             usize::try_from(len).map_err(|_| std::io::Error::other("record too large"))?,
@@ -162,6 +257,9 @@ impl Framing {
     }
 
     pub(crate) fn skip(&mut self, len: u64) -> Result<(), LogError> {
+        if self.in_chunk() {
+            return Ok(());
+        }
         match i64::try_from(len) {
             Ok(len) => self.reader.seek_relative(len)?,
             Err(_) => {
@@ -220,14 +318,40 @@ impl RunLog {
             let in_data = data_end.is_none();
             match opcode {
                 op::MESSAGE if in_data => {
-                    message_count += 1;
-                    framing.skip(len)?;
+                    // Samples only: the derived transforms are not counted.
+                    framing.body(len, &mut body)?;
+                    let channel = body.get(..2).map(|id| u16::from_le_bytes([id[0], id[1]]));
+                    let derived =
+                        channel
+                            .and_then(|id| channels.get(&id))
+                            .is_some_and(|c: &ChannelEntry| {
+                                crate::foxglove::DERIVED_TOPICS.contains(&c.topic.as_str())
+                            });
+                    if !derived {
+                        message_count += 1;
+                    }
                 }
-                op::CHUNK => {
-                    return Err(LogError::Unsupported {
-                        offset,
-                        what: "a chunked MCAP file",
-                    });
+                // A chunked file's channels without messages are only in the summary.
+                op::SCHEMA | op::CHANNEL if !in_data => {
+                    framing.body(len, &mut body)?;
+                    match parse(opcode, offset, &body)? {
+                        Record::Schema { header, .. } => {
+                            schemas
+                                .entry(header.id)
+                                .or_insert((header.name, header.encoding));
+                        }
+                        Record::Channel(c) if !channels.contains_key(&c.id) => {
+                            let kind = channel_kind(&c, &schemas);
+                            channels.insert(
+                                c.id,
+                                ChannelEntry {
+                                    topic: c.topic,
+                                    kind,
+                                },
+                            );
+                        }
+                        _ => {}
+                    }
                 }
                 op::HEADER | op::SCHEMA | op::CHANNEL | op::ATTACHMENT | op::METADATA
                     if in_data =>
@@ -336,14 +460,20 @@ impl RunLog {
         self.end == LogEnd::Complete
     }
 
-    /// Number of complete message records in the data section.
+    /// Number of complete sample messages in the data section (the derived transforms of
+    /// [`foxglove`](crate::foxglove) not counted).
     pub fn message_count(&self) -> u64 {
         self.message_count
     }
 
-    /// The topics of the file's channels, in channel-id order.
+    /// The topics of the file's sample channels, in channel-id order (the derived transforms
+    /// of [`foxglove`](crate::foxglove) left out).
     pub fn topics(&self) -> Vec<&str> {
-        self.channels.values().map(|c| c.topic.as_str()).collect()
+        self.channels
+            .values()
+            .map(|c| c.topic.as_str())
+            .filter(|t| !crate::foxglove::DERIVED_TOPICS.contains(t))
+            .collect()
     }
 
     /// Every record in file order.
@@ -424,11 +554,20 @@ fn run_info(
         key: keys::SEED,
         problem: format!("{seed_text:?} is not a u64: {e}"),
     })?;
+    metadata.remove(keys::START_TIME);
+    let start_time_ns = match metadata.remove(keys::START_TIME_NS) {
+        None => 0,
+        Some(text) => text.parse().map_err(|e| LogError::BadRunInfo {
+            key: keys::START_TIME_NS,
+            problem: format!("{text:?} is not a u64: {e}"),
+        })?,
+    };
     Ok(RunInfo {
         profile,
         seed,
         mode,
         config_toml,
+        start_time_ns,
         extra: metadata,
     })
 }
@@ -449,7 +588,7 @@ pub struct Records<'a> {
 impl Records<'_> {
     fn step(&mut self) -> Result<Option<LogRecord>, LogError> {
         loop {
-            if self.framing.pos >= self.log.data_end {
+            if !self.framing.in_chunk() && self.framing.pos >= self.log.data_end {
                 return Ok(None);
             }
             let (opcode, offset, len) = match self.framing.next()? {
@@ -479,7 +618,9 @@ impl Records<'_> {
             let kind = match &channel.kind {
                 Ok(kind) => *kind,
                 Err(problem) => {
-                    if self.filter.is_some() {
+                    if self.filter.is_some()
+                        || crate::foxglove::DERIVED_TOPICS.contains(&channel.topic.as_str())
+                    {
                         continue; // not one of the wanted ipc-types topics
                     }
                     return Err(LogError::Undecodable {

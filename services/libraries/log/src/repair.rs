@@ -34,6 +34,34 @@ pub struct RepairReport {
 /// footer, to `output` (which may be `input`: the repaired file replaces it atomically, via a
 /// temporary file in the same directory, once it is complete).
 pub fn repair(input: &Path, output: &Path) -> Result<RepairReport, LogError> {
+    rewrite(input, output, Layout::Unchunked)
+}
+
+/// Rewrites the complete log at `path` in place as an indexed MCAP file: the same records
+/// (ids, order, bytes of every message) in uncompressed chunks of about
+/// [`INDEXED_CHUNK_BYTES`], with a message index after each chunk and a chunk index in the
+/// summary, so viewers (Foxglove, `mcap` readers) can seek by time without reading the file
+/// from the start. The logger does this when a run ends (see
+/// [`WriterOptions::indexed`](crate::WriterOptions::indexed)); a file cut mid-run keeps the
+/// unchunked layout, every complete record of which [`repair`] recovers.
+///
+/// The rewrite goes through a temporary file renamed over `path` once complete and synced, so
+/// a crash during it leaves the original. A cut file is refused (repair it first).
+pub fn index(path: &Path) -> Result<RepairReport, LogError> {
+    rewrite(path, path, Layout::Indexed)
+}
+
+/// Size of the chunks [`index`] writes, bytes (uncompressed). At the test bed's data rates
+/// (a few MB per minute) a chunk holds several seconds of records.
+pub const INDEXED_CHUNK_BYTES: u64 = 256 * 1024;
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Layout {
+    Unchunked,
+    Indexed,
+}
+
+fn rewrite(input: &Path, output: &Path, layout: Layout) -> Result<RepairReport, LogError> {
     let mut framing = match Framing::open(input)? {
         Ok(framing) => framing,
         Err(file_len) => {
@@ -51,8 +79,17 @@ pub fn repair(input: &Path, output: &Path) -> Result<RepairReport, LogError> {
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_else(|| "log".to_owned());
-    let temporary = output.with_file_name(format!(".{name}.repairing"));
-    let result = copy_records(&mut framing, file_len, &temporary);
+    let temporary = output.with_file_name(format!(".{name}.rewriting"));
+    let result = copy_records(&mut framing, file_len, &temporary, layout);
+    let result = match result {
+        Ok((LogEnd::Truncated { offset, .. }, ..)) if layout == Layout::Indexed => {
+            Err(LogError::Unsupported {
+                offset,
+                what: "indexing a cut log (repair it first)",
+            })
+        }
+        other => other,
+    };
     let (end, messages, last_time_ns) = match result {
         Ok(done) => done,
         Err(e) => {
@@ -76,7 +113,12 @@ pub fn repair(input: &Path, output: &Path) -> Result<RepairReport, LogError> {
 
 type Copied = (LogEnd, u64, u64);
 
-fn copy_records(framing: &mut Framing, file_len: u64, to: &Path) -> Result<Copied, LogError> {
+fn copy_records(
+    framing: &mut Framing,
+    file_len: u64,
+    to: &Path,
+    layout: Layout,
+) -> Result<Copied, LogError> {
     let file = File::create(to).map_err(|e| LogError::io(to, e))?;
     let mut writer: Option<mcap::Writer<BufWriter<File>>> = None;
     let mut body = Vec::new();
@@ -94,12 +136,6 @@ fn copy_records(framing: &mut Framing, file_len: u64, to: &Path) -> Result<Copie
             Next::Cut { offset } => break LogEnd::Truncated { offset, file_len },
         };
         match opcode {
-            op::CHUNK => {
-                return Err(LogError::Unsupported {
-                    offset,
-                    what: "a chunked MCAP file",
-                });
-            }
             op::DATA_END => {
                 in_data = false;
                 framing.skip(len)?;
@@ -119,7 +155,8 @@ fn copy_records(framing: &mut Framing, file_len: u64, to: &Path) -> Result<Copie
                         continue; // a second header: not valid MCAP, keep the first
                     };
                     let options = mcap::WriteOptions::new()
-                        .use_chunks(false)
+                        .use_chunks(layout == Layout::Indexed)
+                        .chunk_size(Some(INDEXED_CHUNK_BYTES))
                         .compression(None)
                         .profile(header.profile.clone())
                         .library(header.library.clone());

@@ -1,5 +1,6 @@
 //! [`RunLogWriter`]: writes one run's MCAP log.
 
+use crate::foxglove;
 use crate::record::{LogEncode, LogRecord, TopicKind};
 use crate::sorter::{EncodedRecord, TickSorter};
 use crate::{
@@ -34,14 +35,19 @@ pub struct WriterOptions {
     /// are lost if the process dies before the next flush; 0 hands every record to the OS as it
     /// is written (one or more `write` system calls per record).
     pub buffer_bytes: usize,
+    /// For a file made by [`RunLogWriter::create`]: on [`finish`](RunLogWriter::finish),
+    /// rewrite it as an indexed (chunked) MCAP file with [`index`](crate::index), so viewers
+    /// can seek. A file never finished stays unchunked (crash-safe, see the type's docs).
+    pub indexed: bool,
 }
 
 impl Default for WriterOptions {
-    /// Arrival order, 64 KiB buffer.
+    /// Arrival order, 64 KiB buffer, indexed when finished.
     fn default() -> Self {
         Self {
             order: RecordOrder::Arrival,
             buffer_bytes: 64 * 1024,
+            indexed: true,
         }
     }
 }
@@ -76,10 +82,14 @@ pub struct LogStats {
 /// [`LogRecord::TOPICS`], in that order (channel ids 1 to 19), the configuration as attachment
 /// [`CONFIG_ATTACHMENT`], the run metadata record [`RUN_METADATA`], then the messages, and on
 /// [`finish`](Self::finish) the summary section (schemas, channels, statistics, attachment and
-/// metadata indexes) and footer. Every message's `log_time` and `publish_time` is the sample's
-/// `header.time_ns`, its MCAP `sequence` the low 32 bits of `header.sequence`. Nothing in the
-/// file comes from the wall clock (the attachment's times are 0), so the same records in the
-/// same order give the same bytes.
+/// metadata indexes) and footer. Every message's `log_time` and `publish_time` is
+/// [`RunInfo::start_time_ns`] plus the sample's `header.time_ns`, its MCAP `sequence` the low
+/// 32 bits of `header.sequence`. After the sample topics come the derived channels
+/// [`foxglove::TF_ESTIMATE_TOPIC`](crate::foxglove::TF_ESTIMATE_TOPIC) and
+/// [`TF_TRUTH_TOPIC`](crate::foxglove::TF_TRUTH_TOPIC): each valid attitude estimate and each
+/// truth sample is followed by its `foxglove.FrameTransform`. Nothing in the file comes from
+/// the wall clock but the start time given (the attachment's times are 0), so the same records
+/// in the same order with the same start time give the same bytes.
 ///
 /// # Crash safety
 ///
@@ -89,12 +99,17 @@ pub struct LogStats {
 /// `mcap recover`). A record is safe once it has reached the OS: on
 /// [`flush`](Self::flush), [`complete_until`](Self::complete_until), when the write buffer
 /// fills, or per record with [`WriterOptions::buffer_bytes`] = 0; [`sync`](Self::sync)
-/// also survives power loss. The price: no compression and no chunk/message indexes, so
-/// viewers read the file linearly (fine at test-bed data rates, a few MB per minute);
-/// `mcap recover` or `mcap convert` makes an indexed, compressed copy if needed.
+/// also survives power loss. Unchunked records have no index; with
+/// [`WriterOptions::indexed`] (the default), [`finish`](Self::finish) rewrites the complete
+/// file with chunks, message indexes and a chunk index ([`index`](crate::index)), atomically.
 pub struct RunLogWriter<W: Write + Seek = BufWriter<File>> {
     mcap: Option<mcap::Writer<W>>,
     channel_ids: Vec<u16>,
+    /// Channels of the estimate and truth transforms.
+    tf_channel_ids: [u16; 2],
+    start_time_ns: u64,
+    /// The file to index on finish (a file made by `create` with `indexed`).
+    index_path: Option<std::path::PathBuf>,
     counts: Vec<u64>,
     sorter: Option<TickSorter>,
     late_records: u64,
@@ -124,6 +139,7 @@ impl RunLogWriter<BufWriter<File>> {
             options,
         )?;
         writer.sync_file = Some(sync_file);
+        writer.index_path = options.indexed.then(|| path.to_owned());
         Ok(writer)
     }
 }
@@ -155,6 +171,18 @@ impl<W: Write + Seek> RunLogWriter<W> {
                 mcap.add_channel(schema_id, kind.name(), MESSAGE_ENCODING, &BTreeMap::new())?;
             channel_ids.push(channel_id);
         }
+        let tf_schema = mcap.add_schema(
+            foxglove::FRAME_TRANSFORM,
+            SCHEMA_ENCODING,
+            foxglove::frame_transform_schema().as_bytes(),
+        )?;
+        let mut tf_channel_ids = [0u16; 2];
+        for (id, topic) in tf_channel_ids
+            .iter_mut()
+            .zip([foxglove::TF_ESTIMATE_TOPIC, foxglove::TF_TRUTH_TOPIC])
+        {
+            *id = mcap.add_channel(tf_schema, topic, MESSAGE_ENCODING, &BTreeMap::new())?;
+        }
 
         mcap.attach(&mcap::Attachment {
             log_time: 0,
@@ -169,6 +197,17 @@ impl<W: Write + Seek> RunLogWriter<W> {
         metadata.insert(keys::PROFILE.to_owned(), info.profile.clone());
         metadata.insert(keys::SEED.to_owned(), info.seed.to_string());
         metadata.insert(keys::MODE.to_owned(), info.mode.clone());
+        metadata.insert(
+            keys::START_TIME_NS.to_owned(),
+            info.start_time_ns.to_string(),
+        );
+        metadata.insert(
+            keys::START_TIME.to_owned(),
+            humantime::format_rfc3339_nanos(
+                std::time::UNIX_EPOCH + std::time::Duration::from_nanos(info.start_time_ns),
+            )
+            .to_string(),
+        );
         mcap.write_metadata(&Metadata {
             name: RUN_METADATA.to_owned(),
             metadata,
@@ -179,6 +218,9 @@ impl<W: Write + Seek> RunLogWriter<W> {
             mcap: Some(mcap),
             counts: vec![0; channel_ids.len()],
             channel_ids,
+            tf_channel_ids,
+            start_time_ns: info.start_time_ns,
+            index_path: None,
             sorter: (options.order == RecordOrder::Sorted).then(TickSorter::new),
             late_records: 0,
             sync_file: None,
@@ -243,16 +285,40 @@ impl<W: Write + Seek> RunLogWriter<W> {
         let (Some(mcap), Some(&channel_id)) = (&mut self.mcap, self.channel_ids.get(index)) else {
             return Err(LogError::Finished);
         };
+        let log_time = self.start_time_ns.saturating_add(time_ns);
         let header = MessageHeader {
             channel_id,
             // MCAP's sequence is 32 bits; the full sequence is in the JSON header.
             sequence: sequence as u32,
-            log_time: time_ns,
-            publish_time: time_ns,
+            log_time,
+            publish_time: log_time,
         };
         mcap.write_to_known_channel(&header, data)?;
         if let Some(count) = self.counts.get_mut(index) {
             *count += 1;
+        }
+        if foxglove::has_transform(kind) {
+            // A record that does not decode has no transform; its sample is logged all the same.
+            if let Some((topic, child, q)) = kind
+                .decode(data)
+                .ok()
+                .as_ref()
+                .and_then(foxglove::transform_of)
+            {
+                let channel_id = if topic == foxglove::TF_ESTIMATE_TOPIC {
+                    self.tf_channel_ids[0]
+                } else {
+                    self.tf_channel_ids[1]
+                };
+                let text = foxglove::frame_transform_json(log_time, child, &q);
+                mcap.write_to_known_channel(
+                    &MessageHeader {
+                        channel_id,
+                        ..header
+                    },
+                    text.as_bytes(),
+                )?;
+            }
         }
         Ok(())
     }
@@ -312,6 +378,9 @@ impl<W: Write + Seek> RunLogWriter<W> {
         inner.flush().map_err(LogError::Io)?;
         if let Some(file) = &self.sync_file {
             file.sync_all().map_err(LogError::Io)?;
+        }
+        if let Some(path) = &self.index_path {
+            crate::index(path)?;
         }
         let per_topic: Vec<_> = TopicKind::ALL
             .iter()

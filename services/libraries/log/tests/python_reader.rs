@@ -6,7 +6,7 @@ use common::{python_read_log, run_info, run_records, temp_path};
 use ipc_types::topic;
 use serde_json::{Value, json};
 use std::collections::BTreeMap;
-use testbed_log::{LogRecord, RunLogWriter, WriterOptions};
+use testbed_log::{LogRecord, RunLogWriter, WriterOptions, foxglove};
 
 #[test]
 fn python_mcap_reads_topics_schemas_messages_and_configuration() {
@@ -32,8 +32,22 @@ fn python_mcap_reads_topics_schemas_messages_and_configuration() {
         .map(|id| channels[&id.to_string()]["topic"].as_str().expect("topic"))
         .collect();
     assert_eq!(topics, topic::ALL);
+    // Then the attitude as Foxglove frame transforms (estimate, truth).
     let schemas = report["schemas"].as_object().expect("schemas");
-    for channel in channels.values() {
+    for (offset, topic) in foxglove::DERIVED_TOPICS.iter().enumerate() {
+        let channel = &channels[&(topic::ALL.len() + 1 + offset).to_string()];
+        assert_eq!(channel["topic"], *topic);
+        let schema = &schemas[&channel["schema_id"].to_string()];
+        assert_eq!(schema["name"], "foxglove.FrameTransform");
+    }
+    assert_eq!(
+        channels.len(),
+        topic::ALL.len() + foxglove::DERIVED_TOPICS.len()
+    );
+    for channel in channels
+        .values()
+        .filter(|c| !foxglove::DERIVED_TOPICS.contains(&c["topic"].as_str().unwrap_or("")))
+    {
         assert_eq!(channel["message_encoding"], "json");
         let schema = &schemas[&channel["schema_id"].to_string()];
         assert_eq!(schema["encoding"], "jsonschema");
@@ -54,11 +68,20 @@ fn python_mcap_reads_topics_schemas_messages_and_configuration() {
         .expect("desc");
     assert!(rate.contains("rad/s"), "units in the description: {rate}");
 
-    // Messages: every one decoded as JSON by the script; counts match.
+    // Messages: every one decoded as JSON by the script (its log time = start time + the
+    // header's run time); counts match, with one transform per valid estimate and per truth.
     let mut expected: BTreeMap<String, u64> = BTreeMap::new();
     for r in &records {
         *expected.entry(r.topic().to_owned()).or_default() += 1;
+        if let Some((topic, ..)) = foxglove::transform_of(r) {
+            *expected.entry(topic.to_owned()).or_default() += 1;
+        }
     }
+    let transforms: u64 = foxglove::DERIVED_TOPICS
+        .iter()
+        .map(|t| expected.get(*t).copied().unwrap_or(0))
+        .sum();
+    assert!(transforms > 0, "the synthetic run has estimates and truth");
     let counted: BTreeMap<String, u64> = report["messages"]
         .as_object()
         .expect("messages")
@@ -66,7 +89,15 @@ fn python_mcap_reads_topics_schemas_messages_and_configuration() {
         .map(|(t, n)| (t.clone(), n.as_u64().expect("count")))
         .collect();
     assert_eq!(counted, expected);
-    assert_eq!(report["statistics"]["message_count"], json!(records.len()));
+    assert_eq!(
+        report["statistics"]["message_count"],
+        json!(records.len() as u64 + transforms)
+    );
+    // Indexed: chunks with a chunk index, and a reader seeks to the middle of the run through
+    // it, reading exactly the messages from there on.
+    assert!(report["chunk_indexes"].as_u64().is_some_and(|n| n >= 1));
+    assert_eq!(report["from_middle"], report["at_or_after_middle"]);
+    assert!(report["from_middle"].as_u64().is_some_and(|n| n > 0));
     assert_eq!(stats.messages, records.len() as u64);
     assert_eq!(report["statistics"]["attachment_count"], 1);
     assert_eq!(report["statistics"]["metadata_count"], 1);
@@ -90,4 +121,12 @@ fn python_mcap_reads_topics_schemas_messages_and_configuration() {
     assert_eq!(metadata["metadata"]["seed"], info.seed.to_string());
     assert_eq!(metadata["metadata"]["git"], "abc123");
     assert_eq!(metadata["metadata"]["format"], "testbed-log/1");
+    assert_eq!(
+        metadata["metadata"]["start_time_ns"],
+        info.start_time_ns.to_string()
+    );
+    assert_eq!(
+        metadata["metadata"]["start_time"],
+        "2026-11-24T07:00:00.000000000Z"
+    );
 }

@@ -192,3 +192,67 @@ fn dropping_an_unfinished_writer_still_completes_the_file() {
     assert_eq!(log.message_count(), 1);
     assert_eq!(CONFIG_ATTACHMENT, "config.toml");
 }
+
+#[test]
+fn a_finished_log_is_indexed_and_reads_back_as_the_unchunked_one() {
+    let records: Vec<LogRecord> = run_records(40, 9).into_iter().flatten().collect();
+    let write = |name: &str, indexed: bool| {
+        let path = temp_path(name);
+        let options = WriterOptions {
+            indexed,
+            ..WriterOptions::default()
+        };
+        let mut writer = RunLogWriter::create_with(&path, &run_info(), options).expect("create");
+        for record in &records {
+            writer.write_record(record).expect("write");
+        }
+        writer.finish().expect("finish");
+        path
+    };
+    let plain = write("index_plain.mcap", false);
+    let indexed = write("index_indexed.mcap", true);
+    let opcodes = |path: &std::path::Path| -> Vec<u8> {
+        common::framing(&std::fs::read(path).expect("read"))
+            .iter()
+            .map(|f| f.opcode)
+            .collect()
+    };
+    const CHUNK: u8 = 0x06;
+    const MESSAGE_INDEX: u8 = 0x07;
+    const CHUNK_INDEX: u8 = 0x08;
+    let plain_ops = opcodes(&plain);
+    let indexed_ops = opcodes(&indexed);
+    assert!(!plain_ops.contains(&CHUNK) && !plain_ops.contains(&CHUNK_INDEX));
+    assert!(indexed_ops.contains(&CHUNK));
+    assert!(indexed_ops.contains(&MESSAGE_INDEX));
+    assert!(indexed_ops.contains(&CHUNK_INDEX));
+
+    let read = |path: &std::path::Path| {
+        let log = RunLog::open(path).expect("open");
+        assert!(log.is_complete());
+        let records: Vec<LogRecord> = log
+            .records()
+            .expect("records")
+            .map(|r| r.expect("decodes"))
+            .collect();
+        (log.message_count(), log.info().clone(), records)
+    };
+    let (plain_count, plain_info, plain_records) = read(&plain);
+    let (indexed_count, indexed_info, indexed_records) = read(&indexed);
+    assert_eq!(plain_count, records.len() as u64);
+    assert_eq!(indexed_count, plain_count);
+    assert_eq!(indexed_info, plain_info);
+    assert!(plain_records == records);
+    assert!(indexed_records == records);
+
+    // Indexing is idempotent on the records and refuses a cut file.
+    testbed_log::index(&indexed).expect("index again");
+    assert!(read(&indexed).2 == records);
+    let bytes = std::fs::read(&plain).expect("read");
+    let cut = temp_path("index_cut.mcap");
+    std::fs::write(&cut, &bytes[..bytes.len() * 2 / 3]).expect("write");
+    assert!(matches!(
+        testbed_log::index(&cut),
+        Err(testbed_log::LogError::Unsupported { .. })
+    ));
+}

@@ -4,16 +4,20 @@ mod common;
 
 use common::{Framed, framing, python_read_log, run_info, run_records, temp_path};
 use std::collections::BTreeSet;
-use testbed_log::{LogEnd, LogError, LogRecord, RunLog, RunLogWriter};
+use testbed_log::{LogEnd, LogError, LogRecord, RunLog, RunLogWriter, WriterOptions};
 
-const MESSAGE: u8 = 0x05;
 const METADATA: u8 = 0x0C;
 
-/// Writes a finished log of a short run; returns its bytes and records.
+/// Writes a finished log of a short run as it stands before the indexed rewrite (unchunked,
+/// the layout a run's log has until it ends); returns its bytes and records.
 fn finished_log(name: &str) -> (Vec<u8>, Vec<LogRecord>) {
     let path = temp_path(name);
     let records: Vec<LogRecord> = run_records(30, 2).into_iter().flatten().collect();
-    let mut writer = RunLogWriter::create(&path, &run_info()).expect("create");
+    let options = WriterOptions {
+        indexed: false,
+        ..WriterOptions::default()
+    };
+    let mut writer = RunLogWriter::create_with(&path, &run_info(), options).expect("create");
     for record in &records {
         writer.write_record(record).expect("write");
     }
@@ -52,7 +56,7 @@ fn every_complete_record_before_a_cut_is_recovered() {
     let frames = framing(&bytes);
     let message_ends: Vec<u64> = frames
         .iter()
-        .filter(|f| f.opcode == MESSAGE)
+        .filter(|f| f.is_sample_message())
         .map(|f| f.end)
         .collect();
     assert_eq!(message_ends.len(), records.len());
@@ -126,7 +130,7 @@ fn every_complete_record_before_a_cut_is_recovered() {
 fn python_stream_reader_recovers_the_complete_records_of_a_cut_log() {
     let (bytes, records) = finished_log("truncation_full_python.mcap");
     let frames = framing(&bytes);
-    let messages: Vec<&Framed> = frames.iter().filter(|f| f.opcode == MESSAGE).collect();
+    let messages: Vec<&Framed> = frames.iter().filter(|f| f.is_sample_message()).collect();
     // Inside a message body, inside a record's length field, and exactly between two records.
     let mid = messages[messages.len() * 3 / 5];
     let cuts = [
@@ -164,7 +168,7 @@ fn python_stream_reader_recovers_the_complete_records_of_a_cut_log() {
 fn a_repaired_cut_log_is_complete_and_holds_every_complete_record() {
     let (bytes, records) = finished_log("truncation_full_repair.mcap");
     let frames = framing(&bytes);
-    let messages: Vec<&Framed> = frames.iter().filter(|f| f.opcode == MESSAGE).collect();
+    let messages: Vec<&Framed> = frames.iter().filter(|f| f.is_sample_message()).collect();
     let mid = messages[messages.len() / 2];
     // Inside a message body, exactly between two records, inside the footer, and complete.
     let footer = frames.last().expect("footer");
@@ -182,8 +186,16 @@ fn a_repaired_cut_log_is_complete_and_holds_every_complete_record() {
         assert_eq!(cut_log.message_count(), n as u64, "cut at {cut}");
 
         // In place: the repaired file replaces the cut one.
+        // The repair copies every complete message record, the derived transforms included.
+        let n_records = frames
+            .iter()
+            .filter(|f| f.opcode == 0x05 && f.end <= cut)
+            .count();
         let report = testbed_log::repair(&path, &path).expect("repair");
-        assert_eq!(report.messages, n as u64, "cut at {cut}: {report:?}");
+        assert_eq!(
+            report.messages, n_records as u64,
+            "cut at {cut}: {report:?}"
+        );
         assert_eq!(report.end == LogEnd::Complete, cut == bytes.len() as u64);
         let repaired = RunLog::open(&path).expect("open the repaired log");
         assert!(repaired.is_complete(), "cut at {cut}: {:?}", repaired.end());
@@ -198,7 +210,7 @@ fn a_repaired_cut_log_is_complete_and_holds_every_complete_record() {
         // Python's make_reader (reads from the footer) now accepts it.
         let summary = python_read_log(&["summary", path.to_str().expect("utf-8 path")]);
         assert_eq!(
-            summary["statistics"]["message_count"], n as u64,
+            summary["statistics"]["message_count"], n_records as u64,
             "cut at {cut}: {summary}"
         );
     }

@@ -41,6 +41,12 @@ pub struct RunSection {
     /// How the controller's commands reach the plant: `direct`, or through the wheel and CMG
     /// gateways, the CAN bus and the smart CAN node (`can_node`).
     pub actuation: Actuation,
+    /// Wall-clock start of the run, ns since the Unix epoch (UTC). The log's message times
+    /// (`log_time`, `publish_time`) are this plus the run clock, so viewers show real dates;
+    /// samples keep the run clock in their header. `testbed run` sets it when the run starts
+    /// (`--start-time-ns` pins it, to reproduce a log byte for byte); unset, the logger takes
+    /// the time it opens the log.
+    pub start_time_ns: Option<u64>,
 }
 
 impl Default for RunSection {
@@ -56,6 +62,7 @@ impl Default for RunSection {
             command_timeout_s: 0.2,
             replay: None,
             actuation: Actuation::Direct,
+            start_time_ns: None,
         }
     }
 }

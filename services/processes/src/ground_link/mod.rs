@@ -24,7 +24,7 @@ use std::sync::atomic::Ordering;
 use std::sync::mpsc::Receiver;
 use std::time::{Duration, Instant};
 use testbed_bus::{Bus, Flow, LoopExit, SubscriberOptions, TopicPublisher, TopicSubscriber, Wake};
-use testbed_log::{LogEncode, LogRecord};
+use testbed_log::{LogEncode, LogRecord, foxglove};
 use testbed_model::attitude::{self, Attitude};
 use testbed_model::config::DEG;
 use testbed_model::physics::cmg_pyramid::CmgPyramid;
@@ -73,29 +73,6 @@ fn bus_channel_spec<T: LogEncode>(id: u32) -> Channel {
     }
 }
 
-/// JSON Schema of `foxglove.FrameTransform` (the fields the link fills).
-fn frame_transform_schema() -> String {
-    let vector = |names: &[&str]| {
-        let props: serde_json::Map<String, serde_json::Value> = names
-            .iter()
-            .map(|n| ((*n).to_owned(), json!({"type": "number"})))
-            .collect();
-        json!({"type": "object", "properties": props})
-    };
-    json!({
-        "title": "foxglove.FrameTransform",
-        "type": "object",
-        "properties": {
-            "timestamp": {"type": "object", "properties": {"sec": {"type": "integer"}, "nsec": {"type": "integer"}}},
-            "parent_frame_id": {"type": "string"},
-            "child_frame_id": {"type": "string"},
-            "translation": vector(&["x", "y", "z"]),
-            "rotation": vector(&["x", "y", "z", "w"]),
-        }
-    })
-    .to_string()
-}
-
 /// Every channel the link advertises.
 pub fn channels() -> Vec<Channel> {
     let own = |id, topic, schema_name, schema: String| Channel {
@@ -120,15 +97,15 @@ pub fn channels() -> Vec<Channel> {
         bus_channel_spec::<GroundCommandAck>(13),
         own(
             CH_TF_ESTIMATE,
-            "testbed/tf/estimate",
-            "foxglove.FrameTransform",
-            frame_transform_schema(),
+            foxglove::TF_ESTIMATE_TOPIC,
+            foxglove::FRAME_TRANSFORM,
+            foxglove::frame_transform_schema(),
         ),
         own(
             CH_TF_TRUTH,
-            "testbed/tf/truth",
-            "foxglove.FrameTransform",
-            frame_transform_schema(),
+            foxglove::TF_TRUTH_TOPIC,
+            foxglove::FRAME_TRANSFORM,
+            foxglove::frame_transform_schema(),
         ),
         own(
             CH_CMG,
@@ -237,9 +214,16 @@ impl GroundLinkProcess {
         let ground = &config.ground;
         let token = token(ground.token.as_ref())?;
         let (to_bus, from_viewers) = std::sync::mpsc::sync_channel(64);
+        let start_time_ns = config
+            .run
+            .start_time_ns
+            .unwrap_or_else(testbed_log::unix_time_ns);
         let settings = Settings {
             channels: channels(),
+            start_time_ns,
             metadata: json!({
+                // Message times are this plus the run clock (a string: exact in JavaScript).
+                "start_time_ns": start_time_ns.to_string(),
                 "profile": config.run.profile,
                 "mode": config.run.mode.as_str(),
                 "seed": config.run.seed,
@@ -327,27 +311,16 @@ impl GroundLinkProcess {
             &self.buffer,
         );
         let t = header.time_ns;
-        let transform = |child: &str, q: &[f64; 4]| {
-            // q maps level-frame components to body components; the body's pose in the level
-            // frame (parent level, child body) is its conjugate.
-            json!({
-                "timestamp": {"sec": t / 1_000_000_000, "nsec": t % 1_000_000_000},
-                "parent_frame_id": "level",
-                "child_frame_id": child,
-                "translation": {"x": 0.0, "y": 0.0, "z": 0.0},
-                "rotation": {"x": -q[0], "y": -q[1], "z": -q[2], "w": q[3]},
-            })
-            .to_string()
-        };
+        if let Some((topic, child, q)) = foxglove::transform_of(record) {
+            let text = foxglove::frame_transform_json(shared.start_time_ns + t, child, &q);
+            let channel = if topic == foxglove::TF_ESTIMATE_TOPIC {
+                CH_TF_ESTIMATE
+            } else {
+                CH_TF_TRUTH
+            };
+            shared.broadcast(channel, 0, true, t, text.as_bytes());
+        }
         match record {
-            LogRecord::AttitudeEstimate(e) if e.header.is_valid() => {
-                let text = transform("body", &e.quaternion);
-                shared.broadcast(CH_TF_ESTIMATE, 0, true, t, text.as_bytes());
-            }
-            LogRecord::SimTruth(s) => {
-                let text = transform("body_truth", &s.quaternion);
-                shared.broadcast(CH_TF_TRUTH, 0, true, t, text.as_bytes());
-            }
             LogRecord::CmgTelemetry(c) => {
                 let measure = testbed_flight::cmg_steering::singularity_measure(
                     &self.pyramid,

@@ -111,6 +111,8 @@ pub struct Shared {
     pub stats: Stats,
     /// The newest sample time the node has seen, ns (the header time of link commands).
     pub now_ns: AtomicU64,
+    /// See [`Settings::start_time_ns`].
+    pub start_time_ns: u64,
     shutdown: AtomicBool,
     next_viewer: AtomicU32,
     next_sequence: AtomicU64,
@@ -153,7 +155,8 @@ impl Shared {
             if decimate && !viewer.decimator.pass((channel, source), now) {
                 continue;
             }
-            let frame = protocol::message_data(subscription, time_ns, payload);
+            let log_time = self.start_time_ns.saturating_add(time_ns);
+            let frame = protocol::message_data(subscription, log_time, payload);
             let len = frame.len() as u64;
             match viewer.queue.try_send(Outgoing::Binary(frame)) {
                 Ok(()) => {
@@ -187,6 +190,9 @@ impl Shared {
 /// The server's fixed settings.
 pub struct Settings {
     pub channels: Vec<Channel>,
+    /// Wall-clock start of the run, ns since the Unix epoch: message times are this plus the
+    /// run clock, as in the run log.
+    pub start_time_ns: u64,
     pub metadata: serde_json::Value,
     pub limits: Limits,
     pub viewer_rate_hz: f64,
@@ -228,6 +234,7 @@ impl Server {
             viewers: Mutex::new(Vec::new()),
             stats: Stats::default(),
             now_ns: AtomicU64::new(0),
+            start_time_ns: settings.start_time_ns,
             shutdown: AtomicBool::new(false),
             next_viewer: AtomicU32::new(1),
             next_sequence: AtomicU64::new(0),

@@ -58,6 +58,10 @@ pub struct RunArgs {
     /// with the recorded run configuration; the summary compares the estimates with the log's.
     #[arg(long, value_name = "LOG")]
     pub replay_candump: Option<PathBuf>,
+    /// Wall-clock start of the run written in the log, ns since the Unix epoch [default: now].
+    /// Pin it to reproduce a log byte for byte.
+    #[arg(long, value_name = "NS")]
+    pub start_time_ns: Option<u64>,
     /// Print the summary as one JSON object.
     #[arg(long)]
     pub json: bool,
@@ -147,6 +151,8 @@ pub fn run(args: &RunArgs) -> Result<()> {
         }
         config.run.seed = args.seed.unwrap_or(profile.run.seed);
     }
+    // A replay is a run of its own: its log starts now, not when the recorded run did.
+    config.run.start_time_ns = Some(args.start_time_ns.unwrap_or_else(testbed_log::unix_time_ns));
     config.run.replay = args.replay.clone();
     if let Some(log) = args.log.clone().or_else(|| profile.run.log.clone()) {
         config.run.log = log;

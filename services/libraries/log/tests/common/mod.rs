@@ -252,6 +252,8 @@ pub fn run_info() -> RunInfo {
         config_toml: "# test configuration\n[plant]\ninertia = [1.2, 1.3, 0.9] # kg m²\n\n\
                       [estimator]\ngyro_noise = 1e-6\n"
             .into(),
+        // 2026-11-24T07:00:00Z: message times on a real epoch.
+        start_time_ns: 1_795_503_600_000_000_000,
         extra: BTreeMap::from([("git".to_owned(), "abc123".to_owned())]),
     }
 }
@@ -271,6 +273,19 @@ pub struct Framed {
     pub opcode: u8,
     pub start: u64,
     pub end: u64,
+    /// For a message record: its channel id.
+    pub channel: Option<u16>,
+}
+
+impl Framed {
+    /// A message on a sample channel (ids 1 to `topic::ALL.len()`; the derived Foxglove
+    /// transforms follow them).
+    pub fn is_sample_message(&self) -> bool {
+        self.opcode == 0x05
+            && self
+                .channel
+                .is_some_and(|c| usize::from(c) <= ipc_types::topic::ALL.len())
+    }
 }
 
 /// The records of a complete MCAP file (independent of the crate's reader).
@@ -286,6 +301,8 @@ pub fn framing(bytes: &[u8]) -> Vec<Framed> {
             opcode,
             start: pos as u64,
             end: end as u64,
+            channel: (opcode == 0x05)
+                .then(|| u16::from_le_bytes([bytes[pos + 9], bytes[pos + 10]])),
         });
         pos = end;
         if opcode == 0x02 {
