@@ -326,6 +326,17 @@ fn the_ground_page_shows_the_run_and_commands_the_controller() {
         browser.eval("document.getElementById('link').dataset.state"),
         "live"
     );
+    // The page's clock is the run clock (message times minus the run's start time): it is
+    // at least the time of the estimate shown, and within the 60-s run.
+    let shown_s: f64 = browser
+        .text("simtime")
+        .parse()
+        .expect("the page shows the run time");
+    assert!(
+        shown_s + 0.1 >= second.0 as f64 * 1e-9 && shown_s <= 61.0,
+        "page time {shown_s} s, estimate at {} ns",
+        second.0
+    );
 
     // A mode typed in the page: applied by the controller.
     let applied = browser.command(

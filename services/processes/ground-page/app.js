@@ -21,7 +21,7 @@ const $ = (id) => document.getElementById(id);
 const state = {
   ws: null, channels: new Map(), viewerId: null, lastMessage: 0, openedAt: 0,
   retryMs: 500, nextCommandId: 1, series: new Map(), processes: new Map(),
-  restarts: new Map(), can: new Map(), deadlineMisses: 0, simTime: 0, target: null, dirty: false,
+  restarts: new Map(), can: new Map(), deadlineMisses: 0, simTime: 0, startNs: 0n, target: null, dirty: false,
 };
 
 // ---- attitude helpers (conventions of ipc-types: q = [x, y, z, w], L→B) ----
@@ -214,7 +214,8 @@ function onMessageData(buf) {
   const view = new DataView(buf);
   if (view.byteLength < 13 || view.getUint8(0) !== 1) return;
   const sub = view.getUint32(1, true);
-  const timeNs = view.getUint32(5, true) + view.getUint32(9, true) * 4294967296;
+  // Message times are the run's wall-clock start plus the run clock: plot the run clock.
+  const timeNs = Number(view.getBigUint64(5, true) - state.startNs);
   const topic = state.channels.get(sub);
   const handler = topic && handlers[topic];
   if (!handler) return;
@@ -232,6 +233,7 @@ function onText(text) {
   try { m = JSON.parse(text); } catch { return; }
   if (m.op === "serverInfo") {
     state.viewerId = m.metadata && m.metadata.viewer_id;
+    state.startNs = BigInt((m.metadata && m.metadata.start_time_ns) || "0");
   } else if (m.op === "advertise") {
     const subs = [];
     for (const c of m.channels) {
