@@ -4,9 +4,10 @@
 //! them unchunked), and streaming readers read it, but readers that start from the footer
 //! (Python `mcap`'s `make_reader`, viewers) refuse it. The repair copies every complete record
 //! of the data section (header, schemas and channels with their ids, attachments, metadata and
-//! messages, in file order) into a new file written the way the logger writes one, then adds
-//! the summary section (schema, channel and statistics records, attachment and metadata
-//! indexes) and the footer. The incomplete record at the cut is dropped: it cannot be decoded.
+//! messages, in file order) into a new file laid out as the logger leaves a finished one
+//! (chunks with message indexes), then adds the summary section (schema, channel, statistics
+//! and chunk index records, attachment and metadata indexes) and the footer. The incomplete
+//! record at the cut is dropped: it cannot be decoded.
 
 use crate::reader::{Framing, Next};
 use crate::{LogEnd, LogError};
@@ -34,7 +35,7 @@ pub struct RepairReport {
 /// footer, to `output` (which may be `input`: the repaired file replaces it atomically, via a
 /// temporary file in the same directory, once it is complete).
 pub fn repair(input: &Path, output: &Path) -> Result<RepairReport, LogError> {
-    rewrite(input, output, Layout::Unchunked)
+    rewrite(input, output, Accept::CutFile)
 }
 
 /// Rewrites the complete log at `path` in place as an indexed MCAP file: the same records
@@ -48,20 +49,23 @@ pub fn repair(input: &Path, output: &Path) -> Result<RepairReport, LogError> {
 /// The rewrite goes through a temporary file renamed over `path` once complete and synced, so
 /// a crash during it leaves the original. A cut file is refused (repair it first).
 pub fn index(path: &Path) -> Result<RepairReport, LogError> {
-    rewrite(path, path, Layout::Indexed)
+    rewrite(path, path, Accept::CompleteFile)
 }
 
 /// Size of the chunks [`index`] writes, bytes (uncompressed). At the test bed's data rates
 /// (a few MB per minute) a chunk holds several seconds of records.
 pub const INDEXED_CHUNK_BYTES: u64 = 256 * 1024;
 
+/// What the rewrite accepts.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Layout {
-    Unchunked,
-    Indexed,
+enum Accept {
+    /// A file cut anywhere: every complete record is kept.
+    CutFile,
+    /// Only a complete file.
+    CompleteFile,
 }
 
-fn rewrite(input: &Path, output: &Path, layout: Layout) -> Result<RepairReport, LogError> {
+fn rewrite(input: &Path, output: &Path, accept: Accept) -> Result<RepairReport, LogError> {
     let mut framing = match Framing::open(input)? {
         Ok(framing) => framing,
         Err(file_len) => {
@@ -80,9 +84,9 @@ fn rewrite(input: &Path, output: &Path, layout: Layout) -> Result<RepairReport, 
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_else(|| "log".to_owned());
     let temporary = output.with_file_name(format!(".{name}.rewriting"));
-    let result = copy_records(&mut framing, file_len, &temporary, layout);
+    let result = copy_records(&mut framing, file_len, &temporary);
     let result = match result {
-        Ok((LogEnd::Truncated { offset, .. }, ..)) if layout == Layout::Indexed => {
+        Ok((LogEnd::Truncated { offset, .. }, ..)) if accept == Accept::CompleteFile => {
             Err(LogError::Unsupported {
                 offset,
                 what: "indexing a cut log (repair it first)",
@@ -113,12 +117,7 @@ fn rewrite(input: &Path, output: &Path, layout: Layout) -> Result<RepairReport, 
 
 type Copied = (LogEnd, u64, u64);
 
-fn copy_records(
-    framing: &mut Framing,
-    file_len: u64,
-    to: &Path,
-    layout: Layout,
-) -> Result<Copied, LogError> {
+fn copy_records(framing: &mut Framing, file_len: u64, to: &Path) -> Result<Copied, LogError> {
     let file = File::create(to).map_err(|e| LogError::io(to, e))?;
     let mut writer: Option<mcap::Writer<BufWriter<File>>> = None;
     let mut body = Vec::new();
@@ -155,7 +154,7 @@ fn copy_records(
                         continue; // a second header: not valid MCAP, keep the first
                     };
                     let options = mcap::WriteOptions::new()
-                        .use_chunks(layout == Layout::Indexed)
+                        .use_chunks(true)
                         .chunk_size(Some(INDEXED_CHUNK_BYTES))
                         .compression(None)
                         .profile(header.profile.clone())
