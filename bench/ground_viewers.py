@@ -79,7 +79,6 @@ class Viewer(threading.Thread):
         self.bytes = self.messages = 0
         self.channels = 0
         self.error = None
-        self.connected_s = None
         self.stop = threading.Event()
 
     def run(self):
@@ -88,7 +87,6 @@ class Viewer(threading.Thread):
         try:
             with connect(self.url, subprotocols=["foxglove.websocket.v1"],
                          max_size=None, open_timeout=10) as ws:
-                started = time.monotonic()
                 channels = []
                 deadline = time.monotonic() + 10
                 while not channels and time.monotonic() < deadline:
@@ -107,11 +105,8 @@ class Viewer(threading.Thread):
                         continue
                     self.messages += 1
                     self.bytes += len(msg)
-                self.connected_s = time.monotonic() - started
         except Exception as e:  # the link closes when the run ends
             self.error = f"{type(e).__name__}: {e}"
-            if self.connected_s is None:
-                self.connected_s = None
 
 
 def run(profile, duration, viewers, scratch, label):

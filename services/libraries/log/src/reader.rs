@@ -48,6 +48,13 @@ struct ChannelEntry {
     kind: Result<TopicKind, String>,
 }
 
+impl ChannelEntry {
+    /// A channel the writer derives from the samples ([`foxglove`](crate::foxglove)).
+    fn is_derived(&self) -> bool {
+        crate::foxglove::DERIVED_TOPICS.contains(&self.topic.as_str())
+    }
+}
+
 /// An opened run log: its run information, how it ends, and iterators over its records.
 ///
 /// [`open`](Self::open) scans the file's record structure once (message bodies are skipped),
@@ -321,56 +328,33 @@ impl RunLog {
                     // Samples only: the derived transforms are not counted.
                     framing.body(len, &mut body)?;
                     let channel = body.get(..2).map(|id| u16::from_le_bytes([id[0], id[1]]));
-                    let derived =
-                        channel
-                            .and_then(|id| channels.get(&id))
-                            .is_some_and(|c: &ChannelEntry| {
-                                crate::foxglove::DERIVED_TOPICS.contains(&c.topic.as_str())
-                            });
+                    let derived = channel
+                        .and_then(|id| channels.get(&id))
+                        .is_some_and(ChannelEntry::is_derived);
                     if !derived {
                         message_count += 1;
                     }
                 }
                 // A chunked file's channels without messages are only in the summary.
-                op::SCHEMA | op::CHANNEL if !in_data => {
-                    framing.body(len, &mut body)?;
-                    match parse(opcode, offset, &body)? {
-                        Record::Schema { header, .. } => {
-                            schemas
-                                .entry(header.id)
-                                .or_insert((header.name, header.encoding));
-                        }
-                        Record::Channel(c) if !channels.contains_key(&c.id) => {
-                            let kind = channel_kind(&c, &schemas);
-                            channels.insert(
-                                c.id,
-                                ChannelEntry {
-                                    topic: c.topic,
-                                    kind,
-                                },
-                            );
-                        }
-                        _ => {}
-                    }
-                }
+                // Schemas and channels are also read from the summary: a chunked file's channels
+                // without messages are only there. The first definition of an id is kept.
                 op::HEADER | op::SCHEMA | op::CHANNEL | op::ATTACHMENT | op::METADATA
-                    if in_data =>
+                    if in_data || matches!(opcode, op::SCHEMA | op::CHANNEL) =>
                 {
                     framing.body(len, &mut body)?;
                     match parse(opcode, offset, &body)? {
                         Record::Header(h) => library = h.library,
                         Record::Schema { header, .. } => {
-                            schemas.insert(header.id, (header.name, header.encoding));
+                            schemas
+                                .entry(header.id)
+                                .or_insert((header.name, header.encoding));
                         }
                         Record::Channel(c) => {
                             let kind = channel_kind(&c, &schemas);
-                            channels.insert(
-                                c.id,
-                                ChannelEntry {
-                                    topic: c.topic,
-                                    kind,
-                                },
-                            );
+                            channels.entry(c.id).or_insert(ChannelEntry {
+                                topic: c.topic,
+                                kind,
+                            });
                         }
                         Record::Attachment { header, data, .. }
                             if header.name == CONFIG_ATTACHMENT =>
@@ -471,8 +455,8 @@ impl RunLog {
     pub fn topics(&self) -> Vec<&str> {
         self.channels
             .values()
+            .filter(|c| !c.is_derived())
             .map(|c| c.topic.as_str())
-            .filter(|t| !crate::foxglove::DERIVED_TOPICS.contains(t))
             .collect()
     }
 
@@ -618,9 +602,7 @@ impl Records<'_> {
             let kind = match &channel.kind {
                 Ok(kind) => *kind,
                 Err(problem) => {
-                    if self.filter.is_some()
-                        || crate::foxglove::DERIVED_TOPICS.contains(&channel.topic.as_str())
-                    {
+                    if self.filter.is_some() || channel.is_derived() {
                         continue; // not one of the wanted ipc-types topics
                     }
                     return Err(LogError::Undecodable {

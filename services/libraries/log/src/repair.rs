@@ -21,7 +21,9 @@ use std::path::{Path, PathBuf};
 pub struct RepairReport {
     /// How the input ended (where it was cut).
     pub end: LogEnd,
-    /// Message records copied (every complete one).
+    /// Sample messages copied (every complete one; the derived transforms of
+    /// [`foxglove`](crate::foxglove) are copied too but not counted, as in
+    /// [`RunLog::message_count`](crate::RunLog::message_count)).
     pub messages: u64,
     /// `log_time` of the last message copied, ns (0 if none).
     pub last_time_ns: u64,
@@ -122,6 +124,7 @@ fn copy_records(framing: &mut Framing, file_len: u64, to: &Path) -> Result<Copie
     let mut writer: Option<mcap::Writer<BufWriter<File>>> = None;
     let mut body = Vec::new();
     let mut messages = 0;
+    let mut derived_channels = Vec::new();
     let mut last_time_ns = 0;
     let mut file = Some(file);
     let mut in_data = true;
@@ -173,6 +176,9 @@ fn copy_records(framing: &mut Framing, file_len: u64, to: &Path) -> Result<Copie
                         mcap.add_schema_with_id(header.id, &header.name, &header.encoding, &data)?;
                     }
                     Record::Channel(c) => {
+                        if crate::foxglove::DERIVED_TOPICS.contains(&c.topic.as_str()) {
+                            derived_channels.push(c.id);
+                        }
                         mcap.add_channel_with_id(
                             c.id,
                             c.schema_id,
@@ -183,7 +189,9 @@ fn copy_records(framing: &mut Framing, file_len: u64, to: &Path) -> Result<Copie
                     }
                     Record::Message { header, data } => {
                         mcap.write_to_known_channel(&header, &data)?;
-                        messages += 1;
+                        if !derived_channels.contains(&header.channel_id) {
+                            messages += 1;
+                        }
                         last_time_ns = header.log_time;
                     }
                     Record::Attachment { header, data, .. } => {
