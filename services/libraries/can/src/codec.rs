@@ -229,6 +229,8 @@ impl Encoder {
                     FieldKind::State => u32::from(record.state),
                     FieldKind::Links => u32::from(record.links),
                     FieldKind::Errors => u32::from(record.errors),
+                    FieldKind::Flags => u32::from(record.flags),
+                    FieldKind::Valves => u32::from(record.valves),
                     FieldKind::Value(ch) => raw.get(usize::from(ch)).copied().unwrap_or(0) as u32,
                 };
                 write_uint(&mut data, offset, width, v);
@@ -372,7 +374,7 @@ pub struct Decoded {
 const NO_SLOT: u8 = 0xFF;
 const NO_COUNTER: u16 = 0x100;
 /// Frames of all messages: one counter slot each.
-const SLOTS: usize = 18;
+const SLOTS: usize = 23;
 
 #[derive(Debug, Clone, Copy, Default)]
 struct Pending {
@@ -600,6 +602,8 @@ impl Decoder {
                     FieldKind::State => record.state = byte,
                     FieldKind::Links => record.links = byte,
                     FieldKind::Errors => record.errors = byte,
+                    FieldKind::Flags => record.flags = byte,
+                    FieldKind::Valves => record.valves = byte,
                     FieldKind::Time => record.time_us = read_uint(data, offset, 4),
                     FieldKind::Value(ch) => {
                         let Some(c) = channel(layout.channels, ch) else {
@@ -634,7 +638,7 @@ impl Decoder {
 mod tests {
     use super::*;
     use crate::message::*;
-    use crate::protocol::{IdMap, Limits};
+    use crate::protocol::{IdMap, Limits, MAX_VALVE_ON_TIME_S};
 
     fn gyro(rate: [f64; 3]) -> Message {
         Message::Gyro(GyroMsg {
@@ -850,5 +854,87 @@ mod tests {
         assert!((t.gimbal_angle_rad[1] + pi).abs() <= lsb / 2.0);
         assert!((t.gimbal_angle_rad[2] + pi / 2.0).abs() <= lsb / 2.0);
         assert!((t.gimbal_angle_rad[3] - (-7.0 + 2.0 * pi)).abs() <= lsb);
+    }
+
+    fn decode_all(dec: &mut Decoder, batch: &FrameBatch) -> Option<Received> {
+        let mut out = None;
+        for f in batch {
+            out = dec.decode(f).message.or(out);
+        }
+        out
+    }
+
+    #[test]
+    fn thruster_command_round_trip_and_wire_bytes() {
+        let mut enc = Encoder::new(Protocol::default());
+        let mut dec = Decoder::new(Protocol::default());
+        let on = [0.1, 0.0, 0.012_34, 0.0, 0.02, 0.099_999];
+        let m = Message::ThrusterCommand(ThrusterCommandMsg {
+            on_time_s: on,
+            latch_shut: true,
+        });
+        let batch = enc.encode(&m).unwrap();
+        let f = batch.as_slice();
+        assert_eq!(f.len(), 2);
+        assert_eq!(f[0].standard_id(), Some(0x160));
+        assert_eq!(f[1].standard_id(), Some(0x161));
+        // 0.1 s = 10000 LSB of 10 µs = 0x2710; the latch flag is bit 0 of byte 1.
+        assert_eq!(f[0].data(), &[0, 1, 0x10, 0x27, 0, 0, 0xD2, 0x04]);
+        let Some(Received {
+            message: Message::ThrusterCommand(c),
+            clipped: 0,
+            ..
+        }) = decode_all(&mut dec, &batch)
+        else {
+            panic!("no thruster command")
+        };
+        assert!(c.latch_shut);
+        for (a, b) in c.on_time_s.iter().zip(on) {
+            assert!((a - b).abs() <= Quantity::ValveOnTime.lsb_si() / 2.0);
+        }
+        // Beyond the field's limit or not finite: refused, nothing sent.
+        for bad in [MAX_VALVE_ON_TIME_S + 0.01, -0.31, f64::NAN] {
+            let mut on = [0.0; 6];
+            on[3] = bad;
+            let e = enc.encode(&Message::ThrusterCommand(ThrusterCommandMsg {
+                on_time_s: on,
+                latch_shut: false,
+            }));
+            assert!(e.is_err(), "{bad} encoded");
+        }
+    }
+
+    #[test]
+    fn thruster_status_round_trip() {
+        let mut enc = Encoder::new(Protocol::default());
+        let mut dec = Decoder::new(Protocol::default());
+        let m = ThrusterStatusMsg {
+            node_time_us: 4_000_000,
+            status: DeviceStatus(0),
+            applied_on_time_s: [0.0, 0.05, 0.0, 0.0, 0.1, 0.0],
+            valves_open: 0b01_0010,
+            latch_shut: true,
+        };
+        let batch = enc.encode(&Message::ThrusterStatus(m)).unwrap();
+        assert_eq!(batch.len(), 3);
+        assert_eq!(batch.as_slice()[0].standard_id(), Some(0x162));
+        assert_eq!(batch.as_slice()[1].data()[1], 0b1001_0010); // valves + latch bit
+        let Some(Received {
+            message: Message::ThrusterStatus(s),
+            ..
+        }) = decode_all(&mut dec, &batch)
+        else {
+            panic!("no thruster status")
+        };
+        assert_eq!(s.node_time_us, m.node_time_us);
+        assert_eq!((s.valves_open, s.latch_shut), (m.valves_open, true));
+        assert_eq!(s.applied_on_time_s, m.applied_on_time_s); // multiples of the LSB
+        let Some(Sample::ThrusterStatus(sample)) =
+            Message::ThrusterStatus(s).to_sample(ipc_types::SampleHeader::default(), 0)
+        else {
+            panic!("no sample")
+        };
+        assert_eq!((sample.valves_open, sample.disabled), (0b01_0010, 1));
+        assert!(sample.header.is_valid());
     }
 }

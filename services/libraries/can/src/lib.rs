@@ -59,7 +59,8 @@ pub use codec::{
 pub use frame::{CanFrame, CanId, FrameError, TimeSource, TimestampedFrame};
 pub use message::{
     CmgCommandMsg, CmgTelemetryMsg, DeviceStatus, GyroMsg, InclinometerMsg, MagnetometerMsg,
-    Message, NodeClock, NodeHeartbeatMsg, NodeState, Sample, WheelCommandMsg, WheelTelemetryMsg,
+    Message, NodeClock, NodeHeartbeatMsg, NodeState, Sample, ThrusterCommandMsg, ThrusterStatusMsg,
+    WheelCommandMsg, WheelTelemetryMsg,
 };
 pub use protocol::{
     Device, DeviceSet, Direction, IdMap, Limits, MessageKind, Protocol, ProtocolError, Quantity,

@@ -193,6 +193,44 @@ pub struct NodeHeartbeatMsg {
     pub serial_errors: u8,
 }
 
+/// Thruster valve command for one control period (computer → node).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct ThrusterCommandMsg {
+    /// Electrical on-time of each valve from the start of the period, s (0: shut).
+    pub on_time_s: [f64; 6],
+    /// Shut the latch valve upstream of every thruster (a stuck-open valve was found): no
+    /// thrust at all until the node restarts.
+    pub latch_shut: bool,
+}
+
+/// Thruster status (node → computer, 10 Hz): what the node applied in the period that just
+/// ended and the valves' position sensors at its end.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct ThrusterStatusMsg {
+    /// The node's time stamp of the valve sensing, µs.
+    pub node_time_us: u32,
+    /// Device status (bit 7: the valve drive reports a fault).
+    pub status: DeviceStatus,
+    /// On-times the node applied in the period that ended, s.
+    pub applied_on_time_s: [f64; 6],
+    /// Valves sensed open at the end of the period: bit `i` for thruster `i` (bits 0–5).
+    pub valves_open: u8,
+    /// The latch valve is shut.
+    pub latch_shut: bool,
+}
+
+impl ThrusterStatusMsg {
+    /// Bit of the valves byte saying the latch valve is shut.
+    pub const LATCH_SHUT_BIT: u8 = 1 << 7;
+    /// The valve bits of the valves byte.
+    pub const VALVE_MASK: u8 = 0x3F;
+}
+
+impl ThrusterCommandMsg {
+    /// Bit of the flags byte asking the node to shut the latch valve.
+    pub const LATCH_SHUT_FLAG: u8 = 1 << 0;
+}
+
 /// Any message of the protocol.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Message {
@@ -212,6 +250,10 @@ pub enum Message {
     Magnetometer(MagnetometerMsg),
     /// [`MessageKind::NodeHeartbeat`].
     NodeHeartbeat(NodeHeartbeatMsg),
+    /// [`MessageKind::ThrusterCommand`].
+    ThrusterCommand(ThrusterCommandMsg),
+    /// [`MessageKind::ThrusterStatus`].
+    ThrusterStatus(ThrusterStatusMsg),
 }
 
 /// The generic form of a message: what the layout tables read and write.
@@ -223,6 +265,8 @@ pub(crate) struct Record {
     pub state: u8,
     pub links: u8,
     pub errors: u8,
+    pub flags: u8,
+    pub valves: u8,
 }
 
 fn put<const N: usize>(values: &mut [f64; MAX_CHANNELS], at: usize, src: &[f64; N]) {
@@ -247,13 +291,16 @@ impl Message {
             Message::Inclinometer(_) => MessageKind::Inclinometer,
             Message::Magnetometer(_) => MessageKind::Magnetometer,
             Message::NodeHeartbeat(_) => MessageKind::NodeHeartbeat,
+            Message::ThrusterCommand(_) => MessageKind::ThrusterCommand,
+            Message::ThrusterStatus(_) => MessageKind::ThrusterStatus,
         }
     }
 
     /// The node's time stamp, µs (None for commands).
     pub const fn node_time_us(&self) -> Option<u32> {
         match self {
-            Message::WheelCommand(_) | Message::CmgCommand(_) => None,
+            Message::WheelCommand(_) | Message::CmgCommand(_) | Message::ThrusterCommand(_) => None,
+            Message::ThrusterStatus(m) => Some(m.node_time_us),
             Message::WheelTelemetry(m) => Some(m.node_time_us),
             Message::CmgTelemetry(m) => Some(m.node_time_us),
             Message::Gyro(m) => Some(m.node_time_us),
@@ -271,6 +318,7 @@ impl Message {
             Message::Gyro(m) => Some(m.status),
             Message::Inclinometer(m) => Some(m.status),
             Message::Magnetometer(m) => Some(m.status),
+            Message::ThrusterStatus(m) => Some(m.status),
             _ => None,
         }
     }
@@ -307,6 +355,24 @@ impl Message {
                 r.state = m.state.to_wire();
                 r.links = m.links.0;
                 r.errors = m.serial_errors;
+            }
+            Message::ThrusterCommand(m) => {
+                put(&mut r.values, 0, &m.on_time_s);
+                r.flags = if m.latch_shut {
+                    ThrusterCommandMsg::LATCH_SHUT_FLAG
+                } else {
+                    0
+                };
+            }
+            Message::ThrusterStatus(m) => {
+                (r.status, r.time_us) = (m.status.0, m.node_time_us);
+                put(&mut r.values, 0, &m.applied_on_time_s);
+                r.valves = (m.valves_open & ThrusterStatusMsg::VALVE_MASK)
+                    | if m.latch_shut {
+                        ThrusterStatusMsg::LATCH_SHUT_BIT
+                    } else {
+                        0
+                    };
             }
         }
         r
@@ -355,6 +421,17 @@ impl Message {
                 links: DeviceSet(r.links),
                 serial_errors: r.errors,
             }),
+            MessageKind::ThrusterCommand => Message::ThrusterCommand(ThrusterCommandMsg {
+                on_time_s: get(&r.values, 0),
+                latch_shut: r.flags & ThrusterCommandMsg::LATCH_SHUT_FLAG != 0,
+            }),
+            MessageKind::ThrusterStatus => Message::ThrusterStatus(ThrusterStatusMsg {
+                node_time_us,
+                status,
+                applied_on_time_s: get(&r.values, 0),
+                valves_open: r.valves & ThrusterStatusMsg::VALVE_MASK,
+                latch_shut: r.valves & ThrusterStatusMsg::LATCH_SHUT_BIT != 0,
+            }),
         }
     }
 }
@@ -376,6 +453,11 @@ pub enum Sample {
     CmgTelemetry(ipc_types::CmgTelemetry),
     /// CMG command (seen on the bus).
     CmgCommand(ipc_types::CmgCommand),
+    /// Thruster status: applied on-times and sensed valves. The gateway fills in what only it
+    /// knows (refusals, propellant, disabled).
+    ThrusterStatus(ipc_types::ThrusterStatus),
+    /// Thruster command (seen on the bus).
+    ThrusterCommand(ipc_types::ThrusterCommand),
 }
 
 impl Message {
@@ -425,6 +507,23 @@ impl Message {
             Message::CmgCommand(m) => {
                 h.flags |= command_flags;
                 Sample::CmgCommand(ipc_types::CmgCommand::new(h, m.gimbal_rate_rad_s))
+            }
+            Message::ThrusterStatus(m) => {
+                h.flags |= m.status.header_flags(clipped);
+                Sample::ThrusterStatus(ipc_types::ThrusterStatus {
+                    header: h,
+                    applied_on_time: m.applied_on_time_s,
+                    valves_open: u32::from(m.valves_open),
+                    disabled: u32::from(m.latch_shut),
+                    ..Default::default()
+                })
+            }
+            Message::ThrusterCommand(m) => {
+                h.flags |= command_flags;
+                Sample::ThrusterCommand(ipc_types::ThrusterCommand {
+                    header: h,
+                    on_time: m.on_time_s,
+                })
             }
             Message::NodeHeartbeat(_) => return None,
         })

@@ -26,19 +26,23 @@ pub enum Device {
     Inclinometer,
     /// The three-axis magnetometer (slot 4).
     Magnetometer,
-    /// The smart CAN node itself: heartbeat (slot 5, lowest priority).
+    /// The smart CAN node itself: heartbeat (slot 5).
     Node,
+    /// The six thruster valves (slot 6, appended after the node so that every earlier
+    /// identifier, and every recorded log, stays as it was).
+    Thrusters,
 }
 
 impl Device {
     /// Every device, in slot order.
-    pub const ALL: [Device; 6] = [
+    pub const ALL: [Device; 7] = [
         Device::Wheels,
         Device::Cmg,
         Device::Gyro,
         Device::Inclinometer,
         Device::Magnetometer,
         Device::Node,
+        Device::Thrusters,
     ];
 
     /// Slot number: identifiers `base + 0x10 · slot + 0..=0xF`.
@@ -60,6 +64,7 @@ impl Device {
             Device::Inclinometer => "inclinometer",
             Device::Magnetometer => "magnetometer",
             Device::Node => "node",
+            Device::Thrusters => "thrusters",
         }
     }
 }
@@ -70,7 +75,7 @@ pub struct DeviceSet(pub u8);
 
 impl DeviceSet {
     /// Every device.
-    pub const ALL: DeviceSet = DeviceSet(0b11_1111);
+    pub const ALL: DeviceSet = DeviceSet(0b111_1111);
 
     /// The set of the listed devices.
     pub fn of(devices: &[Device]) -> Self {
@@ -111,11 +116,15 @@ pub enum MessageKind {
     Magnetometer,
     /// Node heartbeat and link status (node → computer), 1 frame.
     NodeHeartbeat,
+    /// Thruster valve on-times for one period and the latch valve (computer → node), 2 frames.
+    ThrusterCommand,
+    /// Thruster on-times applied, valves sensed, latch valve (node → computer), 3 frames.
+    ThrusterStatus,
 }
 
 impl MessageKind {
     /// Every message, in identifier order.
-    pub const ALL: [MessageKind; 8] = [
+    pub const ALL: [MessageKind; 10] = [
         MessageKind::WheelCommand,
         MessageKind::WheelTelemetry,
         MessageKind::CmgCommand,
@@ -124,6 +133,8 @@ impl MessageKind {
         MessageKind::Inclinometer,
         MessageKind::Magnetometer,
         MessageKind::NodeHeartbeat,
+        MessageKind::ThrusterCommand,
+        MessageKind::ThrusterStatus,
     ];
 
     /// Index into [`MessageKind::ALL`].
@@ -172,6 +183,8 @@ impl MessageKind {
             MessageKind::Inclinometer => "inclinometer",
             MessageKind::Magnetometer => "magnetometer",
             MessageKind::NodeHeartbeat => "node heartbeat",
+            MessageKind::ThrusterCommand => "thruster command",
+            MessageKind::ThrusterStatus => "thruster status",
         }
     }
 }
@@ -193,11 +206,13 @@ pub enum Quantity {
     GimbalAngle,
     /// CMG gimbal rate: signed 24 bit, LSB 1e-4 °/s.
     GimbalRate,
+    /// Thruster valve on-time: signed 16 bit, LSB 10 µs.
+    ValveOnTime,
 }
 
 impl Quantity {
     /// Every quantity.
-    pub const ALL: [Quantity; 7] = [
+    pub const ALL: [Quantity; 8] = [
         Quantity::GyroRate,
         Quantity::Tilt,
         Quantity::Field,
@@ -205,12 +220,13 @@ impl Quantity {
         Quantity::WheelTorque,
         Quantity::GimbalAngle,
         Quantity::GimbalRate,
+        Quantity::ValveOnTime,
     ];
 
     /// Width on the wire, bits (two's complement, little-endian).
     pub const fn bits(self) -> u32 {
         match self {
-            Quantity::WheelTorque => 16,
+            Quantity::WheelTorque | Quantity::ValveOnTime => 16,
             _ => 24,
         }
     }
@@ -235,6 +251,7 @@ impl Quantity {
             Quantity::WheelTorque => 1e-5,
             Quantity::GimbalAngle => 360.0 / (1u32 << 24) as f64,
             Quantity::GimbalRate => 1e-4,
+            Quantity::ValveOnTime => 1e-5,
         }
     }
 
@@ -246,6 +263,7 @@ impl Quantity {
             Quantity::Field => "G",
             Quantity::WheelSpeed => "rpm",
             Quantity::WheelTorque => "Nm",
+            Quantity::ValveOnTime => "s",
         }
     }
 
@@ -257,7 +275,7 @@ impl Quantity {
             }
             Quantity::Field => GAUSS,
             Quantity::WheelSpeed => RPM,
-            Quantity::WheelTorque => 1.0,
+            Quantity::WheelTorque | Quantity::ValveOnTime => 1.0,
         }
     }
 
@@ -281,6 +299,7 @@ impl Quantity {
             Quantity::WheelTorque => "wheel torque",
             Quantity::GimbalAngle => "gimbal angle",
             Quantity::GimbalRate => "gimbal rate",
+            Quantity::ValveOnTime => "valve on-time",
         }
     }
 }
@@ -300,12 +319,21 @@ pub(crate) enum FieldKind {
     Links,
     /// Heartbeat: serial error count, 1 byte.
     Errors,
+    /// Thruster command: flags (bit 0: shut the latch valve), 1 byte.
+    Flags,
+    /// Thruster status: valves sensed open (bits 0–5) and latch valve shut (bit 7), 1 byte.
+    Valves,
 }
 
 impl FieldKind {
     pub(crate) const fn width(self, channels: &[Channel]) -> usize {
         match self {
-            FieldKind::Status | FieldKind::State | FieldKind::Links | FieldKind::Errors => 1,
+            FieldKind::Status
+            | FieldKind::State
+            | FieldKind::Links
+            | FieldKind::Errors
+            | FieldKind::Flags
+            | FieldKind::Valves => 1,
             FieldKind::Time => 4,
             FieldKind::Value(ch) => channels[ch as usize].quantity.bytes(),
         }
@@ -352,7 +380,7 @@ const fn f(offset: u8, kind: FieldKind) -> Field {
 const fn c(quantity: Quantity, axis: u8) -> Channel {
     Channel { quantity, axis }
 }
-use FieldKind::{Errors, Links, State, Status, Time, Value};
+use FieldKind::{Errors, Flags, Links, State, Status, Time, Value, Valves};
 
 /// Two frames: `[ctr][status][ch0 i24][ch1 i24]`, `[ctr][ch2 i24][t_us u32]`.
 const THREE_AXIS_PARTS: &[PartLayout] = &[
@@ -366,7 +394,7 @@ const THREE_AXIS_PARTS: &[PartLayout] = &[
     },
 ];
 
-pub(crate) const LAYOUTS: [MessageLayout; 8] = [
+pub(crate) const LAYOUTS: [MessageLayout; 10] = [
     MessageLayout {
         kind: MessageKind::WheelCommand,
         device: Device::Wheels,
@@ -522,7 +550,60 @@ pub(crate) const LAYOUTS: [MessageLayout; 8] = [
         }],
         channels: &[],
     },
+    MessageLayout {
+        kind: MessageKind::ThrusterCommand,
+        device: Device::Thrusters,
+        direction: Direction::ToNode,
+        first: 0x0,
+        parts: &[
+            PartLayout {
+                dlc: 8,
+                fields: &[f(1, Flags), f(2, Value(0)), f(4, Value(1)), f(6, Value(2))],
+            },
+            PartLayout {
+                dlc: 7,
+                fields: &[f(1, Value(3)), f(3, Value(4)), f(5, Value(5))],
+            },
+        ],
+        channels: &VALVE_CHANNELS,
+    },
+    MessageLayout {
+        kind: MessageKind::ThrusterStatus,
+        device: Device::Thrusters,
+        direction: Direction::FromNode,
+        first: 0x2,
+        parts: &[
+            PartLayout {
+                dlc: 8,
+                fields: &[f(1, Status), f(2, Value(0)), f(4, Value(1)), f(6, Value(2))],
+            },
+            PartLayout {
+                dlc: 8,
+                fields: &[f(1, Valves), f(2, Value(3)), f(4, Value(4)), f(6, Value(5))],
+            },
+            PartLayout {
+                dlc: 5,
+                fields: &[f(1, Time)],
+            },
+        ],
+        channels: &VALVE_CHANNELS,
+    },
 ];
+
+/// The six valve on-times of the thruster messages (thruster `i` is channel and axis `i`).
+const VALVE_CHANNELS: [Channel; 6] = [
+    c(Quantity::ValveOnTime, 0),
+    c(Quantity::ValveOnTime, 1),
+    c(Quantity::ValveOnTime, 2),
+    c(Quantity::ValveOnTime, 3),
+    c(Quantity::ValveOnTime, 4),
+    c(Quantity::ValveOnTime, 5),
+];
+
+/// Longest valve on-time a thruster message carries, s: the limit of the on-time field (its
+/// wire span is 0.32767 s). It is a property of the wire format, not of the valves: the
+/// thruster gateway refuses an on-time longer than the control period (0.1 s) before encoding.
+pub const MAX_VALVE_ON_TIME_S: f64 = 0.3;
 
 /// Why a protocol configuration was refused.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -624,6 +705,8 @@ pub struct Limits {
     pub wheel_torque_nm: f64,
     /// CMG gimbal rate limit ±, rad/s (`cmg.max_gimbal_rate_deg_s`, 90 °/s), for telemetry and commands.
     pub gimbal_rate_rad_s: f64,
+    /// Thruster valve on-time limit, s ([`MAX_VALVE_ON_TIME_S`]).
+    pub valve_on_time_s: f64,
 }
 
 impl Default for Limits {
@@ -642,6 +725,7 @@ impl Limits {
             wheel_speed_rad_s: config.wheels.max_speed_rad_s(),
             wheel_torque_nm: config.wheels.max_torque_nm,
             gimbal_rate_rad_s: config.cmg.max_gimbal_rate_rad_s(),
+            valve_on_time_s: MAX_VALVE_ON_TIME_S,
         }
     }
 
@@ -655,6 +739,7 @@ impl Limits {
             Quantity::WheelTorque => Some(self.wheel_torque_nm),
             Quantity::GimbalAngle => None,
             Quantity::GimbalRate => Some(self.gimbal_rate_rad_s),
+            Quantity::ValveOnTime => Some(self.valve_on_time_s),
         }
     }
 
@@ -688,7 +773,7 @@ pub struct Protocol {
     ids: IdMap,
     limits: Limits,
     /// Per quantity (index in `Quantity::ALL`): largest raw magnitude inside the range.
-    raw_limit: [i32; 7],
+    raw_limit: [i32; 8],
 }
 
 impl Default for Protocol {
@@ -748,6 +833,7 @@ pub(crate) const fn quantity_index(q: Quantity) -> usize {
         Quantity::WheelTorque => 4,
         Quantity::GimbalAngle => 5,
         Quantity::GimbalRate => 6,
+        Quantity::ValveOnTime => 7,
     }
 }
 
@@ -768,8 +854,12 @@ mod tests {
         assert!(IdMap::new(MAX_BASE + 0x10).is_err());
         assert!(IdMap::new(0x101).is_err());
         let top = IdMap::new(MAX_BASE).unwrap();
-        let last = MessageKind::NodeHeartbeat;
-        assert!(top.id(last, 0).unwrap() <= 0x7FF);
+        for kind in MessageKind::ALL {
+            for part in 0..kind.parts() {
+                assert!(top.id(kind, part).unwrap() <= 0x7FF);
+            }
+        }
+        assert_eq!(MAX_BASE, 0x790);
     }
 
     #[test]

@@ -31,7 +31,31 @@ fn angles() -> impl Strategy<Value = [f64; 4]> {
 fn any_message() -> impl Strategy<Value = Message> {
     let l = *protocol().limits();
     let status = any::<u8>().prop_map(DeviceStatus);
+    // On-times are never negative; the field's range is symmetric like every other.
+    let on_times = || values::<6>(l.valve_on_time_s).prop_map(|v| v.map(f64::abs));
     prop_oneof![
+        (on_times(), any::<bool>()).prop_map(|(on, latch)| {
+            Message::ThrusterCommand(ThrusterCommandMsg {
+                on_time_s: on,
+                latch_shut: latch,
+            })
+        }),
+        (
+            any::<u32>(),
+            status.clone(),
+            on_times(),
+            0u8..64,
+            any::<bool>()
+        )
+            .prop_map(|(t, s, on, valves, latch)| {
+                Message::ThrusterStatus(ThrusterStatusMsg {
+                    node_time_us: t,
+                    status: s,
+                    applied_on_time_s: on,
+                    valves_open: valves,
+                    latch_shut: latch,
+                })
+            }),
         values::<3>(l.wheel_torque_nm)
             .prop_map(|t| Message::WheelCommand(WheelCommandMsg { torque_nm: t })),
         (
@@ -120,11 +144,13 @@ fn channels(m: &Message) -> Vec<(f64, Quantity)> {
         Message::Inclinometer(i) => tag(&i.tilt_rad, Quantity::Tilt),
         Message::Magnetometer(b) => tag(&b.field_t, Quantity::Field),
         Message::NodeHeartbeat(_) => vec![],
+        Message::ThrusterCommand(c) => tag(&c.on_time_s, Quantity::ValveOnTime),
+        Message::ThrusterStatus(t) => tag(&t.applied_on_time_s, Quantity::ValveOnTime),
     }
 }
 
 fn arbitrary_frame() -> impl Strategy<Value = CanFrame> {
-    let id = prop_oneof![3 => 0x100u32..0x160, 1 => 0u32..0x800, 1 => 0u32..0x2000_0000];
+    let id = prop_oneof![3 => 0x100u32..0x170, 1 => 0u32..0x800, 1 => 0u32..0x2000_0000];
     (
         id,
         any::<bool>(),
@@ -172,8 +198,15 @@ proptest! {
         prop_assert_eq!(r.message.kind(), m.kind());
         prop_assert_eq!(r.message.node_time_us(), m.node_time_us());
         prop_assert_eq!(r.message.status(), m.status());
-        if let (Message::NodeHeartbeat(a), Message::NodeHeartbeat(b)) = (&r.message, &m) {
-            prop_assert_eq!(a, b);
+        match (&r.message, &m) {
+            (Message::NodeHeartbeat(a), Message::NodeHeartbeat(b)) => prop_assert_eq!(a, b),
+            (Message::ThrusterCommand(a), Message::ThrusterCommand(b)) => {
+                prop_assert_eq!(a.latch_shut, b.latch_shut)
+            }
+            (Message::ThrusterStatus(a), Message::ThrusterStatus(b)) => {
+                prop_assert_eq!((a.valves_open, a.latch_shut), (b.valves_open, b.latch_shut))
+            }
+            _ => {}
         }
         for ((got, q), (want, _)) in channels(&r.message).into_iter().zip(channels(&m)) {
             let lsb = q.lsb_si();

@@ -292,7 +292,7 @@ pub struct CanSection {
     pub link: CanLink,
     /// SocketCAN interface (`link = "socketcan"`).
     pub interface: String,
-    /// Identifier base of the node's protocol (a multiple of 16, at most 0x7A0).
+    /// Identifier base of the node's protocol (a multiple of 16, at most 0x790: seven device blocks of 16 below 0x7FF).
     pub id_base: u16,
     /// `candump -L` file: the gateways' input with `link = "candump"`, and `can-replay`'s.
     pub candump: Option<PathBuf>,
@@ -332,11 +332,11 @@ impl CanSection {
     /// `(key, value, reason)` of the first invalid setting.
     fn validate(&self) -> Result<(), (String, String, &'static str)> {
         let bad = |key: &str, value: String, reason| Err((format!("can.{key}"), value, reason));
-        if !self.id_base.is_multiple_of(16) || self.id_base > 0x7A0 {
+        if !self.id_base.is_multiple_of(16) || self.id_base > 0x790 {
             return bad(
                 "id_base",
                 self.id_base.to_string(),
-                "must be a multiple of 16, at most 1952 (0x7A0)",
+                "must be a multiple of 16, at most 1936 (0x790)",
             );
         }
         if !(self.replay_speed.is_finite() && self.replay_speed >= 0.0) {
