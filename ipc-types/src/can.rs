@@ -18,6 +18,8 @@ pub mod can_source {
     pub const CMG: u32 = 6;
     /// A replay of a recorded bus (`candump -L` file).
     pub const REPLAY: u32 = 7;
+    /// The thruster gateway.
+    pub const THRUSTERS: u32 = 8;
 }
 
 /// One classic CAN 2.0 frame on the software CAN bus (iceoryx2 instead of a kernel CAN

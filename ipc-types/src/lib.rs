@@ -57,7 +57,7 @@ pub use run::{ClockMode, Device, ENV_RESTART_COUNT, restart_count};
 pub use sensors::{GyroSample, InclinometerSample, MagnetometerSample};
 pub use sim::{SimClockTick, SimTruth};
 pub use system::{HealthEvent, HealthEventKind, Heartbeat, ProcessState};
-pub use thrusters::{ThrusterCommand, ThrusterStatus};
+pub use thrusters::{AppliedThrusterCommand, ThrusterCommand, ThrusterStatus};
 
 /// The identity attitude quaternion `[x, y, z, w] = [0, 0, 0, 1]` (B coincides with L).
 pub const IDENTITY_QUATERNION: [f64; 4] = [0.0, 0.0, 0.0, 1.0];

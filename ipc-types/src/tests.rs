@@ -110,6 +110,7 @@ fn all_names() -> Vec<(&'static str, &'static str, &'static str)> {
         names::<GroundCommandAck>(),
         names::<ThrusterCommand>(),
         names::<ThrusterStatus>(),
+        names::<AppliedThrusterCommand>(),
     ]
 }
 

@@ -11,7 +11,8 @@ use iceoryx2::prelude::*;
 pub const THRUSTERS: usize = 6;
 
 pub use crate::topic::{
-    THRUSTER_COMMAND, THRUSTER_COMMAND_EVENT, THRUSTER_STATUS, THRUSTER_STATUS_EVENT,
+    THRUSTER_APPLIED, THRUSTER_APPLIED_EVENT, THRUSTER_COMMAND, THRUSTER_COMMAND_EVENT,
+    THRUSTER_STATUS, THRUSTER_STATUS_EVENT,
 };
 
 /// Valve on-times for one control period, from the controller.
@@ -44,6 +45,35 @@ pub struct ThrusterStatus {
     pub refused: u64,
     /// Propellant used since start as the gateway integrates it, kg.
     pub propellant_used: f64,
+}
+
+/// Valve on-times as the smart CAN node applies them (CAN actuation path): the plant of a
+/// `run.actuation = "can_node"` run with thrusters takes these instead of the controller's
+/// [`ThrusterCommand`], so what reaches the valves is what came over the bus.
+#[derive(Debug, Clone, Copy, PartialEq, Default, ZeroCopySend)]
+#[type_name("testbed::AppliedThrusterCommand.v1")]
+#[repr(C)]
+pub struct AppliedThrusterCommand {
+    /// Common header; `time_ns` is the tick the pulses start at. `STALE`: no complete command
+    /// arrived for this tick, and every valve stays shut (a thruster command is never held).
+    pub header: SampleHeader,
+    /// Electrical on-time of each valve from the start of the period, s (0: shut).
+    pub on_time: [f64; THRUSTERS],
+    /// 1 once the latch valve upstream of every thruster is shut (no thrust at all), else 0.
+    pub latch_shut: u32,
+    /// Padding, always zero.
+    pub _pad0: u32,
+}
+
+impl Topic for AppliedThrusterCommand {
+    const NAME: &'static str = THRUSTER_APPLIED;
+    const EVENT_NAME: &'static str = THRUSTER_APPLIED_EVENT;
+    fn header(&self) -> &SampleHeader {
+        &self.header
+    }
+    fn header_mut(&mut self) -> &mut SampleHeader {
+        &mut self.header
+    }
 }
 
 impl Topic for ThrusterCommand {
@@ -92,5 +122,8 @@ mod tests {
             crate::topic::event_service_name(THRUSTER_STATUS),
             THRUSTER_STATUS_EVENT
         );
+        assert_eq!(size_of::<AppliedThrusterCommand>(), 80);
+        assert_eq!(offset_of!(AppliedThrusterCommand, on_time), 24);
+        assert_eq!(offset_of!(AppliedThrusterCommand, latch_shut), 72);
     }
 }

@@ -69,6 +69,9 @@ topics! {
     /// [`ThrusterStatus`](crate::ThrusterStatus): what the thruster drive applied, the valves'
     /// state and the propellant used (runs with thrusters only).
     THRUSTER_STATUS, THRUSTER_STATUS_EVENT = "testbed/actuators/thrusters/status";
+    /// [`AppliedThrusterCommand`](crate::AppliedThrusterCommand): valve on-times as the CAN
+    /// node applies them (CAN actuation with thrusters only).
+    THRUSTER_APPLIED, THRUSTER_APPLIED_EVENT = "testbed/actuators/thrusters/applied";
 }
 
 /// Name of the event service paired with the data service `topic` (`topic` + [`EVENT_SUFFIX`]).

@@ -1,20 +1,30 @@
-//! The CAN device gateways (`gyro-gateway`, …, `cmg-gateway`): the device's link in,
-//! [`Gateway`] decoding, samples out; for the wheels and CMGs, commands in, limited and encoded
-//! onto the link. A gateway on a candump file stops cleanly at its end.
+//! The CAN device gateways (`gyro-gateway`, …, `cmg-gateway`, `thruster-gateway`): the device's
+//! link in, [`Gateway`] decoding, samples out; for the wheels, CMGs and thrusters, commands in,
+//! limited (thrusters: checked by [`ThrusterGuard`]) and encoded onto the link. A gateway on a
+//! candump file stops cleanly at its end.
+//!
+//! The thruster gateway completes the node's thruster status with what only it knows before
+//! publishing it: the commands it refused, the propellant it estimates from the applied
+//! on-times ([`PropellantEstimate`]) and whether the thrusters are disabled. A valve the node
+//! senses open after its pulse ended, `stuck_open_confirm_periods` periods in a row, disables
+//! them: reported once as the health event `ThrustersDisabled`, every later command refused
+//! and sent with the latch flag, so the node shuts the latch valve.
 
 use crate::can_link::Link;
 use anyhow::{Context as _, bail};
 use ipc_types::{
     CanLinkStatus, CmgCommand, CmgTelemetry, GyroSample, HealthEventKind, InclinometerSample,
-    MagnetometerSample, ProcessState, SampleHeader, WheelCommand, WheelTelemetry,
+    MagnetometerSample, ProcessState, SampleHeader, ThrusterCommand, ThrusterStatus, WheelCommand,
+    WheelTelemetry,
 };
 use std::time::{Duration, Instant};
 use testbed_bus::{Bus, BusError, Flow, LoopExit, SourceId, TopicPublisher, TopicSubscriber, Wake};
 use testbed_can::{FrameBatch, Sample, TransportError};
 use testbed_gateways::bus_transport::SoftwareBusTransport;
-use testbed_gateways::gateway::{Gateway, GatewayDevice};
+use testbed_gateways::gateway::{Gateway, GatewayDevice, Served};
 use testbed_gateways::node;
 use testbed_gateways::status::{HeartbeatCounters, StatusTracker};
+use testbed_gateways::thrusters::{PropellantEstimate, ThrusterGuard};
 use testbed_runtime::{ClockMode, Context, Io, Node, WakeOn};
 
 /// How often a gateway polls a link that cannot wake its event loop (SocketCAN, serial,
@@ -33,16 +43,19 @@ enum SamplePublisher {
     Magnetometer(TopicPublisher<MagnetometerSample>),
     Wheels(TopicPublisher<WheelTelemetry>),
     Cmg(TopicPublisher<CmgTelemetry>),
+    Thrusters(TopicPublisher<ThrusterStatus>),
 }
 
 impl SamplePublisher {
-    fn new(bus: &Bus, device: ipc_types::Device) -> Result<Self, BusError> {
-        Ok(match device {
-            ipc_types::Device::Gyro => Self::Gyro(bus.publisher()?),
-            ipc_types::Device::Inclinometer => Self::Inclinometer(bus.publisher()?),
-            ipc_types::Device::Magnetometer => Self::Magnetometer(bus.publisher()?),
-            ipc_types::Device::Wheels => Self::Wheels(bus.publisher()?),
-            ipc_types::Device::Cmg => Self::Cmg(bus.publisher()?),
+    fn new(bus: &Bus, served: Served) -> Result<Self, BusError> {
+        use ipc_types::Device;
+        Ok(match served {
+            Served::Device(Device::Gyro) => Self::Gyro(bus.publisher()?),
+            Served::Device(Device::Inclinometer) => Self::Inclinometer(bus.publisher()?),
+            Served::Device(Device::Magnetometer) => Self::Magnetometer(bus.publisher()?),
+            Served::Device(Device::Wheels) => Self::Wheels(bus.publisher()?),
+            Served::Device(Device::Cmg) => Self::Cmg(bus.publisher()?),
+            Served::Thrusters => Self::Thrusters(bus.publisher()?),
         })
     }
 
@@ -53,6 +66,7 @@ impl SamplePublisher {
             (Self::Magnetometer(p), Sample::Magnetometer(s)) => p.publish(s).map(drop),
             (Self::Wheels(p), Sample::WheelTelemetry(s)) => p.publish(s).map(drop),
             (Self::Cmg(p), Sample::CmgTelemetry(s)) => p.publish(s).map(drop),
+            (Self::Thrusters(p), Sample::ThrusterStatus(s)) => p.publish(s).map(drop),
             _ => Ok(()),
         }
     }
@@ -67,6 +81,30 @@ pub struct CanGatewayPorts {
     status: TopicPublisher<CanLinkStatus>,
     wheel_commands: Option<TopicSubscriber<WheelCommand>>,
     cmg_commands: Option<TopicSubscriber<CmgCommand>>,
+    thruster_commands: Option<TopicSubscriber<ThrusterCommand>>,
+}
+
+/// The thruster gateway's own state: its checks and its propellant estimate.
+struct ThrusterSide {
+    guard: ThrusterGuard,
+    propellant: PropellantEstimate,
+}
+
+impl ThrusterSide {
+    /// Completes the node's status (refusals, propellant, disabled) and senses the valves:
+    /// returns the valve newly found stuck open.
+    fn on_status(&mut self, status: &mut ThrusterStatus) -> Option<usize> {
+        let stuck = if status.header.is_valid() && status.header.flags & SampleHeader::STALE == 0 {
+            self.propellant.add(&status.applied_on_time);
+            self.guard.on_valves_sensed(status.valves_open)
+        } else {
+            None
+        };
+        status.refused = self.guard.refused().total();
+        status.propellant_used = self.propellant.used_kg();
+        status.disabled = u32::from(status.disabled != 0 || self.guard.disabled().is_some());
+        stuck
+    }
 }
 
 /// The gateway of one device.
@@ -91,6 +129,8 @@ pub struct CanGateway {
     zeroed: bool,
     /// The link's state: down since the last check found it down.
     link: LinkState,
+    /// The thruster gateway's checks and estimate.
+    thrusters: Option<ThrusterSide>,
 }
 
 /// A SocketCAN interface's up/down state as the gateway last saw it.
@@ -106,10 +146,27 @@ struct LinkState {
 impl CanGateway {
     pub fn open(
         cx: &Context,
-        device: ipc_types::Device,
+        device: impl Into<Served>,
     ) -> anyhow::Result<(Self, CanGatewayPorts)> {
+        let device = device.into();
         let (config, bus, name) = (cx.config, cx.bus, cx.name);
         let schedule = config.schedule()?;
+        let thrusters = match device {
+            Served::Thrusters => {
+                let valves = config.model.thrusters.as_ref().context(
+                    "the thruster gateway needs [model.thrusters] (the valves' parameters)",
+                )?;
+                Some(ThrusterSide {
+                    guard: ThrusterGuard::new(
+                        valves,
+                        schedule.period_s(),
+                        valves.stuck_open_confirm_periods,
+                    ),
+                    propellant: PropellantEstimate::new(valves),
+                })
+            }
+            Served::Device(_) => None,
+        };
         let protocol =
             node::protocol(config).context("the CAN protocol of the model configuration")?;
         let tick_sync = config.run.mode == ClockMode::Lockstep;
@@ -134,10 +191,13 @@ impl CanGateway {
             bus_link,
             samples: SamplePublisher::new(bus, device)?,
             status: bus.publisher()?,
-            wheel_commands: (device == ipc_types::Device::Wheels)
+            wheel_commands: (device == Served::Device(ipc_types::Device::Wheels))
                 .then(|| bus.subscriber())
                 .transpose()?,
-            cmg_commands: (device == ipc_types::Device::Cmg)
+            cmg_commands: (device == Served::Device(ipc_types::Device::Cmg))
+                .then(|| bus.subscriber())
+                .transpose()?,
+            thruster_commands: (device == Served::Thrusters)
                 .then(|| bus.subscriber())
                 .transpose()?,
         };
@@ -161,6 +221,7 @@ impl CanGateway {
                 recoveries: 0,
                 last_check: Instant::now(),
             },
+            thrusters,
         };
         Ok((node, ports))
     }
@@ -267,7 +328,24 @@ impl CanGateway {
             for sample in &outcome.samples {
                 self.latest_ns = testbed_gateways::gateway::sample_header(sample).time_ns;
                 io.heartbeat.set_time_ns(self.latest_ns);
-                ports.samples.publish(sample)?;
+                let mut sample = *sample;
+                if let (Sample::ThrusterStatus(status), Some(side)) =
+                    (&mut sample, self.thrusters.as_mut())
+                    && let Some(stuck) = side.on_status(status)
+                {
+                    tracing::error!(
+                        "{}: thruster {stuck}: valve stuck open; thrusters disabled, latch valve shut",
+                        io.name
+                    );
+                    io.health.report(
+                        self.latest_ns,
+                        HealthEventKind::ThrustersDisabled,
+                        "actuators/thrusters",
+                        stuck as u32,
+                        0.0,
+                    );
+                }
+                ports.samples.publish(&sample)?;
                 io.heartbeat.add_samples_out(1);
             }
         }
@@ -277,13 +355,30 @@ impl CanGateway {
     fn send_commands(&mut self, ports: &CanGatewayPorts, io: &Io) -> anyhow::Result<()> {
         let gateway = &mut self.gateway;
         let mut batches = Vec::new();
-        let drained = match (&ports.wheel_commands, &ports.cmg_commands) {
-            (Some(s), _) => {
+        let drained = match (
+            &ports.wheel_commands,
+            &ports.cmg_commands,
+            &ports.thruster_commands,
+            self.thrusters.as_mut(),
+        ) {
+            (Some(s), _, _, _) => {
                 s.drain(|c| batches.push((c.header.time_ns, gateway.wheel_command(&c))))?
             }
-            (_, Some(s)) => {
+            (_, Some(s), _, _) => {
                 s.drain(|c| batches.push((c.header.time_ns, gateway.cmg_command(&c))))?
             }
+            (_, _, Some(s), Some(side)) => s.drain(|c| {
+                let (on_time, refusal) = side.guard.check(&c);
+                if let Some(refusal) = refusal {
+                    gateway.count_refused_command();
+                    tracing::warn!(
+                        t_ns = c.header.time_ns,
+                        "thruster command refused: {refusal}"
+                    );
+                }
+                let latch = side.guard.disabled().is_some();
+                batches.push((c.header.time_ns, gateway.thruster_command(on_time, latch)));
+            })?,
             _ => 0,
         };
         io.heartbeat.add_samples_in(drained as u64);
@@ -307,9 +402,12 @@ impl CanGateway {
     fn command_zero(&mut self, ports: &CanGatewayPorts, io: &Io) {
         let header = SampleHeader::new(self.latest_ns, 0, SampleHeader::VALID);
         let gateway = &mut self.gateway;
-        let batch = match (&ports.wheel_commands, &ports.cmg_commands) {
-            (Some(_), _) => gateway.wheel_command(&WheelCommand::new(header, [0.0; 3])),
-            (_, Some(_)) => gateway.cmg_command(&CmgCommand::new(header, [0.0; 4])),
+        let batch = match (&ports.wheel_commands, &ports.cmg_commands, &self.thrusters) {
+            (Some(_), _, _) => gateway.wheel_command(&WheelCommand::new(header, [0.0; 3])),
+            (_, Some(_), _) => gateway.cmg_command(&CmgCommand::new(header, [0.0; 4])),
+            (_, _, Some(side)) => {
+                gateway.thruster_command([0.0; 6], side.guard.disabled().is_some())
+            }
             _ => return,
         };
         if !self.zeroed {
@@ -379,6 +477,9 @@ impl Node for CanGateway {
             self.command_source = Some(wake.input(s, self.period)?);
         }
         if let Some(s) = &ports.cmg_commands {
+            self.command_source = Some(wake.input(s, self.period)?);
+        }
+        if let Some(s) = &ports.thruster_commands {
             self.command_source = Some(wake.input(s, self.period)?);
         }
         self.status_interval = (!self.tick_sync)

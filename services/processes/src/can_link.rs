@@ -12,7 +12,7 @@ use testbed_can::transport::{
 };
 use testbed_can::{CanFrame, CanTransport, Device, TimestampedFrame, TransportError};
 use testbed_gateways::bus_transport::SoftwareBusTransport;
-use testbed_gateways::gateway::GatewayDevice;
+use testbed_gateways::gateway::{GatewayDevice, Served};
 use testbed_gateways::node;
 use testbed_runtime::run_config::{CanLink, RunConfig};
 
@@ -33,7 +33,8 @@ pub enum Link {
 
 impl Link {
     /// Opens the link the run configuration gives `device`.
-    pub fn open(bus: &Bus, config: &RunConfig, device: ipc_types::Device) -> anyhow::Result<Self> {
+    pub fn open(bus: &Bus, config: &RunConfig, device: impl Into<Served>) -> anyhow::Result<Self> {
+        let device = device.into();
         let can = &config.can;
         if let Some(serial) = can.serial.get(device.name()) {
             let path = serial.path.to_string_lossy().into_owned();

@@ -7,7 +7,8 @@ use crate::can_gateway::POLL_PERIOD;
 use crate::can_link::BUS_BUFFER;
 use anyhow::Context as _;
 use ipc_types::{
-    AppliedCmgCommand, AppliedWheelCommand, CanLinkStatus, SampleHeader, SimTruth, can_source,
+    AppliedCmgCommand, AppliedThrusterCommand, AppliedWheelCommand, CanLinkStatus, SampleHeader,
+    SimTruth, can_source,
 };
 use testbed_bus::{Flow, LoopExit, TopicPublisher, TopicSubscriber, Wake};
 use testbed_can::transport::SocketCanTransport;
@@ -25,6 +26,8 @@ pub struct CanNodePorts {
     link: Option<SoftwareBusTransport>,
     wheel: TopicPublisher<AppliedWheelCommand>,
     cmg: TopicPublisher<AppliedCmgCommand>,
+    /// Runs with thrusters.
+    thrusters: Option<TopicPublisher<AppliedThrusterCommand>>,
     status: TopicPublisher<CanLinkStatus>,
 }
 
@@ -65,11 +68,15 @@ impl CanNodeProcess {
                 let iface = &config.can.interface;
                 let mut transport = SocketCanTransport::open(iface)
                     .with_context(|| format!("{}: can.interface = {iface:?}", cx.name))?;
-                // The node hears the computer's commands only: the wheel and CMG blocks (its own
-                // telemetry in those blocks never comes back: no CAN_RAW_RECV_OWN_MSGS).
+                // The node hears the computer's commands only: the wheel, CMG and thruster
+                // blocks (its own telemetry in those blocks never comes back: no
+                // CAN_RAW_RECV_OWN_MSGS).
                 let protocol = testbed_gateways::node::protocol(config)?;
                 transport
-                    .set_device_filters(protocol.ids(), &[Device::Wheels, Device::Cmg])
+                    .set_device_filters(
+                        protocol.ids(),
+                        &[Device::Wheels, Device::Cmg, Device::Thrusters],
+                    )
                     .with_context(|| format!("{}: filters on {iface}", cx.name))?;
                 (None, Some(transport))
             }
@@ -83,6 +90,7 @@ impl CanNodeProcess {
             link,
             wheel: bus.publisher()?,
             cmg: bus.publisher()?,
+            thrusters: node.has_thrusters().then(|| bus.publisher()).transpose()?,
             status: bus.publisher()?,
         };
         let process = Self {
@@ -175,6 +183,10 @@ impl Node for CanNodeProcess {
             ports.wheel.publish(&applied.wheel)?;
             ports.cmg.publish(&applied.cmg)?;
             io.heartbeat.add_samples_out(2);
+            if let (Some(publisher), Some(thrusters)) = (&ports.thrusters, &applied.thrusters) {
+                publisher.publish(thrusters)?;
+                io.heartbeat.add_samples_out(1);
+            }
             self.counters.update(io.heartbeat, &node.status());
         }
         Ok(Flow::Continue)

@@ -95,6 +95,7 @@ impl LoggerProcess {
             logged::<GroundCommandAck>(bus)?,
             logged::<ThrusterCommand>(bus)?,
             logged::<ThrusterStatus>(bus)?,
+            logged::<AppliedThrusterCommand>(bus)?,
         ];
         if !lockstep {
             topics.push(logged::<Heartbeat>(bus)?);

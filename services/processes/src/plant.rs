@@ -8,17 +8,19 @@
 //! `run.actuation = "can_node"`, the ones the smart CAN node applies after the wheel and CMG
 //! gateways and the CAN bus (`AppliedWheelCommand`, `AppliedCmgCommand`, same time stamps).
 //!
-//! With thrusters (`[model.thrusters]` and `[controller.thrusters]`; direct actuation only, the
-//! CAN protocol has no thruster messages yet) the plant is also the simulated thruster drive:
-//! each tick's [`ThrusterCommand`] is part of the tick's answer, checked as the thruster
-//! gateway checks it ([`ThrusterGuard`]: a bad command is refused, counted, every valve shut),
-//! the valves are sensed at the end of the period (a stuck-open valve shuts the latch valve and
-//! is reported as [`HealthEventKind::ThrustersDisabled`]), and a [`ThrusterStatus`] goes out
-//! every tick.
+//! With thrusters (`[model.thrusters]` and `[controller.thrusters]`) and direct actuation the
+//! plant is also the simulated thruster drive: each tick's [`ThrusterCommand`] is part of the
+//! tick's answer, checked as the thruster gateway checks it ([`ThrusterGuard`]: a bad command is
+//! refused, counted, every valve shut), the valves are sensed at the end of the period (a
+//! stuck-open valve shuts the latch valve and is reported as
+//! [`HealthEventKind::ThrustersDisabled`]), and a [`ThrusterStatus`] goes out every tick. With
+//! `run.actuation = "can_node"` the thruster gateway does the checking, the sensing and the
+//! status over the bus, and the plant takes the node's [`AppliedThrusterCommand`] (its latch
+//! flag shuts the latch valve).
 
 use ipc_types::{
-    AppliedCmgCommand, AppliedWheelCommand, CmgCommand, HealthEventKind, SampleHeader,
-    SimClockTick, SimTruth, ThrusterCommand, ThrusterStatus, WheelCommand,
+    AppliedCmgCommand, AppliedThrusterCommand, AppliedWheelCommand, CmgCommand, HealthEventKind,
+    SampleHeader, SimClockTick, SimTruth, ThrusterCommand, ThrusterStatus, WheelCommand,
 };
 use std::time::{Duration, Instant};
 use testbed_bus::{
@@ -50,9 +52,19 @@ pub enum CommandPorts {
 }
 
 /// The thruster drive's ports (runs with thruster control).
-pub struct ThrusterPorts {
-    commands: TopicSubscriber<ThrusterCommand>,
-    status: TopicPublisher<ThrusterStatus>,
+// One value per process, built once: the variants' size difference costs nothing.
+#[allow(clippy::large_enum_variant)]
+pub enum ThrusterPorts {
+    /// Direct actuation: the controller's commands in, checked here; the status out.
+    Direct {
+        commands: TopicSubscriber<ThrusterCommand>,
+        status: TopicPublisher<ThrusterStatus>,
+    },
+    /// CAN actuation: what the node applies (the thruster gateway checked it and publishes the
+    /// status).
+    Applied {
+        applied: TopicSubscriber<AppliedThrusterCommand>,
+    },
 }
 
 /// The plant's ports: truth and clock out, commands in.
@@ -154,27 +166,31 @@ impl PlantProcess {
                 cmg: bus.subscriber_with(options)?,
             },
         };
-        let (thrusters, thruster_ports) = match (
-            &cx.config.controller.thrusters,
-            &cx.config.model.thrusters,
-        ) {
-            (None, _) => (None, None),
-            (Some(_), None) => {
-                anyhow::bail!("controller.thrusters is set but the model has no [model.thrusters]")
-            }
-            (Some(_), Some(valves)) => {
-                anyhow::ensure!(
-                    cx.config.run.actuation == Actuation::Direct,
-                    "thrusters need run.actuation = \"direct\": the CAN protocol has no thruster messages yet"
-                );
-                let drive = ThrusterDrive::new(valves, period.as_secs_f64());
-                let ports = ThrusterPorts {
-                    commands: bus.subscriber_with(options)?,
-                    status: bus.publisher()?,
-                };
-                (Some(drive), Some(ports))
-            }
-        };
+        let (thrusters, thruster_ports) =
+            match (&cx.config.controller.thrusters, &cx.config.model.thrusters) {
+                (None, _) => (None, None),
+                (Some(_), None) => {
+                    anyhow::bail!(
+                        "controller.thrusters is set but the model has no [model.thrusters]"
+                    )
+                }
+                (Some(_), Some(valves)) => match cx.config.run.actuation {
+                    Actuation::Direct => {
+                        let drive = ThrusterDrive::new(valves, period.as_secs_f64());
+                        let ports = ThrusterPorts::Direct {
+                            commands: bus.subscriber_with(options)?,
+                            status: bus.publisher()?,
+                        };
+                        (Some(drive), Some(ports))
+                    }
+                    Actuation::CanNode => (
+                        None,
+                        Some(ThrusterPorts::Applied {
+                            applied: bus.subscriber_with(options)?,
+                        }),
+                    ),
+                },
+            };
         let process = Self {
             node,
             period,
@@ -224,8 +240,14 @@ impl Node for PlantProcess {
                 wake.data(cmg)?;
             }
         }
-        if let Some(thrusters) = &ports.thrusters {
-            wake.data(&thrusters.commands)?;
+        match &ports.thrusters {
+            Some(ThrusterPorts::Direct { commands, .. }) => {
+                wake.data(commands)?;
+            }
+            Some(ThrusterPorts::Applied { applied }) => {
+                wake.data(applied)?;
+            }
+            None => {}
         }
         if wake.mode() == ClockMode::Paced {
             self.pace = Some(wake.interval(self.period)?);
@@ -251,8 +273,22 @@ impl Node for PlantProcess {
                 cmg.drain(|c| node.on_cmg_command(&CmgCommand::new(c.header, c.gimbal_rate)))?;
             }
         }
-        if let (Some(ports), Some(drive)) = (&ports.thrusters, &mut self.thrusters) {
-            ports.commands.drain(|c| drive.on_command(&c, node))?;
+        match (&ports.thrusters, &mut self.thrusters) {
+            (Some(ThrusterPorts::Direct { commands, .. }), Some(drive)) => {
+                commands.drain(|c| drive.on_command(&c, node))?;
+            }
+            (Some(ThrusterPorts::Applied { applied }), _) => {
+                applied.drain(|c| {
+                    if c.latch_shut != 0 {
+                        node.shut_thruster_latch();
+                    }
+                    node.on_thruster_command(&ThrusterCommand {
+                        header: c.header,
+                        on_time: c.on_time,
+                    });
+                })?;
+            }
+            _ => {}
         }
         let advance_now = match self.pace {
             None => node.answered(),
@@ -267,7 +303,13 @@ impl Node for PlantProcess {
         let was_zeroed = node.commands_zeroed();
         node.advance()?;
         let t_ns = self.node.time_ns();
-        if let (Some(ports), Some(drive)) = (&ports.thrusters, &mut self.thrusters) {
+        if let (
+            Some(ThrusterPorts::Direct {
+                status: publisher, ..
+            }),
+            Some(drive),
+        ) = (&ports.thrusters, &mut self.thrusters)
+        {
             let (status, stuck) = drive.end_of_period(&mut self.node);
             if let Some(stuck) = stuck {
                 tracing::error!(
@@ -281,7 +323,7 @@ impl Node for PlantProcess {
                     0.0,
                 );
             }
-            ports.status.publish(&status)?;
+            publisher.publish(&status)?;
         }
         match (was_zeroed, self.node.commands_zeroed()) {
             (false, true) => {

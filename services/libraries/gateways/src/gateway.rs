@@ -32,12 +32,12 @@
 use ipc_types::Device;
 use ipc_types::{
     CanLinkStatus, CmgCommand, CmgTelemetry, GyroSample, InclinometerSample, MagnetometerSample,
-    SampleHeader, WheelCommand, WheelTelemetry, can_source,
+    SampleHeader, ThrusterStatus, WheelCommand, WheelTelemetry, can_source,
 };
 use testbed_can::{
     CanFrame, CmgCommandMsg, Decoder, Device as CanDevice, DeviceSet, EncodeError, Encoder,
     FrameBatch, FrameClass, Message, MessageKind, NodeClock, NodeState, Protocol, Sample,
-    WheelCommandMsg,
+    ThrusterCommandMsg, WheelCommandMsg,
 };
 use testbed_flight::schedule::Schedule;
 
@@ -109,14 +109,81 @@ impl GatewayDevice for Device {
         }
     }
 }
+
+/// What a gateway serves: one of the platform's devices, or the six thruster valves. The
+/// thrusters are not an [`ipc_types::Device`]: they are optional (runs with `[model.thrusters]`
+/// only), so profiles neither list nor must serve them.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Served {
+    /// A sensor or the wheels or CMGs.
+    Device(Device),
+    /// The thruster valves (`thruster-gateway`).
+    Thrusters,
+}
+
+impl Served {
+    /// The name used in configurations (`[can.serial.<name>]`) and messages.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Served::Device(d) => d.name(),
+            Served::Thrusters => "thrusters",
+        }
+    }
+}
+
+impl From<Device> for Served {
+    fn from(device: Device) -> Self {
+        Served::Device(device)
+    }
+}
+
+impl GatewayDevice for Served {
+    fn process_name(self) -> &'static str {
+        match self {
+            Served::Device(d) => d.process_name(),
+            Served::Thrusters => "thruster-gateway",
+        }
+    }
+
+    fn can_device(self) -> CanDevice {
+        match self {
+            Served::Device(d) => d.can_device(),
+            Served::Thrusters => CanDevice::Thrusters,
+        }
+    }
+
+    fn telemetry(self) -> MessageKind {
+        match self {
+            Served::Device(d) => d.telemetry(),
+            Served::Thrusters => MessageKind::ThrusterStatus,
+        }
+    }
+
+    fn source_id(self) -> u32 {
+        match self {
+            Served::Device(d) => d.source_id(),
+            Served::Thrusters => can_source::THRUSTERS,
+        }
+    }
+
+    fn due(self, schedule: &Schedule, k: u64) -> bool {
+        match self {
+            Served::Device(d) => d.due(schedule, k),
+            // The node reports the valves after every period.
+            Served::Thrusters => true,
+        }
+    }
+}
+
 /// A zero sample of the device (what a stale sample repeats before any good one).
-fn zero_sample(device: Device) -> Sample {
-    match device {
-        Device::Gyro => Sample::Gyro(GyroSample::default()),
-        Device::Inclinometer => Sample::Inclinometer(InclinometerSample::default()),
-        Device::Magnetometer => Sample::Magnetometer(MagnetometerSample::default()),
-        Device::Wheels => Sample::WheelTelemetry(WheelTelemetry::default()),
-        Device::Cmg => Sample::CmgTelemetry(CmgTelemetry::default()),
+fn zero_sample(served: Served) -> Sample {
+    match served {
+        Served::Device(Device::Gyro) => Sample::Gyro(GyroSample::default()),
+        Served::Device(Device::Inclinometer) => Sample::Inclinometer(InclinometerSample::default()),
+        Served::Device(Device::Magnetometer) => Sample::Magnetometer(MagnetometerSample::default()),
+        Served::Device(Device::Wheels) => Sample::WheelTelemetry(WheelTelemetry::default()),
+        Served::Device(Device::Cmg) => Sample::CmgTelemetry(CmgTelemetry::default()),
+        Served::Thrusters => Sample::ThrusterStatus(ThrusterStatus::default()),
     }
 }
 
@@ -130,6 +197,8 @@ pub fn sample_header(sample: &Sample) -> &SampleHeader {
         Sample::WheelCommand(s) => &s.header,
         Sample::CmgTelemetry(s) => &s.header,
         Sample::CmgCommand(s) => &s.header,
+        Sample::ThrusterStatus(s) => &s.header,
+        Sample::ThrusterCommand(s) => &s.header,
     }
 }
 
@@ -142,6 +211,8 @@ fn sample_header_mut(sample: &mut Sample) -> &mut SampleHeader {
         Sample::WheelCommand(s) => &mut s.header,
         Sample::CmgTelemetry(s) => &mut s.header,
         Sample::CmgCommand(s) => &mut s.header,
+        Sample::ThrusterStatus(s) => &mut s.header,
+        Sample::ThrusterCommand(s) => &mut s.header,
     }
 }
 
@@ -192,7 +263,7 @@ pub fn limit_command<const N: usize>(
 /// One gateway's state; see the [module documentation](self).
 #[derive(Debug, Clone)]
 pub struct Gateway {
-    device: Device,
+    device: Served,
     protocol: Protocol,
     decoder: Decoder,
     encoder: Encoder,
@@ -224,7 +295,13 @@ pub struct Gateway {
 impl Gateway {
     /// A gateway for `device` speaking `protocol`. `tick_sync`: publish at the node's tick sync
     /// (lockstep), else as samples complete.
-    pub fn new(device: Device, protocol: Protocol, schedule: Schedule, tick_sync: bool) -> Self {
+    pub fn new(
+        device: impl Into<Served>,
+        protocol: Protocol,
+        schedule: Schedule,
+        tick_sync: bool,
+    ) -> Self {
+        let device = device.into();
         Self {
             device,
             protocol,
@@ -256,8 +333,8 @@ impl Gateway {
         }
     }
 
-    /// The device.
-    pub fn device(&self) -> Device {
+    /// What the gateway serves.
+    pub fn device(&self) -> Served {
         self.device
     }
 
@@ -479,6 +556,30 @@ impl Gateway {
         self.commands_clamped += u64::from(clamped);
         self.encoder
             .encode(&Message::CmgCommand(CmgCommandMsg { gimbal_rate_rad_s }))
+    }
+
+    /// Encodes valve on-times already checked by the thruster gateway's
+    /// [`ThrusterGuard`](crate::thrusters::ThrusterGuard) (thruster gateway); `latch_shut` asks
+    /// the node to shut the latch valve. An encoding error (an on-time beyond the wire field)
+    /// counts as a refused command.
+    pub fn thruster_command(
+        &mut self,
+        on_time_s: [f64; 6],
+        latch_shut: bool,
+    ) -> Result<FrameBatch, EncodeError> {
+        let result = self
+            .encoder
+            .encode(&Message::ThrusterCommand(ThrusterCommandMsg {
+                on_time_s,
+                latch_shut,
+            }));
+        self.commands_refused += u64::from(result.is_err());
+        result
+    }
+
+    /// Counts a command refused before encoding (by the thruster gateway's checks).
+    pub fn count_refused_command(&mut self) {
+        self.commands_refused += 1;
     }
 }
 

@@ -19,6 +19,16 @@
 //! `can.command_timeout_s`. Frames delayed on the way in are handed over at the next tick's
 //! close, after that tick's deadline: they are late and their messages are not used.
 //!
+//! **Thrusters** (runs with `[model.thrusters]` and `[controller.thrusters]`): the tick's
+//! command frames also include the thruster command's two frames. The node applies it as
+//! [`Applied::thrusters`] (a missing or out-of-range command: every valve shut, flagged `STALE`;
+//! a thruster command is never held), shuts the latch valve for good when a command asks, and
+//! reports each period's applied on-times and the valves' position sensors in a thruster
+//! status, the last message before the tick sync. It senses the valves with its own copy of
+//! the plant's valve model (same configuration, same applied commands; valve timing has no
+//! noise), which is what a position sensor on each valve would read, an injected stuck-open
+//! valve included.
+//!
 //! No fault is injected in tick 0 nor in the last ticks of the run (as many as the slowest
 //! device's sampling period), so that every injected fault is followed, within the run, by a
 //! frame that lets its receiver see it.
@@ -26,17 +36,19 @@
 use crate::faults::{Fault, FaultInjector};
 use crate::gateway::node_stamp_us;
 use ipc_types::{
-    AppliedCmgCommand, AppliedWheelCommand, CanLinkStatus, CmgCommand, SampleHeader, SimTruth,
-    WheelCommand,
+    AppliedCmgCommand, AppliedThrusterCommand, AppliedWheelCommand, CanLinkStatus, CmgCommand,
+    SampleHeader, SimTruth, WheelCommand,
 };
 use std::ops::RangeInclusive;
 use testbed_can::{
     CanFrame, CmgTelemetryMsg, Decoder, Device, DeviceSet, DeviceStatus, Encoder, GyroMsg,
     InclinometerMsg, Limits, MagnetometerMsg, Message, MessageKind, NodeHeartbeatMsg, NodeState,
-    Protocol, ProtocolError, WheelTelemetryMsg,
+    Protocol, ProtocolError, ThrusterStatusMsg, WheelTelemetryMsg,
 };
 use testbed_flight::convert::Sequence;
 use testbed_flight::schedule::Schedule;
+use testbed_model::physics::thrusters::{ThrusterBank, ThrusterCommand as ValveCommand};
+use testbed_model::thruster_config::THRUSTER_COUNT;
 use testbed_runtime::run_config::RunConfig;
 use testbed_sim::sim_devices::{SimCmg, SimGyro, SimInclinometer, SimMagnetometer, SimWheels};
 
@@ -67,6 +79,19 @@ pub struct Applied {
     pub wheel: AppliedWheelCommand,
     /// Gimbal rates.
     pub cmg: AppliedCmgCommand,
+    /// Valve on-times (runs with thrusters).
+    pub thrusters: Option<AppliedThrusterCommand>,
+}
+
+/// The node's side of the thruster valves.
+struct NodeThrusters {
+    /// The valves as their position sensors read them (a copy of the plant's valve model).
+    valves: ThrusterBank,
+    /// On-times applied in the period in progress, s.
+    applied: [f64; THRUSTER_COUNT],
+    latch_shut: bool,
+    period_s: f64,
+    seq: Sequence,
 }
 
 /// The node's protocol for a run: the model's limits, `can.id_base`.
@@ -88,7 +113,7 @@ pub struct SimCanNode {
     faults: FaultInjector,
     tx_window: RangeInclusive<u64>,
     rx_window: RangeInclusive<u64>,
-    command_ids: [u16; 3],
+    command_ids: Vec<u16>,
     timeout_ticks: u64,
     tick: Option<u64>,
     open: bool,
@@ -104,6 +129,7 @@ pub struct SimCanNode {
     overdue_ticks: u64,
     wheel_seq: Sequence,
     cmg_seq: Sequence,
+    thrusters: Option<NodeThrusters>,
 }
 
 impl SimCanNode {
@@ -118,10 +144,35 @@ impl SimCanNode {
         let timeout_ticks = (config.can.command_timeout_s / schedule.period_s())
             .ceil()
             .max(1.0) as u64;
+        let thrusters = config
+            .controller
+            .thrusters
+            .as_ref()
+            .and(ThrusterBank::from_config(&config.model))
+            .map(|valves| NodeThrusters {
+                valves,
+                applied: [0.0; THRUSTER_COUNT],
+                latch_shut: false,
+                period_s: schedule.period_s(),
+                seq: Sequence::default(),
+            });
+        let mut command_ids = vec![
+            id(MessageKind::WheelCommand, 0),
+            id(MessageKind::CmgCommand, 0),
+            id(MessageKind::CmgCommand, 1),
+        ];
+        let mut heard = vec![Device::Wheels, Device::Cmg];
+        if thrusters.is_some() {
+            command_ids.extend([
+                id(MessageKind::ThrusterCommand, 0),
+                id(MessageKind::ThrusterCommand, 1),
+            ]);
+            heard.push(Device::Thrusters);
+        }
         Ok(Self {
             protocol,
             encoder: Encoder::new(protocol),
-            decoder: Decoder::with_devices(protocol, DeviceSet::of(&[Device::Wheels, Device::Cmg])),
+            decoder: Decoder::with_devices(protocol, DeviceSet::of(&heard)),
             schedule,
             gyro: SimGyro::new(config, schedule),
             tilt: SimInclinometer::new(config, schedule),
@@ -132,11 +183,7 @@ impl SimCanNode {
             // Wrapping ends give an empty range for runs too short to hold faults.
             tx_window: 1..=last.saturating_sub(guard),
             rx_window: 1..=last.saturating_sub(1),
-            command_ids: [
-                id(MessageKind::WheelCommand, 0),
-                id(MessageKind::CmgCommand, 0),
-                id(MessageKind::CmgCommand, 1),
-            ],
+            command_ids,
             timeout_ticks,
             tick: None,
             open: false,
@@ -152,12 +199,18 @@ impl SimCanNode {
             overdue_ticks: 0,
             wheel_seq: Sequence::default(),
             cmg_seq: Sequence::default(),
+            thrusters,
         })
     }
 
     /// The time of the current tick, ns.
     pub fn time_ns(&self) -> Option<u64> {
         self.tick.map(|k| self.schedule.time_ns(k))
+    }
+
+    /// Whether the node drives thruster valves (runs with thrusters).
+    pub fn has_thrusters(&self) -> bool {
+        self.thrusters.is_some()
     }
 
     /// Ticks closed before all their command frames arrived (paced runs only).
@@ -312,6 +365,21 @@ impl SimCanNode {
                 .on_truth(truth)
                 .map(|s| Message::Magnetometer(MagnetometerMsg::from_sample(&s, t_us))),
         );
+        if let Some(th) = &mut self.thrusters {
+            // The period that ends now: what was applied and where the valves are.
+            let t_s = t_ns as f64 * 1e-9;
+            let valves_open = (0..THRUSTER_COUNT)
+                .filter(|&i| th.valves.valve_open(i, t_s))
+                .fold(0u8, |bits, i| bits | 1 << i);
+            th.valves.discard_before(t_s);
+            messages.push(Message::ThrusterStatus(ThrusterStatusMsg {
+                node_time_us: t_us,
+                status: DeviceStatus::default(),
+                applied_on_time_s: std::mem::take(&mut th.applied),
+                valves_open,
+                latch_shut: th.latch_shut,
+            }));
+        }
         let in_window = self.tx_window.contains(&k);
         let mut out = Vec::with_capacity(24);
         let mut delayed = Vec::new();
@@ -348,16 +416,20 @@ impl SimCanNode {
                 }
             }
         }
+        let mut links = DeviceSet::of(&[
+            Device::Wheels,
+            Device::Cmg,
+            Device::Gyro,
+            Device::Inclinometer,
+            Device::Magnetometer,
+        ]);
+        if self.thrusters.is_some() {
+            links.0 |= Device::Thrusters.bit();
+        }
         let sync = Message::NodeHeartbeat(NodeHeartbeatMsg {
             node_time_us: t_us,
             state: NodeState::Running,
-            links: DeviceSet::of(&[
-                Device::Wheels,
-                Device::Cmg,
-                Device::Gyro,
-                Device::Inclinometer,
-                Device::Magnetometer,
-            ]),
+            links,
             serial_errors: 0,
         });
         match self.encoder.encode(&sync) {
@@ -406,6 +478,7 @@ impl SimCanNode {
         batch.sort_by_key(|f| f.standard_id());
         let mut new_wheel = None;
         let mut new_cmg = None;
+        let mut new_thrusters = None;
         for late in std::mem::take(&mut self.rx_late) {
             self.late_frames += 1;
             let _ = self.decoder.decode(&late); // keeps the counters; its message is not used
@@ -448,6 +521,7 @@ impl SimCanNode {
                     Message::CmgCommand(m) if received.clipped == 0 => {
                         new_cmg = Some(m.gimbal_rate_rad_s)
                     }
+                    Message::ThrusterCommand(m) if received.clipped == 0 => new_thrusters = Some(m),
                     _ => {}
                 }
             }
@@ -489,11 +563,45 @@ impl SimCanNode {
             header: self.cmg_seq.header(t_ns, cmg_flags),
             gimbal_rate: self.cmg_rate,
         };
+        let thrusters = self.thrusters.as_mut().map(|th| {
+            // Range-checked again: a negative or longer-than-the-period on-time is refused and
+            // every valve stays shut, as for a missing command.
+            let valid = new_thrusters.filter(|m| {
+                m.on_time_s
+                    .iter()
+                    .all(|t| (0.0..=th.period_s + 1e-9).contains(t))
+            });
+            th.latch_shut |= new_thrusters.is_some_and(|m| m.latch_shut);
+            th.valves.set_latch_shut(th.latch_shut);
+            let (on_time, flags) = match valid {
+                Some(m) => (m.on_time_s, SampleHeader::VALID),
+                None => (
+                    [0.0; THRUSTER_COUNT],
+                    SampleHeader::VALID | SampleHeader::STALE,
+                ),
+            };
+            th.valves.command(
+                t_ns as f64 * 1e-9,
+                &ValveCommand { on_time_s: on_time },
+                th.period_s,
+            );
+            th.applied = on_time;
+            AppliedThrusterCommand {
+                header: th.seq.header(t_ns, flags),
+                on_time,
+                latch_shut: u32::from(th.latch_shut),
+                _pad0: 0,
+            }
+        });
         // The telemetry of the next tick reports the commands in effect.
         self.wheels
             .on_command(&WheelCommand::new(wheel.header, wheel.torque));
         self.cmg
             .on_command(&CmgCommand::new(cmg.header, cmg.gimbal_rate));
-        Applied { wheel, cmg }
+        Applied {
+            wheel,
+            cmg,
+            thrusters,
+        }
     }
 }

@@ -148,6 +148,46 @@ impl ThrusterGuard {
     }
 }
 
+/// The propellant the gateway estimates from the on-times the node applied: each pulse of
+/// electrical on-time `t` (stretched to the minimum on-time) lets gas through for
+/// `t + close_delay − open_delay` at the nominal flow `F / (Isp g0)` of the configuration.
+/// A gateway sees no thrust noise, scale error or empty tank: this is the nominal budget, and
+/// the difference from the plant's truth is part of what identification can name.
+#[derive(Debug, Clone)]
+pub struct PropellantEstimate {
+    flow_kg_s: f64,
+    min_on_s: f64,
+    gas_extra_s: f64,
+    used_kg: f64,
+}
+
+impl PropellantEstimate {
+    /// An estimate for the valves of `config`, starting from nothing used.
+    pub fn new(config: &ThrusterConfig) -> Self {
+        Self {
+            flow_kg_s: config.mass_flow_kg_s(),
+            min_on_s: config.min_on_time_s,
+            gas_extra_s: config.close_delay_s - config.open_delay_s,
+            used_kg: 0.0,
+        }
+    }
+
+    /// Adds one period's applied on-times, s.
+    pub fn add(&mut self, applied_on_time_s: &[f64; THRUSTER_COUNT]) {
+        for &t in applied_on_time_s {
+            if t.is_finite() && t > 0.0 {
+                let gas_s = (t.max(self.min_on_s) + self.gas_extra_s).max(0.0);
+                self.used_kg += gas_s * self.flow_kg_s;
+            }
+        }
+    }
+
+    /// Propellant used since start, kg.
+    pub fn used_kg(&self) -> f64 {
+        self.used_kg
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -262,5 +302,22 @@ mod tests {
             });
             assert_eq!(g.on_valves_sensed(bits), None, "period {k}");
         }
+    }
+
+    #[test]
+    fn the_propellant_estimate_is_the_nominal_flow_times_the_gas_time() {
+        let config = ThrusterConfig::default();
+        let mut p = PropellantEstimate::new(&config);
+        // One 50-ms pulse and one 1-ms pulse (stretched to the minimum on-time).
+        p.add(&[0.05, 0.0, 0.001, 0.0, 0.0, 0.0]);
+        let extra = config.close_delay_s - config.open_delay_s;
+        let want = config.mass_flow_kg_s() * ((0.05 + extra) + (config.min_on_time_s + extra));
+        assert!(
+            (p.used_kg() - want).abs() <= 1e-15,
+            "{} vs {want}",
+            p.used_kg()
+        );
+        p.add(&[f64::NAN, -1.0, 0.0, 0.0, 0.0, 0.0]);
+        assert!((p.used_kg() - want).abs() <= 1e-15);
     }
 }

@@ -22,7 +22,7 @@ struct Outcome {
     /// (t, attitude error per axis, degrees)
     errors: Vec<(f64, [f64; 3])>,
     estimates: Vec<ipc_types::AttitudeEstimate>,
-    gateways: Vec<(ipc_types::Device, CanLinkStatus)>,
+    gateways: Vec<(testbed_gateways::gateway::Served, CanLinkStatus)>,
     node: CanLinkStatus,
     estimator: EstimatorCounters,
     stale_applied: u64,

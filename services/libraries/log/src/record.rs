@@ -2,10 +2,10 @@
 
 use crate::json::{DecodeError, Field, as_object, check_no_extra, member, object_schema};
 use ipc_types::{
-    AppliedCmgCommand, AppliedWheelCommand, AttitudeEstimate, CanBusFrame, CanLinkStatus,
-    CmgCommand, CmgTelemetry, ControllerStatus, GroundCommand, GroundCommandAck, GyroSample,
-    HealthEvent, Heartbeat, InclinometerSample, MagnetometerSample, SampleHeader, SimClockTick,
-    SimTruth, ThrusterCommand, ThrusterStatus, Topic, WheelCommand, WheelTelemetry,
+    AppliedCmgCommand, AppliedThrusterCommand, AppliedWheelCommand, AttitudeEstimate, CanBusFrame,
+    CanLinkStatus, CmgCommand, CmgTelemetry, ControllerStatus, GroundCommand, GroundCommandAck,
+    GyroSample, HealthEvent, Heartbeat, InclinometerSample, MagnetometerSample, SampleHeader,
+    SimClockTick, SimTruth, ThrusterCommand, ThrusterStatus, Topic, WheelCommand, WheelTelemetry,
 };
 use serde_json::Value;
 
@@ -504,6 +504,15 @@ log_types! {
         refused: "Commands refused since start (not finite, out of range, too short).",
         propellant_used: "Propellant used since start, kg.",
     } pad [];
+
+    /// [`AppliedThrusterCommand`] on [`topic::THRUSTER_APPLIED`](ipc_types::topic::THRUSTER_APPLIED).
+    ThrusterApplied(AppliedThrusterCommand) = "testbed::AppliedThrusterCommand.v1",
+    "Valve on-times as the smart CAN node applies them (CAN actuation with thrusters)." {
+        header: "Common header; time_ns is the tick the pulses start at; flag STALE: no \
+                 complete command came for the tick and every valve stays shut.",
+        on_time: "Electrical on-time of each valve from the start of the period, s (0: shut).",
+        latch_shut: "1 once the latch valve upstream of every thruster is shut, else 0.",
+    } pad [_pad0];
 }
 
 #[cfg(test)]
@@ -546,6 +555,7 @@ mod tests {
         check::<GroundCommandAck>();
         check::<ThrusterCommand>();
         check::<ThrusterStatus>();
+        check::<AppliedThrusterCommand>();
     }
 
     #[test]
@@ -593,6 +603,7 @@ mod tests {
             TopicKind::GroundCommandAck => LogRecord::GroundCommandAck(Default::default()),
             TopicKind::ThrusterCommand => LogRecord::ThrusterCommand(Default::default()),
             TopicKind::ThrusterStatus => LogRecord::ThrusterStatus(Default::default()),
+            TopicKind::ThrusterApplied => LogRecord::ThrusterApplied(Default::default()),
         };
         let mut out = Vec::new();
         record.encode_json(&mut out);
