@@ -6,14 +6,14 @@ const DEG = 180 / Math.PI;
 const RPM = 60 / (2 * Math.PI);
 const WINDOW_S = 60;            // plot window, simulated s
 const STALE_AFTER_S = 1.0;      // no message for this long: the link is stale
-const MODES = ["Idle", "RateDamping", "WheelPointing", "CmgSlew", "Fault", "Safe"];
+const MODES = ["Idle", "RateDamping", "WheelPointing", "CmgSlew", "Fault", "Safe", "MomentumDump", "ThrusterRateDamping"];
 const STATES = ["Starting", "Running", "Degraded", "Stopping", "Faulted"];
 const HEALTH_KINDS = ["unknown", "input lost", "input restored", "process hung", "process exited",
   "process restarted", "safe mode entered", "safe mode left", "commands zeroed",
-  "commands resumed", "run aborted"];
-const FAULT_KINDS = new Set([1, 3, 4, 6, 8, 10]);
+  "commands resumed", "run aborted", "thrusters disabled"];
+const FAULT_KINDS = new Set([1, 3, 4, 6, 8, 10, 11]);
 const COMMAND_KINDS = ["unknown", "mode", "target", "experiment start", "experiment abort"];
-const CAN_NAMES = { 1: "CAN node", 2: "gyro gw", 3: "inclinometer gw", 4: "magnetometer gw", 5: "wheel gw", 6: "CMG gw" };
+const CAN_NAMES = { 1: "CAN node", 2: "gyro gw", 3: "inclinometer gw", 4: "magnetometer gw", 5: "wheel gw", 6: "CMG gw", 8: "thruster gw" };
 const COLORS = ["#d32f2f", "#388e3c", "#1976d2", "#f57c00"];
 const COMMAND_CHANNEL = 1;
 
@@ -22,6 +22,7 @@ const state = {
   ws: null, channels: new Map(), viewerId: null, lastMessage: 0, openedAt: 0,
   retryMs: 500, nextCommandId: 1, series: new Map(), processes: new Map(),
   restarts: new Map(), can: new Map(), deadlineMisses: 0, simTime: 0, startNs: 0n, target: null, dirty: false,
+  thrusters: false,
 };
 
 // ---- attitude helpers (conventions of ipc-types: q = [x, y, z, w], L→B) ----
@@ -90,6 +91,7 @@ function redraw() {
   plot("plot-wheel-torque", axes("wtrq", 3));
   plot("plot-gimbal", axes("gim", 4));
   plot("plot-gimbal-rate", axes("grate", 4));
+  if (state.thrusters) plot("plot-thrust", axes("thr", 3));
 }
 
 // ---- displays ----
@@ -152,6 +154,17 @@ const handlers = {
     m.gimbal_angle.forEach((v, i) => push(`gim${i}`, t, v * DEG));
     m.gimbal_rate.forEach((v, i) => push(`grate${i}`, t, v * DEG));
     setNumber("singularity", m.singularity_measure, 3);
+  },
+  // Valve on-time per axis, + thruster minus − thruster (thruster 2a: + torque about axis a).
+  "testbed/actuators/thrusters/status"(m, t) {
+    if (!state.thrusters) { state.thrusters = true; $("thrusters").style.display = ""; }
+    for (let a = 0; a < 3; a++) push(`thr${a}`, t, (m.applied_on_time[2 * a] - m.applied_on_time[2 * a + 1]) * 1000);
+    const open = [0, 1, 2, 3, 4, 5].filter((i) => m.valves_open & (1 << i)).join(" ") || "none";
+    const e = $("thr-info");
+    e.textContent = `propellant used ${(m.propellant_used * 1000).toFixed(2)} g · refused ${m.refused} · valves open: ${open}` +
+      (m.disabled ? " · DISABLED (latch valve shut)" : "");
+    e.className = m.disabled ? "rejected" : "";
+    e.dataset.value = String(m.propellant_used);
   },
   "testbed/system/heartbeat"(m) {
     state.processes.set(m.name, { hb: m, at: performance.now() });

@@ -42,6 +42,9 @@ pub const CH_TF_TRUTH: u32 = 15;
 pub const CH_CMG: u32 = 16;
 pub const CH_LINK: u32 = 17;
 pub const CH_EVENTS: u32 = 18;
+/// Thruster status and commands (runs with thrusters).
+pub const CH_THRUSTER_STATUS: u32 = 19;
+pub const CH_THRUSTER_COMMAND: u32 = 20;
 
 /// The bus topics served: channel id, whether viewers get it decimated (streams) or whole
 /// (events, heartbeats, commands).
@@ -60,6 +63,8 @@ fn bus_channel(record: &LogRecord) -> Option<(u32, bool)> {
         LogRecord::CanStatus(_) => (11, true),
         LogRecord::GroundCommand(_) => (12, false),
         LogRecord::GroundCommandAck(_) => (13, false),
+        LogRecord::ThrusterStatus(_) => (CH_THRUSTER_STATUS, true),
+        LogRecord::ThrusterCommand(_) => (CH_THRUSTER_COMMAND, true),
         _ => return None,
     })
 }
@@ -95,6 +100,8 @@ pub fn channels() -> Vec<Channel> {
         bus_channel_spec::<CanLinkStatus>(11),
         bus_channel_spec::<GroundCommand>(12),
         bus_channel_spec::<GroundCommandAck>(13),
+        bus_channel_spec::<ThrusterStatus>(CH_THRUSTER_STATUS),
+        bus_channel_spec::<ThrusterCommand>(CH_THRUSTER_COMMAND),
         own(
             CH_TF_ESTIMATE,
             foxglove::TF_ESTIMATE_TOPIC,
@@ -270,6 +277,8 @@ impl GroundLinkProcess {
             stream::<CanLinkStatus>(bus)?,
             stream::<GroundCommand>(bus)?,
             stream::<GroundCommandAck>(bus)?,
+            stream::<ThrusterStatus>(bus)?,
+            stream::<ThrusterCommand>(bus)?,
         ];
         let ports = GroundLinkPorts {
             streams,

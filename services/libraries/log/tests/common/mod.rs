@@ -3,10 +3,11 @@
 #![allow(dead_code)] // each test binary uses a subset
 
 use ipc_types::{
-    AppliedCmgCommand, AppliedWheelCommand, AttitudeEstimate, CanBusFrame, CanLinkStatus,
-    CmgCommand, CmgTelemetry, ControllerMode, ControllerStatus, GyroSample, HealthEvent,
-    HealthEventKind, Heartbeat, InclinometerSample, MagnetometerSample, ProcessState, SampleHeader,
-    SimClockTick, SimTruth, ThrusterCommand, ThrusterStatus, WheelCommand, WheelTelemetry,
+    AppliedCmgCommand, AppliedThrusterCommand, AppliedWheelCommand, AttitudeEstimate, CanBusFrame,
+    CanLinkStatus, CmgCommand, CmgTelemetry, ControllerMode, ControllerStatus, GyroSample,
+    HealthEvent, HealthEventKind, Heartbeat, InclinometerSample, MagnetometerSample, ProcessState,
+    SampleHeader, SimClockTick, SimTruth, ThrusterCommand, ThrusterStatus, WheelCommand,
+    WheelTelemetry,
 };
 use ipc_types::{GroundAckStatus, GroundCommand, GroundCommandAck};
 use std::collections::BTreeMap;
@@ -231,6 +232,15 @@ pub fn tick_records(k: u64, rng: &mut Rng) -> Vec<LogRecord> {
             disabled: u32::from(k > 30),
             refused: k / 7,
             propellant_used: 1.5e-5 * k as f64,
+        }
+        .into(),
+    );
+    out.push(
+        AppliedThrusterCommand {
+            header: SampleHeader::new(t, seq, SampleHeader::VALID),
+            on_time: [0.0, 0.0, 0.012_34 * (k % 2) as f64, 0.0, 0.0, 0.1],
+            latch_shut: u32::from(k > 40),
+            _pad0: 0,
         }
         .into(),
     );
