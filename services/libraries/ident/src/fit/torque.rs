@@ -1,9 +1,11 @@
-//! Torque causes (centre-of-mass offset, constant torque, aerodynamic drag, inertia error):
-//! linear in the torque channel, fitted by weighted least squares with `aero_drag`'s
-//! coefficients kept ≥ 0 (active set).
+//! Torque causes (centre-of-mass offset, constant torque, aerodynamic drag, inertia error,
+//! thruster torque scale, the propellant's centre-of-mass shift): linear in the torque channel,
+//! fitted by weighted least squares with `aero_drag`'s coefficients kept ≥ 0 (active set).
+//! Columns the data do not excite (a thruster that never fired) are held at their base values
+//! (no standard error: not estimated).
 
 use super::{FittedCause, Problem, State, solve_fixed};
-use crate::channels::{TORQUE_COLUMNS, torque_columns};
+use crate::channels::{TORQUE_COLUMNS, column_cause, torque_columns};
 use crate::effects::Cause;
 use crate::error::IdentError;
 use crate::stats::NormalEquations;
@@ -29,7 +31,13 @@ impl Problem<'_> {
             let (cause, off) = column_cause(col);
             cause.values(&self.base)[off]
         };
-        let mut fixed: Vec<(usize, f64)> = Vec::new(); // (index into `columns`, delta)
+        // (index into `columns`, delta): columns the data leave at zero are not estimated.
+        let mut fixed: Vec<(usize, f64)> = columns
+            .iter()
+            .enumerate()
+            .filter(|(_, c)| !ch.determined(**c))
+            .map(|(j, _)| (j, 0.0))
+            .collect();
         let mut ne = NormalEquations::new(columns.len());
         let mut row = vec![0.0; columns.len()];
         for (i, &a) in ch.ticks.iter().enumerate() {
@@ -81,15 +89,5 @@ impl Problem<'_> {
             out.push(FittedCause::estimated(cause, values, se));
         }
         Ok((delta, out))
-    }
-}
-
-/// Cause and value offset of a torque column.
-fn column_cause(col: usize) -> (Cause, usize) {
-    match col {
-        0..3 => (Cause::ComOffset, col),
-        3..6 => (Cause::ConstantTorque, col - 3),
-        6..12 => (Cause::AeroDrag, col - 6),
-        _ => (Cause::InertiaError, col - 12),
     }
 }

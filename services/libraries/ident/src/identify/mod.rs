@@ -645,7 +645,18 @@ fn available(cause: Cause, problem: &Problem, nominal: &SetFit) -> bool {
             !s.recon.innovations.is_empty()
                 && (cause != Cause::MagneticDisturbance || !problem.data.field.is_empty())
         }
-        Kind::Torque => s.torque.len() >= 30,
+        // The thrusters' causes only with thruster firings in the data (and `[thrusters]` in
+        // the model): otherwise their columns are zero.
+        Kind::Torque => {
+            s.torque.len() >= 30
+                && (!matches!(
+                    cause,
+                    Cause::ThrusterTorqueScale | Cause::PropellantComShift
+                ) || crate::channels::torque_columns(cause)
+                    .into_iter()
+                    .flatten()
+                    .any(|c| s.torque.excited[c]))
+        }
         Kind::Wheel => s.wheel.len() >= 10,
     }
 }
