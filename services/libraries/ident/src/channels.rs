@@ -88,6 +88,8 @@ pub struct TorqueChannel {
     /// Whether each column is non-zero in some row (a thruster that never fired, or no
     /// thrusters at all, leaves its columns zero: the data do not determine them).
     pub excited: [bool; TORQUE_COLUMNS],
+    /// The thrusters over the record (data with thruster firings and a model with thrusters).
+    pub thrusters: Option<ThrusterHistory>,
 }
 
 impl TorqueChannel {
@@ -192,6 +194,7 @@ impl TorqueChannel {
             x: Vec::new(),
             sigma: Vector3::zeros(),
             excited: [false; TORQUE_COLUMNS],
+            thrusters: None,
         };
         let mut k = recon.start.max(1) + 1;
         while k + 1 < n {
@@ -281,6 +284,7 @@ impl TorqueChannel {
                 .sum();
             (from_gyro + (j * tach).powi(2)).sqrt()
         });
+        out.thrusters = thrusters;
         out
     }
 

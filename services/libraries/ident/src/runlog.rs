@@ -164,3 +164,35 @@ has_header!(
     CmgCommand,
     ThrusterStatus
 );
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_thruster_status_describes_the_period_before_its_time() {
+        let status = |t_ns: u64, on: f64| ThrusterStatus {
+            header: ipc_types::SampleHeader {
+                time_ns: t_ns,
+                ..Default::default()
+            },
+            applied_on_time: [on, 0.0, 0.0, 0.0, 0.0, 0.0],
+            ..Default::default()
+        };
+        let rows = thruster_rows(
+            &[
+                status(100_000_000, 0.05),
+                status(200_000_000, 0.0),
+                status(300_000_000, 0.1),
+            ],
+            &[],
+        );
+        let t: Vec<f64> = rows.iter().map(|r| r.t_s).collect();
+        assert!(
+            (t[0] - 0.0).abs() < 1e-12 && (t[2] - 0.2).abs() < 1e-12,
+            "{t:?}"
+        );
+        assert_eq!(rows[0].on_time_s[0], 0.05);
+        assert_eq!(rows[2].on_time_s[0], 0.1);
+    }
+}

@@ -39,6 +39,11 @@ pub struct ThrusterHistory {
     pub tank_m: Vector3<f64>,
     /// Local gravity, m/s².
     pub gravity_mps2: f64,
+    /// Per thruster, its pulses: `(tick in which the pulse started, thrust time s)`. Each pulse
+    /// has its own thrust noise (`thrust_noise_fraction`, drawn at the valve's opening).
+    pub pulses: [Vec<(usize, f64)>; THRUSTER_COUNT],
+    /// The configuration's pulse-to-pulse thrust noise, 1σ relative.
+    pub thrust_noise_fraction: f64,
 }
 
 impl ThrusterHistory {
@@ -69,18 +74,41 @@ impl ThrusterHistory {
         let mut thrust_s = vec![[0.0; THRUSTER_COUNT]; n];
         let mut cumulative_s = vec![[0.0; THRUSTER_COUNT]; n];
         let mut total = [0.0; THRUSTER_COUNT];
-        // Integrate the relative thrust over [t, until), splitting at valve switches.
-        let integrate = |bank: &mut ThrusterBank, t: &mut f64, until: f64, acc: &mut [f64]| {
+        let mut pulses: [Vec<(usize, f64)>; THRUSTER_COUNT] = Default::default();
+        // Integrate the relative thrust over [t, until), splitting at valve switches; the
+        // thrust time also goes to each thruster's current pulse.
+        let integrate = |bank: &mut ThrusterBank,
+                         t: &mut f64,
+                         until: f64,
+                         acc: &mut [f64],
+                         pulses: &mut [Vec<(usize, f64)>; THRUSTER_COUNT]| {
             while until - *t > TOL_S {
                 let end = bank.next_switch_after(*t).map_or(until, |s| s.min(until));
                 let f = bank.factors_at(*t);
                 for i in 0..THRUSTER_COUNT {
                     acc[i] += f[i] * (end - *t);
+                    if let Some(p) = pulses[i].last_mut() {
+                        p.1 += f[i] * (end - *t);
+                    }
                 }
                 bank.consume(&f, end - *t);
                 *t = end;
             }
             *t = until.max(*t);
+        };
+        // Issue command j; a pulse it starts is recorded at tick `k`.
+        let issue = |bank: &mut ThrusterBank,
+                     t: f64,
+                     j: usize,
+                     k: usize,
+                     pulses: &mut [Vec<(usize, f64)>; THRUSTER_COUNT]| {
+            let before = *bank.pulse_count();
+            bank.command(t, &command(&cmds[j].1), period_of(j));
+            for i in 0..THRUSTER_COUNT {
+                if bank.pulse_count()[i] > before[i] {
+                    pulses[i].push((k, 0.0));
+                }
+            }
         };
         let mut next = 0;
         let mut t = data.t[0];
@@ -90,11 +118,11 @@ impl ThrusterHistory {
         }
         let mut discard = [0.0; THRUSTER_COUNT];
         while next < cmds.len() && cmds[next].0 < data.t[0] - TOL_S {
-            integrate(&mut bank, &mut t, cmds[next].0, &mut discard);
-            bank.command(t, &command(&cmds[next].1), period_of(next));
+            integrate(&mut bank, &mut t, cmds[next].0, &mut discard, &mut pulses);
+            issue(&mut bank, t, next, 0, &mut pulses);
             next += 1;
         }
-        integrate(&mut bank, &mut t, data.t[0], &mut discard);
+        integrate(&mut bank, &mut t, data.t[0], &mut discard, &mut pulses);
         for k in 0..n {
             cumulative_s[k] = total;
             let Some(&end) = data.t.get(k + 1) else {
@@ -102,11 +130,11 @@ impl ThrusterHistory {
             };
             let mut acc = [0.0; THRUSTER_COUNT];
             while next < cmds.len() && cmds[next].0 < end - TOL_S {
-                integrate(&mut bank, &mut t, cmds[next].0, &mut acc);
-                bank.command(t, &command(&cmds[next].1), period_of(next));
+                integrate(&mut bank, &mut t, cmds[next].0, &mut acc, &mut pulses);
+                issue(&mut bank, t, next, k, &mut pulses);
                 next += 1;
             }
-            integrate(&mut bank, &mut t, end, &mut acc);
+            integrate(&mut bank, &mut t, end, &mut acc, &mut pulses);
             bank.discard_before(t);
             for i in 0..THRUSTER_COUNT {
                 total[i] += acc[i];
@@ -121,6 +149,8 @@ impl ThrusterHistory {
             scale,
             tank_m: Vector3::from(thrusters.tank_position_m),
             gravity_mps2: config.platform.gravity_mps2,
+            pulses,
+            thrust_noise_fraction: thrusters.thrust_noise_fraction,
         })
     }
 
@@ -158,5 +188,81 @@ impl ThrusterHistory {
 fn command(on_time_s: &[f64; THRUSTER_COUNT]) -> ThrusterCommand {
     ThrusterCommand {
         on_time_s: *on_time_s,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::data::{Dataset, GyroRow, ThrusterRow};
+
+    /// 10 s of 10 Hz ticks with thruster 2 commanded for 40 ms at every other tick and thruster
+    /// 5 for two back-to-back full periods at 5.0 s.
+    fn data() -> Dataset {
+        let mut d = Dataset::default();
+        for k in 0..=100 {
+            let t = 0.1 * k as f64;
+            d.gyro.push(GyroRow {
+                t_s: t,
+                rate_rad_s: Vector3::zeros(),
+            });
+            let mut on = [0.0; THRUSTER_COUNT];
+            if k % 2 == 0 && k < 20 {
+                on[2] = 0.04;
+            }
+            if k == 50 || k == 51 {
+                on[5] = 0.1;
+            }
+            d.thrusters.push(ThrusterRow {
+                t_s: t,
+                on_time_s: on,
+            });
+        }
+        d
+    }
+
+    #[test]
+    fn thrust_time_is_the_valve_models_on_time_plus_close_minus_open_delay() {
+        let config = ModelConfig {
+            thrusters: Some(testbed_model::thruster_config::ThrusterConfig::default()),
+            ..ModelConfig::default()
+        };
+        let t = config.thrusters.clone().unwrap_or_default();
+        let aligned = Aligned::new(&data());
+        let h = ThrusterHistory::new(&aligned, &config).expect("thrusters fired");
+        // Each 40 ms pulse thrusts over [t0 + 5 ms, t0 + 43 ms): inside its own tick interval.
+        let pulse = 0.04 + t.close_delay_s - t.open_delay_s;
+        for k in 0..20 {
+            let want = if k % 2 == 0 { pulse } else { 0.0 };
+            assert!((h.thrust_s[k][2] - want).abs() < 1e-12, "tick {k}");
+        }
+        // Back-to-back full periods: one pulse from 5.005 s to 5.203 s.
+        assert!((h.thrust_s[50][5] - 0.095).abs() < 1e-12);
+        assert!((h.thrust_s[51][5] - 0.1).abs() < 1e-12);
+        assert!((h.thrust_s[52][5] - 0.003).abs() < 1e-12);
+        assert_eq!(h.pulses[5].len(), 1);
+        assert_eq!(h.pulses[2].len(), 10);
+        assert!((h.pulses[5][0].1 - 0.198).abs() < 1e-12);
+        // Propellant: the thrust time times the flow, at the configuration's scale.
+        let total = 10.0 * pulse + 0.198;
+        assert!((h.used_kg(100) - total * t.mass_flow_kg_s()).abs() < 1e-15);
+        // Angular impulse of thruster 2 (+Y, 0.05 Nm) over tick 0.
+        assert!((h.impulse_nms(0) - Vector3::new(0.0, 0.05 * pulse, 0.0)).norm() < 1e-15);
+        assert!(h.pulses[2].iter().all(|p| (p.1 - pulse).abs() < 1e-12));
+        assert_eq!(h.pulses[2][3].0, 6);
+    }
+
+    #[test]
+    fn no_history_without_firings_or_without_thrusters_in_the_model() {
+        let mut quiet = data();
+        for r in &mut quiet.thrusters {
+            r.on_time_s = [0.0; THRUSTER_COUNT];
+        }
+        let with = ModelConfig {
+            thrusters: Some(testbed_model::thruster_config::ThrusterConfig::default()),
+            ..ModelConfig::default()
+        };
+        assert!(ThrusterHistory::new(&Aligned::new(&quiet), &with).is_none());
+        assert!(ThrusterHistory::new(&Aligned::new(&data()), &ModelConfig::default()).is_none());
     }
 }
