@@ -559,6 +559,7 @@ pub fn identify(
         (!data.magnetometer.is_empty(), "magnetometer"),
         (!data.wheels.is_empty(), "wheels"),
         (!data.cmg.is_empty(), "cmg"),
+        (!data.thrusters.is_empty(), "thrusters"),
     ]
     .into_iter()
     .filter_map(|(p, n)| p.then_some(n))
