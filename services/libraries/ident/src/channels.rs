@@ -30,16 +30,20 @@
 use crate::data::Aligned;
 use crate::effects::Cause;
 use crate::reconstruct::Reconstruction;
+use crate::thrusters::ThrusterHistory;
 use nalgebra::{Matrix3, Vector3};
 use testbed_model::ModelConfig;
 use testbed_model::attitude::{self, Attitude};
 use testbed_model::config::RPM;
 use testbed_model::physics::{CmgPyramid, ExternalTorqueModel, Wheel, WheelFrictionModel};
+use testbed_model::thruster_config::THRUSTER_COUNT;
 
 /// Columns of the torque channel's regressor matrix, in this order: `com_offset.r_m` (3),
 /// `constant_torque.torque_nm` (3), `aero_drag.c1` (3), `aero_drag.c2` (3),
-/// `inertia_error.fraction` (3), `inertia_error.products_kgm2` (3: xy, yz, zx).
-pub const TORQUE_COLUMNS: usize = 18;
+/// `inertia_error.fraction` (3), `inertia_error.products_kgm2` (3: xy, yz, zx),
+/// `thruster_torque_scale.scale` (6), `propellant_com_shift.tank_position_m` (3). The last nine
+/// are zero without thruster firings.
+pub const TORQUE_COLUMNS: usize = 27;
 
 /// Column range of a torque-kind cause in the torque regressors.
 pub fn torque_columns(cause: Cause) -> Option<std::ops::Range<usize>> {
@@ -48,7 +52,21 @@ pub fn torque_columns(cause: Cause) -> Option<std::ops::Range<usize>> {
         Cause::ConstantTorque => Some(3..6),
         Cause::AeroDrag => Some(6..12),
         Cause::InertiaError => Some(12..18),
+        Cause::ThrusterTorqueScale => Some(18..24),
+        Cause::PropellantComShift => Some(24..27),
         _ => None,
+    }
+}
+
+/// Cause and value offset of a torque column.
+pub fn column_cause(col: usize) -> (Cause, usize) {
+    match col {
+        0..3 => (Cause::ComOffset, col),
+        3..6 => (Cause::ConstantTorque, col - 3),
+        6..12 => (Cause::AeroDrag, col - 6),
+        12..18 => (Cause::InertiaError, col - 12),
+        18..24 => (Cause::ThrusterTorqueScale, col - 18),
+        _ => (Cause::PropellantComShift, col - 24),
     }
 }
 
@@ -67,6 +85,11 @@ pub struct TorqueChannel {
     pub x: Vec<[Vector3<f64>; TORQUE_COLUMNS]>,
     /// A-priori 1σ of a row per axis, Nms (gyro and tachometer noise).
     pub sigma: Vector3<f64>,
+    /// Whether each column is non-zero in some row (a thruster that never fired, or no
+    /// thrusters at all, leaves its columns zero: the data do not determine them).
+    pub excited: [bool; TORQUE_COLUMNS],
+    /// The thrusters over the record (data with thruster firings and a model with thrusters).
+    pub thrusters: Option<ThrusterHistory>,
 }
 
 impl TorqueChannel {
@@ -91,6 +114,7 @@ impl TorqueChannel {
         };
         let cmg = CmgPyramid::from_config(&config.cmg);
         let external = ExternalTorqueModel::from_config(config);
+        let thrusters = ThrusterHistory::new(data, config);
         let mg = config.platform.mass_kg * config.platform.gravity_mps2;
         let limit = config.platform.tilt_limit_rad() - 1.0_f64.to_radians();
         let rotor = |k: usize| {
@@ -114,7 +138,12 @@ impl TorqueChannel {
         let momentum = |k: usize, b0: &Vector3<f64>| inertia * rate(k, b0) + rotor(k);
         let integrand = |k: usize, b0: &Vector3<f64>| {
             let w = rate(k, b0);
-            w.cross(&momentum(k, b0)) - external.torque(&recon.q[k], &w).total_b()
+            let f = w.cross(&momentum(k, b0)) - external.torque(&recon.q[k], &w).total_b();
+            match &thrusters {
+                // The propellant's gravity torque; the thrust itself is added per interval.
+                Some(th) => f - th.propellant_torque(k, &attitude::gravity_b(&recon.q[k])),
+                None => f,
+            }
         };
         let parts = |k: usize,
                      b0: &Vector3<f64>|
@@ -142,6 +171,19 @@ impl TorqueChannel {
                 f[15 + p] = -v.cross(&dv);
                 m[15 + p] = -dv;
             }
+            // Thrusters: a scale also changes the propellant drawn (`∂m_u/∂s_i = ṁ A_i`), and
+            // so the propellant's gravity torque; the thrust's own part is added per interval.
+            // The tank position: `∂(−m_u g r_t × G_B)/∂r_t,j = −m_u g e_j × G_B`.
+            if let Some(th) = &thrusters {
+                let lever = th.tank_m.cross(&g) * th.gravity_mps2 * th.mass_flow_kg_s;
+                for i in 0..THRUSTER_COUNT {
+                    f[18 + i] = -lever * th.cumulative_s[k][i];
+                }
+                let mug = th.used_kg(k) * th.gravity_mps2;
+                for j in 0..3 {
+                    f[24 + j] = -mug * Vector3::ith(j, 1.0).cross(&g);
+                }
+            }
             (m, f)
         };
 
@@ -151,6 +193,8 @@ impl TorqueChannel {
             y: Vec::new(),
             x: Vec::new(),
             sigma: Vector3::zeros(),
+            excited: [false; TORQUE_COLUMNS],
+            thrusters: None,
         };
         let mut k = recon.start.max(1) + 1;
         while k + 1 < n {
@@ -176,6 +220,13 @@ impl TorqueChannel {
                     c += h * (prev_f + fk);
                     for col in 0..TORQUE_COLUMNS {
                         xc[col] += h * (prev_parts[col] + f_parts[col]);
+                    }
+                    // The thrusters' impulse over the interval, exact (valve switches inside).
+                    if let Some(th) = &thrusters {
+                        c -= th.impulse_nms(k - 1);
+                        for i in 0..THRUSTER_COUNT {
+                            xc[18 + i] += th.torque_nm[i] * th.thrust_s[k - 1][i];
+                        }
                     }
                     prev_f = fk;
                     prev_parts = f_parts;
@@ -219,6 +270,11 @@ impl TorqueChannel {
             out.segments.push(rows);
         }
 
+        for row in &out.x {
+            for col in 0..TORQUE_COLUMNS {
+                out.excited[col] |= row[col] != Vector3::zeros();
+            }
+        }
         // A-priori noise of H: one gyro sample through the inertia, and the tachometer.
         let gyro_sigma = config.gyro.noise_density_rad_sqrt_s() / data.period_s.sqrt();
         let tach = config.wheels.speed_noise_rpm * RPM;
@@ -228,7 +284,15 @@ impl TorqueChannel {
                 .sum();
             (from_gyro + (j * tach).powi(2)).sqrt()
         });
+        out.thrusters = thrusters;
         out
+    }
+
+    /// Whether column `col` can be fitted: the thrusters' columns (18 on) only where the data
+    /// excite them (a thruster that fired, propellant used); the others always (as before the
+    /// thrusters were added).
+    pub fn determined(&self, col: usize) -> bool {
+        col < 18 || self.excited[col]
     }
 
     /// Rows.

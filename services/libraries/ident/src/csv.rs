@@ -25,6 +25,7 @@ pub mod files {
     pub const MAGNETOMETER: &str = "magnetometer.csv";
     pub const WHEELS: &str = "wheels.csv";
     pub const CMG: &str = "cmg.csv";
+    pub const THRUSTERS: &str = "thrusters.csv";
 }
 
 /// One row of a contract file: its columns (in the contract's order, time first) are the
@@ -83,6 +84,14 @@ record! {
     }
 }
 
+record! {
+    /// A `thrusters.csv` row: the valve on-time applied to each of the six thrusters for the
+    /// command period starting at `t_s`, s (0: shut).
+    ThrusterRecord {
+        t_s, on_time_0_s, on_time_1_s, on_time_2_s, on_time_3_s, on_time_4_s, on_time_5_s,
+    }
+}
+
 /// Columns of each file, in the contract's order.
 pub mod columns {
     use super::Record;
@@ -91,6 +100,7 @@ pub mod columns {
     pub const MAGNETOMETER: &[&str] = super::FieldRecord::COLUMNS;
     pub const WHEELS: &[&str] = super::WheelRecord::COLUMNS;
     pub const CMG: &[&str] = super::CmgRecord::COLUMNS;
+    pub const THRUSTERS: &[&str] = super::ThrusterRecord::COLUMNS;
 }
 
 /// The contents of a measured-data directory as plain records; an empty series is an absent
@@ -104,6 +114,7 @@ pub struct Records {
     pub magnetometer: Vec<FieldRecord>,
     pub wheels: Vec<WheelRecord>,
     pub cmg: Vec<CmgRecord>,
+    pub thrusters: Vec<ThrusterRecord>,
 }
 
 /// Read a measured-data directory (into a [`crate::Dataset`], or anything built from
@@ -122,6 +133,7 @@ pub fn read_dir<D: From<Records>>(dir: &Path) -> Result<D, DataError> {
         magnetometer: read_file(&dir.join(files::MAGNETOMETER))?,
         wheels: read_file(&dir.join(files::WHEELS))?,
         cmg: read_file(&dir.join(files::CMG))?,
+        thrusters: read_file(&dir.join(files::THRUSTERS))?,
     }))
 }
 
@@ -155,6 +167,10 @@ where
             write_file(&dir.join(files::WHEELS), &records.wheels),
         ),
         (files::CMG, write_file(&dir.join(files::CMG), &records.cmg)),
+        (
+            files::THRUSTERS,
+            write_file(&dir.join(files::THRUSTERS), &records.thrusters),
+        ),
     ] {
         if done? {
             written.push(dir.join(name));

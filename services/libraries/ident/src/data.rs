@@ -9,12 +9,18 @@
 //! * a `wheels.csv` row's `torque_*` is the motor-torque command issued at `t_s` and held until
 //!   the next row (zero-order hold, as the controller issues it); its `speed_*` is the
 //!   tachometer reading at `t_s`;
-//! * a `cmg.csv` row's `rate_cmd_*` is likewise held until the next row.
+//! * a `cmg.csv` row's `rate_cmd_*` is likewise held until the next row;
+//! * a `thrusters.csv` row's `on_time_<i>_s` is the electrical on-time of thruster i's valve
+//!   commanded at `t_s` for the period that starts there (the model's valve delays and minimum
+//!   on-time turn it into thrust, `docs/thrusters.md`); a missing file means no thrusters.
 
-use crate::csv::{CmgRecord, FieldRecord, GyroRecord, Records, TiltRecord, WheelRecord, columns};
+use crate::csv::{
+    CmgRecord, FieldRecord, GyroRecord, Records, ThrusterRecord, TiltRecord, WheelRecord, columns,
+};
 use crate::error::DataError;
 use nalgebra::{Vector3, Vector4};
 use std::path::PathBuf;
+use testbed_model::thruster_config::THRUSTER_COUNT;
 
 /// Shortest record identification accepts, s of gyro data.
 pub const MIN_DURATION_S: f64 = 60.0;
@@ -63,6 +69,15 @@ pub struct CmgRow {
     pub rate_cmd_rad_s: Vector4<f64>,
 }
 
+/// One thruster row: the valve on-times applied for the command period starting at `t_s`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ThrusterRow {
+    pub t_s: f64,
+    /// Electrical on-time of each thruster's valve from `t_s`, s (0: shut); thruster `2a` gives
+    /// `+` torque about body axis `a`, `2a + 1` `−` torque in the default layout.
+    pub on_time_s: [f64; THRUSTER_COUNT],
+}
+
 /// A measured record. An empty series means the device was absent.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct Dataset {
@@ -73,6 +88,8 @@ pub struct Dataset {
     pub magnetometer: Vec<FieldRow>,
     pub wheels: Vec<WheelRow>,
     pub cmg: Vec<CmgRow>,
+    /// Thruster valve on-times (empty: no thrusters).
+    pub thrusters: Vec<ThrusterRow>,
 }
 
 /// File names of the CSV contract.
@@ -139,6 +156,21 @@ impl From<Records> for Dataset {
                     ),
                 })
                 .collect(),
+            thrusters: r
+                .thrusters
+                .iter()
+                .map(|v| ThrusterRow {
+                    t_s: v.t_s,
+                    on_time_s: [
+                        v.on_time_0_s,
+                        v.on_time_1_s,
+                        v.on_time_2_s,
+                        v.on_time_3_s,
+                        v.on_time_4_s,
+                        v.on_time_5_s,
+                    ],
+                })
+                .collect(),
         }
     }
 }
@@ -202,6 +234,19 @@ impl From<&Dataset> for Records {
                     rate_cmd_2: r.rate_cmd_rad_s[1],
                     rate_cmd_3: r.rate_cmd_rad_s[2],
                     rate_cmd_4: r.rate_cmd_rad_s[3],
+                })
+                .collect(),
+            thrusters: d
+                .thrusters
+                .iter()
+                .map(|r| ThrusterRecord {
+                    t_s: r.t_s,
+                    on_time_0_s: r.on_time_s[0],
+                    on_time_1_s: r.on_time_s[1],
+                    on_time_2_s: r.on_time_s[2],
+                    on_time_3_s: r.on_time_s[3],
+                    on_time_4_s: r.on_time_s[4],
+                    on_time_5_s: r.on_time_s[5],
                 })
                 .collect(),
         }
@@ -273,6 +318,29 @@ impl Dataset {
             },
             columns::CMG,
         )?;
+        check_series(
+            &self.file(files::THRUSTERS),
+            &self.thrusters,
+            |r| (r.t_s, r.on_time_s.to_vec()),
+            columns::THRUSTERS,
+        )?;
+        if let Some((i, j, x)) = self.thrusters.iter().enumerate().find_map(|(i, r)| {
+            r.on_time_s
+                .iter()
+                .enumerate()
+                .find(|(_, x)| **x < 0.0)
+                .map(|(j, x)| (i, j, *x))
+        }) {
+            return Err(DataError::Row {
+                file: self.file(files::THRUSTERS),
+                row: i + 1,
+                line: i + 2,
+                message: format!(
+                    "column `{}`: on-time {x} s is negative",
+                    columns::THRUSTERS[j + 1]
+                ),
+            });
+        }
         if self.gyro.is_empty() {
             return Err(DataError::Missing {
                 file: self.file(files::GYRO),
@@ -313,6 +381,10 @@ impl Dataset {
             ),
             (files::WHEELS, self.wheels.iter().map(|r| r.t_s).collect()),
             (files::CMG, self.cmg.iter().map(|r| r.t_s).collect()),
+            (
+                files::THRUSTERS,
+                self.thrusters.iter().map(|r| r.t_s).collect(),
+            ),
         ] {
             if let (Some(a), Some(b)) = (times.first(), times.last()) {
                 let overlap = b.min(t1) - a.max(t0);
@@ -413,6 +485,9 @@ pub struct Aligned {
     pub tilt: Vec<(f64, [f64; 2])>,
     /// Magnetometer samples `(t − t0, field T)`.
     pub field: Vec<(f64, Vector3<f64>)>,
+    /// Thruster valve on-times `(t − t0, on-times s)` in time order (empty without
+    /// `thrusters.csv`).
+    pub thruster_cmd: Vec<(f64, [f64; THRUSTER_COUNT])>,
 }
 
 impl Aligned {
@@ -459,6 +534,11 @@ impl Aligned {
                 .iter()
                 .map(|r| (r.t_s - t0, r.field_t))
                 .collect(),
+            thruster_cmd: data
+                .thrusters
+                .iter()
+                .map(|r| (r.t_s - t0, r.on_time_s))
+                .collect(),
             t,
             t0,
         }
@@ -471,6 +551,13 @@ impl Aligned {
 
     pub fn is_empty(&self) -> bool {
         self.t.is_empty()
+    }
+
+    /// Whether any thruster valve was commanded open in the record.
+    pub fn has_thruster_firings(&self) -> bool {
+        self.thruster_cmd
+            .iter()
+            .any(|(_, on)| on.iter().any(|x| *x > 0.0))
     }
 
     /// Whether the record has wheels.

@@ -18,6 +18,14 @@
 //! | `wheel_torque_scale` | `scale` — delivered / commanded motor torque per wheel |
 //! | `actuator_delay` | `delay_s` — s |
 //! | `magnetic_disturbance` | `hard_iron_gauss` — body-fixed field, gauss |
+//! | `thruster_torque_scale` | `scale` — delivered / nominal thrust per thruster 0–5 |
+//! | `propellant_com_shift` | `tank_position_m` — the propellant's centre of mass from the bearing centre, m, body axes (`[thrusters].tank_position_m`) |
+//!
+//! The last two are candidates only for data with thruster firings and a model with
+//! `[thrusters]`. `propellant_com_shift` is the centre-of-mass shift of the draining tank: with
+//! `m_u` of propellant used, the gravity torque changes by `−m_u g r_t × G_B`; what is uncertain
+//! is where the propellant sits, `r_t`, so that is the parameter (it is written into the model's
+//! `[thrusters]` table, not into an effect table).
 
 use serde::Serialize;
 use testbed_model::ModelConfig;
@@ -25,6 +33,7 @@ use testbed_model::config::{
     ActuatorDelay, AeroDrag, ComOffset, ConstantTorque, EarthRate, GyroMisalignment, GyroScale,
     InertiaError, MagneticDisturbance, WheelFriction, WheelTorqueScale,
 };
+use testbed_model::thruster_config::{THRUSTER_COUNT, ThrusterConfig, ThrusterTorqueScale};
 
 /// A candidate cause: one effect table of the model configuration.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize)]
@@ -41,6 +50,8 @@ pub enum Cause {
     WheelTorqueScale,
     ActuatorDelay,
     MagneticDisturbance,
+    ThrusterTorqueScale,
+    PropellantComShift,
 }
 
 /// Which residual channel a cause acts on directly.
@@ -160,6 +171,22 @@ const P_TSCALE: &[ParamSpec] = &[spec(
     INF,
     1e-3,
 )];
+const P_THRUSTER_SCALE: &[ParamSpec] = &[spec(
+    "scale",
+    THRUSTER_COUNT,
+    "dimensionless: delivered / nominal thrust, per thruster 0–5",
+    1e-6,
+    INF,
+    1e-3,
+)];
+const P_TANK: &[ParamSpec] = &[spec(
+    "tank_position_m",
+    3,
+    "m, body axes, propellant's centre of mass from the bearing centre",
+    -1.0,
+    1.0,
+    1e-3,
+)];
 const P_DELAY: &[ParamSpec] = &[spec("delay_s", 1, "s", 0.0, 10.0, 0.01)];
 const P_MAG: &[ParamSpec] = &[spec(
     "hard_iron_gauss",
@@ -172,7 +199,7 @@ const P_MAG: &[ParamSpec] = &[spec(
 
 impl Cause {
     /// Every cause, in the library's order.
-    pub const ALL: [Cause; 11] = [
+    pub const ALL: [Cause; 13] = [
         Cause::ComOffset,
         Cause::EarthRate,
         Cause::AeroDrag,
@@ -184,6 +211,8 @@ impl Cause {
         Cause::WheelTorqueScale,
         Cause::ActuatorDelay,
         Cause::MagneticDisturbance,
+        Cause::ThrusterTorqueScale,
+        Cause::PropellantComShift,
     ];
 
     /// The configuration table's name (`[effects.<name>]`), which is also the cause's name.
@@ -200,6 +229,8 @@ impl Cause {
             Cause::WheelTorqueScale => "wheel_torque_scale",
             Cause::ActuatorDelay => "actuator_delay",
             Cause::MagneticDisturbance => "magnetic_disturbance",
+            Cause::ThrusterTorqueScale => "thruster_torque_scale",
+            Cause::PropellantComShift => "propellant_com_shift",
         }
     }
 
@@ -230,6 +261,13 @@ impl Cause {
             Cause::MagneticDisturbance => {
                 "body-fixed (hard-iron) field added to the magnetometer reading"
             }
+            Cause::ThrusterTorqueScale => {
+                "thrusters deliver a scaled thrust (worn nozzle, regulator set wrong), per thruster"
+            }
+            Cause::PropellantComShift => {
+                "the draining tank moves the centre of mass: gravity torque −m_u g (r_t × G_B) \
+                 growing with the propellant used; r_t is the tank position"
+            }
         }
     }
 
@@ -239,9 +277,12 @@ impl Cause {
             | Cause::GyroScale
             | Cause::GyroMisalignment
             | Cause::MagneticDisturbance => Kind::Sensor,
-            Cause::ComOffset | Cause::AeroDrag | Cause::ConstantTorque | Cause::InertiaError => {
-                Kind::Torque
-            }
+            Cause::ComOffset
+            | Cause::AeroDrag
+            | Cause::ConstantTorque
+            | Cause::InertiaError
+            | Cause::ThrusterTorqueScale
+            | Cause::PropellantComShift => Kind::Torque,
             Cause::WheelFriction | Cause::WheelTorqueScale | Cause::ActuatorDelay => Kind::Wheel,
         }
     }
@@ -260,6 +301,8 @@ impl Cause {
             Cause::WheelTorqueScale => P_TSCALE,
             Cause::ActuatorDelay => P_DELAY,
             Cause::MagneticDisturbance => P_MAG,
+            Cause::ThrusterTorqueScale => P_THRUSTER_SCALE,
+            Cause::PropellantComShift => P_TANK,
         }
     }
 
@@ -312,6 +355,9 @@ impl Cause {
             Cause::WheelTorqueScale => e.wheel_torque_scale.is_some(),
             Cause::ActuatorDelay => e.actuator_delay.is_some(),
             Cause::MagneticDisturbance => e.magnetic_disturbance.is_some(),
+            Cause::ThrusterTorqueScale => e.thruster_torque_scale.is_some(),
+            // The tank position is part of `[thrusters]`: present with the thrusters.
+            Cause::PropellantComShift => config.thrusters.is_some(),
         }
     }
 
@@ -376,6 +422,19 @@ impl Cause {
                 .as_ref()
                 .map_or([0.0; 3], |x| x.hard_iron_gauss)
                 .to_vec(),
+            Cause::ThrusterTorqueScale => e
+                .thruster_torque_scale
+                .as_ref()
+                .map_or([1.0; THRUSTER_COUNT], |x| x.scale)
+                .to_vec(),
+            Cause::PropellantComShift => config
+                .thrusters
+                .as_ref()
+                .map_or_else(
+                    || ThrusterConfig::default().tank_position_m,
+                    |t| t.tank_position_m,
+                )
+                .to_vec(),
         }
     }
 
@@ -429,6 +488,17 @@ impl Cause {
                 e.magnetic_disturbance = Some(MagneticDisturbance {
                     hard_iron_gauss: a3(0),
                 })
+            }
+            Cause::ThrusterTorqueScale => {
+                e.thruster_torque_scale = Some(ThrusterTorqueScale {
+                    scale: std::array::from_fn(|i| v[i]),
+                })
+            }
+            // Without thrusters there is no tank to move (the cause is never a candidate then).
+            Cause::PropellantComShift => {
+                if let Some(t) = config.thrusters.as_mut() {
+                    t.tank_position_m = a3(0);
+                }
             }
         }
     }
@@ -488,7 +558,10 @@ mod tests {
     #[test]
     fn values_round_trip_through_apply_and_the_toml() {
         for cause in Cause::ALL {
-            let mut config = ModelConfig::default();
+            let mut config = ModelConfig {
+                thrusters: Some(ThrusterConfig::default()),
+                ..ModelConfig::default()
+            };
             let values: Vec<f64> = cause
                 .values(&config)
                 .iter()

@@ -13,7 +13,7 @@
 //!   (`wheel_momentum_nms`, level frame); as the platform turns, that momentum turns in body axes
 //!   and the X and Y wheels sweep slowly through zero (friction asymmetry and Stribeck effect).
 
-use crate::data::{CmgRow, Dataset, FieldRow, GyroRow, TiltRow, WheelRow};
+use crate::data::{CmgRow, Dataset, FieldRow, GyroRow, ThrusterRow, TiltRow, WheelRow};
 use crate::error::IdentError;
 use nalgebra::Vector4;
 use serde::Serialize;
@@ -24,6 +24,7 @@ use testbed_flight::tasks::ControllerConfig;
 use testbed_model::ModelConfig;
 use testbed_model::config::RPM;
 use testbed_sim::closed_loop::{self, Feedback, MeasurementRecord, Scenario, TargetChange, Trace};
+use testbed_sim::thruster_trace::ThrusterTrace;
 
 /// Parameters of the excitation schedule.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -240,10 +241,30 @@ pub fn run(
     model: &ModelConfig,
     options: &ExperimentOptions,
 ) -> Result<(Dataset, Trace), IdentError> {
-    let scenario = scenario(model, options)?;
-    let (trace, measured) = closed_loop::run_recorded(&scenario)?;
-    let data = dataset_from_run(&trace, &measured, PathBuf::from("<experiment>"));
+    run_scenario(&scenario(model, options)?)
+}
+
+/// Run any closed-loop scenario: the measured data (with the thrusters' valve on-times when the
+/// model has thrusters) and the trace.
+pub fn run_scenario(scenario: &Scenario) -> Result<(Dataset, Trace), IdentError> {
+    let (trace, measured, thrusters) = closed_loop::run_with_thrusters(scenario)?;
+    let mut data = dataset_from_run(&trace, &measured, PathBuf::from("<experiment>"));
+    data.thrusters = thruster_rows(&thrusters);
     Ok((data, trace))
+}
+
+/// The thrusters' rows of a closed-loop run: the valve on-times commanded at each tick (the
+/// in-process loop has no gateway: what the controller commands is applied). Empty without
+/// thrusters.
+pub fn thruster_rows(thrusters: &ThrusterTrace) -> Vec<ThrusterRow> {
+    thrusters
+        .ticks
+        .iter()
+        .map(|t| ThrusterRow {
+            t_s: t.t_s,
+            on_time_s: t.command.on_time_s,
+        })
+        .collect()
 }
 
 /// The measured data of a closed-loop run in the CSV contract's form: gyro, inclinometer and

@@ -14,6 +14,7 @@
 //! * [`friction_id`]: wheel friction from spin-down data (paper eq. 4–5).
 //! * [`experiment`]: an excitation schedule for the closed loop and its data as a CSV directory.
 //! * [`stats`]: least squares and residual statistics.
+//! * [`thrusters`]: the thrust time and propellant use of the recorded valve on-times.
 
 #![forbid(unsafe_code)]
 // Index loops over the 3 axes and the parameter columns read as the maths they implement.
@@ -33,6 +34,7 @@ pub mod reconstruct;
 pub mod runlog;
 pub mod sparse;
 pub mod stats;
+pub mod thrusters;
 
 pub use data::Dataset;
 pub use effects::Cause;

@@ -9,16 +9,27 @@
 //! speeds from the tachometers (within 3σ of zero: stopped); gimbals from the encoders. The
 //! actuator delay of the model is applied here (the plant is built without it), so commands
 //! issued before the window act in it.
+//!
+//! Thrusters (data with `thrusters.csv` and a model with `[thrusters]`): the recorded valve
+//! on-times are issued to the plant's valves at their times (not delayed: the actuator delay is
+//! the wheel and CMG drives'), without the pulse noise (unknown); the propellant used before the
+//! window (from [`ThrusterHistory`]) is taken out of the tank and its weight moment
+//! `−m_u g r_t` put into the window's centre-of-mass offset, so the plant starts each window
+//! with the centre of mass where the draining tank has moved it. A thruster command inside a
+//! tick interval split by the actuator delay is clamped to the piece it starts (a limitation of
+//! the plant's one-period command; no delay: no split).
 
 use crate::data::Aligned;
 use crate::error::IdentError;
 use crate::reconstruct::{Reconstruction, SensorModel};
+use crate::thrusters::ThrusterHistory;
 use nalgebra::{Matrix3, Vector3, Vector4};
 use serde::Serialize;
 use testbed_model::ModelConfig;
 use testbed_model::attitude::{self, Attitude};
+use testbed_model::config::ComOffset;
 use testbed_model::config::{DEG, GAUSS, RPM};
-use testbed_model::physics::{ActuatorCommand, CmgPyramid, Plant, PlatformState};
+use testbed_model::physics::{ActuatorCommand, CmgPyramid, Plant, PlatformState, ThrusterCommand};
 
 /// The predicted measurement components, in this order.
 pub const COMPONENTS: [&str; 11] = [
@@ -192,6 +203,10 @@ pub fn predict(
         .map_or(0.0, |d| d.delay_s);
     let mut plant_config = config.clone();
     plant_config.effects.actuator_delay = None;
+    if let Some(t) = plant_config.thrusters.as_mut() {
+        t.thrust_noise_fraction = 0.0;
+    }
+    let thrusters = ThrusterHistory::new(data, config);
     let inertia = config.true_inertia().unwrap_or_else(Matrix3::identity);
     let inertia_inv = inertia.try_inverse().unwrap_or_else(Matrix3::identity);
     let j = if data.has_wheels() {
@@ -254,7 +269,11 @@ pub fn predict(
             wheel_speed,
             gimbal: data.gimbal_at(k0),
         };
-        let Ok(mut plant) = Plant::new(&plant_config, state) else {
+        let window_config = match &thrusters {
+            Some(th) => propellant_used_before(&plant_config, th.used_kg(k0)),
+            None => plant_config.clone(),
+        };
+        let Ok(mut plant) = Plant::new(&window_config, state) else {
             continue;
         };
         let bias = recon.bias[k0];
@@ -277,7 +296,13 @@ pub fn predict(
                 break;
             }
             // Step to the next tick, splitting where the (delayed) commands change.
-            for (dt, command) in command_pieces(data, data.t[k], data.t[k + 1], delay) {
+            for (dt, command, thrust) in command_pieces(data, data.t[k], data.t[k + 1], delay) {
+                if let Some(thrust) = thrust
+                    && plant.command_thrusters(&thrust).is_err()
+                {
+                    failed = true;
+                    break;
+                }
                 if plant.step(&command, dt).is_err() {
                     failed = true;
                     break;
@@ -370,11 +395,45 @@ fn times_inside<T>(series: &[(f64, T)], a: f64, b: f64) -> impl Iterator<Item = 
     series[lo..hi].iter().map(|(t, _)| *t)
 }
 
-/// The commands acting over `[a, b]` after a delay, as `(duration, command)` pieces.
-fn command_pieces(data: &Aligned, a: f64, b: f64, delay: f64) -> Vec<(f64, ActuatorCommand)> {
+/// `config` for a window that starts when `used_kg` of propellant has been used: the tank holds
+/// that much less, and the weight moment of the propellant gone, `−m_u g r_t`, is part of the
+/// centre-of-mass offset (`Δr = −m_u r_t / M`), as the plant would have it after drawing it.
+fn propellant_used_before(config: &ModelConfig, used_kg: f64) -> ModelConfig {
+    let mut out = config.clone();
+    let Some(t) = out.thrusters.as_mut() else {
+        return out;
+    };
+    if used_kg <= 0.0 {
+        return out;
+    }
+    let used = used_kg.min(t.propellant_kg);
+    t.propellant_kg -= used;
+    let shift = Vector3::from(t.tank_position_m) * (-used / config.platform.mass_kg);
+    let r = out
+        .effects
+        .com_offset
+        .as_ref()
+        .map_or_else(Vector3::zeros, |c| Vector3::from(c.r_m));
+    out.effects.com_offset = Some(ComOffset {
+        r_m: (r + shift).into(),
+    });
+    out
+}
+
+/// The commands acting over `[a, b]` after a delay, as `(duration, command, thruster command
+/// issued at the piece's start)` pieces (thruster commands are not delayed).
+fn command_pieces(
+    data: &Aligned,
+    a: f64,
+    b: f64,
+    delay: f64,
+) -> Vec<(f64, ActuatorCommand, Option<ThrusterCommand>)> {
     let (sa, sb) = (a - delay, b - delay);
+    // Thruster commands in the delayed frame of the pieces: real time − delay.
+    let thrust_times = times_inside(&data.thruster_cmd, a, b).map(|t| t - delay);
     let mut cuts: Vec<f64> = times_inside(&data.wheel_cmd, sa, sb)
         .chain(times_inside(&data.gimbal_cmd, sa, sb))
+        .chain(thrust_times)
         .collect();
     cuts.sort_by(f64::total_cmp);
     cuts.dedup();
@@ -391,11 +450,24 @@ fn command_pieces(data: &Aligned, a: f64, b: f64, delay: f64) -> Vec<(f64, Actua
             },
         };
         if end - start > 1e-9 {
-            out.push((end - start, command));
+            out.push((
+                end - start,
+                command,
+                thruster_command_at(data, start + delay),
+            ));
         }
         start = end;
     }
     out
+}
+
+/// The thruster command issued at `t` (s from the record's start), if one is.
+fn thruster_command_at(data: &Aligned, t: f64) -> Option<ThrusterCommand> {
+    let i = data.thruster_cmd.partition_point(|(ti, _)| *ti < t - 1e-9);
+    data.thruster_cmd
+        .get(i)
+        .filter(|(ti, _)| (ti - t).abs() <= 1e-9)
+        .map(|(_, on)| ThrusterCommand { on_time_s: *on })
 }
 
 #[cfg(test)]

@@ -1,12 +1,15 @@
 //! Measured data from one of the project's MCAP run logs (`testbed-log`): the sensor topics,
 //! the wheel speeds (telemetry) with the wheel commands, and the CMG telemetry with its
-//! commands. Samples without the `VALID` flag are left out.
+//! commands, and the thrusters' applied valve on-times (`testbed/actuators/thrusters/status`).
+//! Samples without the `VALID` flag are left out.
 
-use crate::data::{CmgRow, Dataset, FieldRow, GyroRow, TiltRow, WheelRow};
+use crate::data::{
+    CmgRow, Dataset, FieldRow, GyroRow, ThrusterRow, TiltRow, WheelRow, median_period,
+};
 use crate::error::DataError;
 use ipc_types::{
-    CmgCommand, CmgTelemetry, GyroSample, InclinometerSample, MagnetometerSample, WheelCommand,
-    WheelTelemetry,
+    CmgCommand, CmgTelemetry, GyroSample, InclinometerSample, MagnetometerSample, ThrusterStatus,
+    WheelCommand, WheelTelemetry,
 };
 use nalgebra::{Vector3, Vector4};
 use std::path::Path;
@@ -22,7 +25,7 @@ pub fn read_log(path: &Path) -> Result<Dataset, DataError> {
         source,
     };
     let log = RunLog::open(path).map_err(err)?;
-    let gyro = samples::<GyroSample>(&log, path)?
+    let gyro: Vec<GyroRow> = samples::<GyroSample>(&log, path)?
         .into_iter()
         .map(|s| GyroRow {
             t_s: s.header.time_ns as f64 * S_PER_NS,
@@ -78,6 +81,7 @@ pub fn read_log(path: &Path) -> Result<Dataset, DataError> {
             }
         })
         .collect();
+    let thrusters = thruster_rows(&samples::<ThrusterStatus>(&log, path)?, &gyro);
     Ok(Dataset {
         source: path.to_path_buf(),
         gyro,
@@ -85,7 +89,28 @@ pub fn read_log(path: &Path) -> Result<Dataset, DataError> {
         magnetometer,
         wheels,
         cmg,
+        thrusters,
     })
+}
+
+/// Thruster rows from the status samples. A status stamped `T` describes the period that ended
+/// at `T` (the plant publishes it after its step): its on-times were commanded at `T − P`, `P`
+/// the command period (the median spacing of the status samples; of the gyro's with a single
+/// status).
+fn thruster_rows(status: &[ThrusterStatus], gyro: &[GyroRow]) -> Vec<ThrusterRow> {
+    let times = || status.iter().map(|s| s.header.time_ns as f64 * S_PER_NS);
+    let period = if status.len() >= 2 {
+        median_period(times())
+    } else {
+        median_period(gyro.iter().map(|r| r.t_s))
+    };
+    times()
+        .zip(status)
+        .map(|(t, s)| ThrusterRow {
+            t_s: t - period,
+            on_time_s: s.applied_on_time,
+        })
+        .collect()
 }
 
 /// The valid samples of one topic, in time order (a log written in file order may interleave
@@ -136,5 +161,38 @@ has_header!(
     WheelTelemetry,
     WheelCommand,
     CmgTelemetry,
-    CmgCommand
+    CmgCommand,
+    ThrusterStatus
 );
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_thruster_status_describes_the_period_before_its_time() {
+        let status = |t_ns: u64, on: f64| ThrusterStatus {
+            header: ipc_types::SampleHeader {
+                time_ns: t_ns,
+                ..Default::default()
+            },
+            applied_on_time: [on, 0.0, 0.0, 0.0, 0.0, 0.0],
+            ..Default::default()
+        };
+        let rows = thruster_rows(
+            &[
+                status(100_000_000, 0.05),
+                status(200_000_000, 0.0),
+                status(300_000_000, 0.1),
+            ],
+            &[],
+        );
+        let t: Vec<f64> = rows.iter().map(|r| r.t_s).collect();
+        assert!(
+            (t[0] - 0.0).abs() < 1e-12 && (t[2] - 0.2).abs() < 1e-12,
+            "{t:?}"
+        );
+        assert_eq!(rows[0].on_time_s[0], 0.05);
+        assert_eq!(rows[2].on_time_s[0], 0.1);
+    }
+}

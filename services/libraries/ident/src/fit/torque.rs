@@ -1,12 +1,16 @@
-//! Torque causes (centre-of-mass offset, constant torque, aerodynamic drag, inertia error):
-//! linear in the torque channel, fitted by weighted least squares with `aero_drag`'s
-//! coefficients kept ≥ 0 (active set).
+//! Torque causes (centre-of-mass offset, constant torque, aerodynamic drag, inertia error,
+//! thruster torque scale, the propellant's centre-of-mass shift): linear in the torque channel,
+//! fitted by weighted least squares with `aero_drag`'s coefficients kept ≥ 0 (active set).
+//! Columns the data do not excite (a thruster that never fired) are held at their base values
+//! (no standard error: not estimated).
 
 use super::{FittedCause, Problem, State, solve_fixed};
-use crate::channels::{TORQUE_COLUMNS, torque_columns};
+use crate::channels::{TORQUE_COLUMNS, TorqueChannel, column_cause, torque_columns};
 use crate::effects::Cause;
 use crate::error::IdentError;
 use crate::stats::NormalEquations;
+use nalgebra::{DMatrix, DVector, Vector3};
+use testbed_model::thruster_config::THRUSTER_COUNT;
 
 impl Problem<'_> {
     pub(super) fn fit_torque(
@@ -29,7 +33,13 @@ impl Problem<'_> {
             let (cause, off) = column_cause(col);
             cause.values(&self.base)[off]
         };
-        let mut fixed: Vec<(usize, f64)> = Vec::new(); // (index into `columns`, delta)
+        // (index into `columns`, delta): columns the data leave at zero are not estimated.
+        let mut fixed: Vec<(usize, f64)> = columns
+            .iter()
+            .enumerate()
+            .filter(|(_, c)| !ch.determined(**c))
+            .map(|(j, _)| (j, 0.0))
+            .collect();
         let mut ne = NormalEquations::new(columns.len());
         let mut row = vec![0.0; columns.len()];
         for (i, &a) in ch.ticks.iter().enumerate() {
@@ -64,6 +74,37 @@ impl Problem<'_> {
                 None => break (theta, stderr),
             }
         };
+        // The thrusters' pulse-to-pulse noise: an error of the measured momentum the
+        // least-squares errors do not assume (added in quadrature).
+        let pulse_var = if ch.thrusters.is_some() {
+            let free: Vec<usize> = (0..columns.len())
+                .filter(|j| !fixed.iter().any(|(f, _)| f == j))
+                .collect();
+            let values: Vec<f64> = (0..columns.len())
+                .map(|j| fixed.iter().find(|(f, _)| *f == j).map_or(0.0, |f| f.1))
+                .collect();
+            let cov = if free.is_empty() {
+                None
+            } else {
+                ne.reduce(&free, &values).and_then(|r| r.solve())
+            };
+            let mut var = vec![0.0; columns.len()];
+            if let Some(fit) = cov {
+                let cols: Vec<usize> = free.iter().map(|&j| columns[j]).collect();
+                let v = pulse_noise_variance(ch, &self.held_out, &cols, &fit.cov_unit);
+                for (a, &j) in free.iter().enumerate() {
+                    var[j] = v[a];
+                }
+            }
+            var
+        } else {
+            vec![0.0; columns.len()]
+        };
+        let stderr: Vec<f64> = stderr
+            .iter()
+            .zip(&pulse_var)
+            .map(|(se, v)| (se * se + v).sqrt())
+            .collect();
         let mut delta = [0.0; TORQUE_COLUMNS];
         for (j, &c) in columns.iter().enumerate() {
             delta[c] = theta[j];
@@ -84,12 +125,66 @@ impl Problem<'_> {
     }
 }
 
-/// Cause and value offset of a torque column.
-fn column_cause(col: usize) -> (Cause, usize) {
-    match col {
-        0..3 => (Cause::ComOffset, col),
-        3..6 => (Cause::ConstantTorque, col - 3),
-        6..12 => (Cause::AeroDrag, col - 6),
-        _ => (Cause::InertiaError, col - 12),
+/// Variance of the fitted torque columns `cols` from the thrusters' pulse-to-pulse thrust noise
+/// (`thrust_noise_fraction`), for the weighted least squares with unit covariance `cov_unit`
+/// (`(XᵀWX)⁻¹` over `cols`) on the rows not `held_out`.
+///
+/// Pulse p of thruster i (thrust time `a_p`, noise `ξ_p ~ N(0, 1)`) adds `σ s_i a_p T_i ξ_p` to
+/// the measured momentum from its tick on: in its segment a step, mean removed like every row.
+/// Its influence on the estimate is `δθ_p = (XᵀWX)⁻¹ XᵀW u_p` (`u_p` that step per unit `ξ_p`),
+/// and the pulses are independent: `Var θ̂_j = Σ_p (δθ_p)_j²`.
+fn pulse_noise_variance(
+    ch: &TorqueChannel,
+    held_out: &[bool],
+    cols: &[usize],
+    cov_unit: &DMatrix<f64>,
+) -> Vec<f64> {
+    let p = cols.len();
+    let mut var = vec![0.0; p];
+    let Some(th) = &ch.thrusters else {
+        return var;
+    };
+    if th.thrust_noise_fraction == 0.0 || p == 0 {
+        return var;
     }
+    // Pulses by start tick: (tick, thruster, noise impulse per unit ξ, Nms).
+    let mut pulses: Vec<(usize, Vector3<f64>)> = Vec::new();
+    for i in 0..THRUSTER_COUNT {
+        for &(k, a) in &th.pulses[i] {
+            pulses.push((
+                k,
+                th.torque_nm[i] * (th.thrust_noise_fraction * th.scale[i] * a),
+            ));
+        }
+    }
+    pulses.sort_by_key(|(k, _)| *k);
+    let w = ch.sigma.map(|s| 1.0 / (s * s));
+    for seg in &ch.segments {
+        let (first, last) = (ch.ticks[seg.start], ch.ticks[seg.end - 1]);
+        // Suffix sums of W x over the segment's fitted rows: after[r][j] (per axis).
+        let len = seg.len();
+        let mut after = vec![vec![Vector3::zeros(); p]; len + 1];
+        for r in (0..len).rev() {
+            let row = seg.start + r;
+            for j in 0..p {
+                after[r][j] = after[r + 1][j];
+                if !held_out[ch.ticks[row]] {
+                    after[r][j] += ch.x[row][cols[j]].component_mul(&w);
+                }
+            }
+        }
+        let lo = pulses.partition_point(|(k, _)| *k < first);
+        let hi = pulses.partition_point(|(k, _)| *k < last);
+        for (k, impulse) in &pulses[lo..hi] {
+            // Rows from the tick after the pulse's on carry it.
+            let r0 = ch.ticks[seg.clone()].partition_point(|t| *t <= *k);
+            let frac = (len - r0) as f64 / len as f64;
+            let v = DVector::from_fn(p, |j, _| (after[r0][j] - after[0][j] * frac).dot(impulse));
+            let d = cov_unit * v;
+            for j in 0..p {
+                var[j] += d[j] * d[j];
+            }
+        }
+    }
+    var
 }

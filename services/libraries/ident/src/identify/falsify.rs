@@ -87,6 +87,7 @@ fn joint_columns(
     named: &[Cause],
     effects: &[UnexplainedEffect],
     candidates: &TorqueCandidates,
+    channel: &crate::channels::TorqueChannel,
 ) -> JointColumns {
     // (cause, torque column) for named; (axis, candidate index) for the unexplained terms.
     let cols: Vec<(Option<Cause>, usize)> = named
@@ -96,6 +97,7 @@ fn joint_columns(
             torque_columns(*c)
                 .into_iter()
                 .flatten()
+                .filter(|col| channel.determined(*col))
                 .map(move |col| (Some(*c), col))
         })
         .collect();
@@ -196,7 +198,7 @@ pub(super) fn test_causes(
     } = *levels;
     let ch = &fit.state.torque;
     let data = problem.data;
-    let (cols, extra) = joint_columns(named, effects, candidates);
+    let (cols, extra) = joint_columns(named, effects, candidates, &fit.state.torque);
     let mut out = Vec::new();
     let mut joint = None;
     if !cols.is_empty() && ch.len() >= 30 {
@@ -220,13 +222,20 @@ pub(super) fn test_causes(
             let se = f.stderr();
             let mut delta = Vec::new();
             for &cause in named.iter().filter(|c| c.kind() == Kind::Torque) {
-                let idx: Vec<usize> = (0..cols.len())
-                    .filter(|&j| cols[j].0 == Some(cause))
-                    .collect();
+                // Every value of the cause: a column not in the fit (not determined) unchanged.
+                let at = |col: usize| {
+                    (0..cols.len()).find(|&j| cols[j].0 == Some(cause) && cols[j].1 == col)
+                };
+                let range = torque_columns(cause).unwrap_or(0..0);
                 delta.push((
                     cause,
-                    idx.iter().map(|&j| f.theta[j]).collect(),
-                    idx.iter().map(|&j| se[j]).collect(),
+                    range
+                        .clone()
+                        .map(|col| at(col).map_or(0.0, |j| f.theta[j]))
+                        .collect(),
+                    range
+                        .map(|col| at(col).map_or(f64::NAN, |j| se[j]))
+                        .collect(),
                 ));
             }
             joint = Some(JointTorque { delta });

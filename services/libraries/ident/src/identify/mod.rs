@@ -559,6 +559,7 @@ pub fn identify(
         (!data.magnetometer.is_empty(), "magnetometer"),
         (!data.wheels.is_empty(), "wheels"),
         (!data.cmg.is_empty(), "cmg"),
+        (!data.thrusters.is_empty(), "thrusters"),
     ]
     .into_iter()
     .filter_map(|(p, n)| p.then_some(n))
@@ -645,7 +646,18 @@ fn available(cause: Cause, problem: &Problem, nominal: &SetFit) -> bool {
             !s.recon.innovations.is_empty()
                 && (cause != Cause::MagneticDisturbance || !problem.data.field.is_empty())
         }
-        Kind::Torque => s.torque.len() >= 30,
+        // The thrusters' causes only with thruster firings in the data (and `[thrusters]` in
+        // the model): otherwise their columns are zero.
+        Kind::Torque => {
+            s.torque.len() >= 30
+                && (!matches!(
+                    cause,
+                    Cause::ThrusterTorqueScale | Cause::PropellantComShift
+                ) || crate::channels::torque_columns(cause)
+                    .into_iter()
+                    .flatten()
+                    .any(|c| s.torque.excited[c]))
+        }
         Kind::Wheel => s.wheel.len() >= 10,
     }
 }

@@ -4,7 +4,6 @@
 use super::Options;
 use super::report::{ComponentReport, Correlation, Curve, Remaining, ResidualReport};
 use crate::channels::{TORQUE_COLUMNS, friction_regressors};
-use crate::effects::Cause;
 use crate::fit::{CHANNELS, ChannelRss, Evaluation, Problem, SetFit, WheelModel};
 use crate::predict::{COMPONENTS, Predictions, UNITS};
 use crate::reconstruct::INNOVATION_LEN;
@@ -218,14 +217,9 @@ fn correlate(problem: &Problem, fit: &SetFit) -> Vec<Correlation> {
             let r: Vec<f64> = (0..s.torque.len())
                 .map(|i| s.torque.whitened(i, &fit.torque_delta)[axis])
                 .collect();
-            for col in 0..TORQUE_COLUMNS {
+            for col in (0..TORQUE_COLUMNS).filter(|c| s.torque.determined(*c)) {
                 let x: Vec<f64> = s.torque.x.iter().map(|row| row[col][axis]).collect();
-                let (cause, off) = match col {
-                    0..3 => (Cause::ComOffset, col),
-                    3..6 => (Cause::ConstantTorque, col - 3),
-                    6..12 => (Cause::AeroDrag, col - 6),
-                    _ => (Cause::InertiaError, col - 12),
-                };
+                let (cause, off) = crate::channels::column_cause(col);
                 out.push(Correlation {
                     residual: format!("momentum_{}", "xyz".as_bytes()[axis] as char),
                     signal: cause.value_name(off),

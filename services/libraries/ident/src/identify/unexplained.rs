@@ -569,11 +569,6 @@ fn effect(
 /// Name of a torque column (`com_offset.r_m[0]` …).
 pub(super) fn column_name(col: usize) -> String {
     debug_assert!(col < TORQUE_COLUMNS);
-    let (cause, off) = match col {
-        0..3 => (Cause::ComOffset, col),
-        3..6 => (Cause::ConstantTorque, col - 3),
-        6..12 => (Cause::AeroDrag, col - 6),
-        _ => (Cause::InertiaError, col - 12),
-    };
+    let (cause, off) = crate::channels::column_cause(col);
     cause.value_name(off)
 }
