@@ -558,3 +558,96 @@ impl Node for CanGateway {
         Ok(())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use testbed_can::{Decoder, Message, Protocol};
+    use testbed_flight::schedule::Schedule;
+    use testbed_model::thruster_config::ThrusterConfig;
+
+    fn side(config: &ThrusterConfig) -> ThrusterSide {
+        ThrusterSide {
+            guard: ThrusterGuard::new(config, 0.1, config.stuck_open_confirm_periods),
+            propellant: PropellantEstimate::new(config),
+        }
+    }
+
+    fn command(on_time: [f64; 6]) -> ThrusterCommand {
+        ThrusterCommand {
+            header: SampleHeader::new(0, 0, SampleHeader::VALID),
+            on_time,
+        }
+    }
+
+    fn status(applied: [f64; 6], valves_open: u32) -> ThrusterStatus {
+        ThrusterStatus {
+            header: SampleHeader::new(0, 0, SampleHeader::VALID),
+            applied_on_time: applied,
+            valves_open,
+            ..Default::default()
+        }
+    }
+
+    /// The gateway's side of a thruster run: bad commands refused and counted, what the node
+    /// reports completed, a stuck valve disabling the thrusters and the latch flag sent.
+    #[test]
+    fn the_thruster_gateway_refuses_counts_and_disables() {
+        let config = ThrusterConfig::default();
+        let mut side = side(&config);
+        let mut gateway = Gateway::new(
+            Served::Thrusters,
+            Protocol::default(),
+            Schedule {
+                period_ns: 100_000_000,
+                tilt_every: 4,
+                field_every: 4,
+            },
+            true,
+        );
+        for bad in [f64::NAN, 0.5, -0.01, config.min_on_time_s / 2.0] {
+            let (on_time, refusal) = side.guard.check(&command([0.0, bad, 0.0, 0.0, 0.0, 0.0]));
+            assert!(refusal.is_some(), "{bad} passed");
+            assert_eq!(on_time, [0.0; 6], "a refused command shuts every valve");
+        }
+        let (on_time, refusal) = side.guard.check(&command([0.05, 0.0, 0.0, 0.0, 0.0, 0.0]));
+        assert_eq!((on_time[0], refusal), (0.05, None));
+        // The node reports the pulse; the gateway adds its propellant and its refusals.
+        let mut s = status(on_time, 0);
+        assert_eq!(side.on_status(&mut s), None);
+        assert_eq!(s.refused, 4);
+        assert!(s.propellant_used > 0.0 && s.disabled == 0);
+        // A stale status (the node's frames did not all come) adds nothing.
+        let used = s.propellant_used;
+        let mut stale = status(on_time, 0);
+        stale.header.flags |= SampleHeader::STALE;
+        side.on_status(&mut stale);
+        assert_eq!(stale.propellant_used, used);
+        // Valve 4 reads open in periods it was not driven: stuck after the confirmation count.
+        let mut stuck = None;
+        for _ in 0..config.stuck_open_confirm_periods {
+            side.guard.check(&command([0.0; 6]));
+            stuck = side.on_status(&mut status([0.0; 6], 1 << 4));
+        }
+        assert_eq!(stuck, Some(4));
+        // From now on every command is refused and goes out with the latch flag.
+        let (on_time, refusal) = side.guard.check(&command([0.05, 0.0, 0.0, 0.0, 0.0, 0.0]));
+        assert!(refusal.is_some() && on_time == [0.0; 6]);
+        let frames = gateway
+            .thruster_command(on_time, side.guard.disabled().is_some())
+            .expect("zeros encode");
+        let mut decoder = Decoder::new(Protocol::default());
+        let decoded = frames
+            .iter()
+            .filter_map(|f| decoder.decode(f).message)
+            .next_back()
+            .expect("a complete command");
+        let Message::ThrusterCommand(m) = decoded.message else {
+            panic!("not a thruster command")
+        };
+        assert!(m.latch_shut && m.on_time_s == [0.0; 6]);
+        let mut s = status([0.0; 6], 1 << 4);
+        side.on_status(&mut s);
+        assert_eq!((s.disabled, s.refused), (1, 5));
+    }
+}
