@@ -160,7 +160,7 @@ fn a_thruster_at_80_percent_is_named_with_every_scale_within_3_standard_errors()
         assert_eq!(extended_round_trip(&id, "thruster-scale"), id.extended);
     }
     // Over the 18 values: measured χ² = 34 (1.9 per value; the standard errors are about 1.4×
-    // too small, see docs/identification.md) and one value beyond 3 σ (seed 31, thruster 4,
+    // too small, see docs/thrusters.md, "Not done yet") and one value beyond 3 σ (seed 31, thruster 4,
     // −3.3 σ). Asserted: at most one of 18 beyond 3 σ and none beyond 4 σ, χ² per value ≤ 2.5.
     println!("thruster scale: χ² {chi2:.1} over 18 values; beyond 3 σ: {beyond:?}");
     assert!(

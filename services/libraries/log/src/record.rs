@@ -449,10 +449,11 @@ log_types! {
                   prefix.",
         kind: "Event kind: 1 input lost, 2 input restored, 3 process hung, 4 process exited, \
                5 process restarted, 6 safe mode entered, 7 safe mode left, 8 commands zeroed, \
-               9 commands resumed, 10 run aborted.",
+               9 commands resumed, 10 run aborted, 11 thrusters disabled.",
         detail: "Kind-specific: exit status or 128 + signal (4), restart count (5), safe-mode \
                  reason bits (6: 1 estimate lost, 2 estimate invalid, 4 wheel telemetry lost, \
-                 8 CMG telemetry lost, 16 wheel near its speed limit, 32 ground command).",
+                 8 CMG telemetry lost, 16 wheel near its speed limit, 32 ground command), the \
+                 thruster found stuck open (11).",
         value: "Kind-specific: time since the last sample or heartbeat, or outage length, s.",
     } pad [];
 
