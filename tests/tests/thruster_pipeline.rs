@@ -162,7 +162,14 @@ fn run_with_a_stuck_valve(scratch: &Scratch, name: &str, duration_s: f64) -> (Ru
     let out = std::process::Command::new(testbed_e2e::binary("testbed"))
         .args(["run", "--profile"])
         .arg(&profile)
-        .args(["--duration", &duration_s.to_string(), "--seed", "2", "--json", "--log"])
+        .args([
+            "--duration",
+            &duration_s.to_string(),
+            "--seed",
+            "2",
+            "--json",
+            "--log",
+        ])
         .arg(&log_path)
         .output()
         .unwrap();

@@ -47,6 +47,10 @@ pub struct ExperimentOptions {
     pub tilt_dwell_s: f64,
     /// Initial wheel momentum per wheel, Nms (body = level axes at the start).
     pub wheel_momentum_nms: [f64; 3],
+    /// Momentum dumping with the thrusters on (`[controller.thrusters]` defaults; the model must
+    /// have `[thrusters]`): data with thruster firings, for `thruster_torque_scale` and
+    /// `propellant_com_shift`. See [`ExperimentOptions::thruster_programme`].
+    pub thrusters: bool,
 }
 
 impl Default for ExperimentOptions {
@@ -61,6 +65,27 @@ impl Default for ExperimentOptions {
             tilt_deg: 7.0,
             tilt_dwell_s: 30.0,
             wheel_momentum_nms: [0.25, 0.25, 0.0],
+            thrusters: false,
+        }
+    }
+}
+
+impl ExperimentOptions {
+    /// The thruster programme: heading held, the tilt steps of the default programme (so the
+    /// propellant's gravity torque has a vertical lever too), the wheels starting at 0.55 Nms
+    /// (55 % of the default wheels' 1 Nms, past the 50 % dump threshold) with signs [−, +, −],
+    /// and momentum dumping: the first dump fires thrusters 0, 3 and 4 at once; a constant
+    /// disturbance in the truth then fills the wheels the other way and the later dumps fire 1,
+    /// 2 and 5. Without a disturbance only the first dump comes, and only those three thrusters
+    /// are identified.
+    pub fn thruster_programme(duration_s: f64, seed: u64) -> Self {
+        Self {
+            duration_s,
+            seed,
+            heading_amplitude_deg: 0.0,
+            wheel_momentum_nms: [-0.55, 0.55, -0.55],
+            thrusters: true,
+            ..Self::default()
         }
     }
 }
@@ -213,6 +238,13 @@ impl ExperimentOptions {
 pub fn scenario(model: &ModelConfig, options: &ExperimentOptions) -> Result<Scenario, IdentError> {
     options.validate()?;
     model.validate()?;
+    if options.thrusters && model.thrusters.is_none() {
+        return Err(IdentError::Options {
+            key: "thrusters".into(),
+            value: "true".into(),
+            reason: "the model has no [thrusters] table: a thruster programme needs the valves' parameters".into(),
+        });
+    }
     let j = model.wheels.inertia_kgm2;
     let manoeuvre = Manoeuvre {
         initial_heading_deg: 0.0,
@@ -227,7 +259,10 @@ pub fn scenario(model: &ModelConfig, options: &ExperimentOptions) -> Result<Scen
     Ok(Scenario {
         estimator: MekfConfig::from_model(model),
         model: model.clone(),
-        controller: ControllerConfig::default(),
+        controller: ControllerConfig {
+            thrusters: options.thrusters.then(Default::default),
+            ..ControllerConfig::default()
+        },
         feedback: Feedback::Estimate,
         manoeuvre,
         duration_s: options.duration_s,

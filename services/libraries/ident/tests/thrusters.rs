@@ -6,7 +6,6 @@
 
 mod common;
 use common::*;
-use testbed_flight::thruster_control::ThrusterControlConfig;
 use testbed_ident::experiment::{self, ExperimentOptions};
 use testbed_ident::{Cause, Dataset, Identification, Options, identify};
 use testbed_model::ModelConfig;
@@ -36,16 +35,8 @@ fn model() -> ModelConfig {
 /// thrusters 0, 3 and 4; the disturbance then fills the wheels the other way and the later dumps
 /// fire 1, 2 and 5: every thruster fires.
 fn run(truth: &ModelConfig, seed: u64, duration_s: f64) -> Dataset {
-    let options = ExperimentOptions {
-        duration_s,
-        seed,
-        heading_amplitude_deg: 0.0,
-        wheel_momentum_nms: [-0.55, 0.55, -0.55],
-        ..ExperimentOptions::default()
-    };
-    let mut scenario = experiment::scenario(truth, &options).expect("scenario");
-    scenario.controller.thrusters = Some(ThrusterControlConfig::default());
-    experiment::run_scenario(&scenario).expect("run").0
+    let options = ExperimentOptions::thruster_programme(duration_s, seed);
+    experiment::run(truth, &options).expect("run").0
 }
 
 fn report(label: &str, data: &Dataset, id: &Identification) {

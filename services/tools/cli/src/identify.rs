@@ -47,6 +47,12 @@ pub struct ExperimentArgs {
     /// Seed of the sensor noise.
     #[arg(long, default_value_t = 1)]
     seed: u64,
+    /// The thruster programme instead: heading held, tilt steps, the wheels past the dump
+    /// threshold and momentum dumping on the thrusters (the model needs `[thrusters]`; a
+    /// constant disturbance in it makes every thruster fire): data for thruster_torque_scale
+    /// and propellant_com_shift.
+    #[arg(long)]
+    thrusters: bool,
 }
 
 /// Read measured data: a CSV directory or an MCAP run log.
@@ -120,10 +126,14 @@ pub fn run_experiment(args: &ExperimentArgs) -> Result<()> {
             .with_context(|| format!("loading the model {}", path.display()))?,
         None => ModelConfig::default(),
     };
-    let options = ExperimentOptions {
-        duration_s: args.duration,
-        seed: args.seed,
-        ..ExperimentOptions::default()
+    let options = if args.thrusters {
+        ExperimentOptions::thruster_programme(args.duration, args.seed)
+    } else {
+        ExperimentOptions {
+            duration_s: args.duration,
+            seed: args.seed,
+            ..ExperimentOptions::default()
+        }
     };
     let (mut data, trace) =
         experiment::run(&model, &options).context("running the identification experiment")?;
@@ -143,8 +153,16 @@ pub fn run_experiment(args: &ExperimentArgs) -> Result<()> {
         .iter()
         .map(|t| t.truth.wheel_speed.amax())
         .fold(0.0, f64::max);
+    // Thruster on-time per thruster, s (all zero without the thruster programme).
+    let on_time_s = data.thrusters.iter().fold([0.0; 6], |mut sum, row| {
+        for (s, t) in sum.iter_mut().zip(row.on_time_s) {
+            *s += t;
+        }
+        sum
+    });
     let info = serde_json::json!({
         "model": args.model.as_ref().map(|p| p.display().to_string()),
+        "thruster_on_time_s": on_time_s,
         "options": options,
         "tilt_stop_strikes": trace.tilt_stops.len(),
         "wheel_saturated": max_wheel >= 0.97 * model.wheels.max_speed_rad_s(),
@@ -171,6 +189,17 @@ pub fn run_experiment(args: &ExperimentArgs) -> Result<()> {
         trace.tilt_stops.len(),
         max_wheel / RPM
     );
+    if options.thrusters {
+        println!(
+            "  thrusters: momentum dumping; on-time [{}] s per thruster",
+            on_time_s.map(|t| format!("{t:.1}")).join(" ")
+        );
+        if let Some(idle) = on_time_s.iter().position(|t| *t == 0.0) {
+            eprintln!(
+                "warning: thruster {idle} never fired: its scale cannot be identified from these data; a constant disturbance in the model makes the wheels fill and every thruster fire"
+            );
+        }
+    }
     // A programme that strikes the stop or saturates a wheel measures the stop and the speed
     // limiter, not the effects it is meant to excite: say so.
     if !trace.tilt_stops.is_empty() {
@@ -599,6 +628,54 @@ fn write_figures(out: &Path, f: &FigureData, horizon_s: f64) -> Result<Vec<Strin
 mod tests {
     use super::*;
 
+    /// The thruster programme writes thruster rows with firings of every thruster when the
+    /// truth has a constant disturbance, and refuses a model without thrusters.
+    #[test]
+    fn the_thruster_programme_writes_firings_and_needs_thrusters() {
+        let dir =
+            std::env::temp_dir().join(format!("testbed-cli-thrusters-{}", std::process::id()));
+        std::fs::remove_dir_all(&dir).ok();
+        std::fs::create_dir_all(&dir).unwrap();
+        let truth = dir.join("truth.toml");
+        std::fs::write(
+            &truth,
+            "[thrusters]\n\n[effects.constant_torque]\ntorque_nm = [1.2e-3, -1.2e-3, 1.8e-3]\n",
+        )
+        .unwrap();
+        let data = dir.join("data");
+        run_experiment(&ExperimentArgs {
+            out: data.clone(),
+            model: Some(truth),
+            duration: 600.0,
+            seed: 3,
+            thrusters: true,
+        })
+        .unwrap();
+        let read: Dataset = csv::read_dir(&data).unwrap();
+        let mut fired = [0usize; 6];
+        for row in &read.thrusters {
+            for (n, t) in fired.iter_mut().zip(row.on_time_s) {
+                *n += usize::from(t > 0.0);
+            }
+        }
+        assert!(
+            fired.iter().all(|n| *n > 0),
+            "pulses per thruster {fired:?}"
+        );
+        let bare = dir.join("bare.toml");
+        std::fs::write(&bare, "").unwrap();
+        let err = run_experiment(&ExperimentArgs {
+            out: dir.join("none"),
+            model: Some(bare),
+            duration: 60.0,
+            seed: 3,
+            thrusters: true,
+        })
+        .unwrap_err();
+        assert!(format!("{err:#}").contains("[thrusters]"), "{err:#}");
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
     #[test]
     fn experiment_then_identify_writes_model_report_and_figures() {
         let dir = std::env::temp_dir().join(format!("testbed-cli-identify-{}", std::process::id()));
@@ -618,6 +695,7 @@ mod tests {
             model: Some(truth),
             duration: 300.0,
             seed: 3,
+            thrusters: false,
         })
         .unwrap();
         for f in [
