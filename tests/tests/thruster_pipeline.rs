@@ -214,6 +214,9 @@ fn a_stuck_open_valve_is_detected_and_the_thrusters_are_disabled() {
     run_with_a_stuck_valve(&scratch, "thrusters", 60.0);
 }
 
+/// Half a least significant bit of the on-time field on the wire (10 µs LSB), s.
+const HALF_LSB_S: f64 = 5e-6;
+
 #[test]
 fn over_can_the_node_applies_what_the_controller_commanded_and_runs_are_byte_identical() {
     let scratch = Scratch::new("thrusters-can");
