@@ -150,9 +150,11 @@ fn a_thruster_at_80_percent_is_named_with_every_scale_within_3_standard_errors()
         assert!(id.report.gain > 2.0, "{label}: gain {}", id.report.gain);
         assert_eq!(extended_round_trip(&id, "thruster-scale"), id.extended);
     }
-    // Over the 18 values: measured χ² = 34 (1.9 per value; the standard errors are about 1.4×
-    // too small, see docs/thrusters.md, "Not done yet") and one value beyond 3 σ (seed 31, thruster 4,
-    // −3.3 σ). Asserted: at most one of 18 beyond 3 σ and none beyond 4 σ, χ² per value ≤ 2.5.
+    // Over the 18 values: measured χ² = 34 (1.9 per value) and one value beyond 3 σ (seed 31,
+    // thruster 4, −3.3 σ). The errors themselves are calibrated (χ² per value 0.85 over 12 more
+    // seeds, `scale_standard_errors_are_calibrated`); thruster 4 fires only at the start of the
+    // run and carries the estimator's start-up (mean −1.6 σ). Asserted: at most one of 18
+    // beyond 3 σ and none beyond 4 σ, χ² per value ≤ 2.5.
     println!("thruster scale: χ² {chi2:.1} over 18 values; beyond 3 σ: {beyond:?}");
     assert!(
         beyond.len() <= 1 && beyond.iter().all(|b| b.2.abs() <= 4.0),
@@ -274,4 +276,39 @@ fn thruster_data_round_trip_through_the_csv_directory() {
         e.contains("thrusters.csv") && e.contains("row 4") && e.contains("on_time_4_s"),
         "{e}"
     );
+}
+
+/// Calibration of the scales' standard errors over 12 more seeds: χ² per value over the 72
+/// fitted scales must lie in [0.5, 1.5] (for calibrated errors its mean is 1 and its standard
+/// deviation √(2/72) = 0.17: the band is ±3 of those). Measured 2026-11-24: 0.85 — calibrated;
+/// the one systematic error is thruster 4 (+Z) at a mean of −1.6 σ (−0.27 %): it fires only in
+/// the first dump, at the start of the run, while the heading estimate is still settling.
+/// `cargo test --release -p testbed-ident --test thrusters scale_standard_errors_are_calibrated
+/// -- --ignored --nocapture` (about 20 s).
+#[test]
+#[ignore = "a 12-seed study, about 20 s"]
+fn scale_standard_errors_are_calibrated() {
+    let nominal = model();
+    let mut truth = model();
+    truth.effects.thruster_torque_scale = Some(ThrusterTorqueScale {
+        scale: [1.0, 1.0, 0.8, 1.0, 1.0, 1.0],
+    });
+    let mut zs = Vec::new();
+    for seed in 100..112u64 {
+        let data = run(&truth, seed, 600.0);
+        let id = identify(&data, &nominal, &Options::default()).expect("identification runs");
+        assert_eq!(names(&id), vec!["thruster_torque_scale"], "seed {seed}");
+        let fitted = Cause::ThrusterTorqueScale.values(&id.extended);
+        let hidden = Cause::ThrusterTorqueScale.values(&truth);
+        let se = stderr(&id, Cause::ThrusterTorqueScale);
+        let z: Vec<f64> = (0..6).map(|i| (fitted[i] - hidden[i]) / se[i]).collect();
+        println!(
+            "seed {seed}: z {:?}",
+            z.iter().map(|v| format!("{v:+.2}")).collect::<Vec<_>>()
+        );
+        zs.extend(z);
+    }
+    let per_value = zs.iter().map(|z| z * z).sum::<f64>() / zs.len() as f64;
+    println!("χ² per value {per_value:.2} over {} values", zs.len());
+    assert!((0.5..=1.5).contains(&per_value), "χ² per value {per_value}");
 }
