@@ -272,10 +272,16 @@ impl Browser {
         .to_owned()
     }
 
-    /// The page's displayed estimate: its time and quaternion.
+    /// The page's displayed estimate: its time and quaternion, read in one evaluation (two
+    /// reads could straddle the arrival of the next estimate and pair one estimate's time
+    /// with the next one's quaternion).
     fn estimate(&mut self) -> Option<(u64, [f64; 4])> {
-        let t: u64 = self.text("est-time").parse().ok()?;
-        let q: Vec<f64> = serde_json::from_str(&self.text("est-q")).ok()?;
+        let both = self.eval(
+            "[document.getElementById('est-time').dataset.value || '', \
+              document.getElementById('est-q').dataset.value || '']",
+        );
+        let t: u64 = both[0].as_str()?.parse().ok()?;
+        let q: Vec<f64> = serde_json::from_str(both[1].as_str()?).ok()?;
         Some((t, q.try_into().ok()?))
     }
 

@@ -269,10 +269,14 @@ pub fn predict(
             wheel_speed,
             gimbal: data.gimbal_at(k0),
         };
-        let window_config = match &thrusters {
+        let mut window_config = match &thrusters {
             Some(th) => propellant_used_before(&plant_config, th.used_kg(k0)),
             None => plant_config.clone(),
         };
+        // A fitted torque's time runs from the record's start; the window's plant starts at 0.
+        if let Some(fitted) = window_config.effects.fitted_torque.as_mut() {
+            fitted.start_time_s += data.t[k0] - data.t[0];
+        }
         let Ok(mut plant) = Plant::new(&window_config, state) else {
             continue;
         };

@@ -308,6 +308,17 @@ impl Design {
         Some((values, se))
     }
 
+    /// Coefficients of `cols` fitted on the clusters not held out, in the columns' own units
+    /// (all clusters when none is held out).
+    pub fn fit_blocks(&self, cols: &[usize]) -> Option<Vec<f64>> {
+        let (theta, _) = self.solve(cols, Subset::NotHeld)?;
+        Some(
+            (0..cols.len())
+                .map(|i| theta[i] / self.scale[cols[i]])
+                .collect(),
+        )
+    }
+
     /// Mean square of the residual with no term at all (for gains).
     pub fn total_rss(&self) -> f64 {
         self.total.yty
@@ -347,6 +358,9 @@ pub struct Term {
     pub value: f64,
     /// Cluster-robust standard error.
     pub stderr: f64,
+    /// Coefficient fitted without the held-out clusters (what a held-out prediction may use);
+    /// equal to `value` when none is held out.
+    pub value_fit_blocks: f64,
 }
 
 /// What the search found in one equation.
@@ -509,10 +523,12 @@ pub fn search(design: &Design, options: &SparseOptions) -> SparseResult {
     let (values, se) = design
         .fit(&active)
         .unwrap_or((vec![f64::NAN; active.len()], vec![f64::NAN; active.len()]));
+    let fit_blocks = design.fit_blocks(&active).unwrap_or_else(|| values.clone());
     let term = |i: usize| Term {
         name: design.names[active[i]].clone(),
         value: values[i],
         stderr: se[i],
+        value_fit_blocks: fit_blocks[i],
     };
     let cv = design.cv_rss(&active).unwrap_or(base_cv);
     let cv_gain = if cv > 0.0 { (base_cv / cv).sqrt() } else { 1.0 };

@@ -93,7 +93,68 @@ fn detection_power_table_for_a_20_minute_experiment() {
             }),
             "max 900 ppm × scale",
         ),
+        (
+            Cause::AeroDrag,
+            Box::new(|s| {
+                format!(
+                    "[effects.aero_drag]\nc1 = [{}, {}, {}]\nc2 = [{}, {}, {}]\n",
+                    0.01 * s,
+                    0.01 * s,
+                    0.03 * s,
+                    0.3 * s,
+                    0.3 * s,
+                    1.0 * s
+                )
+            }),
+            "c1 = 0.03 Nm s, c2 = 1 Nm s² (Z) × scale",
+        ),
+        (
+            Cause::GyroMisalignment,
+            Box::new(|s| {
+                format!(
+                    "[effects.gyro_misalignment]\nangles_rad = [{}, {}, {}]\n",
+                    5e-4 * s,
+                    -3e-4 * s,
+                    8e-4 * s
+                )
+            }),
+            "max 0.8 mrad × scale",
+        ),
+        (
+            // The departure from the nominal friction (eq. 3: 1.5 mNm Coulomb, 3e-6 Nm/(rad/s)
+            // viscous per wheel) is scaled: asymmetry, levels and the Stribeck spike.
+            Cause::WheelFriction,
+            Box::new(|s| {
+                let (c, v) = (1.5e-3, 3e-6);
+                let f = |truth: [f64; 3], nominal: f64| truth.map(|x| nominal + s * (x - nominal));
+                format!(
+                    "[effects.wheel_friction]\ncoulomb_pos_nm = {:?}\ncoulomb_neg_nm = {:?}\nviscous_nm_per_rad_s = {:?}\nstribeck_nm = {:?}\nstribeck_speed_rad_s = [0.8, 1.0, 1.5]\n",
+                    f([1.2e-3, 1.5e-3, 1.8e-3], c),
+                    f([1.8e-3, 1.5e-3, 1.3e-3], c),
+                    f([3e-6, 4e-6, 2.5e-6], v),
+                    f([3e-3, 1.5e-3, 3.5e-3], c),
+                )
+            }),
+            "max departure from eq. 3: 2 mNm (Stribeck, Z) × scale",
+        ),
+        (
+            // Not a magnitude a lab chooses: the Earth's rate at the test bed's latitude.
+            Cause::EarthRate,
+            Box::new(|_| "[effects.earth_rate]\nlatitude_deg = 43.88\n".to_string()),
+            "fixed: 15 °/h at 43.88° N (every column the same)",
+        ),
     ];
+    // `POWER_CAUSES=aero_drag,earth_rate`: only these rows.
+    let only: Option<Vec<String>> = std::env::var("POWER_CAUSES")
+        .ok()
+        .map(|v| v.split(',').map(|c| c.trim().to_string()).collect());
+    let cases: Vec<Case> = cases
+        .into_iter()
+        .filter(|(cause, _, _)| {
+            only.as_ref()
+                .is_none_or(|o| o.iter().any(|c| c == cause.name()))
+        })
+        .collect();
     // Two workers (the machine's cores); rows printed in the cases' order.
     let rows: Vec<String> = std::thread::scope(|scope| {
         let handles: Vec<_> = [0, 1]

@@ -272,6 +272,35 @@ pub struct EffectsConfig {
     /// acts only with `[thrusters]`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub thruster_torque_scale: Option<crate::thruster_config::ThrusterTorqueScale>,
+    /// A torque fitted to data (an unexplained effect of `testbed identify`, carried into the
+    /// model): see [`crate::physics::fitted_torque`].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub fitted_torque: Option<FittedTorque>,
+}
+
+/// A torque fitted to data, `M_a = Σ coefficient × function` per body axis `a`, written by
+/// `testbed identify` from the unexplained effects it finds in the torque channels (or by
+/// hand). Functions: [`crate::physics::fitted_torque::TorqueFunction`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FittedTorque {
+    /// The terms' time at the plant's start, s (their time is the record's time from its
+    /// start; 0 when the run starts where the record did).
+    #[serde(default)]
+    pub start_time_s: f64,
+    pub terms: Vec<FittedTorqueTerm>,
+}
+
+/// One term of a [`FittedTorque`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FittedTorqueTerm {
+    /// Body axis of the torque: `x`, `y` or `z`.
+    pub axis: String,
+    /// The function, by name (`1`, `t_s`, `sin 2ψ`, `w_z`, …).
+    pub function: String,
+    /// Nm per unit of the function (Nm/s for `t_s`, Nm/(rad/s) for a rate).
+    pub coefficient: f64,
 }
 
 /// The centre of mass moves at a constant rate (thermal expansion, a draining tank): the offset
@@ -588,6 +617,29 @@ impl ModelConfig {
         }
         if let Some(x) = &e.thruster_torque_scale {
             v.positive_all("effects.thruster_torque_scale.scale", &x.scale);
+        }
+        if let Some(x) = &e.fitted_torque {
+            use crate::physics::fitted_torque::{TorqueFunction, axis_index};
+            v.finite("effects.fitted_torque.start_time_s", x.start_time_s);
+            for (i, term) in x.terms.iter().enumerate() {
+                let key = format!("effects.fitted_torque.terms[{i}]");
+                if axis_index(&term.axis).is_none() {
+                    v.fail(
+                        &format!("{key}.axis"),
+                        term.axis.clone(),
+                        "must be x, y or z",
+                    );
+                }
+                if TorqueFunction::from_name(&term.function).is_none() {
+                    let known: Vec<&str> = TorqueFunction::ALL.iter().map(|f| f.name()).collect();
+                    v.fail(
+                        &format!("{key}.function"),
+                        term.function.clone(),
+                        &format!("unknown function; known: {}", known.join(", ")),
+                    );
+                }
+                v.finite(&format!("{key}.coefficient"), term.coefficient);
+            }
         }
         v.finish()?;
         match &self.thrusters {

@@ -451,7 +451,32 @@ pub fn identify(
             .collect::<Vec<_>>()
             .join(" + ")
     };
-    let extended = current.config.clone();
+    // The unexplained torque terms become a fitted torque in the extended model (added to one
+    // the model already has); held-out predictions use the terms fitted without the held-out
+    // blocks.
+    let span_s = (aligned.t.last().copied().unwrap_or(1.0)
+        - aligned.t.first().copied().unwrap_or(0.0))
+    .max(1e-9);
+    let with_terms = |fit_blocks: bool| {
+        let (fitted, not_carried) = unexplained::fitted_torque(&effects, span_s, fit_blocks);
+        let mut config = current.config.clone();
+        if let Some(new) = &fitted {
+            match config.effects.fitted_torque.as_mut() {
+                Some(old) => old.terms.extend(new.terms.iter().cloned()),
+                None => config.effects.fitted_torque = Some(new.clone()),
+            }
+        }
+        (config, fitted, not_carried)
+    };
+    let (extended, fitted_torque, not_carried) = with_terms(false);
+    let (extended_fit_blocks, _, _) = with_terms(true);
+    let extends = !selected.is_empty() || fitted_torque.is_some();
+    let mut extension = report::ModelExtension {
+        gain_includes_fitted_torque: fitted_torque.is_some() && !cross_validated,
+        fitted_torque,
+        not_carried,
+        gain_without_fitted_torque: None,
+    };
     // The extended model must load as it is written.
     ModelConfig::from_toml_str(&extended.to_toml_string(), "extended model")?;
 
@@ -464,11 +489,28 @@ pub fn identify(
         let spans = held_out_spans(&held_out, start);
         let windows = predict::windows(&aligned, &spans, options.horizon_s);
         let base_held = predict::predict(&aligned, &nominal.state.recon, model, &windows)?;
-        let ext_held = if selected.is_empty() {
-            base_held.clone()
+        let ext_held = if extends {
+            predict::predict(
+                &aligned,
+                &current.state.recon,
+                &extended_fit_blocks,
+                &windows,
+            )?
         } else {
-            predict::predict(&aligned, &current.state.recon, &extended, &windows)?
+            base_held.clone()
         };
+        // What carrying the fitted torque adds: the gain of the named causes alone.
+        if extension.fitted_torque.is_some() {
+            let named_only = if selected.is_empty() {
+                base_held.clone()
+            } else {
+                predict::predict(&aligned, &current.state.recon, &current.config, &windows)?
+            };
+            extension.gain_without_fitted_torque = Some(
+                predict::Predictions::overall(&base_held.rms(|_| true))
+                    / predict::Predictions::overall(&named_only.rms(|_| true)),
+            );
+        }
         (base_held, ext_held, held_fraction)
     } else {
         let fold_windows: Vec<Vec<(usize, usize)>> = fold_masks
@@ -520,10 +562,10 @@ pub fn identify(
     let nominal_prediction = predict::predict(&aligned, &nominal.state.recon, model, &all_windows)?;
     let (nominal_equation, nominal_report) =
         equation_error(&problem, &nominal, &nominal_prediction);
-    let extended_prediction = if selected.is_empty() {
-        nominal_prediction.clone()
-    } else {
+    let extended_prediction = if extends {
         predict::predict(&aligned, &current.state.recon, &extended, &all_windows)?
+    } else {
+        nominal_prediction.clone()
     };
     let (extended_equation, extended_report) =
         equation_error(&problem, &current, &extended_prediction);
@@ -582,7 +624,15 @@ pub fn identify(
                 .collect()
         })
         .unwrap_or_default();
-    let summary = report::summary(&causes, &cause_tests, &possible, &effects, &remaining, gain);
+    let summary = report::summary(
+        &causes,
+        &cause_tests,
+        &possible,
+        &effects,
+        &remaining,
+        gain,
+        &extension,
+    );
     let report = Report {
         summary,
         data: DataSummary {
@@ -601,6 +651,7 @@ pub fn identify(
         verdict,
         cause_tests,
         unexplained: effects,
+        extension,
         remaining,
         extended_residuals: extended_report,
         baseline_rms,

@@ -138,6 +138,8 @@ pub struct Report {
     pub cause_tests: Vec<super::CauseTest>,
     /// Effects no named cause explains, with their proposed form (empty: none found).
     pub unexplained: Vec<super::UnexplainedEffect>,
+    /// What the extended model carries beyond the named causes.
+    pub extension: ModelExtension,
     pub remaining: Remaining,
     /// The extended model's residuals.
     pub extended_residuals: ResidualReport,
@@ -213,6 +215,20 @@ pub fn with_error(value: f64, stderr: f64) -> String {
 }
 
 /// The verdict in sentences (see [`Report::summary`]).
+/// What the extended model carries beyond the named causes.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct ModelExtension {
+    /// The unexplained torque terms as a fitted torque (`[effects.fitted_torque]`).
+    pub fitted_torque: Option<testbed_model::config::FittedTorque>,
+    /// Terms found but not carried (`equation: function`).
+    pub not_carried: Vec<String>,
+    /// Whether the held-out gain's predictions include the fitted torque.
+    pub gain_includes_fitted_torque: bool,
+    /// Held-out prediction gain of the named causes alone (without the fitted torque), to set
+    /// against the extended model's.
+    pub gain_without_fitted_torque: Option<f64>,
+}
+
 pub(super) fn summary(
     causes: &[CauseReport],
     tests: &[super::CauseTest],
@@ -220,6 +236,7 @@ pub(super) fn summary(
     effects: &[super::UnexplainedEffect],
     remaining: &Remaining,
     gain: f64,
+    extension: &ModelExtension,
 ) -> Vec<String> {
     let mut out = Vec::new();
     if causes.is_empty() {
@@ -275,7 +292,7 @@ pub(super) fn summary(
             parts.join("; ")
         ));
     }
-    if !causes.is_empty() {
+    if !causes.is_empty() || extension.fitted_torque.is_some() {
         out.push(format!(
             "Held-out prediction gain of the extended model: {gain:.2}× (nominal RMS / extended RMS)."
         ));
@@ -296,6 +313,22 @@ pub(super) fn summary(
         out.push(format!(
             "Unexplained effect (not a library cause): {}; held-out gain {:.2}×, cross-validated {:.2}× in that equation.",
             e.proposed, e.held_out_gain, e.cv_gain
+        ));
+    }
+    if let Some(f) = &extension.fitted_torque {
+        out.push(format!(
+            "Model extension: the unexplained torque terms are in the extended model as [effects.fitted_torque] ({} terms), so the plant reproduces them; {}.",
+            f.terms.len(),
+            match (extension.gain_includes_fitted_torque, extension.gain_without_fitted_torque) {
+                (true, Some(without)) => format!("the gain above includes them (without them: {without:.2}×)"),
+                _ => "with --folds the gain above leaves them out (the folds' predictions do not carry them yet)".to_string(),
+            }
+        ));
+    }
+    if !extension.not_carried.is_empty() {
+        out.push(format!(
+            "Not carried into the model (a forward simulation cannot apply them as a torque): {}.",
+            extension.not_carried.join(", ")
         ));
     }
     out.push(remaining.message.clone());

@@ -36,6 +36,8 @@ use crate::reconstruct::INNOVATION_LEN;
 use crate::sparse::{Design, Rows, SparseOptions, SparseResult, Term, search};
 use serde::Serialize;
 use testbed_model::attitude;
+use testbed_model::config::{FittedTorque, FittedTorqueTerm};
+use testbed_model::physics::fitted_torque::TorqueFunction;
 
 /// An effect in the residuals that no named cause explains.
 #[derive(Debug, Clone, Serialize)]
@@ -571,4 +573,116 @@ pub(super) fn column_name(col: usize) -> String {
     debug_assert!(col < TORQUE_COLUMNS);
     let (cause, off) = crate::channels::column_cause(col);
     cause.value_name(off)
+}
+
+/// The torque-channel unexplained effects as a model extension, `[effects.fitted_torque]`:
+/// each term's function in the plant's form (identification's `t`, 0…1 over the record of
+/// `span_s` seconds, becomes `t_s` in seconds from its start, its coefficient divided by the
+/// span). With `fit_blocks` the coefficients fitted without the held-out blocks (for a held-out
+/// prediction), else those fitted on all the data. The second value lists the terms a forward
+/// simulation cannot carry (angular accelerations: an inertia change, `inertia_error`'s
+/// domain), as `equation: function`.
+pub(super) fn fitted_torque(
+    effects: &[UnexplainedEffect],
+    span_s: f64,
+    fit_blocks: bool,
+) -> (Option<FittedTorque>, Vec<String>) {
+    let mut terms = Vec::new();
+    let mut not_carried = Vec::new();
+    for effect in effects {
+        let Some(axis) = effect.equation.strip_prefix("torque_") else {
+            continue;
+        };
+        for term in &effect.terms {
+            let value = if fit_blocks {
+                term.value_fit_blocks
+            } else {
+                term.value
+            };
+            let (name, per_unit) = match term.name.strip_prefix('t') {
+                Some(rest) if rest.is_empty() || rest.starts_with('·') => {
+                    (format!("t_s{rest}"), 1.0 / span_s)
+                }
+                _ => (term.name.clone(), 1.0),
+            };
+            match TorqueFunction::from_name(&name) {
+                Some(f) if value.is_finite() => terms.push(FittedTorqueTerm {
+                    axis: axis.to_string(),
+                    function: f.name().to_string(),
+                    coefficient: value * per_unit,
+                }),
+                _ => not_carried.push(format!("{}: {}", effect.equation, term.name)),
+            }
+        }
+    }
+    let fitted = (!terms.is_empty()).then_some(FittedTorque {
+        start_time_s: 0.0,
+        terms,
+    });
+    (fitted, not_carried)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn effect(equation: &str, terms: &[(&str, f64)]) -> UnexplainedEffect {
+        UnexplainedEffect {
+            equation: equation.into(),
+            unit: "Nm",
+            proposed: String::new(),
+            terms: terms
+                .iter()
+                .map(|(name, value)| Term {
+                    name: name.to_string(),
+                    value: *value,
+                    stderr: 0.1 * value.abs(),
+                    value_fit_blocks: 0.5 * value,
+                })
+                .collect(),
+            refitted_named: Vec::new(),
+            z_threshold: 4.6,
+            cv_gain: 2.0,
+            held_out_gain: 2.0,
+            rows: 100,
+            clusters: 10,
+        }
+    }
+
+    #[test]
+    fn torque_terms_become_a_fitted_torque_with_time_in_seconds() {
+        let effects = [
+            effect(
+                "torque_x",
+                &[("t", 3e-3), ("t·sin tilt_x", -6e-4), ("dw_x/dt", 2.0)],
+            ),
+            effect("torque_z", &[("1", 1e-3), ("sin 2ψ", 8e-4)]),
+            effect("innovation_field_x", &[("B_x", 0.3)]),
+        ];
+        let (fitted, not_carried) = fitted_torque(&effects, 600.0, false);
+        let fitted = fitted.expect("torque terms carried");
+        let got: Vec<(&str, &str, f64)> = fitted
+            .terms
+            .iter()
+            .map(|t| (t.axis.as_str(), t.function.as_str(), t.coefficient))
+            .collect();
+        assert_eq!(
+            got,
+            [
+                ("x", "t_s", 3e-3 / 600.0),
+                ("x", "t_s·sin tilt_x", -6e-4 / 600.0),
+                ("z", "1", 1e-3),
+                ("z", "sin 2ψ", 8e-4),
+            ]
+        );
+        assert_eq!(not_carried, ["torque_x: dw_x/dt"]);
+        // The held-out prediction's values: fitted without the held-out blocks.
+        let (held, _) = fitted_torque(&effects, 600.0, true);
+        assert_eq!(held.expect("carried").terms[2].coefficient, 0.5e-3);
+        // Sensor effects alone: nothing to carry into the plant.
+        assert_eq!(
+            fitted_torque(&effects[2..], 600.0, false),
+            (None, Vec::new())
+        );
+    }
 }

@@ -4,10 +4,12 @@
 //! * `com_offset`: gravity acting at a centre of mass offset `r` from the bearing centre,
 //!   `M = m g (r × G_B)`, `G_B = A(q) G_L` the unit down vector in body axes;
 //! * `aero_drag`: `M = −(c1 ⊙ w + c2 ⊙ w ⊙ |w|)` per body axis;
-//! * `constant_torque`: bearing exhaust and cable torque, fixed in body axes.
+//! * `constant_torque`: bearing exhaust and cable torque, fixed in body axes;
+//! * `fitted_torque`: a torque fitted to data ([`super::fitted_torque`]).
 //!
 //! Sensor-side effects (earth rate, gyro errors, magnetic disturbance) live in `devices`.
 
+use super::fitted_torque::FittedTorqueModel;
 use crate::attitude::{self, Attitude};
 use crate::config::ModelConfig;
 use nalgebra::Vector3;
@@ -22,12 +24,14 @@ pub struct ExternalTorque {
     pub drag_b: Vector3<f64>,
     /// Constant (exhaust, cable) torque, Nm, body axes.
     pub constant_b: Vector3<f64>,
+    /// The fitted torque (`fitted_torque`), Nm, body axes; zero without it.
+    pub fitted_b: Vector3<f64>,
 }
 
 impl ExternalTorque {
     /// Sum of all parts, Nm, body axes.
     pub fn total_b(&self) -> Vector3<f64> {
-        self.gravity_b + self.drag_b + self.constant_b
+        self.gravity_b + self.drag_b + self.constant_b + self.fitted_b
     }
 }
 
@@ -50,6 +54,10 @@ pub struct ExternalTorqueModel {
     /// without it (then the heading is not computed).
     pub heading_cos_b: Vector3<f64>,
     pub heading_sin_b: Vector3<f64>,
+    /// `fitted_torque`, resolved.
+    pub fitted: FittedTorqueModel,
+    /// Plant time the model was resolved at ([`ExternalTorqueModel::at_time`]), s.
+    pub time_s: f64,
 }
 
 impl ExternalTorqueModel {
@@ -85,13 +93,15 @@ impl ExternalTorqueModel {
                 .heading_torque
                 .as_ref()
                 .map_or_else(Vector3::zeros, |h| Vector3::from(h.sin_nm)),
+            fitted: FittedTorqueModel::from_config(e.fitted_torque.as_ref()),
+            time_s: 0.0,
         }
     }
 
-    /// Whether the torque changes with time (`com_drift`): the plant then re-resolves the model
-    /// with [`ExternalTorqueModel::at_time`] before each substep.
+    /// Whether the torque changes with time (`com_drift`, a fitted term in time): the plant
+    /// then re-resolves the model with [`ExternalTorqueModel::at_time`] before each substep.
     pub fn time_dependent(&self) -> bool {
-        self.weight_moment_rate_b != Vector3::zeros()
+        self.weight_moment_rate_b != Vector3::zeros() || self.fitted.uses_time()
     }
 
     /// The model at plant time `t_s` (s): the weight moment of a drifting centre of mass,
@@ -99,6 +109,7 @@ impl ExternalTorqueModel {
     pub fn at_time(base: &Self, t_s: f64) -> Self {
         Self {
             weight_moment_b: base.weight_moment_b + base.weight_moment_rate_b * t_s,
+            time_s: t_s,
             ..*base
         }
     }
@@ -114,6 +125,7 @@ impl ExternalTorqueModel {
             constant_b: self
                 .heading_part(q)
                 .map_or(self.constant_b, |h| self.constant_b + h),
+            fitted_b: self.fitted.torque(self.time_s, q, rate_b),
         }
     }
 

@@ -6,6 +6,7 @@
 //! * [`dynamics`]: equations of motion of the platform with wheels and CMGs;
 //! * [`friction`]: wheel bearing friction (paper eq. 3, or the asymmetric Stribeck effect);
 //! * [`environment`]: external torques (centre-of-mass offset, drag, constant);
+//! * [`fitted_torque`]: a torque fitted to data (identification's unexplained effect);
 //! * [`tilt_stop`]: the bearing's ±30° mechanical stop;
 //! * [`delay`]: actuator command delay;
 //! * [`integrator`]: fixed-step RK4;
@@ -18,6 +19,7 @@ pub mod delay;
 pub mod dynamics;
 pub mod environment;
 pub mod error;
+pub mod fitted_torque;
 pub mod friction;
 pub mod integrator;
 pub mod plant;

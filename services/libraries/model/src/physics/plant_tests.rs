@@ -403,6 +403,94 @@ fn linear_drag_decays_the_spin_exponentially() {
 }
 
 #[test]
+fn a_fitted_rate_term_is_linear_drag_and_a_fitted_time_term_ramps_the_rate() {
+    use crate::config::{FittedTorque, FittedTorqueTerm};
+    let term = |function: &str, coefficient: f64| FittedTorqueTerm {
+        axis: "z".into(),
+        function: function.into(),
+        coefficient,
+    };
+    // M_z = −c1 w_z: the spin decays as exp(−c1 t / Izz), as with aero_drag.
+    let c1 = 0.05;
+    let mut config = diagonal();
+    config.effects.fitted_torque = Some(FittedTorque {
+        start_time_s: 0.0,
+        terms: vec![term("w_z", -c1)],
+    });
+    config.validate().expect("valid fitted torque");
+    let w0 = 0.1;
+    let spinning = PlatformState {
+        rate_b: Vector3::new(0.0, 0.0, w0),
+        ..Default::default()
+    };
+    let mut p = plant(&config, spinning.clone());
+    for _ in 0..1000 {
+        step(&mut p, &ActuatorCommand::default(), 0.1);
+    }
+    let truth = w0 * (-c1 * 100.0 / IZZ).exp();
+    assert!(
+        (p.state().rate_b.z / truth - 1.0).abs() < 1e-9,
+        "{} vs {truth}",
+        p.state().rate_b.z
+    );
+    // M_z = a (t0 + t): w_z(T) = a (t0 T + T²/2) / Izz, less a h T / (2 Izz) because the
+    // plant holds a time-dependent torque at its value at the start of each 0.01-s substep.
+    let (a, t0) = (2e-6, 100.0);
+    config.effects.fitted_torque = Some(FittedTorque {
+        start_time_s: t0,
+        terms: vec![term("t_s", a)],
+    });
+    let mut p = plant(&config, PlatformState::default());
+    for _ in 0..500 {
+        step(&mut p, &ActuatorCommand::default(), 0.1);
+    }
+    let big_t = 50.0;
+    let continuous = a * (t0 * big_t + big_t * big_t / 2.0) / IZZ;
+    let h = 0.01;
+    let truth = continuous - a * h * big_t / (2.0 * IZZ);
+    let w = p.state().rate_b.z;
+    assert!(
+        (w / truth - 1.0).abs() < 1e-9,
+        "{w} vs {truth} (continuous: {continuous})"
+    );
+    // The torque reported is the one of the last substep (resolved at its start, T − h).
+    assert!(
+        (p.external_torque_b().fitted_b.z - a * (t0 + big_t - h)).abs() < 1e-12,
+        "{}",
+        p.external_torque_b().fitted_b.z
+    );
+}
+
+#[test]
+fn a_fitted_torque_with_an_unknown_function_or_axis_is_refused() {
+    use crate::config::{FittedTorque, FittedTorqueTerm};
+    let mut config = ModelConfig::default();
+    config.effects.fitted_torque = Some(FittedTorque {
+        start_time_s: 0.0,
+        terms: vec![FittedTorqueTerm {
+            axis: "z".into(),
+            function: "dw_z/dt".into(),
+            coefficient: 1.0,
+        }],
+    });
+    let e = config.validate().unwrap_err().to_string();
+    assert!(
+        e.contains("effects.fitted_torque.terms[0].function") && e.contains("dw_z/dt"),
+        "{e}"
+    );
+    config.effects.fitted_torque = Some(FittedTorque {
+        start_time_s: 0.0,
+        terms: vec![FittedTorqueTerm {
+            axis: "w".into(),
+            function: "1".into(),
+            coefficient: 1.0,
+        }],
+    });
+    let e = config.validate().unwrap_err().to_string();
+    assert!(e.contains("effects.fitted_torque.terms[0].axis"), "{e}");
+}
+
+#[test]
 fn tilt_stop_fires_once_and_holds_the_platform_on_the_stop() {
     // A constant torque about X from level rotates the platform about X only:
     // angle = ½ (M/Ixx) t², and φ (elevation of body Y) = −angle, reaching −30° at
