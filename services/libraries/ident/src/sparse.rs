@@ -308,10 +308,9 @@ impl Design {
         Some((values, se))
     }
 
-    /// Coefficients of `cols` fitted on the clusters not held out, in the columns' own units
-    /// (all clusters when none is held out).
-    pub fn fit_blocks(&self, cols: &[usize]) -> Option<Vec<f64>> {
-        let (theta, _) = self.solve(cols, Subset::NotHeld)?;
+    /// Coefficients of `cols` fitted on the clusters of `subset`, in the columns' own units.
+    fn fit_on(&self, cols: &[usize], subset: Subset) -> Option<Vec<f64>> {
+        let (theta, _) = self.solve(cols, subset)?;
         Some(
             (0..cols.len())
                 .map(|i| theta[i] / self.scale[cols[i]])
@@ -361,6 +360,10 @@ pub struct Term {
     /// Coefficient fitted without the held-out clusters (what a held-out prediction may use);
     /// equal to `value` when none is held out.
     pub value_fit_blocks: f64,
+    /// Per fold f of the search's cross-validation, the coefficient fitted without the
+    /// clusters of fold f (what a prediction of fold f may use).
+    #[serde(skip)]
+    pub value_without_fold: Vec<f64>,
 }
 
 /// What the search found in one equation.
@@ -523,12 +526,22 @@ pub fn search(design: &Design, options: &SparseOptions) -> SparseResult {
     let (values, se) = design
         .fit(&active)
         .unwrap_or((vec![f64::NAN; active.len()], vec![f64::NAN; active.len()]));
-    let fit_blocks = design.fit_blocks(&active).unwrap_or_else(|| values.clone());
+    let fit_blocks = design
+        .fit_on(&active, Subset::NotHeld)
+        .unwrap_or_else(|| values.clone());
+    let without_fold: Vec<Vec<f64>> = (0..design.folds)
+        .map(|f| {
+            design
+                .fit_on(&active, Subset::NotFold(f))
+                .unwrap_or_else(|| values.clone())
+        })
+        .collect();
     let term = |i: usize| Term {
         name: design.names[active[i]].clone(),
         value: values[i],
         stderr: se[i],
         value_fit_blocks: fit_blocks[i],
+        value_without_fold: without_fold.iter().map(|v| v[i]).collect(),
     };
     let cv = design.cv_rss(&active).unwrap_or(base_cv);
     let cv_gain = if cv > 0.0 { (base_cv / cv).sqrt() } else { 1.0 };

@@ -61,8 +61,8 @@ fn aero_drag() {
     let truth = truth("[effects.aero_drag]\nc1 = [0.01, 0.01, 0.03]\nc2 = [0.3, 0.3, 1.0]\n");
     for seed in SEEDS {
         let data = experiment_data(&truth, seed, 1200.0);
-        let id = testbed_ident::identify(&data, &nominal(), &testbed_ident::Options::default())
-            .expect("identification runs");
+        let id =
+            testbed_ident::identify(&data, &nominal(), &options()).expect("identification runs");
         let label = format!("aero_drag seed {seed}");
         assert_eq!(
             names(&id),
@@ -373,7 +373,7 @@ fn residual_is_reported_when_the_cause_is_not_among_the_candidates() {
             .into_iter()
             .filter(|c| *c != Cause::ComOffset)
             .collect(),
-        ..testbed_ident::Options::default()
+        ..options()
     };
     let id = testbed_ident::identify(&data, &nominal(), &options).expect("identification runs");
     let r = &id.report;
@@ -419,8 +419,7 @@ fn residual_is_reported_when_the_cause_is_not_among_the_candidates() {
 fn a_model_that_already_has_the_effect_gives_none() {
     let truth = truth("[effects.constant_torque]\ntorque_nm = [1.5e-3, -1.0e-3, 2.0e-3]\n");
     let data = experiment_data(&truth, 42, 600.0);
-    let id = testbed_ident::identify(&data, &truth, &testbed_ident::Options::default())
-        .expect("identification runs");
+    let id = testbed_ident::identify(&data, &truth, &options()).expect("identification runs");
     assert_eq!(id.report.verdict, "none", "{:?}", id.report.steps);
     assert_eq!(id.extended, truth);
 }

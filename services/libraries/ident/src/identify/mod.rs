@@ -457,9 +457,10 @@ pub fn identify(
     let span_s = (aligned.t.last().copied().unwrap_or(1.0)
         - aligned.t.first().copied().unwrap_or(0.0))
     .max(1e-9);
-    let with_terms = |fit_blocks: bool| {
-        let (fitted, not_carried) = unexplained::fitted_torque(&effects, span_s, fit_blocks);
-        let mut config = current.config.clone();
+    use unexplained::Coefficients;
+    let with_terms = |base: &ModelConfig, which: Coefficients| {
+        let (fitted, not_carried) = unexplained::fitted_torque(&effects, span_s, which);
+        let mut config = base.clone();
         if let Some(new) = &fitted {
             match config.effects.fitted_torque.as_mut() {
                 Some(old) => old.terms.extend(new.terms.iter().cloned()),
@@ -468,14 +469,18 @@ pub fn identify(
         }
         (config, fitted, not_carried)
     };
-    let (extended, fitted_torque, not_carried) = with_terms(false);
-    let (extended_fit_blocks, _, _) = with_terms(true);
+    let (mut extended, fitted_torque, not_carried) = with_terms(&current.config, Coefficients::All);
+    let (extended_fit_blocks, _, _) = with_terms(&current.config, Coefficients::FitBlocks);
     let extends = !selected.is_empty() || fitted_torque.is_some();
+    // With k-fold cross-validation each fold is predicted with the terms fitted without it,
+    // which needs the search's folds to be the selection's (same count, same blocks).
+    let fold_terms = options.folds == options.sparse.folds;
     let mut extension = report::ModelExtension {
-        gain_includes_fitted_torque: fitted_torque.is_some() && !cross_validated,
+        gain_includes_fitted_torque: fitted_torque.is_some() && (!cross_validated || fold_terms),
         fitted_torque,
         not_carried,
         gain_without_fitted_torque: None,
+        rejected: None,
     };
     // The extended model must load as it is written.
     ModelConfig::from_toml_str(&extended.to_toml_string(), "extended model")?;
@@ -483,7 +488,8 @@ pub fn identify(
     // Gain: cross-validated (each fold predicted by the named causes fitted without it) or on
     // the held-out blocks.
     let start = nominal.state.recon.start;
-    let (base_held, ext_held, held_fraction) = if !cross_validated {
+    // `named_only`: the same predictions without the fitted torque (when it is carried).
+    let (base_held, ext_held, held_fraction, named_only) = if !cross_validated {
         let held_fraction =
             held_out.iter().filter(|h| **h).count() as f64 / held_out.len().max(1) as f64;
         let spans = held_out_spans(&held_out, start);
@@ -499,19 +505,18 @@ pub fn identify(
         } else {
             base_held.clone()
         };
-        // What carrying the fitted torque adds: the gain of the named causes alone.
-        if extension.fitted_torque.is_some() {
-            let named_only = if selected.is_empty() {
-                base_held.clone()
-            } else {
-                predict::predict(&aligned, &current.state.recon, &current.config, &windows)?
-            };
-            extension.gain_without_fitted_torque = Some(
-                predict::Predictions::overall(&base_held.rms(|_| true))
-                    / predict::Predictions::overall(&named_only.rms(|_| true)),
-            );
-        }
-        (base_held, ext_held, held_fraction)
+        // What carrying the fitted torque adds: the named causes alone.
+        let named_only = match (&extension.fitted_torque, selected.is_empty()) {
+            (None, _) => None,
+            (Some(_), true) => Some(base_held.clone()),
+            (Some(_), false) => Some(predict::predict(
+                &aligned,
+                &current.state.recon,
+                &current.config,
+                &windows,
+            )?),
+        };
+        (base_held, ext_held, held_fraction, named_only)
     } else {
         let fold_windows: Vec<Vec<(usize, usize)>> = fold_masks
             .iter()
@@ -524,14 +529,16 @@ pub fn identify(
         let base_held = predict::predict(&aligned, &nominal.state.recon, model, &windows)?;
         let mut cv_nominal = crate::fit::ChannelRss::default();
         let mut cv_extended = crate::fit::ChannelRss::default();
-        let ext_held = if selected.is_empty() {
+        let carry = extension.gain_includes_fitted_torque;
+        let (ext_held, named_only) = if !extends {
             for f in &nominal_folds {
                 cv_nominal.add(&f.evaluation.held_out);
             }
             cv_extended = cv_nominal;
-            base_held.clone()
+            (base_held.clone(), None)
         } else {
             let mut parts = Vec::with_capacity(folds.len());
+            let mut parts_without_terms = Vec::with_capacity(folds.len());
             for (j, fold) in folds.iter().enumerate() {
                 let warm_j = if sensor_dropped {
                     HashMap::new()
@@ -539,22 +546,64 @@ pub fn identify(
                     sensor_warm(&current_folds[j])
                 };
                 cv_nominal.add(&nominal_folds[j].evaluation.held_out);
-                let fit_j = fold.fit(&selected, &warm_j)?;
+                let fit_j = if selected.is_empty() {
+                    nominal_folds[j].clone()
+                } else {
+                    fold.fit(&selected, &warm_j)?
+                };
                 cv_extended.add(&fit_j.evaluation.held_out);
-                parts.push(predict::predict(
+                let without_terms = predict::predict(
                     &aligned,
                     &fit_j.state.recon,
                     &fit_j.config,
                     &fold_windows[j],
-                )?);
+                )?;
+                if carry {
+                    let (config_j, _, _) = with_terms(&fit_j.config, Coefficients::WithoutFold(j));
+                    parts.push(predict::predict(
+                        &aligned,
+                        &fit_j.state.recon,
+                        &config_j,
+                        &fold_windows[j],
+                    )?);
+                    parts_without_terms.push(without_terms);
+                } else {
+                    parts.push(without_terms);
+                }
             }
-            predict::Predictions::merge(parts)
+            let named_only = carry.then(|| predict::Predictions::merge(parts_without_terms));
+            (predict::Predictions::merge(parts), named_only)
         };
         // The held-out channel sums reported are the cross-validated ones.
         nominal.evaluation.held_out = cv_nominal;
         current.evaluation.held_out = cv_extended;
-        (base_held, ext_held, held_fraction)
+        (base_held, ext_held, held_fraction, named_only)
     };
+    // The fitted torque stays in the extended model only if it improves the held-out
+    // prediction by at least 1 % (the sparse search's own bar); a term that stands in for a
+    // sensor-side effect (the torque channel is built on the filter's attitude) need not.
+    let overall = |p: &predict::Predictions| predict::Predictions::overall(&p.rms(|_| true));
+    let ext_held = match named_only {
+        Some(named_only) => {
+            let (with, without) = (overall(&ext_held), overall(&named_only));
+            let base = overall(&base_held);
+            extension.gain_without_fitted_torque = Some(base / without);
+            if with > without * (1.0 - MIN_EXTENSION_GAIN) {
+                extension.rejected = Some(format!(
+                    "the fitted torque is not carried into the extended model: it does not improve the held-out prediction by 1 % ({:.2}× without, {:.2}× with)",
+                    base / without,
+                    base / with
+                ));
+                extension.fitted_torque = None;
+                extended = current.config.clone();
+                named_only
+            } else {
+                ext_held
+            }
+        }
+        None => ext_held,
+    };
+    let extends = !selected.is_empty() || extension.fitted_torque.is_some();
 
     // Residual reports, nominal and extended.
     let all_spans = [(nominal.state.recon.start, aligned.len())];
@@ -668,6 +717,9 @@ pub fn identify(
         figures,
     })
 }
+
+/// Least relative drop of the held-out prediction's RMS for the fitted torque to be carried.
+const MIN_EXTENSION_GAIN: f64 = 0.01;
 
 /// Cross-validation of the set `set` over the folds: fitted on each fold's problem (sensor
 /// causes of the fold's current fit warm, `warm_of`), the sum over the folds of the held-out

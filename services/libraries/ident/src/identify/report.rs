@@ -227,6 +227,9 @@ pub struct ModelExtension {
     /// Held-out prediction gain of the named causes alone (without the fitted torque), to set
     /// against the extended model's.
     pub gain_without_fitted_torque: Option<f64>,
+    /// Why the unexplained torque terms were not carried (they did not improve the held-out
+    /// prediction).
+    pub rejected: Option<String>,
 }
 
 pub(super) fn summary(
@@ -321,9 +324,12 @@ pub(super) fn summary(
             f.terms.len(),
             match (extension.gain_includes_fitted_torque, extension.gain_without_fitted_torque) {
                 (true, Some(without)) => format!("the gain above includes them (without them: {without:.2}×)"),
-                _ => "with --folds the gain above leaves them out (the folds' predictions do not carry them yet)".to_string(),
+                _ => "the cross-validated gain above leaves them out (the search's folds differ from --folds)".to_string(),
             }
         ));
+    }
+    if let Some(why) = &extension.rejected {
+        out.push(format!("Model extension: {why}."));
     }
     if !extension.not_carried.is_empty() {
         out.push(format!(

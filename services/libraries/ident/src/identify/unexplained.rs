@@ -575,17 +575,27 @@ pub(super) fn column_name(col: usize) -> String {
     cause.value_name(off)
 }
 
+/// Which fit of a term's coefficient to use.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) enum Coefficients {
+    /// Fitted on all the data (the extended model written).
+    All,
+    /// Fitted without the held-out blocks (their prediction).
+    FitBlocks,
+    /// Fitted without the search's fold f (that fold's prediction).
+    WithoutFold(usize),
+}
+
 /// The torque-channel unexplained effects as a model extension, `[effects.fitted_torque]`:
 /// each term's function in the plant's form (identification's `t`, 0…1 over the record of
 /// `span_s` seconds, becomes `t_s` in seconds from its start, its coefficient divided by the
-/// span). With `fit_blocks` the coefficients fitted without the held-out blocks (for a held-out
-/// prediction), else those fitted on all the data. The second value lists the terms a forward
+/// span), with the coefficients `which` says. The second value lists the terms a forward
 /// simulation cannot carry (angular accelerations: an inertia change, `inertia_error`'s
 /// domain), as `equation: function`.
 pub(super) fn fitted_torque(
     effects: &[UnexplainedEffect],
     span_s: f64,
-    fit_blocks: bool,
+    which: Coefficients,
 ) -> (Option<FittedTorque>, Vec<String>) {
     let mut terms = Vec::new();
     let mut not_carried = Vec::new();
@@ -594,10 +604,12 @@ pub(super) fn fitted_torque(
             continue;
         };
         for term in &effect.terms {
-            let value = if fit_blocks {
-                term.value_fit_blocks
-            } else {
-                term.value
+            let value = match which {
+                Coefficients::All => term.value,
+                Coefficients::FitBlocks => term.value_fit_blocks,
+                Coefficients::WithoutFold(f) => {
+                    term.value_without_fold.get(f).copied().unwrap_or(f64::NAN)
+                }
             };
             let (name, per_unit) = match term.name.strip_prefix('t') {
                 Some(rest) if rest.is_empty() || rest.starts_with('·') => {
@@ -638,6 +650,7 @@ mod tests {
                     value: *value,
                     stderr: 0.1 * value.abs(),
                     value_fit_blocks: 0.5 * value,
+                    value_without_fold: vec![0.25 * value],
                 })
                 .collect(),
             refitted_named: Vec::new(),
@@ -659,7 +672,7 @@ mod tests {
             effect("torque_z", &[("1", 1e-3), ("sin 2ψ", 8e-4)]),
             effect("innovation_field_x", &[("B_x", 0.3)]),
         ];
-        let (fitted, not_carried) = fitted_torque(&effects, 600.0, false);
+        let (fitted, not_carried) = fitted_torque(&effects, 600.0, Coefficients::All);
         let fitted = fitted.expect("torque terms carried");
         let got: Vec<(&str, &str, f64)> = fitted
             .terms
@@ -677,11 +690,13 @@ mod tests {
         );
         assert_eq!(not_carried, ["torque_x: dw_x/dt"]);
         // The held-out prediction's values: fitted without the held-out blocks.
-        let (held, _) = fitted_torque(&effects, 600.0, true);
+        let (held, _) = fitted_torque(&effects, 600.0, Coefficients::FitBlocks);
         assert_eq!(held.expect("carried").terms[2].coefficient, 0.5e-3);
+        let (fold, _) = fitted_torque(&effects, 600.0, Coefficients::WithoutFold(0));
+        assert_eq!(fold.expect("carried").terms[2].coefficient, 0.25e-3);
         // Sensor effects alone: nothing to carry into the plant.
         assert_eq!(
-            fitted_torque(&effects[2..], 600.0, false),
+            fitted_torque(&effects[2..], 600.0, Coefficients::All),
             (None, Vec::new())
         );
     }

@@ -30,7 +30,23 @@ pub fn experiment_data(truth: &ModelConfig, seed: u64, duration_s: f64) -> Datas
 /// Identify blind: the data of `truth` against the nominal model.
 pub fn identify_blind(truth: &ModelConfig, seed: u64, duration_s: f64) -> Identification {
     let data = experiment_data(truth, seed, duration_s);
-    identify(&data, &nominal(), &Options::default()).expect("identification runs")
+    identify(&data, &nominal(), &options()).expect("identification runs")
+}
+
+/// The identification's options: the defaults, with `IDENT_FOLDS=K` in the environment k-fold
+/// cross-validation and `IDENT_CONSISTENCY_BLOCKS=B` the falsification's block count (to run a
+/// suite with other settings).
+pub fn options() -> Options {
+    let mut options = Options::default();
+    if let Ok(k) = std::env::var("IDENT_FOLDS") {
+        options.folds = k.parse().expect("IDENT_FOLDS: a number of folds");
+    }
+    if let Ok(k) = std::env::var("IDENT_CONSISTENCY_BLOCKS") {
+        options.consistency_blocks = k
+            .parse()
+            .expect("IDENT_CONSISTENCY_BLOCKS: a number of blocks");
+    }
+    options
 }
 
 /// Standard errors of a named cause, in the cause's value order (NaN where not estimated).
