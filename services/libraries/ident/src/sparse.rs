@@ -376,6 +376,8 @@ pub struct SparseResult {
     pub z_threshold: f64,
     /// Cross-validated RMS ratio, forced columns only / with the terms (1: nothing found).
     pub cv_gain: f64,
+    /// Cross-validated residual sum with the terms (of the forced columns alone if none).
+    pub cv_rss: f64,
     /// Held-out RMS ratio (fit on the fit blocks, evaluated on the held-out blocks); with no
     /// block held out, the cross-validated ratio `cv_gain`.
     pub held_out_gain: f64,
@@ -560,6 +562,7 @@ pub fn search(design: &Design, options: &SparseOptions) -> SparseResult {
         terms: (nf..active.len()).map(term).collect(),
         z_threshold,
         cv_gain,
+        cv_rss: cv,
         held_out_gain,
     }
 }

@@ -157,8 +157,13 @@ fn normal_equations(
     (ne, used)
 }
 
+/// How much better (relative drop of the cross-validated residual sum) a competing generic
+/// form must explain a named cause's part for the cause to be dropped: ties go to the library
+/// cause, the physical explanation.
+const COMPETITOR_MARGIN: f64 = 0.01;
+
 /// Settings of the tests.
-pub(super) struct Levels {
+pub(super) struct Levels<'a> {
     /// Disjoint time blocks of the consistency test.
     pub blocks: usize,
     /// Level of the consistency test.
@@ -167,9 +172,12 @@ pub(super) struct Levels {
     pub selection: f64,
     /// `N`: scalar residuals in the fit data.
     pub n_fit: f64,
+    /// The unexplained-effect search's blocks and settings (for the competing explanation).
+    pub block_s: f64,
+    pub sparse: &'a crate::sparse::SparseOptions,
 }
 
-impl Levels {
+impl Levels<'_> {
     /// The test of a cause beside the others: the likelihood ratio `n ln(RSS_without /
     /// RSS_with)` of `n` residuals, and the selection's threshold for its `k` parameters,
     /// `max(k ln N, χ²_k(1 − selection))`.
@@ -281,6 +289,24 @@ pub(super) fn test_causes(
                         );
                     }
                 }
+            }
+            // Third: no generic form of another kind explains the cause's part better.
+            if kept
+                && let Some((with, without)) = super::unexplained::competing_explanation(
+                    problem,
+                    fit,
+                    named,
+                    cause,
+                    candidates,
+                    levels.block_s,
+                    levels.sparse,
+                )
+                && without < with * (1.0 - COMPETITOR_MARGIN)
+            {
+                kept = false;
+                verdict = format!(
+                    "dropped: a form of another kind explains its part better (torque channel's cross-validated residual sum {without:.1} without it, {with:.1} with it); it stood in for that form"
+                );
             }
             if kept {
                 verdict = match &consistency {

@@ -374,6 +374,8 @@ pub fn identify(
                 consistency: options.consistency_alpha,
                 selection: options.alpha,
                 n_fit,
+                block_s: options.block_s,
+                sparse: &options.sparse,
             },
         );
         (effects, tests, joint)

@@ -235,11 +235,80 @@ fn search_torque(
     block_s: f64,
     options: &SparseOptions,
 ) -> Vec<UnexplainedEffect> {
+    search_torque_as(problem, fit, named, candidates, block_s, options, None).0
+}
+
+/// The competing explanation of a named torque cause: the torque search redone without it
+/// (its fitted part put back into the residual) and without the candidate functions that are
+/// the cause's own form (`1` for a constant torque, the tilt terms for a centre-of-mass offset,
+/// rates for drag, accelerations and rate products for the inertia), against the search with
+/// it. Returns the cross-validated residual sums (whitened, summed over the three axes) with
+/// and without the cause: a cause whose part a generic form of another kind explains better
+/// stood in for that form.
+pub(super) fn competing_explanation(
+    problem: &Problem,
+    fit: &SetFit,
+    named: &[Cause],
+    cause: Cause,
+    candidates: &TorqueCandidates,
+    block_s: f64,
+    options: &SparseOptions,
+) -> Option<(f64, f64)> {
+    let (_, with) = search_torque_as(problem, fit, named, candidates, block_s, options, None);
+    let others: Vec<Cause> = named.iter().copied().filter(|c| *c != cause).collect();
+    let (_, without) = search_torque_as(
+        problem,
+        fit,
+        &others,
+        candidates,
+        block_s,
+        options,
+        Some(cause),
+    );
+    Some((with?, without?))
+}
+
+/// The cause's own form among the torque candidates (excluded from its competitor).
+fn own_form(cause: Cause) -> &'static [&'static str] {
+    match cause {
+        Cause::ConstantTorque => &["1"],
+        Cause::ComOffset => &["1", "sin tilt_x", "sin tilt_y"],
+        Cause::AeroDrag => &["w_x", "w_y", "w_z", "w_x·|w_x|", "w_y·|w_y|", "w_z·|w_z|"],
+        Cause::InertiaError => &[
+            "dw_x/dt", "dw_y/dt", "dw_z/dt", "w_x·w_y", "w_y·w_z", "w_z·w_x",
+        ],
+        _ => &[],
+    }
+}
+
+/// The torque search; with `removed` the residual has that cause's fitted part put back and
+/// its own form is not a candidate. Also the cross-validated residual sum over the axes,
+/// whitened by each axis's noise (`None` if the channel is too short).
+fn search_torque_as(
+    problem: &Problem,
+    fit: &SetFit,
+    named: &[Cause],
+    candidates: &TorqueCandidates,
+    block_s: f64,
+    options: &SparseOptions,
+    removed: Option<Cause>,
+) -> (Vec<UnexplainedEffect>, Option<f64>) {
     let data = problem.data;
     let ch = &fit.state.torque;
     if ch.len() < 30 {
-        return Vec::new();
+        return (Vec::new(), None);
     }
+    let mut delta = fit.torque_delta;
+    if let Some(range) = removed.and_then(torque_columns) {
+        for d in &mut delta[range] {
+            *d = 0.0;
+        }
+    }
+    let excluded: &[&str] = removed.map_or(&[], own_form);
+    let kept_candidates: Vec<usize> = (0..candidates.names.len())
+        .filter(|&j| !excluded.contains(&candidates.names[j]))
+        .collect();
+    let mut cv_total = 0.0;
     let named_cols: Vec<usize> = named
         .iter()
         .filter(|c| c.kind() == Kind::Torque)
@@ -264,16 +333,20 @@ fn search_torque(
             .filter(|&c| ch.x.iter().any(|row| row[c][axis] != 0.0))
             .collect();
         let mut names: Vec<String> = forced.iter().map(|&c| column_name(c)).collect();
-        names.extend(candidates.names.iter().map(|n| n.to_string()));
+        names.extend(
+            kept_candidates
+                .iter()
+                .map(|&j| candidates.names[j].to_string()),
+        );
         let x: Vec<Vec<f64>> = (0..ch.len())
             .map(|r| {
                 let mut row: Vec<f64> = forced.iter().map(|&c| ch.x[r][c][axis]).collect();
-                row.extend(&candidates.values[r]);
+                row.extend(kept_candidates.iter().map(|&j| candidates.values[r][j]));
                 row
             })
             .collect();
         let y: Vec<f64> = (0..ch.len())
-            .map(|r| ch.whitened(r, &fit.torque_delta)[axis] * ch.sigma[axis])
+            .map(|r| ch.whitened(r, &delta)[axis] * ch.sigma[axis])
             .collect();
         let rows = Rows {
             x: &x,
@@ -284,6 +357,7 @@ fn search_torque(
         };
         let design = Design::new(names, forced.len(), rows, options.folds);
         let result = search(&design, options);
+        cv_total += result.cv_rss / (ch.sigma[axis] * ch.sigma[axis]);
         if let Some(e) = effect(
             format!("torque_{}", "xyz".as_bytes()[axis] as char),
             "Nm",
@@ -293,7 +367,7 @@ fn search_torque(
             out.push(e);
         }
     }
-    out
+    (out, Some(cv_total))
 }
 
 /// Per filter innovation (all ticks, in the reconstruction's order): the sensor-channel
