@@ -1,0 +1,241 @@
+//! Experiment design (`testbed_ident::design`, issue 17 item 5): the designed programme against
+//! the default one, predicted and measured.
+//!
+//! The measured comparison hides three causes in the truth (a centre-of-mass offset, an inertia
+//! error and a wheel torque scale), designs the programme on the nominal model (what a lab user
+//! has before identifying), runs both programmes on the truth for fixed seeds and identifies
+//! each blind; it compares the standard errors identify reports and the actual errors. Ignored
+//! (two identifications per seed): run with
+//! `cargo test --release -p testbed-ident --test design -- --ignored --nocapture`; the table in
+//! `docs/measured-data.md` ("Experiment design") is its output.
+
+mod common;
+use common::*;
+use testbed_ident::design::{self, DesignOptions};
+use testbed_ident::experiment::{self, ExperimentOptions};
+use testbed_ident::{Cause, Options, identify};
+
+fn rms(v: &[f64]) -> f64 {
+    (v.iter().map(|x| x * x).sum::<f64>() / v.len().max(1) as f64).sqrt()
+}
+
+/// The hidden truth of the measured comparison, one cause of each target of the default design:
+/// 0.3 µm / −0.2 µm horizontal and 0.5 µm pendulous centre-of-mass offset (about 1.2 mNm of
+/// gravity torque level: the wheels hold it for the 600 s of both programmes), a constant
+/// torque of 0.4, −0.3 and 0.2 mNm, inertia errors of 3, −2 and 4 %, wheel torque scales of
+/// 0.95, 1.04 and 0.97.
+const TRUTH: &str = "[effects.com_offset]\nr_m = [3.0e-7, -2.0e-7, -5.0e-7]\n\
+[effects.constant_torque]\ntorque_nm = [4.0e-4, -3.0e-4, 2.0e-4]\n\
+[effects.inertia_error]\nfraction = [0.03, -0.02, 0.04]\n\
+[effects.wheel_torque_scale]\nscale = [0.95, 1.04, 0.97]\n";
+
+const SEEDS: [u64; 8] = [51, 52, 53, 54, 55, 56, 57, 58];
+
+/// The targeted parameters hidden in the truth: (cause, value offset).
+fn hidden() -> Vec<(Cause, usize)> {
+    [
+        Cause::ComOffset,
+        Cause::ConstantTorque,
+        Cause::InertiaError,
+        Cause::WheelTorqueScale,
+    ]
+    .into_iter()
+    .flat_map(|c| (0..3).map(move |i| (c, i)))
+    .collect()
+}
+
+/// Reported standard errors and actual errors of the hidden parameters (NaN where the cause
+/// was not named), and the causes named.
+fn measure(options: &ExperimentOptions) -> (Vec<f64>, Vec<f64>, Vec<&'static str>, usize) {
+    let truth = truth(TRUTH);
+    let (data, trace) = experiment::run(&truth, options).expect("experiment runs");
+    let id = identify(&data, &nominal(), &Options::default()).expect("identification runs");
+    let named = names(&id);
+    let mut se = Vec::new();
+    let mut err = Vec::new();
+    for (cause, i) in hidden() {
+        if named.contains(&cause.name()) {
+            se.push(stderr(&id, cause)[i]);
+            err.push(cause.values(&id.extended)[i] - cause.values(&truth)[i]);
+        } else {
+            se.push(f64::NAN);
+            err.push(f64::NAN);
+        }
+    }
+    (se, err, named, trace.tilt_stops.len())
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+#[test]
+fn the_search_beats_the_default_within_the_limits() {
+    // About 50 closed-loop simulations of 600 s: a few seconds in a release build.
+    let settings = DesignOptions::default();
+    let d =
+        design::design(&nominal(), &ExperimentOptions::default(), &settings).expect("design runs");
+    println!(
+        "{} simulated, {} rejected; log det {:.2} -> {:.2}; {:?}",
+        d.evaluated,
+        d.rejected,
+        d.baseline.criterion.log_det,
+        d.chosen.criterion.log_det,
+        d.chosen.options
+    );
+    assert!(d.baseline.admissible(), "{:?}", d.baseline.rejected);
+    assert!(d.chosen.admissible());
+    assert_eq!(d.chosen.criterion.unidentified, 0);
+    assert!(d.chosen.criterion.log_det >= d.baseline.criterion.log_det);
+    assert!(d.chosen.tilt_stop_strikes == 0);
+    assert!(d.chosen.max_tilt_deg <= 30.0 - settings.limits.tilt_margin_deg);
+    assert!(d.chosen.max_wheel_speed_fraction <= settings.limits.wheel_speed_fraction);
+    assert_eq!(d.chosen.options.duration_s, 600.0);
+    // Some candidates broke a limit (the grids reach past them) and were not chosen.
+    assert!(d.rejected > 0);
+    // Deterministic: the chosen programme evaluated again gives the same criterion.
+    let again = design::evaluate(&nominal(), &d.chosen.options, &settings).expect("evaluates");
+    assert_eq!(again.criterion, d.chosen.criterion);
+    assert_eq!(d.parameters.len(), d.chosen.stderr.len());
+    assert!(d.chosen.stderr.iter().all(|s| s.is_finite() && *s > 0.0));
+}
+
+#[test]
+fn a_programme_past_the_wheel_limit_is_rejected() {
+    // 0.9 °/s of heading slew needs about 1 Nms on the Z wheel: past 85 % of its speed.
+    let fast = ExperimentOptions {
+        heading_rate_deg_s: 0.9,
+        ..ExperimentOptions::default()
+    };
+    let e = design::evaluate(&nominal(), &fast, &DesignOptions::default()).expect("evaluates");
+    println!(
+        "{:?}, wheel at {:.2}",
+        e.rejected, e.max_wheel_speed_fraction
+    );
+    assert!(!e.admissible());
+    assert!(e.max_wheel_speed_fraction > 0.85);
+    assert!(e.rejected.as_deref().is_some_and(|r| r.contains("wheel")));
+}
+
+#[test]
+#[ignore]
+fn designed_programme_reduces_the_standard_errors() {
+    let settings = DesignOptions::default();
+    let baseline = ExperimentOptions::default();
+    let d = design::design(&nominal(), &baseline, &settings).expect("design runs");
+    println!(
+        "design: {} candidates simulated ({} rejected), {} passes",
+        d.evaluated, d.rejected, d.passes
+    );
+    println!("default:  {:?}", d.baseline.options);
+    println!("designed: {:?}", d.chosen.options);
+    println!(
+        "log det: default {:.2}, designed {:.2}",
+        d.baseline.criterion.log_det, d.chosen.criterion.log_det
+    );
+    // What the search guarantees: the baseline is a candidate and only a better admissible
+    // candidate replaces it.
+    assert_eq!(d.chosen.criterion.unidentified, 0);
+    assert!(d.chosen.criterion.log_det >= d.baseline.criterion.log_det);
+    assert!(d.chosen.admissible());
+
+    let params = hidden();
+    let index = |c: Cause, i: usize| {
+        d.parameters
+            .iter()
+            .position(|p| *p == c.value_name(i))
+            .expect("hidden parameter among the targets")
+    };
+    let n = params.len();
+    // Per parameter, over the seeds in which both programmes named its cause.
+    let (mut se_a, mut se_b, mut ratio) = (vec![vec![]; n], vec![vec![]; n], vec![vec![]; n]);
+    let (mut err_a, mut err_b) = (vec![vec![]; n], vec![vec![]; n]);
+    let (mut all_a, mut all_b) = (0, 0);
+    for seed in SEEDS {
+        let a = measure(&ExperimentOptions {
+            seed,
+            ..d.baseline.options.clone()
+        });
+        let b = measure(&ExperimentOptions {
+            seed,
+            ..d.chosen.options.clone()
+        });
+        println!(
+            "seed {seed}: default names {:?} ({} stop strikes), designed names {:?} ({} stop strikes)",
+            a.2, a.3, b.2, b.3
+        );
+        all_a += usize::from(a.0.iter().all(|s| s.is_finite()));
+        all_b += usize::from(b.0.iter().all(|s| s.is_finite()));
+        for k in 0..n {
+            if a.0[k].is_finite() && b.0[k].is_finite() {
+                se_a[k].push(a.0[k]);
+                se_b[k].push(b.0[k]);
+                ratio[k].push(b.0[k] / a.0[k]);
+                err_a[k].push(a.1[k]);
+                err_b[k].push(b.1[k]);
+            }
+        }
+    }
+    println!(
+        "every hidden cause named: default {all_a} of {} seeds, designed {all_b}",
+        SEEDS.len()
+    );
+    println!(
+        "| parameter | SE default, predicted | SE default, reported (median) | SE designed, predicted | SE designed, reported (median) | ratio predicted | ratio reported (median) | RMS error default | RMS error designed |"
+    );
+    println!("|---|---|---|---|---|---|---|---|---|");
+    let (mut norm_a, mut norm_b) = (Vec::new(), Vec::new());
+    for (k, &(c, i)) in params.iter().enumerate() {
+        let j = index(c, i);
+        let (pa, pb) = (d.baseline.stderr[j], d.chosen.stderr[j]);
+        let (ma, mb, mr) = (
+            median(se_a[k].clone()),
+            median(se_b[k].clone()),
+            median(ratio[k].clone()),
+        );
+        println!(
+            "| `{}` | {pa:.2e} | {ma:.2e} | {pb:.2e} | {mb:.2e} | {:.2} | {mr:.2} | {:.2e} | {:.2e} |",
+            c.value_name(i),
+            pb / pa,
+            rms(&err_a[k]),
+            rms(&err_b[k])
+        );
+        let typical = design::typical_magnitude(c, i);
+        norm_a.extend(err_a[k].iter().map(|e| e / typical));
+        norm_b.extend(err_b[k].iter().map(|e| e / typical));
+        // The information is the fits' own normal equations: the standard errors identify
+        // reports (residual-scaled) are within a third of the prediction.
+        assert!(
+            ratio[k].len() >= SEEDS.len() / 2,
+            "{}: too few seeds",
+            c.value_name(i)
+        );
+        for (m, p) in [(ma, pa), (mb, pb)] {
+            assert!(
+                (0.75..=1.33).contains(&(m / p)),
+                "{}: reported {m:.3e} against predicted {p:.3e}",
+                c.value_name(i)
+            );
+        }
+        // The measured reduction is the predicted one within 25 %, and a reduction wherever
+        // the prediction promises one of at least 20 % (the D-criterion improves the
+        // determinant, not every parameter: constant_torque Z is left as it was).
+        assert!(mr <= 1.25 * pb / pa, "{}: ratio {mr:.2}", c.value_name(i));
+        if pb / pa < 0.8 {
+            assert!(mr < 1.0, "{}: ratio {mr:.2}", c.value_name(i));
+        }
+    }
+    let (ra, rb) = (rms(&norm_a), rms(&norm_b));
+    println!(
+        "RMS actual error over every hidden parameter and seed, in typical magnitudes: default {ra:.3}, designed {rb:.3}"
+    );
+    // Standard errors a half to a quarter of the default's: the actual errors must follow.
+    assert!(rb < ra);
+    assert!(all_b >= all_a);
+}
