@@ -123,21 +123,28 @@ fn a_programme_past_the_wheel_limit_is_rejected() {
     assert!(e.rejected.as_deref().is_some_and(|r| r.contains("wheel")));
 }
 
-#[test]
-#[ignore]
-fn designed_programme_reduces_the_standard_errors() {
-    let settings = DesignOptions::default();
+/// Design on the nominal model with `settings`, then run the default and the designed
+/// programmes on the truth for every seed and identify each blind; print the table and check
+/// what the design guarantees. `exact`: the targets are exactly the hidden causes, so the
+/// predicted standard errors are those of the fit identify makes (otherwise the prediction
+/// also estimates target causes identify does not fit, which changes some errors).
+fn compare(label: &str, settings: &DesignOptions, exact: bool) {
     let baseline = ExperimentOptions::default();
-    let d = design::design(&nominal(), &baseline, &settings).expect("design runs");
+    let d = design::design(&nominal(), &baseline, settings).expect("design runs");
     println!(
-        "design: {} candidates simulated ({} rejected), {} passes",
+        "## {label}: {} candidates simulated ({} rejected), {} passes",
         d.evaluated, d.rejected, d.passes
     );
     println!("default:  {:?}", d.baseline.options);
     println!("designed: {:?}", d.chosen.options);
     println!(
-        "log det: default {:.2}, designed {:.2}",
-        d.baseline.criterion.log_det, d.chosen.criterion.log_det
+        "log det: default {:.2}, designed {:.2}; max tilt {:.1}° -> {:.1}°, max wheel speed {:.0} % -> {:.0} %",
+        d.baseline.criterion.log_det,
+        d.chosen.criterion.log_det,
+        d.baseline.max_tilt_deg,
+        d.chosen.max_tilt_deg,
+        100.0 * d.baseline.max_wheel_speed_fraction,
+        100.0 * d.chosen.max_wheel_speed_fraction
     );
     // What the search guarantees: the baseline is a candidate and only a better admissible
     // candidate replaces it.
@@ -156,7 +163,7 @@ fn designed_programme_reduces_the_standard_errors() {
     // Per parameter, over the seeds in which both programmes named its cause.
     let (mut se_a, mut se_b, mut ratio) = (vec![vec![]; n], vec![vec![]; n], vec![vec![]; n]);
     let (mut err_a, mut err_b) = (vec![vec![]; n], vec![vec![]; n]);
-    let (mut all_a, mut all_b) = (0, 0);
+    let (mut all_a, mut all_b, mut strikes) = (0, 0, 0);
     for seed in SEEDS {
         let a = measure(&ExperimentOptions {
             seed,
@@ -170,6 +177,7 @@ fn designed_programme_reduces_the_standard_errors() {
             "seed {seed}: default names {:?} ({} stop strikes), designed names {:?} ({} stop strikes)",
             a.2, a.3, b.2, b.3
         );
+        strikes += a.3 + b.3;
         all_a += usize::from(a.0.iter().all(|s| s.is_finite()));
         all_b += usize::from(b.0.iter().all(|s| s.is_finite()));
         for k in 0..n {
@@ -183,7 +191,7 @@ fn designed_programme_reduces_the_standard_errors() {
         }
     }
     println!(
-        "every hidden cause named: default {all_a} of {} seeds, designed {all_b}",
+        "every hidden cause named: default {all_a} of {} seeds, designed {all_b}; tilt-stop strikes {strikes}",
         SEEDS.len()
     );
     println!(
@@ -206,36 +214,59 @@ fn designed_programme_reduces_the_standard_errors() {
             rms(&err_a[k]),
             rms(&err_b[k])
         );
-        let typical = design::typical_magnitude(c, i);
-        norm_a.extend(err_a[k].iter().map(|e| e / typical));
-        norm_b.extend(err_b[k].iter().map(|e| e / typical));
-        // The information is the fits' own normal equations: the standard errors identify
-        // reports (residual-scaled) are within a third of the prediction.
+        // Each parameter's errors in units of its predicted standard error on the default
+        // programme: every parameter weighs the same.
+        norm_a.extend(err_a[k].iter().map(|e| e / pa));
+        norm_b.extend(err_b[k].iter().map(|e| e / pa));
         assert!(
             ratio[k].len() >= SEEDS.len() / 2,
             "{}: too few seeds",
             c.value_name(i)
         );
-        for (m, p) in [(ma, pa), (mb, pb)] {
-            assert!(
-                (0.75..=1.33).contains(&(m / p)),
-                "{}: reported {m:.3e} against predicted {p:.3e}",
-                c.value_name(i)
-            );
+        if exact {
+            // The information is the fits' own normal equations: the standard errors identify
+            // reports (residual-scaled) are within a third of the prediction, and the measured
+            // reduction is the predicted one within 25 %.
+            for (m, p) in [(ma, pa), (mb, pb)] {
+                assert!(
+                    (0.75..=1.33).contains(&(m / p)),
+                    "{}: reported {m:.3e} against predicted {p:.3e}",
+                    c.value_name(i)
+                );
+            }
+            assert!(mr <= 1.25 * pb / pa, "{}: ratio {mr:.2}", c.value_name(i));
         }
-        // The measured reduction is the predicted one within 25 %, and a reduction wherever
-        // the prediction promises one of at least 20 % (the D-criterion improves the
-        // determinant, not every parameter: constant_torque Z is left as it was).
-        assert!(mr <= 1.25 * pb / pa, "{}: ratio {mr:.2}", c.value_name(i));
+        // A reduction wherever the prediction promises one of at least 20 % (the D-criterion
+        // improves the determinant, not every parameter).
         if pb / pa < 0.8 {
             assert!(mr < 1.0, "{}: ratio {mr:.2}", c.value_name(i));
         }
     }
     let (ra, rb) = (rms(&norm_a), rms(&norm_b));
     println!(
-        "RMS actual error over every hidden parameter and seed, in typical magnitudes: default {ra:.3}, designed {rb:.3}"
+        "RMS actual error over every hidden parameter and seed, in predicted standard errors of the default programme: default {ra:.2}, designed {rb:.2}"
     );
-    // Standard errors a half to a quarter of the default's: the actual errors must follow.
+    // Smaller standard errors: the actual errors must follow (over 8 seeds × 12 parameters;
+    // the default's should be near 1 if its standard errors are calibrated).
     assert!(rb < ra);
     assert!(all_b >= all_a);
+}
+
+#[test]
+#[ignore]
+fn designed_programme_reduces_the_standard_errors() {
+    // Designed for exactly the hidden causes: predicted and reported standard errors compare
+    // one to one.
+    let exact = DesignOptions {
+        targets: vec![
+            Cause::ComOffset,
+            Cause::ConstantTorque,
+            Cause::InertiaError,
+            Cause::WheelTorqueScale,
+        ],
+        ..DesignOptions::default()
+    };
+    compare("targets = the hidden causes", &exact, true);
+    // The default targets (what `testbed experiment --design` uses): friction too.
+    compare("default targets", &DesignOptions::default(), false);
 }

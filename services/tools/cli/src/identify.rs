@@ -61,9 +61,8 @@ pub struct ExperimentArgs {
     /// errors, then run the designed programme.
     #[arg(long)]
     design: bool,
-    /// Causes the design targets (comma-separated; torque causes other than the thrusters', and
-    /// wheel_torque_scale); default com_offset, constant_torque, inertia_error,
-    /// wheel_torque_scale.
+    /// Causes the design targets (comma-separated: com_offset, constant_torque, aero_drag,
+    /// inertia_error, wheel_torque_scale, wheel_friction); default all but aero_drag.
     #[arg(long, value_delimiter = ',', requires = "design")]
     targets: Vec<String>,
 }

@@ -4,6 +4,10 @@
 //! left out). For noise as modelled (whitened rows of unit variance) `F⁻¹` is the covariance
 //! the fits report, so `sqrt(diag F⁻¹)` predicts their standard errors.
 //!
+//! A wheel that never changes direction leaves the Coulomb level of the other direction with no
+//! information: the matrix is singular there, which the design counts as an undetermined
+//! direction.
+//!
 //! The torque channel and the wheel channel have independent noise (gyro through the inertia
 //! and tachometer, against tachometer alone) and are fitted separately: the information is
 //! block-diagonal between them. Sensor causes are not covered: their Jacobians are finite
@@ -30,30 +34,43 @@ pub struct Information {
 }
 
 /// Whether the information of `cause` can be computed ([`Problem::information`]): the torque
-/// causes other than the thrusters' (those need a thruster programme) and `wheel_torque_scale`.
+/// causes other than the thrusters' (those need a thruster programme), `wheel_torque_scale`
+/// and `wheel_friction`'s linear levels.
 pub fn information_supported(cause: Cause) -> bool {
     match cause.kind() {
         Kind::Torque => !matches!(
             cause,
             Cause::ThrusterTorqueScale | Cause::PropellantComShift
         ),
-        Kind::Wheel => cause == Cause::WheelTorqueScale,
+        Kind::Wheel => matches!(cause, Cause::WheelTorqueScale | Cause::WheelFriction),
         Kind::Sensor => false,
+    }
+}
+
+/// The values of `cause` ([`Cause::values`] offsets) the information covers: all of them,
+/// except for `wheel_friction` its linear levels only (`coulomb_pos_nm`, `coulomb_neg_nm`,
+/// `viscous_nm_per_rad_s`: offsets 0–8); the Stribeck level and speed enter non-linearly (the
+/// fit searches the speed) and are left out.
+pub fn information_params(cause: Cause) -> std::ops::Range<usize> {
+    match cause {
+        Cause::WheelFriction => 0..9,
+        _ => 0..cause.len(),
     }
 }
 
 impl Problem<'_> {
     /// The Fisher information of the parameters of `causes` on `state` (normally the base
     /// configuration's state): torque causes jointly from the torque channel's normal
-    /// equations, `wheel_torque_scale` per wheel from the wheel channel's (friction and delay
-    /// held at the base configuration's values, as when they are not fitted). Causes in the
-    /// order given, each cause's values in [`Cause::values`] order.
+    /// equations, `wheel_torque_scale` and `wheel_friction`'s levels per wheel from the wheel
+    /// channel's (delay, and friction when not a target, held at the base configuration's
+    /// values, as when they are not fitted). Causes in the order given, each cause's values
+    /// ([`information_params`]) in [`Cause::values`] order.
     pub fn information(&self, state: &State, causes: &[Cause]) -> Result<Information, IdentError> {
         if let Some(c) = causes.iter().find(|c| !information_supported(**c)) {
             return Err(IdentError::Options {
                 key: "causes".into(),
                 value: c.name().into(),
-                reason: "no Fisher information for this cause (only the torque causes other than the thrusters' and wheel_torque_scale)".into(),
+                reason: "no Fisher information for this cause (only the torque causes other than the thrusters', wheel_torque_scale and wheel_friction)".into(),
             });
         }
         let mut params: Vec<(Cause, usize)> = Vec::new();
@@ -61,7 +78,7 @@ impl Problem<'_> {
             if params.iter().any(|(p, _)| *p == c) {
                 continue;
             }
-            params.extend((0..c.len()).map(|i| (c, i)));
+            params.extend(information_params(c).map(|i| (c, i)));
         }
         let p = params.len();
         let mut matrix = DMatrix::zeros(p, p);
@@ -84,23 +101,40 @@ impl Problem<'_> {
                 }
             }
         }
-        // Wheel block: one scale per wheel, independent of the others.
-        if let Some(j0) = params
-            .iter()
-            .position(|(c, _)| *c == Cause::WheelTorqueScale)
-        {
+        // Wheel block: per wheel, its scale and friction levels (the unknowns
+        // `[scale, coulomb_pos, coulomb_neg, stribeck, viscous]` of the wheel fit, Stribeck
+        // term off), independent of the other wheels.
+        let fit_scale = params.iter().any(|(c, _)| *c == Cause::WheelTorqueScale);
+        let fit_friction = params.iter().any(|(c, _)| *c == Cause::WheelFriction);
+        if fit_scale || fit_friction {
             let base = WheelModel::from_config(&self.base);
+            let index = |c: Cause, off: usize| params.iter().position(|p| *p == (c, off));
             for w in 0..3 {
                 let (ne, _) = self.wheel_normal_equations(
                     &state.wheel,
                     &base,
                     w,
                     base.delay_s,
-                    true,
-                    false,
+                    fit_scale,
+                    fit_friction,
                     None,
                 );
-                matrix[(j0 + w, j0 + w)] = ne.diag(0);
+                let f = ne.information();
+                // (unknown of the wheel fit, parameter index)
+                let map: Vec<(usize, usize)> = [
+                    (0, index(Cause::WheelTorqueScale, w)),
+                    (1, index(Cause::WheelFriction, w)),
+                    (2, index(Cause::WheelFriction, 3 + w)),
+                    (4, index(Cause::WheelFriction, 6 + w)),
+                ]
+                .into_iter()
+                .filter_map(|(u, j)| j.map(|j| (u, j)))
+                .collect();
+                for &(ua, ja) in &map {
+                    for &(ub, jb) in &map {
+                        matrix[(ja, jb)] = f[(ua, ub)];
+                    }
+                }
             }
         }
         Ok(Information { params, matrix })

@@ -33,7 +33,7 @@ mod torque;
 mod wheels;
 
 pub use hard_iron::sphere_fit;
-pub use information::{Information, information_supported};
+pub use information::{Information, information_params, information_supported};
 pub use wheels::WheelModel;
 
 use crate::channels::{TORQUE_COLUMNS, TorqueChannel, WheelChannel};
