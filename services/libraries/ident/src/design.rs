@@ -37,10 +37,11 @@
 //! evaluated candidates are cached. The search finds a coordinate-wise optimum on the grid,
 //! not necessarily the global one.
 //!
-//! Covered causes: the torque causes (centre-of-mass offset, constant torque, drag, inertia
-//! error), `wheel_torque_scale` and the linear levels of `wheel_friction`
-//! ([`information_supported`]); sensor causes are not (their Jacobians go through the attitude
-//! filter, a filter run per parameter and candidate).
+//! Covered causes ([`information_supported`]): the torque causes (centre-of-mass offset,
+//! constant torque, drag, inertia error), `wheel_torque_scale` and the linear levels of
+//! `wheel_friction` (from the fits' normal equations), and the sensor causes (gyro scale and
+//! misalignment, Earth rate, hard iron: from the Jacobian of the filter's innovations by
+//! forward differences, one more filter run per parameter and candidate).
 
 use crate::data::Aligned;
 use crate::effects::Cause;
@@ -171,8 +172,8 @@ impl Variable {
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct DesignOptions {
     /// Causes whose parameters the programme should determine ([`information_supported`]);
-    /// default: com_offset, constant_torque, inertia_error, wheel_torque_scale and
-    /// wheel_friction (its linear levels); `aero_drag` can be added.
+    /// default: every cause the design covers (all but the actuator delay and the thrusters'
+    /// causes; friction's linear levels).
     pub targets: Vec<Cause>,
     pub limits: DesignLimits,
     pub space: DesignSpace,
@@ -187,13 +188,10 @@ pub struct DesignOptions {
 impl Default for DesignOptions {
     fn default() -> Self {
         Self {
-            targets: vec![
-                Cause::ComOffset,
-                Cause::ConstantTorque,
-                Cause::InertiaError,
-                Cause::WheelTorqueScale,
-                Cause::WheelFriction,
-            ],
+            targets: Cause::ALL
+                .into_iter()
+                .filter(|c| information_supported(*c))
+                .collect(),
             limits: DesignLimits::default(),
             space: DesignSpace::default(),
             passes: 2,
@@ -219,7 +217,7 @@ impl DesignOptions {
             return bad(
                 "targets",
                 c.name().into(),
-                "not covered by the design (torque causes other than the thrusters', wheel_torque_scale, wheel_friction)",
+                "not covered by the design (the thrusters' causes need the thruster programme; of the wheel causes only wheel_torque_scale and wheel_friction)",
             );
         }
         let l = &self.limits;
@@ -255,7 +253,8 @@ impl DesignOptions {
 /// platform), 0.1 mNm of constant torque, 1e-3 Nm/(rad/s) and 1e-2 Nm/(rad/s)² of drag, 1 % of
 /// a principal moment and 0.5 kg m² of product of inertia (1 % of the default moments), 1 % of
 /// wheel torque scale, 0.1 mNm of Coulomb friction and 1e-7 Nm/(rad/s) of viscous friction
-/// (7 % and 3 % of the default wheels'); 1 for anything else.
+/// (7 % and 3 % of the default wheels'), 100 ppm of gyro scale, 0.1 mrad of gyro
+/// misalignment, 1° of latitude (Earth rate), 0.01 G (1 µT) of hard iron; 1 for anything else.
 pub fn typical_magnitude(cause: Cause, i: usize) -> f64 {
     match cause {
         Cause::ComOffset => 1e-6,
@@ -275,6 +274,10 @@ pub fn typical_magnitude(cause: Cause, i: usize) -> f64 {
             }
         }
         Cause::WheelTorqueScale => 0.01,
+        Cause::GyroScale => 100.0,
+        Cause::GyroMisalignment => 1e-4,
+        Cause::EarthRate => 1.0,
+        Cause::MagneticDisturbance => 0.01,
         Cause::WheelFriction => {
             if i < 6 {
                 1e-4
@@ -709,12 +712,12 @@ mod tests {
     fn settings_are_validated() {
         let ok = DesignOptions::default();
         assert!(ok.validate().is_ok());
-        let sensor = DesignOptions {
-            targets: vec![Cause::GyroScale],
+        let thrusters = DesignOptions {
+            targets: vec![Cause::ThrusterTorqueScale],
             ..DesignOptions::default()
         };
         assert!(matches!(
-            sensor.validate(),
+            thrusters.validate(),
             Err(DesignError::Options { key, .. }) if key == "targets"
         ));
         let mut wheel = DesignOptions::default();

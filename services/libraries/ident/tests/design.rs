@@ -14,6 +14,7 @@ use common::*;
 use testbed_ident::design::{self, DesignOptions};
 use testbed_ident::experiment::{self, ExperimentOptions};
 use testbed_ident::{Cause, Options, identify};
+use testbed_model::ModelConfig;
 
 fn rms(v: &[f64]) -> f64 {
     (v.iter().map(|x| x * x).sum::<f64>() / v.len().max(1) as f64).sqrt()
@@ -29,34 +30,49 @@ const TRUTH: &str = "[effects.com_offset]\nr_m = [3.0e-7, -2.0e-7, -5.0e-7]\n\
 [effects.inertia_error]\nfraction = [0.03, -0.02, 0.04]\n\
 [effects.wheel_torque_scale]\nscale = [0.95, 1.04, 0.97]\n";
 
-const SEEDS: [u64; 8] = [51, 52, 53, 54, 55, 56, 57, 58];
+/// The sensor-side truth: hard iron (0.08, −0.05, 0.1) G, gyro scale (500, −700, 900) ppm and
+/// the Earth rate at 43.88° N, the magnitudes of the library's tests.
+const SENSOR_TRUTH: &str = "[effects.magnetic_disturbance]\nhard_iron_gauss = [0.08, -0.05, 0.1]\n\
+[effects.gyro_scale]\nppm = [500.0, -700.0, 900.0]\n\
+[effects.earth_rate]\nlatitude_deg = 43.88\n";
 
-/// The targeted parameters hidden in the truth: (cause, value offset).
-fn hidden() -> Vec<(Cause, usize)> {
-    [
-        Cause::ComOffset,
-        Cause::ConstantTorque,
-        Cause::InertiaError,
-        Cause::WheelTorqueScale,
-    ]
-    .into_iter()
-    .flat_map(|c| (0..3).map(move |i| (c, i)))
-    .collect()
+const TORQUE_CAUSES: [Cause; 4] = [
+    Cause::ComOffset,
+    Cause::ConstantTorque,
+    Cause::InertiaError,
+    Cause::WheelTorqueScale,
+];
+
+const SENSOR_CAUSES: [Cause; 3] = [
+    Cause::MagneticDisturbance,
+    Cause::GyroScale,
+    Cause::EarthRate,
+];
+
+/// Every parameter of the hidden causes: (cause, value offset).
+fn hidden(causes: &[Cause]) -> Vec<(Cause, usize)> {
+    causes
+        .iter()
+        .flat_map(|&c| (0..c.len()).map(move |i| (c, i)))
+        .collect()
 }
 
 /// Reported standard errors and actual errors of the hidden parameters (NaN where the cause
-/// was not named), and the causes named.
-fn measure(options: &ExperimentOptions) -> (Vec<f64>, Vec<f64>, Vec<&'static str>, usize) {
-    let truth = truth(TRUTH);
-    let (data, trace) = experiment::run(&truth, options).expect("experiment runs");
+/// was not named), the causes named and the tilt-stop strikes.
+fn measure(
+    truth: &ModelConfig,
+    causes: &[Cause],
+    options: &ExperimentOptions,
+) -> (Vec<f64>, Vec<f64>, Vec<&'static str>, usize) {
+    let (data, trace) = experiment::run(truth, options).expect("experiment runs");
     let id = identify(&data, &nominal(), &Options::default()).expect("identification runs");
     let named = names(&id);
     let mut se = Vec::new();
     let mut err = Vec::new();
-    for (cause, i) in hidden() {
+    for (cause, i) in hidden(causes) {
         if named.contains(&cause.name()) {
             se.push(stderr(&id, cause)[i]);
-            err.push(cause.values(&id.extended)[i] - cause.values(&truth)[i]);
+            err.push(cause.values(&id.extended)[i] - cause.values(truth)[i]);
         } else {
             se.push(f64::NAN);
             err.push(f64::NAN);
@@ -123,12 +139,32 @@ fn a_programme_past_the_wheel_limit_is_rejected() {
     assert!(e.rejected.as_deref().is_some_and(|r| r.contains("wheel")));
 }
 
+/// What [`compare`] asserts beyond the design's own guarantees.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Check {
+    /// The targets are exactly the hidden causes: predictions within their bounds.
+    Exact,
+    /// The targets include the hidden causes and others.
+    Targets,
+    /// The hidden causes are not among the targets: measured only (their naming aside).
+    Unchecked,
+}
+
 /// Design on the nominal model with `settings`, then run the default and the designed
 /// programmes on the truth for every seed and identify each blind; print the table and check
-/// what the design guarantees. `exact`: the targets are exactly the hidden causes, so the
-/// predicted standard errors are those of the fit identify makes (otherwise the prediction
-/// also estimates target causes identify does not fit, which changes some errors).
-fn compare(label: &str, settings: &DesignOptions, exact: bool) {
+/// what the design guarantees. With [`Check::Exact`] the predicted standard errors are those of
+/// the fit identify makes (otherwise the prediction also estimates target causes identify does
+/// not fit, which changes some errors).
+fn compare(
+    label: &str,
+    truth_toml: &str,
+    causes: &[Cause],
+    seeds: &[u64],
+    settings: &DesignOptions,
+    check: Check,
+) {
+    let exact = check == Check::Exact;
+    let truth = truth(truth_toml);
     let baseline = ExperimentOptions::default();
     let d = design::design(&nominal(), &baseline, settings).expect("design runs");
     println!(
@@ -152,27 +188,38 @@ fn compare(label: &str, settings: &DesignOptions, exact: bool) {
     assert!(d.chosen.criterion.log_det >= d.baseline.criterion.log_det);
     assert!(d.chosen.admissible());
 
-    let params = hidden();
-    let index = |c: Cause, i: usize| {
+    let params = hidden(causes);
+    // Predicted standard errors (NaN when the parameter is not a target).
+    let predicted = |c: Cause, i: usize| {
         d.parameters
             .iter()
             .position(|p| *p == c.value_name(i))
-            .expect("hidden parameter among the targets")
+            .map_or((f64::NAN, f64::NAN), |j| {
+                (d.baseline.stderr[j], d.chosen.stderr[j])
+            })
     };
     let n = params.len();
     // Per parameter, over the seeds in which both programmes named its cause.
     let (mut se_a, mut se_b, mut ratio) = (vec![vec![]; n], vec![vec![]; n], vec![vec![]; n]);
     let (mut err_a, mut err_b) = (vec![vec![]; n], vec![vec![]; n]);
     let (mut all_a, mut all_b, mut strikes) = (0, 0, 0);
-    for seed in SEEDS {
-        let a = measure(&ExperimentOptions {
-            seed,
-            ..d.baseline.options.clone()
-        });
-        let b = measure(&ExperimentOptions {
-            seed,
-            ..d.chosen.options.clone()
-        });
+    for &seed in seeds {
+        let a = measure(
+            &truth,
+            causes,
+            &ExperimentOptions {
+                seed,
+                ..d.baseline.options.clone()
+            },
+        );
+        let b = measure(
+            &truth,
+            causes,
+            &ExperimentOptions {
+                seed,
+                ..d.chosen.options.clone()
+            },
+        );
         println!(
             "seed {seed}: default names {:?} ({} stop strikes), designed names {:?} ({} stop strikes)",
             a.2, a.3, b.2, b.3
@@ -192,7 +239,7 @@ fn compare(label: &str, settings: &DesignOptions, exact: bool) {
     }
     println!(
         "every hidden cause named: default {all_a} of {} seeds, designed {all_b}; tilt-stop strikes {strikes}",
-        SEEDS.len()
+        seeds.len()
     );
     println!(
         "| parameter | SE default, predicted | SE default, reported (median) | SE designed, predicted | SE designed, reported (median) | ratio predicted | ratio reported (median) | RMS error default | RMS error designed |"
@@ -200,8 +247,7 @@ fn compare(label: &str, settings: &DesignOptions, exact: bool) {
     println!("|---|---|---|---|---|---|---|---|---|");
     let (mut norm_a, mut norm_b) = (Vec::new(), Vec::new());
     for (k, &(c, i)) in params.iter().enumerate() {
-        let j = index(c, i);
-        let (pa, pb) = (d.baseline.stderr[j], d.chosen.stderr[j]);
+        let (pa, pb) = predicted(c, i);
         let (ma, mb, mr) = (
             median(se_a[k].clone()),
             median(se_b[k].clone()),
@@ -214,12 +260,13 @@ fn compare(label: &str, settings: &DesignOptions, exact: bool) {
             rms(&err_a[k]),
             rms(&err_b[k])
         );
-        // Each parameter's errors in units of its predicted standard error on the default
-        // programme: every parameter weighs the same.
-        norm_a.extend(err_a[k].iter().map(|e| e / pa));
-        norm_b.extend(err_b[k].iter().map(|e| e / pa));
+        // Each parameter's errors in units of its standard error on the default programme
+        // (predicted, or reported when not a target): every parameter weighs the same.
+        let unit = if pa.is_finite() { pa } else { ma };
+        norm_a.extend(err_a[k].iter().map(|e| e / unit));
+        norm_b.extend(err_b[k].iter().map(|e| e / unit));
         assert!(
-            ratio[k].len() >= SEEDS.len() / 2,
+            ratio[k].len() >= seeds.len() / 2,
             "{}: too few seeds",
             c.value_name(i)
         );
@@ -246,27 +293,97 @@ fn compare(label: &str, settings: &DesignOptions, exact: bool) {
     println!(
         "RMS actual error over every hidden parameter and seed, in predicted standard errors of the default programme: default {ra:.2}, designed {rb:.2}"
     );
-    // Smaller standard errors: the actual errors must follow (over 8 seeds × 12 parameters;
-    // the default's should be near 1 if its standard errors are calibrated).
-    assert!(rb < ra);
-    assert!(all_b >= all_a);
+    // Where the design promises much smaller standard errors overall (geometric mean of the
+    // predicted ratios below 0.6), the actual errors must follow (the default's RMS is near 1
+    // if its standard errors are calibrated). The RMS of n normalised errors scatters by about
+    // 1/√(2n) relative (±13 % for the 28 values of 4 seeds × 7 parameters), so a smaller
+    // promised reduction is not testable on these seeds.
+    let promised = (params
+        .iter()
+        .map(|&(c, i)| {
+            let (pa, pb) = predicted(c, i);
+            (pb / pa).ln()
+        })
+        .sum::<f64>()
+        / n as f64)
+        .exp();
+    println!("geometric mean of the predicted ratios {promised:.2}");
+    if promised < 0.6 {
+        assert!(
+            rb < ra,
+            "RMS error designed {rb:.2} against default {ra:.2}"
+        );
+    }
+    if check != Check::Unchecked {
+        assert!(all_b >= all_a);
+    }
 }
 
 #[test]
 #[ignore]
 fn designed_programme_reduces_the_standard_errors() {
+    let seeds = [51, 52, 53, 54, 55, 56, 57, 58];
     // Designed for exactly the hidden causes: predicted and reported standard errors compare
     // one to one.
     let exact = DesignOptions {
-        targets: vec![
-            Cause::ComOffset,
-            Cause::ConstantTorque,
-            Cause::InertiaError,
-            Cause::WheelTorqueScale,
-        ],
+        targets: TORQUE_CAUSES.to_vec(),
         ..DesignOptions::default()
     };
-    compare("targets = the hidden causes", &exact, true);
-    // The default targets (what `testbed experiment --design` uses): friction too.
-    compare("default targets", &DesignOptions::default(), false);
+    compare(
+        "torque and wheel causes hidden, targets = those causes",
+        TRUTH,
+        &TORQUE_CAUSES,
+        &seeds,
+        &exact,
+        Check::Exact,
+    );
+    // The default targets (what `testbed experiment --design` uses): every covered cause.
+    compare(
+        "torque and wheel causes hidden, default targets",
+        TRUTH,
+        &TORQUE_CAUSES,
+        &seeds,
+        &DesignOptions::default(),
+        Check::Targets,
+    );
+}
+
+#[test]
+#[ignore]
+fn sensor_causes_designed_for_and_not() {
+    let seeds = [61, 62, 63, 64];
+    let exact = DesignOptions {
+        targets: SENSOR_CAUSES.to_vec(),
+        ..DesignOptions::default()
+    };
+    compare(
+        "sensor causes hidden, targets = those causes",
+        SENSOR_TRUTH,
+        &SENSOR_CAUSES,
+        &seeds,
+        &exact,
+        Check::Exact,
+    );
+    compare(
+        "sensor causes hidden, default targets",
+        SENSOR_TRUTH,
+        &SENSOR_CAUSES,
+        &seeds,
+        &DesignOptions::default(),
+        Check::Targets,
+    );
+    // A design for the torque and wheel causes alone takes no account of the sensor causes:
+    // what it costs them is measured, not bounded (no assertion on the ratios but the naming).
+    let torque_only = DesignOptions {
+        targets: TORQUE_CAUSES.to_vec(),
+        ..DesignOptions::default()
+    };
+    compare(
+        "sensor causes hidden, targets = torque and wheel causes",
+        SENSOR_TRUTH,
+        &SENSOR_CAUSES,
+        &seeds,
+        &torque_only,
+        Check::Unchecked,
+    );
 }

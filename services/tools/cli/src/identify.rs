@@ -61,8 +61,8 @@ pub struct ExperimentArgs {
     /// errors, then run the designed programme.
     #[arg(long)]
     design: bool,
-    /// Causes the design targets (comma-separated: com_offset, constant_torque, aero_drag,
-    /// inertia_error, wheel_torque_scale, wheel_friction); default all but aero_drag.
+    /// Causes the design targets (comma-separated names of the library; all but
+    /// actuator_delay and the thrusters' causes can be targeted); default all of those.
     #[arg(long, value_delimiter = ',', requires = "design")]
     targets: Vec<String>,
 }

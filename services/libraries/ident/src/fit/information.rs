@@ -1,4 +1,4 @@
-//! The Fisher information of torque-channel and wheel-channel causes on one estimated state:
+//! The Fisher information of candidate causes on one estimated state. Torque and wheel causes:
 //! the `XᵀX` of the whitened normal equations the fits themselves solve ([`torque`] and
 //! [`wheels`] build them; nothing is re-derived here), on the ticks the fits use (held-out ticks
 //! left out). For noise as modelled (whitened rows of unit variance) `F⁻¹` is the covariance
@@ -10,13 +10,15 @@
 //!
 //! The torque channel and the wheel channel have independent noise (gyro through the inertia
 //! and tachometer, against tachometer alone) and are fitted separately: the information is
-//! block-diagonal between them. Sensor causes are not covered: their Jacobians are finite
-//! differences through the attitude filter (one filter run per parameter), too slow to repeat
-//! for every candidate of a design search.
+//! block-diagonal between them. The sensor causes act on the attitude filter's innovations:
+//! their information is `JᵀJ` of the whitened innovations' Jacobian, by forward differences
+//! through the filter as the sensor fit computes it (one filter run per parameter), a third
+//! block (identify fits them first and on the innovations alone).
 //!
 //! [`torque`]: super::torque
 //! [`wheels`]: super::wheels
 
+use super::jacobian::{forward_jacobian, normal_equations};
 use super::torque::torque_normal_equations;
 use super::{Problem, State, WheelModel};
 use crate::channels::{column_cause, torque_columns};
@@ -33,9 +35,9 @@ pub struct Information {
     pub matrix: DMatrix<f64>,
 }
 
-/// Whether the information of `cause` can be computed ([`Problem::information`]): the torque
-/// causes other than the thrusters' (those need a thruster programme), `wheel_torque_scale`
-/// and `wheel_friction`'s linear levels.
+/// Whether the information of `cause` can be computed ([`Problem::information`]): the sensor
+/// causes, the torque causes other than the thrusters' (those need a thruster programme),
+/// `wheel_torque_scale` and `wheel_friction`'s linear levels.
 pub fn information_supported(cause: Cause) -> bool {
     match cause.kind() {
         Kind::Torque => !matches!(
@@ -43,7 +45,7 @@ pub fn information_supported(cause: Cause) -> bool {
             Cause::ThrusterTorqueScale | Cause::PropellantComShift
         ),
         Kind::Wheel => matches!(cause, Cause::WheelTorqueScale | Cause::WheelFriction),
-        Kind::Sensor => false,
+        Kind::Sensor => true,
     }
 }
 
@@ -70,7 +72,7 @@ impl Problem<'_> {
             return Err(IdentError::Options {
                 key: "causes".into(),
                 value: c.name().into(),
-                reason: "no Fisher information for this cause (only the torque causes other than the thrusters', wheel_torque_scale and wheel_friction)".into(),
+                reason: "no Fisher information for this cause (the thrusters' causes need the thruster programme; of the wheel causes only wheel_torque_scale and wheel_friction)".into(),
             });
         }
         let mut params: Vec<(Cause, usize)> = Vec::new();
@@ -137,6 +139,69 @@ impl Problem<'_> {
                 }
             }
         }
+        // Attitude block: the sensor causes jointly, from the Jacobian of the filter's whitened
+        // innovations by forward differences (the sensor fit's own Jacobian), at the base
+        // configuration's values of the causes (Earth rate on at the lab's latitude).
+        let sensor: Vec<(usize, Cause, usize)> = params
+            .iter()
+            .enumerate()
+            .filter(|(_, (c, _))| c.kind() == Kind::Sensor)
+            .map(|(j, (c, off))| (j, *c, *off))
+            .collect();
+        if !sensor.is_empty() {
+            let theta: Vec<f64> = sensor
+                .iter()
+                .map(|&(_, c, off)| c.values(&self.base)[off])
+                .collect();
+            let build = |t: &[f64]| {
+                let mut config = self.base.clone();
+                for cause in Cause::ALL {
+                    let mut values = cause.values(&config);
+                    let mut any = false;
+                    for (k, &(_, c, off)) in sensor.iter().enumerate() {
+                        if c == cause {
+                            values[off] = t[k];
+                            any = true;
+                        }
+                    }
+                    if any {
+                        cause.apply(&mut config, &values);
+                    }
+                }
+                config
+            };
+            let steps: Vec<f64> = sensor.iter().map(|&(_, c, off)| step_of(c, off)).collect();
+            let r0 = self.fit_innovations(&*self.recon(&build(&theta))?);
+            let all: Vec<usize> = (0..sensor.len()).collect();
+            let columns = forward_jacobian(
+                &theta,
+                &r0,
+                &all,
+                &steps,
+                |k| sensor[k].1.bounds(sensor[k].2),
+                |t: &[f64]| -> Result<Vec<f64>, IdentError> {
+                    Ok(self.fit_innovations(&self.run_filter(&build(t))?))
+                },
+            )?;
+            let f = normal_equations(&columns, &r0).information();
+            for (a, &(ja, _, _)) in sensor.iter().enumerate() {
+                for (b, &(jb, _, _)) in sensor.iter().enumerate() {
+                    matrix[(ja, jb)] = f[(a, b)];
+                }
+            }
+        }
         Ok(Information { params, matrix })
     }
+}
+
+/// Finite-difference step of value `off` of `cause` (its parameter array's step).
+fn step_of(cause: Cause, off: usize) -> f64 {
+    let mut i = off;
+    for p in cause.params() {
+        if i < p.len {
+            return p.step;
+        }
+        i -= p.len;
+    }
+    1e-6
 }
