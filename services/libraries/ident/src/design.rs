@@ -90,6 +90,28 @@ impl Default for DesignLimits {
     }
 }
 
+/// Which limit a rejected candidate broke.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Limit {
+    /// It struck the tilt stop.
+    TiltStop,
+    /// It tilted to within the margin of the stop.
+    Tilt,
+    /// A wheel ran faster than the allowed fraction of its limit.
+    WheelSpeed,
+    /// Its simulation or filter run failed.
+    Failed,
+}
+
+/// A candidate the search rejected, and why.
+#[derive(Debug, Clone, Serialize)]
+pub struct Rejection {
+    pub options: ExperimentOptions,
+    pub limit: Limit,
+    pub why: String,
+}
+
 /// The design variables and the values searched for each. Empty grid: the variable is held
 /// at the baseline's value.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -383,7 +405,9 @@ pub struct Evaluation {
     pub tilt_stop_strikes: usize,
     /// Largest wheel speed reached, fraction of the drives' limit.
     pub max_wheel_speed_fraction: f64,
-    /// Why the programme breaks a limit (`None`: admissible).
+    /// The limit the programme breaks (`None`: admissible).
+    pub limit: Option<Limit>,
+    /// Why the programme breaks it (`None`: admissible).
     pub rejected: Option<String>,
     /// D-criterion of the scaled information.
     pub criterion: Criterion,
@@ -447,20 +471,31 @@ pub fn evaluate(
     let max_tilt_deg = max_tilt.to_degrees();
     let tilt_allowed_deg = model.platform.tilt_limit_deg - settings.limits.tilt_margin_deg;
     let strikes = trace.tilt_stops.len();
-    let rejected = if strikes > 0 {
-        Some(format!("strikes the tilt stop {strikes} time(s)"))
+    let broken = if strikes > 0 {
+        Some((
+            Limit::TiltStop,
+            format!("strikes the tilt stop {strikes} time(s)"),
+        ))
     } else if max_tilt_deg > tilt_allowed_deg {
-        Some(format!(
-            "tilts to {max_tilt_deg:.1}° (limit {tilt_allowed_deg:.1}°)"
+        Some((
+            Limit::Tilt,
+            format!("tilts to {max_tilt_deg:.1}° (limit {tilt_allowed_deg:.1}°)"),
         ))
     } else if wheel_fraction > settings.limits.wheel_speed_fraction {
-        Some(format!(
-            "runs a wheel at {:.0} % of its speed limit (limit {:.0} %)",
-            100.0 * wheel_fraction,
-            100.0 * settings.limits.wheel_speed_fraction
+        Some((
+            Limit::WheelSpeed,
+            format!(
+                "runs a wheel at {:.0} % of its speed limit (limit {:.0} %)",
+                100.0 * wheel_fraction,
+                100.0 * settings.limits.wheel_speed_fraction
+            ),
         ))
     } else {
         None
+    };
+    let (limit, rejected) = match broken {
+        Some((l, why)) => (Some(l), Some(why)),
+        None => (None, None),
     };
     data.check().map_err(IdentError::from)?;
     let aligned = Aligned::new(&data);
@@ -489,6 +524,7 @@ pub fn evaluate(
         max_tilt_deg,
         tilt_stop_strikes: strikes,
         max_wheel_speed_fraction: wheel_fraction,
+        limit,
         rejected,
         criterion,
         stderr,
@@ -511,6 +547,8 @@ pub struct Design {
     pub evaluated: usize,
     /// Of those, rejected for a limit or because the evaluation failed.
     pub rejected: usize,
+    /// The rejected candidates, in the order simulated.
+    pub rejections: Vec<Rejection>,
     /// Passes of the coordinate search run.
     pub passes: usize,
     pub limits: DesignLimits,
@@ -535,6 +573,7 @@ struct Search<'a> {
     cache: Vec<Evaluation>,
     failures: usize,
     last_failure: String,
+    failed: Vec<Rejection>,
 }
 
 impl Search<'_> {
@@ -555,6 +594,11 @@ impl Search<'_> {
             Err(DesignError::Ident(err)) => {
                 self.failures += 1;
                 self.last_failure = err.to_string();
+                self.failed.push(Rejection {
+                    options: options.clone(),
+                    limit: Limit::Failed,
+                    why: self.last_failure.clone(),
+                });
                 Ok(None)
             }
             Err(other) => Err(other),
@@ -585,6 +629,7 @@ pub fn design(
         cache: Vec::new(),
         failures: 0,
         last_failure: String::new(),
+        failed: Vec::new(),
     };
     let Some(baseline_eval) = search.eval(baseline)? else {
         return Err(DesignError::NoAdmissible {
@@ -617,7 +662,19 @@ pub fn design(
         }
     }
     let evaluated = search.cache.len() + search.failures;
-    let rejected = search.cache.iter().filter(|e| !e.admissible()).count() + search.failures;
+    let mut rejections: Vec<Rejection> = search
+        .cache
+        .iter()
+        .filter_map(|e| {
+            Some(Rejection {
+                options: e.options.clone(),
+                limit: e.limit?,
+                why: e.rejected.clone()?,
+            })
+        })
+        .collect();
+    rejections.extend(search.failed.iter().cloned());
+    let rejected = rejections.len();
     if !best.admissible() {
         let why = best.rejected.clone().unwrap_or_default();
         return Err(DesignError::NoAdmissible {
@@ -636,6 +693,7 @@ pub fn design(
         chosen: best,
         evaluated,
         rejected,
+        rejections,
         passes,
         limits: settings.limits.clone(),
     })

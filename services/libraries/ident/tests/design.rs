@@ -11,7 +11,7 @@
 
 mod common;
 use common::*;
-use testbed_ident::design::{self, DesignOptions};
+use testbed_ident::design::{self, DesignOptions, Limit};
 use testbed_ident::experiment::{self, ExperimentOptions};
 use testbed_ident::{Cause, Options, identify};
 use testbed_model::ModelConfig;
@@ -113,8 +113,14 @@ fn the_search_beats_the_default_within_the_limits() {
     assert!(d.chosen.max_tilt_deg <= 30.0 - settings.limits.tilt_margin_deg);
     assert!(d.chosen.max_wheel_speed_fraction <= settings.limits.wheel_speed_fraction);
     assert_eq!(d.chosen.options.duration_s, 600.0);
-    // Some candidates broke a limit (the grids reach past them) and were not chosen.
+    // Some candidates broke a limit (the grids reach past them) and were not chosen; none
+    // failed to simulate.
     assert!(d.rejected > 0);
+    assert_eq!(d.rejections.len(), d.rejected);
+    assert!(d.rejections.iter().all(|r| r.limit != Limit::Failed));
+    for r in &d.rejections {
+        println!("rejected {:?}: {}", r.limit, r.why);
+    }
     // Deterministic: the chosen programme evaluated again gives the same criterion.
     let again = design::evaluate(&nominal(), &d.chosen.options, &settings).expect("evaluates");
     assert_eq!(again.criterion, d.chosen.criterion);
@@ -136,6 +142,7 @@ fn a_programme_past_the_wheel_limit_is_rejected() {
     );
     assert!(!e.admissible());
     assert!(e.max_wheel_speed_fraction > 0.85);
+    assert_eq!(e.limit, Some(Limit::WheelSpeed));
     assert!(e.rejected.as_deref().is_some_and(|r| r.contains("wheel")));
 }
 

@@ -6,7 +6,7 @@ use crate::figure::{self, Panel, Series};
 use anyhow::{Context, Result, bail};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
-use testbed_ident::design::{self, Design, DesignOptions};
+use testbed_ident::design::{self, Design, DesignOptions, Limit};
 use testbed_ident::experiment::{self, ExperimentOptions};
 use testbed_ident::identify::{Curve, FigureData, Report};
 use testbed_ident::{Dataset, Options, csv, runlog};
@@ -266,14 +266,22 @@ fn run_design(
     let started = std::time::Instant::now();
     let d = design::design(model, baseline, &settings).context("designing the experiment")?;
     println!(
-        "design: {} programmes of {:.0} s simulated on the model in {:.1} s ({} rejected by the limits: tilt ≤ {:.1}°, no stop strike, wheel speed ≤ {:.0} % of the limit), {} pass(es) of coordinate search",
+        "design: {} programmes of {:.0} s simulated on the model in {:.1} s, {} pass(es) of coordinate search; limits: no tilt-stop strike, tilt ≤ {:.1}°, wheel speed ≤ {:.0} % of the limit",
         d.evaluated,
         baseline.duration_s,
         started.elapsed().as_secs_f64(),
-        d.rejected,
+        d.passes,
         model.platform.tilt_limit_deg - d.limits.tilt_margin_deg,
         100.0 * d.limits.wheel_speed_fraction,
-        d.passes
+    );
+    let count = |l: Limit| d.rejections.iter().filter(|r| r.limit == l).count();
+    println!(
+        "  rejected: {} (tilt-stop strike {}, tilt {}, wheel speed {}, simulation failed {})",
+        d.rejected,
+        count(Limit::TiltStop),
+        count(Limit::Tilt),
+        count(Limit::WheelSpeed),
+        count(Limit::Failed)
     );
     Ok(d)
 }
