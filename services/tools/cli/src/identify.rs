@@ -816,7 +816,8 @@ mod tests {
     }
 
     /// `--design` searches, runs the designed programme and records the design in
-    /// experiment.json; a target the design does not cover is refused by name.
+    /// experiment.json; a target the design does not cover, or no cause at all, is refused by
+    /// name.
     #[test]
     fn the_designed_experiment_records_its_design() {
         let dir = std::env::temp_dir().join(format!("testbed-cli-design-{}", std::process::id()));
@@ -852,10 +853,24 @@ mod tests {
             seed: 4,
             thrusters: false,
             design: true,
-            targets: vec!["gyro_scale".into()],
+            targets: vec!["thruster_torque_scale".into()],
         })
         .unwrap_err();
-        assert!(format!("{err:#}").contains("gyro_scale"), "{err:#}");
+        assert!(
+            format!("{err:#}").contains("thruster_torque_scale"),
+            "{err:#}"
+        );
+        let err = run_experiment(&ExperimentArgs {
+            out: dir.join("bad"),
+            model: None,
+            duration: 60.0,
+            seed: 4,
+            thrusters: false,
+            design: true,
+            targets: vec!["no_such_cause".into()],
+        })
+        .unwrap_err();
+        assert!(format!("{err:#}").contains("no_such_cause"), "{err:#}");
         std::fs::remove_dir_all(&dir).ok();
     }
 
