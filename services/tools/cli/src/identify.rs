@@ -266,13 +266,14 @@ fn run_design(
     let started = std::time::Instant::now();
     let d = design::design(model, baseline, &settings).context("designing the experiment")?;
     println!(
-        "design: {} programmes of {:.0} s simulated on the model in {:.1} s, {} pass(es) of coordinate search; limits: no tilt-stop strike, tilt ≤ {:.1}°, wheel speed ≤ {:.0} % of the limit",
+        "design: {} programmes of {:.0} s simulated on the model in {:.1} s, {} pass(es) of coordinate search; limits: no tilt-stop strike, tilt ≤ {:.1}°, wheel speed ≤ {:.0} % of the limit, also with {:.2} µm more centre-of-mass offset along ±X or ±Y",
         d.evaluated,
         baseline.duration_s,
         started.elapsed().as_secs_f64(),
         d.passes,
         model.platform.tilt_limit_deg - d.limits.tilt_margin_deg,
         100.0 * d.limits.wheel_speed_fraction,
+        1e6 * d.limits.com_allowance_m,
     );
     let count = |l: Limit| d.rejections.iter().filter(|r| r.limit == l).count();
     println!(
@@ -323,6 +324,14 @@ fn print_design(d: &Design, model: &ModelConfig) {
         "max wheel speed, % of limit",
         format!("{:.0}", 100.0 * a.max_wheel_speed_fraction),
         format!("{:.0}", 100.0 * b.max_wheel_speed_fraction),
+    );
+    row(
+        &format!(
+            "  with ±{:.2} µm CoM offset",
+            1e6 * d.limits.com_allowance_m
+        ),
+        format!("{:.0}", 100.0 * a.worst_with_allowance.wheel_fraction),
+        format!("{:.0}", 100.0 * b.worst_with_allowance.wheel_fraction),
     );
     row(
         "log det F (typical units)",
