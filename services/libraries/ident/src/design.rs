@@ -27,16 +27,18 @@
 //!
 //! **Limits.** A candidate is rejected if its simulation strikes the tilt stop, tilts to within
 //! `tilt_margin_deg` of the stop, or runs a wheel faster than `wheel_speed_fraction` of the
-//! drives' limit ([`DesignLimits`]). The duration and seed are those of the baseline
+//! drives' limit ([`DesignLimits`]), on the model or with `com_allowance_m` more horizontal
+//! centre-of-mass offset along ±X or ±Y (an optimal design sits on its limits; without the
+//! allowance the best design saturated a wheel with 0.1 µm of unmodelled offset). The duration and seed are those of the baseline
 //! programme.
 //!
 //! **Search.** Coordinate search over a grid per design variable ([`DesignSpace`]): from the
 //! baseline, each variable in turn is set to every value of its grid with the others held, and
 //! the best admissible candidate is kept; passes repeat until one changes nothing (or
 //! `passes` is reached). Every candidate is a full closed-loop simulation of the programme at
-//! its duration (no shortening or decimation) plus one filter run over its data and one more
-//! per sensor parameter targeted: about 0.1 s per 600-s candidate without sensor targets and
-//! 0.17 s with all of them in a release build, so a search of about 50 candidates takes 5–9 s;
+//! its duration (no shortening or decimation), four more with the centre-of-mass allowance,
+//! one filter run over its data and one more per sensor parameter targeted: about 0.5 s per
+//! 600-s candidate in a release build, so a search of about 50 candidates takes 25–30 s;
 //! evaluated candidates are cached. The search finds a coordinate-wise optimum on the grid,
 //! not necessarily the global one.
 //!
