@@ -65,6 +65,10 @@ pub struct ExperimentArgs {
     /// actuator_delay and the thrusters' causes can be targeted); default all of those.
     #[arg(long, value_delimiter = ',', requires = "design")]
     targets: Vec<String>,
+    /// Unmodelled horizontal centre-of-mass offset, m, the designed programme must survive
+    /// within the limits (each candidate is also simulated with it along ±X and ±Y); 0: none.
+    #[arg(long, default_value_t = 2e-7, requires = "design")]
+    com_allowance_m: f64,
 }
 
 /// Read measured data: a CSV directory or an MCAP run log.
@@ -148,7 +152,7 @@ pub fn run_experiment(args: &ExperimentArgs) -> Result<()> {
         }
     };
     let design = if args.design {
-        let d = run_design(&model, &options, &args.targets)?;
+        let d = run_design(&model, &options, &args.targets, args.com_allowance_m)?;
         print_design(&d, &model);
         Some(d)
     } else {
@@ -252,8 +256,10 @@ fn run_design(
     model: &ModelConfig,
     baseline: &ExperimentOptions,
     targets: &[String],
+    com_allowance_m: f64,
 ) -> Result<Design> {
     let mut settings = DesignOptions::default();
+    settings.limits.com_allowance_m = com_allowance_m;
     if !targets.is_empty() {
         settings.targets = targets
             .iter()
@@ -795,6 +801,7 @@ mod tests {
             thrusters: true,
             design: false,
             targets: Vec::new(),
+            com_allowance_m: 2e-7,
         })
         .unwrap();
         let read: Dataset = csv::read_dir(&data).unwrap();
@@ -818,6 +825,7 @@ mod tests {
             thrusters: true,
             design: false,
             targets: Vec::new(),
+            com_allowance_m: 2e-7,
         })
         .unwrap_err();
         assert!(format!("{err:#}").contains("[thrusters]"), "{err:#}");
@@ -840,6 +848,7 @@ mod tests {
             thrusters: false,
             design: true,
             targets: vec!["com_offset".into(), "inertia_error".into()],
+            com_allowance_m: 2e-7,
         })
         .unwrap();
         assert!(data.join("gyro.csv").is_file());
@@ -863,6 +872,7 @@ mod tests {
             thrusters: false,
             design: true,
             targets: vec!["thruster_torque_scale".into()],
+            com_allowance_m: 2e-7,
         })
         .unwrap_err();
         assert!(
@@ -877,9 +887,22 @@ mod tests {
             thrusters: false,
             design: true,
             targets: vec!["no_such_cause".into()],
+            com_allowance_m: 2e-7,
         })
         .unwrap_err();
         assert!(format!("{err:#}").contains("no_such_cause"), "{err:#}");
+        let err = run_experiment(&ExperimentArgs {
+            out: dir.join("bad"),
+            model: None,
+            duration: 60.0,
+            seed: 4,
+            thrusters: false,
+            design: true,
+            targets: Vec::new(),
+            com_allowance_m: -1.0,
+        })
+        .unwrap_err();
+        assert!(format!("{err:#}").contains("com_allowance_m"), "{err:#}");
         std::fs::remove_dir_all(&dir).ok();
     }
 
@@ -905,6 +928,7 @@ mod tests {
             thrusters: false,
             design: false,
             targets: Vec::new(),
+            com_allowance_m: 2e-7,
         })
         .unwrap();
         for f in [
