@@ -362,13 +362,13 @@ fn print_design(d: &Design, model: &ModelConfig) {
         model.platform.tilt_limit_deg
     );
     println!(
-        "  {:<34} {:>12} {:>12} {:>8}",
+        "  {:<42} {:>12} {:>12} {:>8}",
         "parameter", "default", "designed", "ratio"
     );
     let ratio = d.stderr_ratio();
     for (i, p) in d.parameters.iter().enumerate() {
         println!(
-            "  {p:<34} {:>12.3e} {:>12.3e} {:>8.2}",
+            "  {p:<42} {:>12.3e} {:>12.3e} {:>8.2}",
             a.stderr[i], b.stderr[i], ratio[i]
         );
     }
