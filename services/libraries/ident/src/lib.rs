@@ -13,6 +13,8 @@
 //! * [`identify`]: the whole analysis — residual report, forward selection, extended model, gain.
 //! * [`friction_id`]: wheel friction from spin-down data (paper eq. 4–5).
 //! * [`experiment`]: an excitation schedule for the closed loop and its data as a CSV directory.
+//! * [`design`]: D-optimal choice of that schedule's amplitudes and timing within the tilt and
+//!   wheel-speed limits.
 //! * [`stats`]: least squares and residual statistics.
 //! * [`thrusters`]: the thrust time and propellant use of the recorded valve on-times.
 
@@ -23,6 +25,7 @@
 pub mod channels;
 pub mod csv;
 pub mod data;
+pub mod design;
 pub mod effects;
 pub mod error;
 pub mod experiment;

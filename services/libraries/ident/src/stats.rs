@@ -134,6 +134,19 @@ impl NormalEquations {
         })
     }
 
+    /// The whole symmetric `XᵀX` (for rows whitened to unit variance, the Fisher information of
+    /// θ).
+    pub fn information(&self) -> DMatrix<f64> {
+        let p = self.xty.len();
+        DMatrix::from_fn(p, p, |i, j| {
+            if j <= i {
+                self.xtx[(i, j)]
+            } else {
+                self.xtx[(j, i)]
+            }
+        })
+    }
+
     /// Diagonal element `(XᵀX)_jj`: the weight of column j.
     pub fn diag(&self, j: usize) -> f64 {
         self.xtx[(j, j)]

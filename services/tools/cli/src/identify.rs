@@ -6,6 +6,7 @@ use crate::figure::{self, Panel, Series};
 use anyhow::{Context, Result, bail};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
+use testbed_ident::design::{self, Design, DesignOptions, Limit};
 use testbed_ident::experiment::{self, ExperimentOptions};
 use testbed_ident::identify::{Curve, FigureData, Report};
 use testbed_ident::{Dataset, Options, csv, runlog};
@@ -51,8 +52,23 @@ pub struct ExperimentArgs {
     /// threshold and momentum dumping on the thrusters (the model needs `[thrusters]`; a
     /// constant disturbance in it makes every thruster fire): data for thruster_torque_scale
     /// and propellant_com_shift.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "design")]
     thrusters: bool,
+    /// Design the programme first: search the heading amplitude and rate, tilt step and dwell
+    /// and initial wheel momentum for the largest information (D-optimal) on the target causes
+    /// within the tilt and wheel-speed limits, each candidate simulated on the model at this
+    /// duration; print the design beside the default programme with the predicted standard
+    /// errors, then run the designed programme.
+    #[arg(long)]
+    design: bool,
+    /// Causes the design targets (comma-separated names of the library; all but
+    /// actuator_delay and the thrusters' causes can be targeted); default all of those.
+    #[arg(long, value_delimiter = ',', requires = "design")]
+    targets: Vec<String>,
+    /// Unmodelled horizontal centre-of-mass offset, m, the designed programme must survive
+    /// within the limits (each candidate is also simulated with it along ±X and ±Y); 0: none.
+    #[arg(long, default_value_t = 2e-7, requires = "design")]
+    com_allowance_m: f64,
 }
 
 /// Read measured data: a CSV directory or an MCAP run log.
@@ -135,6 +151,16 @@ pub fn run_experiment(args: &ExperimentArgs) -> Result<()> {
             ..ExperimentOptions::default()
         }
     };
+    let design = if args.design {
+        let d = run_design(&model, &options, &args.targets, args.com_allowance_m)?;
+        print_design(&d, &model);
+        Some(d)
+    } else {
+        None
+    };
+    let options = design
+        .as_ref()
+        .map_or(options, |d| d.chosen.options.clone());
     let (mut data, trace) =
         experiment::run(&model, &options).context("running the identification experiment")?;
     data.source = args.out.clone();
@@ -168,6 +194,7 @@ pub fn run_experiment(args: &ExperimentArgs) -> Result<()> {
         "wheel_saturated": max_wheel >= 0.97 * model.wheels.max_speed_rad_s(),
         "max_tilt_deg": max_tilt / DEG,
         "max_wheel_speed_rpm": max_wheel / RPM,
+        "design": design,
     });
     let info_path = args.out.join("experiment.json");
     std::fs::write(&info_path, serde_json::to_string_pretty(&info)?)
@@ -222,6 +249,129 @@ pub fn run_experiment(args: &ExperimentArgs) -> Result<()> {
         println!("wrote {}", f.display());
     }
     Ok(())
+}
+
+/// The design search of `testbed experiment --design` around `baseline` on `model`.
+fn run_design(
+    model: &ModelConfig,
+    baseline: &ExperimentOptions,
+    targets: &[String],
+    com_allowance_m: f64,
+) -> Result<Design> {
+    let mut settings = DesignOptions::default();
+    settings.limits.com_allowance_m = com_allowance_m;
+    if !targets.is_empty() {
+        settings.targets = targets
+            .iter()
+            .map(|name| {
+                testbed_ident::Cause::from_name(name.trim())
+                    .with_context(|| format!("--targets: `{name}` is not a cause of the library"))
+            })
+            .collect::<Result<_>>()?;
+    }
+    let started = std::time::Instant::now();
+    let d = design::design(model, baseline, &settings).context("designing the experiment")?;
+    println!(
+        "design: {} programmes of {:.0} s simulated on the model in {:.1} s, {} pass(es) of coordinate search; limits: no tilt-stop strike, tilt ≤ {:.1}°, wheel speed ≤ {:.0} % of the limit, also with {:.2} µm more centre-of-mass offset along ±X or ±Y",
+        d.evaluated,
+        baseline.duration_s,
+        started.elapsed().as_secs_f64(),
+        d.passes,
+        model.platform.tilt_limit_deg - d.limits.tilt_margin_deg,
+        100.0 * d.limits.wheel_speed_fraction,
+        1e6 * d.limits.com_allowance_m,
+    );
+    let count = |l: Limit| d.rejections.iter().filter(|r| r.limit == l).count();
+    println!(
+        "  rejected: {} (tilt-stop strike {}, tilt {}, wheel speed {}, simulation failed {})",
+        d.rejected,
+        count(Limit::TiltStop),
+        count(Limit::Tilt),
+        count(Limit::WheelSpeed),
+        count(Limit::Failed)
+    );
+    Ok(d)
+}
+
+/// The design beside the default programme: options, limits reached, criterion and the
+/// predicted standard errors.
+fn print_design(d: &Design, model: &ModelConfig) {
+    let (a, b) = (&d.baseline, &d.chosen);
+    let row = |name: &str, x: String, y: String| println!("  {name:<34} {x:>18} {y:>18}");
+    row("", "default".into(), "designed".into());
+    row(
+        "heading_amplitude_deg",
+        format!("{}", a.options.heading_amplitude_deg),
+        format!("{}", b.options.heading_amplitude_deg),
+    );
+    row(
+        "heading_rate_deg_s",
+        format!("{}", a.options.heading_rate_deg_s),
+        format!("{}", b.options.heading_rate_deg_s),
+    );
+    row(
+        "tilt_deg",
+        format!("{}", a.options.tilt_deg),
+        format!("{}", b.options.tilt_deg),
+    );
+    row(
+        "tilt_dwell_s",
+        format!("{}", a.options.tilt_dwell_s),
+        format!("{}", b.options.tilt_dwell_s),
+    );
+    let h = |o: &ExperimentOptions| format!("{:?}", o.wheel_momentum_nms);
+    row("wheel_momentum_nms", h(&a.options), h(&b.options));
+    row(
+        "max tilt, deg",
+        format!("{:.1}", a.max_tilt_deg),
+        format!("{:.1}", b.max_tilt_deg),
+    );
+    row(
+        "max wheel speed, % of limit",
+        format!("{:.0}", 100.0 * a.max_wheel_speed_fraction),
+        format!("{:.0}", 100.0 * b.max_wheel_speed_fraction),
+    );
+    row(
+        &format!(
+            "  with ±{:.2} µm CoM offset",
+            1e6 * d.limits.com_allowance_m
+        ),
+        format!("{:.0}", 100.0 * a.worst_with_allowance.wheel_fraction),
+        format!("{:.0}", 100.0 * b.worst_with_allowance.wheel_fraction),
+    );
+    row(
+        "log det F (typical units)",
+        format!("{:.2}", a.criterion.log_det),
+        format!("{:.2}", b.criterion.log_det),
+    );
+    row(
+        "undetermined directions",
+        a.criterion.unidentified.to_string(),
+        b.criterion.unidentified.to_string(),
+    );
+    if let Some(why) = &a.rejected {
+        eprintln!(
+            "warning: the default programme breaks the design's limits on this model: it {why}"
+        );
+    }
+    if a.options == b.options {
+        println!("  the default programme is already the best found");
+    }
+    println!(
+        "  predicted standard errors (noise as modelled; the tilt stop is at {}°):",
+        model.platform.tilt_limit_deg
+    );
+    println!(
+        "  {:<42} {:>12} {:>12} {:>8}",
+        "parameter", "default", "designed", "ratio"
+    );
+    let ratio = d.stderr_ratio();
+    for (i, p) in d.parameters.iter().enumerate() {
+        println!(
+            "  {p:<42} {:>12.3e} {:>12.3e} {:>8.2}",
+            a.stderr[i], b.stderr[i], ratio[i]
+        );
+    }
 }
 
 /// The report as text: the verdict first, then the evidence.
@@ -649,6 +799,9 @@ mod tests {
             duration: 600.0,
             seed: 3,
             thrusters: true,
+            design: false,
+            targets: Vec::new(),
+            com_allowance_m: 2e-7,
         })
         .unwrap();
         let read: Dataset = csv::read_dir(&data).unwrap();
@@ -670,9 +823,86 @@ mod tests {
             duration: 60.0,
             seed: 3,
             thrusters: true,
+            design: false,
+            targets: Vec::new(),
+            com_allowance_m: 2e-7,
         })
         .unwrap_err();
         assert!(format!("{err:#}").contains("[thrusters]"), "{err:#}");
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    /// `--design` searches, runs the designed programme and records the design in
+    /// experiment.json; a target the design does not cover, or no cause at all, is refused by
+    /// name.
+    #[test]
+    fn the_designed_experiment_records_its_design() {
+        let dir = std::env::temp_dir().join(format!("testbed-cli-design-{}", std::process::id()));
+        std::fs::remove_dir_all(&dir).ok();
+        let data = dir.join("data");
+        run_experiment(&ExperimentArgs {
+            out: data.clone(),
+            model: None,
+            duration: 180.0,
+            seed: 4,
+            thrusters: false,
+            design: true,
+            targets: vec!["com_offset".into(), "inertia_error".into()],
+            com_allowance_m: 2e-7,
+        })
+        .unwrap();
+        assert!(data.join("gyro.csv").is_file());
+        let info: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(data.join("experiment.json")).unwrap())
+                .unwrap();
+        let design = &info["design"];
+        assert_eq!(design["parameters"].as_array().unwrap().len(), 9);
+        // The programme run is the designed one, at the duration and seed asked for.
+        assert_eq!(info["options"], design["chosen"]["options"]);
+        assert_eq!(info["options"]["duration_s"], 180.0);
+        assert_eq!(info["options"]["seed"], 4);
+        let log_det = |e: &serde_json::Value| e["criterion"]["log_det"].as_f64().unwrap();
+        assert!(log_det(&design["chosen"]) >= log_det(&design["baseline"]));
+        assert_eq!(info["tilt_stop_strikes"], 0);
+        let err = run_experiment(&ExperimentArgs {
+            out: dir.join("bad"),
+            model: None,
+            duration: 60.0,
+            seed: 4,
+            thrusters: false,
+            design: true,
+            targets: vec!["thruster_torque_scale".into()],
+            com_allowance_m: 2e-7,
+        })
+        .unwrap_err();
+        assert!(
+            format!("{err:#}").contains("thruster_torque_scale"),
+            "{err:#}"
+        );
+        let err = run_experiment(&ExperimentArgs {
+            out: dir.join("bad"),
+            model: None,
+            duration: 60.0,
+            seed: 4,
+            thrusters: false,
+            design: true,
+            targets: vec!["no_such_cause".into()],
+            com_allowance_m: 2e-7,
+        })
+        .unwrap_err();
+        assert!(format!("{err:#}").contains("no_such_cause"), "{err:#}");
+        let err = run_experiment(&ExperimentArgs {
+            out: dir.join("bad"),
+            model: None,
+            duration: 60.0,
+            seed: 4,
+            thrusters: false,
+            design: true,
+            targets: Vec::new(),
+            com_allowance_m: -1.0,
+        })
+        .unwrap_err();
+        assert!(format!("{err:#}").contains("com_allowance_m"), "{err:#}");
         std::fs::remove_dir_all(&dir).ok();
     }
 
@@ -696,6 +926,9 @@ mod tests {
             duration: 300.0,
             seed: 3,
             thrusters: false,
+            design: false,
+            targets: Vec::new(),
+            com_allowance_m: 2e-7,
         })
         .unwrap();
         for f in [

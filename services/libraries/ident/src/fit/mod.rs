@@ -21,15 +21,19 @@
 //! * `hard_iron`: the hard iron's starting value (sphere fit of the field readings);
 //! * `torque`: weighted least squares of the torque causes;
 //! * `wheels`: per-wheel least squares, delay and Stribeck-speed searches, [`WheelModel`];
+//! * `information`: the Fisher information of torque and wheel causes on a state (the normal
+//!   equations the fits solve), for experiment design;
 //! * `jacobian`: the one finite-difference Jacobian (and its normal equations) the fits use.
 
 mod hard_iron;
+mod information;
 mod jacobian;
 mod sensors;
 mod torque;
 mod wheels;
 
 pub use hard_iron::sphere_fit;
+pub use information::{Information, information_params, information_supported};
 pub use wheels::WheelModel;
 
 use crate::channels::{TORQUE_COLUMNS, TorqueChannel, WheelChannel};

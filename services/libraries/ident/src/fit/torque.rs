@@ -40,20 +40,7 @@ impl Problem<'_> {
             .filter(|(_, c)| !ch.determined(**c))
             .map(|(j, _)| (j, 0.0))
             .collect();
-        let mut ne = NormalEquations::new(columns.len());
-        let mut row = vec![0.0; columns.len()];
-        for (i, &a) in ch.ticks.iter().enumerate() {
-            if self.held_out[a] {
-                continue;
-            }
-            for axis in 0..3 {
-                let s = ch.sigma[axis];
-                for (j, &c) in columns.iter().enumerate() {
-                    row[j] = ch.x[i][c][axis] / s;
-                }
-                ne.add(&row, ch.y[i][axis] / s);
-            }
-        }
+        let ne = torque_normal_equations(ch, &self.held_out, &columns);
         let (theta, stderr) = loop {
             let (theta, stderr) = solve_fixed(&ne, &fixed).ok_or_else(|| {
                 IdentError::Failed(format!(
@@ -123,6 +110,32 @@ impl Problem<'_> {
         }
         Ok((delta, out))
     }
+}
+
+/// Normal equations of the torque channel's weighted least squares in the columns `columns`
+/// (indices into the [`TORQUE_COLUMNS`] regressors), on the rows not `held_out`: each row and
+/// axis whitened by the channel's a-priori σ, so `XᵀX` is the Fisher information of those
+/// parameters (configuration units) for noise as modelled.
+pub(crate) fn torque_normal_equations(
+    ch: &TorqueChannel,
+    held_out: &[bool],
+    columns: &[usize],
+) -> NormalEquations {
+    let mut ne = NormalEquations::new(columns.len());
+    let mut row = vec![0.0; columns.len()];
+    for (i, &a) in ch.ticks.iter().enumerate() {
+        if held_out[a] {
+            continue;
+        }
+        for axis in 0..3 {
+            let s = ch.sigma[axis];
+            for (j, &c) in columns.iter().enumerate() {
+                row[j] = ch.x[i][c][axis] / s;
+            }
+            ne.add(&row, ch.y[i][axis] / s);
+        }
+    }
+    ne
 }
 
 /// Variance of the fitted torque columns `cols` from the thrusters' pulse-to-pulse thrust noise

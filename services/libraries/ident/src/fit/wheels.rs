@@ -178,37 +178,8 @@ impl Problem<'_> {
         fit_friction: bool,
         ns: Option<f64>,
     ) -> Option<WheelSolve> {
-        let rows = &ch.rows[w];
-        // Unknown layout: [s, c_pos, c_neg, t_s, k]; the Stribeck column only with `ns`.
-        let mut ne = NormalEquations::new(5);
-        let mut x = [0.0; 5];
-        let mut n = 0usize;
+        let (ne, n) = self.wheel_normal_equations(ch, base, w, delay, fit_scale, fit_friction, ns);
         let base_friction = &base.friction[w];
-        for row in rows.iter().filter(|r| !self.held_out[r.k]) {
-            let tau = self
-                .data
-                .wheel_cmd_integral(row.t0, row.t1, delay, ch.max_torque_nm)[w];
-            let mut y = row.ja;
-            if fit_scale {
-                x[0] = tau;
-            } else {
-                x[0] = 0.0;
-                y -= base.scale[w] * tau;
-            }
-            if fit_friction {
-                let r = friction_regressors(row, ns);
-                x[1] = -r[0];
-                x[2] = -r[1];
-                x[3] = if ns.is_some() { -r[2] } else { 0.0 };
-                x[4] = -r[3];
-            } else {
-                x[1..].fill(0.0);
-                y += friction_integral(base_friction, row);
-            }
-            let s = ch.sigma;
-            ne.add(&x.map(|v| v / s), y / s);
-            n += 1;
-        }
         if n < 10 {
             return None;
         }
@@ -271,6 +242,55 @@ impl Problem<'_> {
             free,
             ns: None,
         })
+    }
+
+    /// Normal equations of wheel `w`'s least squares at delay `delay` (unknowns
+    /// `[scale, coulomb_pos, coulomb_neg, stribeck, viscous]`, a column zero where not fitted)
+    /// on the intervals not held out, rows whitened by the channel's σ: `XᵀX` is the Fisher
+    /// information of those unknowns for noise as modelled. Also the number of rows.
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn wheel_normal_equations(
+        &self,
+        ch: &WheelChannel,
+        base: &WheelModel,
+        w: usize,
+        delay: f64,
+        fit_scale: bool,
+        fit_friction: bool,
+        ns: Option<f64>,
+    ) -> (NormalEquations, usize) {
+        let rows = &ch.rows[w];
+        // Unknown layout: [s, c_pos, c_neg, t_s, k]; the Stribeck column only with `ns`.
+        let mut ne = NormalEquations::new(5);
+        let mut x = [0.0; 5];
+        let mut n = 0usize;
+        let base_friction = &base.friction[w];
+        for row in rows.iter().filter(|r| !self.held_out[r.k]) {
+            let tau = self
+                .data
+                .wheel_cmd_integral(row.t0, row.t1, delay, ch.max_torque_nm)[w];
+            let mut y = row.ja;
+            if fit_scale {
+                x[0] = tau;
+            } else {
+                x[0] = 0.0;
+                y -= base.scale[w] * tau;
+            }
+            if fit_friction {
+                let r = friction_regressors(row, ns);
+                x[1] = -r[0];
+                x[2] = -r[1];
+                x[3] = if ns.is_some() { -r[2] } else { 0.0 };
+                x[4] = -r[3];
+            } else {
+                x[1..].fill(0.0);
+                y += friction_integral(base_friction, row);
+            }
+            let s = ch.sigma;
+            ne.add(&x.map(|v| v / s), y / s);
+            n += 1;
+        }
+        (ne, n)
     }
 }
 

@@ -119,7 +119,8 @@ impl Default for Options {
 }
 
 impl Options {
-    fn validate(&self) -> Result<(), IdentError> {
+    /// Refuse options the analysis cannot use, naming the option.
+    pub fn validate(&self) -> Result<(), IdentError> {
         let bad = |key: &str, value: String, reason: &str| {
             Err(IdentError::Options {
                 key: key.into(),
@@ -178,6 +179,21 @@ impl Options {
     }
 }
 
+/// Which ticks the fits of [`identify`] leave out: with `folds` ≥ 2 (k-fold) none (the fits use
+/// all the data, each fold's problem holds out its own blocks); otherwise every
+/// `held_out_every`-th block of `block_s`.
+pub fn held_out_mask(aligned: &Aligned, options: &Options) -> Vec<bool> {
+    let block = |t: f64| (t / options.block_s).floor().max(0.0) as usize;
+    let cross_validated = options.folds >= 2;
+    aligned
+        .t
+        .iter()
+        .map(|&t| {
+            !cross_validated && block(t) % options.held_out_every == options.held_out_every - 1
+        })
+        .collect()
+}
+
 /// Identify what the model gets wrong in `data` (see the module documentation).
 pub fn identify(
     data: &Dataset,
@@ -190,15 +206,7 @@ pub fn identify(
     let aligned = Aligned::new(data);
     let block = |t: f64| (t / options.block_s).floor().max(0.0) as usize;
     let cross_validated = options.folds >= 2;
-    // k-fold: the fits use all the data and fold j's problem holds out the blocks of fold j;
-    // otherwise every `held_out_every`-th block is held out of the fits.
-    let held_out: Vec<bool> = aligned
-        .t
-        .iter()
-        .map(|&t| {
-            !cross_validated && block(t) % options.held_out_every == options.held_out_every - 1
-        })
-        .collect();
+    let held_out = held_out_mask(&aligned, options);
     let problem = Problem::new(
         &aligned,
         model.clone(),
