@@ -299,26 +299,20 @@ fn print_design(d: &Design, model: &ModelConfig) {
     let (a, b) = (&d.baseline, &d.chosen);
     let row = |name: &str, x: String, y: String| println!("  {name:<34} {x:>18} {y:>18}");
     row("", "default".into(), "designed".into());
-    row(
-        "heading_amplitude_deg",
-        format!("{}", a.options.heading_amplitude_deg),
-        format!("{}", b.options.heading_amplitude_deg),
-    );
-    row(
-        "heading_rate_deg_s",
-        format!("{}", a.options.heading_rate_deg_s),
-        format!("{}", b.options.heading_rate_deg_s),
-    );
-    row(
-        "tilt_deg",
-        format!("{}", a.options.tilt_deg),
-        format!("{}", b.options.tilt_deg),
-    );
-    row(
-        "tilt_dwell_s",
-        format!("{}", a.options.tilt_dwell_s),
-        format!("{}", b.options.tilt_dwell_s),
-    );
+    type Field = fn(&ExperimentOptions) -> f64;
+    let options: [(&str, Field); 4] = [
+        ("heading_amplitude_deg", |o| o.heading_amplitude_deg),
+        ("heading_rate_deg_s", |o| o.heading_rate_deg_s),
+        ("tilt_deg", |o| o.tilt_deg),
+        ("tilt_dwell_s", |o| o.tilt_dwell_s),
+    ];
+    for (name, value) in options {
+        row(
+            name,
+            format!("{}", value(&a.options)),
+            format!("{}", value(&b.options)),
+        );
+    }
     let h = |o: &ExperimentOptions| format!("{:?}", o.wheel_momentum_nms);
     row("wheel_momentum_nms", h(&a.options), h(&b.options));
     row(

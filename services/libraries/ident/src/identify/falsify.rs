@@ -248,6 +248,15 @@ pub(super) fn test_causes(
             }
             joint = Some(JointTorque { delta });
         }
+        // The torque search with every named cause, computed once for all the competitions.
+        let cv_with = super::unexplained::torque_cv_rss(
+            problem,
+            fit,
+            named,
+            candidates,
+            levels.block_s,
+            levels.sparse,
+        );
         for &cause in named.iter().filter(|c| c.kind() == Kind::Torque) {
             let idx: Vec<usize> = (0..cols.len())
                 .filter(|&j| cols[j].0 == Some(cause))
@@ -292,7 +301,8 @@ pub(super) fn test_causes(
             }
             // Third: no generic form of another kind explains the cause's part better.
             if kept
-                && let Some((with, without)) = super::unexplained::competing_explanation(
+                && let Some(with) = cv_with
+                && let Some(without) = super::unexplained::competing_explanation(
                     problem,
                     fit,
                     named,

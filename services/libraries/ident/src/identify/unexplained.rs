@@ -208,14 +208,18 @@ pub(super) fn search_all(
     options: &SparseOptions,
 ) -> Vec<UnexplainedEffect> {
     let mut out = Vec::new();
-    out.extend(search_torque(
-        problem,
-        fit,
-        named,
-        &candidates.torque,
-        block_s,
-        options,
-    ));
+    out.extend(
+        search_torque(
+            problem,
+            fit,
+            named,
+            &candidates.torque,
+            block_s,
+            options,
+            None,
+        )
+        .0,
+    );
     out.extend(search_innovations(
         problem,
         fit,
@@ -227,24 +231,25 @@ pub(super) fn search_all(
     out
 }
 
-fn search_torque(
+/// The torque search's cross-validated residual sum (whitened, summed over the three axes)
+/// with the named causes `named`: what a competing explanation is measured against.
+pub(super) fn torque_cv_rss(
     problem: &Problem,
     fit: &SetFit,
     named: &[Cause],
     candidates: &TorqueCandidates,
     block_s: f64,
     options: &SparseOptions,
-) -> Vec<UnexplainedEffect> {
-    search_torque_as(problem, fit, named, candidates, block_s, options, None).0
+) -> Option<f64> {
+    search_torque(problem, fit, named, candidates, block_s, options, None).1
 }
 
 /// The competing explanation of a named torque cause: the torque search redone without it
 /// (its fitted part put back into the residual) and without the candidate functions that are
 /// the cause's own form (`1` for a constant torque, the tilt terms for a centre-of-mass offset,
-/// rates for drag, accelerations and rate products for the inertia), against the search with
-/// it. Returns the cross-validated residual sums (whitened, summed over the three axes) with
-/// and without the cause: a cause whose part a generic form of another kind explains better
-/// stood in for that form.
+/// rates for drag, accelerations and rate products for the inertia). Returns its
+/// cross-validated residual sum, to set against [`torque_cv_rss`] with the cause: a cause
+/// whose part a generic form of another kind explains better stood in for that form.
 pub(super) fn competing_explanation(
     problem: &Problem,
     fit: &SetFit,
@@ -253,10 +258,9 @@ pub(super) fn competing_explanation(
     candidates: &TorqueCandidates,
     block_s: f64,
     options: &SparseOptions,
-) -> Option<(f64, f64)> {
-    let (_, with) = search_torque_as(problem, fit, named, candidates, block_s, options, None);
+) -> Option<f64> {
     let others: Vec<Cause> = named.iter().copied().filter(|c| *c != cause).collect();
-    let (_, without) = search_torque_as(
+    search_torque(
         problem,
         fit,
         &others,
@@ -264,8 +268,8 @@ pub(super) fn competing_explanation(
         block_s,
         options,
         Some(cause),
-    );
-    Some((with?, without?))
+    )
+    .1
 }
 
 /// The cause's own form among the torque candidates (excluded from its competitor).
@@ -284,7 +288,7 @@ fn own_form(cause: Cause) -> &'static [&'static str] {
 /// The torque search; with `removed` the residual has that cause's fitted part put back and
 /// its own form is not a candidate. Also the cross-validated residual sum over the axes,
 /// whitened by each axis's noise (`None` if the channel is too short).
-fn search_torque_as(
+fn search_torque(
     problem: &Problem,
     fit: &SetFit,
     named: &[Cause],
