@@ -197,9 +197,6 @@ pub struct WaitCounts {
     pub polled: u64,
     pub empty_windows: u64,
     pub stale_notifications: u64,
-    /// Data wake-ups delivered by the bus's listener sweep.
-    #[serde(default)]
-    pub swept: u64,
 }
 
 impl WaitCounts {
@@ -208,12 +205,11 @@ impl WaitCounts {
         self.polled += o.polled;
         self.empty_windows += o.empty_windows;
         self.stale_notifications += o.stale_notifications;
-        self.swept += o.swept;
     }
 
     /// Data wake-ups of every kind.
     pub fn wakeups(&self) -> u64 {
-        self.woken + self.polled + self.swept
+        self.woken + self.polled
     }
 }
 
@@ -224,7 +220,6 @@ impl From<WaitStats> for WaitCounts {
             polled: s.polled,
             empty_windows: s.empty_windows,
             stale_notifications: s.stale_notifications,
-            swept: s.swept,
         }
     }
 }

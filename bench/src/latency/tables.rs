@@ -421,7 +421,7 @@ pub fn wakeup_table(out: &mut String, r: &Report) {
             } else {
                 "–".into()
             };
-            let counts = [w.woken, w.polled, w.swept].map(|n| n.to_string());
+            let counts = [w.woken, w.polled].map(|n| n.to_string());
             let mut row = vec![
                 format!("{:?} {}", m.kind, m.label()).to_lowercase(),
                 load_name(m.load),
@@ -436,6 +436,6 @@ pub fn wakeup_table(out: &mut String, r: &Report) {
             rows.push(row);
         }
     }
-    let head = "measurement | load | process | data wake-ups after sleeping | by polling | by the listener sweep | per message | empty poll windows | stale notifications";
+    let head = "measurement | load | process | data wake-ups after a ring | by polling | per message | empty poll windows | stale notifications";
     table(out, head, 3, rows);
 }

@@ -362,13 +362,13 @@ impl CanGateway {
             self.thrusters.as_mut(),
         ) {
             (Some(s), _, _, _) => {
-                s.drain(|c| batches.push((c.header.time_ns, gateway.wheel_command(&c))))?
+                s.drain(|c| batches.push((c.header.time_ns, gateway.wheel_command(c))))?
             }
             (_, Some(s), _, _) => {
-                s.drain(|c| batches.push((c.header.time_ns, gateway.cmg_command(&c))))?
+                s.drain(|c| batches.push((c.header.time_ns, gateway.cmg_command(c))))?
             }
             (_, _, Some(s), Some(side)) => s.drain(|c| {
-                let (on_time, refusal) = side.guard.check(&c);
+                let (on_time, refusal) = side.guard.check(c);
                 if let Some(refusal) = refusal {
                     gateway.count_refused_command();
                     tracing::warn!(

@@ -118,10 +118,10 @@ impl Node for ControllerProcess {
                 "control cycle missed its deadline"
             );
         }
-        let received = ports.estimate.drain(|e| node.on_estimate(&e))?
-            + ports.wheels.drain(|t| node.on_wheel_telemetry(&t))?
-            + ports.cmg.drain(|t| node.on_cmg_telemetry(&t))?
-            + ports.gyro.drain(|g| node.on_gyro(&g))?;
+        let received = ports.estimate.drain(|e| node.on_estimate(e))?
+            + ports.wheels.drain(|t| node.on_wheel_telemetry(t))?
+            + ports.cmg.drain(|t| node.on_cmg_telemetry(t))?
+            + ports.gyro.drain(|g| node.on_gyro(g))?;
         io.heartbeat.add_samples_in(received as u64);
         // Ground commands take effect from the next cycle on.
         let mut commands = Vec::new();

@@ -60,9 +60,9 @@ impl Node for EstimatorProcess {
 
     fn on_wake(&mut self, ports: &EstimatorPorts, _wake: Wake, io: &Io) -> anyhow::Result<Flow> {
         let node = &mut self.node;
-        let received = ports.gyro.drain(|s| node.on_gyro(&s))?
-            + ports.tilt.drain(|s| node.on_inclinometer(&s))?
-            + ports.field.drain(|s| node.on_magnetometer(&s))?;
+        let received = ports.gyro.drain(|s| node.on_gyro(s))?
+            + ports.tilt.drain(|s| node.on_inclinometer(s))?
+            + ports.field.drain(|s| node.on_magnetometer(s))?;
         io.heartbeat.add_samples_in(received as u64);
         for estimate in node.ready() {
             io.heartbeat.set_time_ns(estimate.header.time_ns);

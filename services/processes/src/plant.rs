@@ -265,8 +265,8 @@ impl Node for PlantProcess {
         let node = &mut self.node;
         match &ports.commands {
             CommandPorts::Direct { wheels, cmg } => {
-                wheels.drain(|c| node.on_wheel_command(&c))?;
-                cmg.drain(|c| node.on_cmg_command(&c))?;
+                wheels.drain(|c| node.on_wheel_command(c))?;
+                cmg.drain(|c| node.on_cmg_command(c))?;
             }
             CommandPorts::Applied { wheels, cmg } => {
                 wheels.drain(|c| node.on_wheel_command(&WheelCommand::new(c.header, c.torque)))?;
@@ -275,7 +275,7 @@ impl Node for PlantProcess {
         }
         match (&ports.thrusters, &mut self.thrusters) {
             (Some(ThrusterPorts::Direct { commands, .. }), Some(drive)) => {
-                commands.drain(|c| drive.on_command(&c, node))?;
+                commands.drain(|c| drive.on_command(c, node))?;
             }
             (Some(ThrusterPorts::Applied { applied }), _) => {
                 applied.drain(|c| {

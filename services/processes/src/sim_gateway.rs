@@ -36,13 +36,13 @@ struct Commands<C: Topic>(TopicSubscriber<C>);
 
 impl CommandInput<SimWheels> for Commands<WheelCommand> {
     fn drain_into(&self, device: &mut SimWheels) -> Result<usize, BusError> {
-        self.0.drain(|c| device.on_command(&c))
+        self.0.drain(|c| device.on_command(c))
     }
 }
 
 impl CommandInput<SimCmg> for Commands<CmgCommand> {
     fn drain_into(&self, device: &mut SimCmg) -> Result<usize, BusError> {
-        self.0.drain(|c| device.on_command(&c))
+        self.0.drain(|c| device.on_command(c))
     }
 }
 

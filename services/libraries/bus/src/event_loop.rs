@@ -1,42 +1,37 @@
-//! The event loop of a pipeline process: an iceoryx2 WaitSet with subscribers' listeners,
-//! intervals, deadlines and the heartbeat attached.
+//! The event loop of a pipeline process: the process's doorbell, with its subscribers,
+//! intervals, deadlines and the heartbeat.
 
 use std::cell::Cell;
+use std::rc::Rc;
 use std::time::{Duration, Instant};
 
-use iceoryx2::prelude::*;
-use iceoryx2::waitset::{WaitSetAttachmentError, WaitSetRunResult};
+use iceoryx2_bb_posix::signal::SignalHandler;
 use ipc_types::Topic;
 
-use crate::ports::{SubscriberPort, drain_listener};
+use crate::doorbell::{Bell, LocalBell, Woken};
+use crate::ports::SubscriberPort;
 use crate::wait::Arrivals;
 use crate::{BusError, HeartbeatPublisher, TopicSubscriber, WaitStats, WaitStrategy};
 
-/// Owns the iceoryx2 WaitSet that an [`EventLoop`] attaches to (the loop borrows it, which is
-/// what lets the loop hold the attachment guards).
+/// What an [`EventLoop`] without subscribers sleeps on (a process-private futex word that
+/// nothing rings: a sleep that a signal interrupts). A loop with subscribers sleeps on the
+/// doorbell of the [`Bus`](crate::Bus) they came from instead.
 pub struct Waiter {
-    waitset: WaitSet<ipc::Service>,
+    local: LocalBell,
 }
 
 impl core::fmt::Debug for Waiter {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        f.debug_struct("Waiter")
-            .field("attachments", &self.waitset.len())
-            .finish()
+        f.debug_struct("Waiter").finish_non_exhaustive()
     }
 }
 
 impl Waiter {
-    /// A WaitSet that reports SIGINT/SIGTERM as termination requests.
+    /// A waiter; SIGINT/SIGTERM become termination requests of the loops on it.
     pub fn new() -> Result<Self, BusError> {
-        let waitset = WaitSetBuilder::new()
-            .signal_handling_mode(SignalHandlingMode::HandleTerminationRequests)
-            .create::<ipc::Service>()
-            .map_err(|e| BusError::WaitSet {
-                operation: "creating the WaitSet",
-                source: Box::new(e),
-            })?;
-        Ok(Self { waitset })
+        Ok(Self {
+            local: LocalBell::new(),
+        })
     }
 }
 
@@ -54,10 +49,9 @@ impl SourceId {
 /// Why the loop called back.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Wake {
-    /// A subscriber was notified; its listener has already been drained. Read its samples with
-    /// [`TopicSubscriber::drain`]. With a polling [`WaitStrategy`] this also means that a
-    /// poll found samples pending (the notification is drained by a later round, and a
-    /// notification whose samples were already taken calls nothing back).
+    /// A subscriber has samples, and its doorbell rang since it was last called back (or, with a
+    /// polling [`WaitStrategy`], a poll found them). Read them with [`TopicSubscriber::drain`];
+    /// samples left pending are called back again only after the next ring.
     Data(SourceId),
     /// An interval elapsed.
     Tick(SourceId),
@@ -94,99 +88,94 @@ pub enum LoopExit {
     TerminationRequested,
 }
 
+/// Longest the loop sleeps without looking at the termination flag: the pipeline's heartbeat
+/// period, so that a pipeline process, which wakes for its heartbeat anyway, has no extra
+/// wake-up. A signal normally interrupts the sleep at once; this bounds the one case where it
+/// lands between the check and the sleep.
+pub const MAX_SLEEP: Duration = Duration::from_millis(500);
+
+/// Most a poll window is opened early to make up for late timer wake-ups.
+const MAX_LATENESS: Duration = Duration::from_micros(200);
+
 enum Kind<'a> {
     Data(&'a dyn SubscriberPort),
     Interval,
     Heartbeat(&'a HeartbeatPublisher),
 }
 
-/// WaitSet guards of intervals borrow nothing but the WaitSet (`'static` attachment).
-enum Guard<'w, 'a> {
-    Listener(WaitSetGuard<'w, 'a, ipc::Service>),
-    Interval(WaitSetGuard<'w, 'static, ipc::Service>),
-}
-
-impl Guard<'_, '_> {
-    fn fired(&self, id: &WaitSetAttachmentId<ipc::Service>) -> bool {
-        match self {
-            Self::Listener(g) => id.has_event_from(g) || id.has_missed_deadline(g),
-            Self::Interval(g) => id.has_event_from(g),
-        }
-    }
-
-    fn missed_deadline(&self, id: &WaitSetAttachmentId<ipc::Service>) -> bool {
-        match self {
-            Self::Listener(g) => id.has_missed_deadline(g),
-            Self::Interval(_) => false,
-        }
-    }
-}
-
-struct Attachment<'w, 'a> {
-    guard: Guard<'w, 'a>,
+struct Attachment<'a> {
     kind: Kind<'a>,
-    missed: Cell<u64>,
-    arrivals: Cell<Arrivals>,
-    /// The deadline of a subscriber attached with one.
+    /// Intervals and the heartbeat: the period and the next time it is due.
+    period: Option<Duration>,
+    next_due: Cell<Option<Instant>>,
+    /// A subscriber attached with a deadline: the deadline and when the last miss was reported.
     deadline: Option<Duration>,
+    last_miss: Cell<Option<Instant>>,
+    missed: Cell<u64>,
+    /// The doorbell's count when this subscriber was last called back.
+    called_at_ring: Cell<Option<u32>>,
+    arrivals: Cell<Arrivals>,
 }
 
-/// How often the loop looks at every subscriber's listener and samples without having been
-/// woken for them.
-///
-/// iceoryx2 0.10's inter-process event (`UnixDatagramShmCountingBitSet`) skips the wake-up
-/// datagram while its shared state says one is pending. That state can be left set after the
-/// listener has already consumed the datagram: the listener resets the state, a notifier
-/// marks it pending and sends, the listener's drain empties the socket (taking that datagram),
-/// then the notifier marks the state "notified". From then on every notifier skips the
-/// datagram and the listener is never woken again, with its samples piling up. Seen under
-/// heavy load (two cores, a CPU hog, two can-sim pipelines): one gateway's CAN listener went
-/// deaf with its state byte at "notified", an empty socket and 53 activations pending, and the
-/// lockstep run stopped. Draining the listener by hand (`try_wait`) resets the state, so a
-/// sweep turns that permanent stop into a delay. The sweep rides on the loop's other wake-ups
-/// (data, intervals, the heartbeat) at most every this period, so it costs no wake-up of its
-/// own; a loop with subscribers never sleeps longer than [`LISTENER_SWEEP_MAX_SLEEP`]. Samples
-/// it finds are called back and counted ([`WaitStats::swept`]).
-pub const LISTENER_SWEEP_PERIOD: Duration = Duration::from_millis(100);
+impl<'a> Attachment<'a> {
+    fn new(kind: Kind<'a>) -> Self {
+        Self {
+            kind,
+            period: None,
+            next_due: Cell::new(None),
+            deadline: None,
+            last_miss: Cell::new(None),
+            missed: Cell::new(0),
+            called_at_ring: Cell::new(None),
+            arrivals: Cell::new(Arrivals::default()),
+        }
+    }
 
-/// Longest a loop with subscribers sleeps without sweeping its listeners
-/// ([`LISTENER_SWEEP_PERIOD`]): the pipeline's heartbeat period, so that a pipeline process,
-/// which wakes for its heartbeat anyway, has no extra wake-up.
-pub const LISTENER_SWEEP_MAX_SLEEP: Duration = Duration::from_millis(500);
+    /// When the deadline of a supervised subscriber runs out: a deadline after its last sample
+    /// or its last reported miss, whichever is later. `None` before its first sample.
+    fn deadline_due(&self, port: &dyn SubscriberPort) -> Option<Instant> {
+        let deadline = self.deadline?;
+        let last = port.last_received()?;
+        let anchor = self.last_miss.get().map_or(last, |miss| miss.max(last));
+        anchor.checked_add(deadline)
+    }
 
-/// How often a polling loop serves the WaitSet (termination, intervals, deadlines) at least.
-const SERVICE_PERIOD: Duration = Duration::from_millis(1);
-
-/// Most a poll window is opened early to make up for late timer wake-ups.
-const MAX_LATENESS: Duration = Duration::from_micros(200);
-
-/// Granularity of the WaitSet's timeouts (epoll: whole milliseconds, rounded up).
-const COARSE: Duration = Duration::from_millis(1);
+    /// The next time this attachment has something to do without a ring.
+    fn next_timer(&self) -> Option<Instant> {
+        match self.kind {
+            Kind::Data(port) => self.deadline_due(port),
+            Kind::Interval | Kind::Heartbeat(_) => self.next_due.get(),
+        }
+    }
+}
 
 /// Waits on subscribers, intervals and deadlines and calls back with the source that fired.
 ///
 /// With the default [`WaitStrategy::Block`] it never busy-waits: between wake-ups the thread
-/// sleeps in `epoll_wait` (iceoryx2 WaitSet), and a data wake-up always drains the subscriber's
-/// listener before calling back, so a notification can wake the loop only once. The other
+/// sleeps on its process's doorbell (a futex), which every publisher to any of its subscribers
+/// rings after sending. Each round reads the doorbell first, then calls back every due interval,
+/// every missed deadline and every subscriber that has samples and was rung for, in attachment
+/// order; it sleeps only when a round found nothing, and only while the doorbell still has the
+/// count it read (so a sample published during the round is never slept through). The other
 /// strategies poll the subscribers in short windows (see [`WaitStrategy`]); the process's
 /// [`ENV_WAIT`](crate::ENV_WAIT) chooses the strategy of [`EventLoop::new`].
 pub struct EventLoop<'w, 'a> {
-    waitset: &'w WaitSet<ipc::Service>,
-    attachments: Vec<Attachment<'w, 'a>>,
+    waiter: &'w Waiter,
+    /// The doorbell of the subscribers' bus (all must come from one bus).
+    bell: Option<Rc<Bell>>,
+    attachments: Vec<Attachment<'a>>,
     wait: WaitStrategy,
     /// End of the current poll-after-wake window ([`WaitStrategy::SpinAfterWake`]).
     spin_until: Cell<Option<Instant>>,
-    /// Last time the WaitSet was asked (polling strategies serve it every [`SERVICE_PERIOD`]).
-    last_round: Cell<Instant>,
     stats: Cell<WaitStats>,
     /// How late timed wake-ups for poll windows come (moving average).
     lateness: Cell<Duration>,
-    /// When the listeners were last swept ([`LISTENER_SWEEP_PERIOD`]).
-    last_sweep: Cell<Instant>,
+    /// The previous sleep ended with a ring (for [`WaitStats::stale_notifications`]).
+    was_rung: Cell<bool>,
 }
 
 impl<'w, 'a> EventLoop<'w, 'a> {
-    /// An empty loop on `waiter`'s WaitSet, waiting as [`ENV_WAIT`](crate::ENV_WAIT) says
+    /// An empty loop on `waiter`, waiting as [`ENV_WAIT`](crate::ENV_WAIT) says
     /// ([`WaitStrategy::Block`] when unset; an invalid value is logged and ignored —
     /// [`BusConfig::from_env`](crate::BusConfig::from_env) refuses it with its name).
     pub fn new(waiter: &'w Waiter) -> Self {
@@ -197,21 +186,21 @@ impl<'w, 'a> EventLoop<'w, 'a> {
         Self::with_wait_strategy(waiter, wait)
     }
 
-    /// An empty loop on `waiter`'s WaitSet that waits with `wait`.
+    /// An empty loop on `waiter` that waits with `wait`.
     ///
     /// [`WaitStrategy::Anticipate`] sets the calling thread's timer slack to 1 µs, so that it
     /// wakes when a poll window opens rather than up to 50 µs later.
     pub fn with_wait_strategy(waiter: &'w Waiter, wait: WaitStrategy) -> Self {
         precise_timers(wait);
         Self {
-            waitset: &waiter.waitset,
+            waiter,
+            bell: None,
             attachments: Vec::new(),
             wait,
             spin_until: Cell::new(None),
-            last_round: Cell::new(Instant::now()),
             stats: Cell::new(WaitStats::default()),
             lateness: Cell::new(Duration::ZERO),
-            last_sweep: Cell::new(Instant::now()),
+            was_rung: Cell::new(false),
         }
     }
 
@@ -232,43 +221,39 @@ impl<'w, 'a> EventLoop<'w, 'a> {
         self.stats.get()
     }
 
-    fn push(&mut self, guard: Guard<'w, 'a>, kind: Kind<'a>) -> SourceId {
-        self.push_with_deadline(guard, kind, None)
-    }
-
-    fn push_with_deadline(
-        &mut self,
-        guard: Guard<'w, 'a>,
-        kind: Kind<'a>,
-        deadline: Option<Duration>,
-    ) -> SourceId {
-        self.attachments.push(Attachment {
-            guard,
-            kind,
-            missed: Cell::new(0),
-            arrivals: Cell::new(Arrivals::default()),
-            deadline,
-        });
+    fn push(&mut self, attachment: Attachment<'a>) -> SourceId {
+        self.attachments.push(attachment);
         SourceId(self.attachments.len() - 1)
     }
 
-    fn attach_error(operation: &'static str) -> impl FnOnce(WaitSetAttachmentError) -> BusError {
-        move |e| BusError::WaitSet {
-            operation,
-            source: Box::new(e),
+    fn attach_subscriber(
+        &mut self,
+        subscriber: &'a dyn SubscriberPort,
+        deadline: Option<Duration>,
+    ) -> Result<SourceId, BusError> {
+        match &self.bell {
+            None => self.bell = Some(subscriber.bell().clone()),
+            Some(bell) if Rc::ptr_eq(bell, subscriber.bell()) => {}
+            Some(_) => {
+                return Err(BusError::WaitSet {
+                    operation: "attaching a subscriber",
+                    source: "the subscribers of one event loop must come from one Bus \
+                             (they ring that bus's doorbell)"
+                        .into(),
+                });
+            }
         }
+        let mut attachment = Attachment::new(Kind::Data(subscriber));
+        attachment.deadline = deadline;
+        Ok(self.push(attachment))
     }
 
-    /// Wakes with [`Wake::Data`] when `subscriber` is notified.
+    /// Wakes with [`Wake::Data`] when `subscriber` has samples.
     pub fn on_data<T: Topic>(
         &mut self,
         subscriber: &'a TopicSubscriber<T>,
     ) -> Result<SourceId, BusError> {
-        let guard = self
-            .waitset
-            .attach_notification(SubscriberPort::listener(subscriber))
-            .map_err(Self::attach_error("attaching a subscriber"))?;
-        Ok(self.push(Guard::Listener(guard), Kind::Data(subscriber)))
+        self.attach_subscriber(subscriber, None)
     }
 
     /// Like [`on_data`](Self::on_data), and also wakes with [`Wake::DeadlineMissed`] when
@@ -281,60 +266,33 @@ impl<'w, 'a> EventLoop<'w, 'a> {
     /// missed deadline.
     ///
     /// "Nothing arrived" means that the subscriber took no sample
-    /// ([`TopicSubscriber::last_received`]) for the whole deadline: a sample whose notification
-    /// was consumed by a `drain` in another source's callback, or taken by polling, counts.
-    /// The WaitSet's timer only sees notifications, so in that case the miss is reported
-    /// between one and two deadlines after the last sample.
+    /// ([`TopicSubscriber::last_received`]) for the whole deadline and has none pending: a
+    /// sample taken by a `drain` in another source's callback, or by polling, counts.
     pub fn on_data_with_deadline<T: Topic>(
         &mut self,
         subscriber: &'a TopicSubscriber<T>,
         deadline: Duration,
     ) -> Result<SourceId, BusError> {
-        let guard = self
-            .waitset
-            .attach_deadline(SubscriberPort::listener(subscriber), deadline)
-            .map_err(Self::attach_error("attaching a subscriber with a deadline"))?;
-        Ok(self.push_with_deadline(
-            Guard::Listener(guard),
-            Kind::Data(subscriber),
-            Some(deadline),
-        ))
+        self.attach_subscriber(subscriber, Some(deadline))
     }
 
-    /// The sweep ([`LISTENER_SWEEP_PERIOD`]): drains every subscriber's listener (which also
-    /// resets a listener left deaf) and calls back [`Wake::Data`] for every subscriber with
-    /// samples pending.
-    fn sweep(&self, on_wake: &mut impl FnMut(Wake) -> Flow) -> Result<(Flow, bool), BusError> {
-        let mut handled = false;
-        for (index, _, port) in self.data_attachments() {
-            // `attach` also connects to publishers created since the last look.
-            let pending = drain_listener(port.listener(), port.event_name())?;
-            if !port.attach()? {
-                continue;
-            }
-            self.count(|s| s.swept += 1);
-            tracing::debug!(
-                service = port.event_name(),
-                notified = pending.samples,
-                "samples found by the listener sweep"
-            );
-            handled = true;
-            let flow = on_wake(Wake::Data(SourceId(index)));
-            self.handled_data();
-            if flow == Flow::Stop {
-                return Ok((Flow::Stop, true));
-            }
+    fn attach_periodic(&mut self, kind: Kind<'a>, period: Duration) -> Result<SourceId, BusError> {
+        if period.is_zero() {
+            return Err(BusError::WaitSet {
+                operation: "attaching an interval",
+                source: "the period must be longer than zero".into(),
+            });
         }
-        Ok((Flow::Continue, handled))
+        let mut attachment = Attachment::new(kind);
+        attachment.period = Some(period);
+        attachment.next_due.set(Instant::now().checked_add(period));
+        Ok(self.push(attachment))
     }
 
-    /// Wakes with [`Wake::Tick`] every `period`.
+    /// Wakes with [`Wake::Tick`] every `period` (a tick that could not be served in time is
+    /// served once, late, and the next one is a period after it).
     pub fn on_interval(&mut self, period: Duration) -> Result<SourceId, BusError> {
-        let guard = self
-            .waitset
-            .attach_interval(period)
-            .map_err(Self::attach_error("attaching an interval"))?;
-        Ok(self.push(Guard::Interval(guard), Kind::Interval))
+        self.attach_periodic(Kind::Interval, period)
     }
 
     /// Publishes `heartbeat` now and then every [`HeartbeatPublisher::period`], without calling
@@ -343,12 +301,9 @@ impl<'w, 'a> EventLoop<'w, 'a> {
         &mut self,
         heartbeat: &'a HeartbeatPublisher,
     ) -> Result<SourceId, BusError> {
-        let guard = self
-            .waitset
-            .attach_interval(heartbeat.period())
-            .map_err(Self::attach_error("attaching the heartbeat interval"))?;
+        let source = self.attach_periodic(Kind::Heartbeat(heartbeat), heartbeat.period())?;
         heartbeat.publish_or_count();
-        Ok(self.push(Guard::Interval(guard), Kind::Heartbeat(heartbeat)))
+        Ok(source)
     }
 
     /// Missed deadlines of `source` so far.
@@ -376,105 +331,157 @@ impl<'w, 'a> EventLoop<'w, 'a> {
         self.wait_once(timeout, &mut on_wake)
     }
 
+    /// The doorbell's count now.
+    fn rings(&self) -> u32 {
+        match &self.bell {
+            Some(bell) => bell.rings(),
+            None => self.waiter.local.rings(),
+        }
+    }
+
+    /// Sleeps until the doorbell rings after `seen`, `timeout` passes or a signal arrives.
+    fn sleep(&self, seen: u32, timeout: Duration) -> Woken {
+        let woken = match &self.bell {
+            Some(bell) => bell.wait(seen, timeout),
+            None => self.waiter.local.wait(seen, timeout),
+        };
+        self.was_rung.set(woken == Woken::Rung);
+        woken
+    }
+
     fn wait_once(
         &self,
         timeout: Duration,
         on_wake: &mut impl FnMut(Wake) -> Flow,
     ) -> Result<Option<LoopExit>, BusError> {
-        if !self.wait.polls() {
-            return self.waitset_round(timeout, on_wake).map(|(exit, _)| exit);
-        }
         let end = Instant::now().checked_add(timeout);
         loop {
+            if SignalHandler::termination_requested() {
+                tracing::info!("termination requested (SIGINT/SIGTERM)");
+                return Ok(Some(LoopExit::TerminationRequested));
+            }
+            let seen = self.rings();
+            match self.dispatch(seen, on_wake)? {
+                Round::Exit(exit) => return Ok(Some(exit)),
+                Round::Handled => return Ok(None),
+                Round::Nothing => {
+                    if self.was_rung.replace(false) {
+                        self.count(|s| s.stale_notifications += 1);
+                    }
+                }
+            }
             let now = Instant::now();
             let left = end.map_or(Duration::MAX, |end| end.saturating_duration_since(now));
-            let window = self.poll_window(now);
-            let exit_or_handled = match window {
-                // Poll until the window closes (or the caller's timeout).
+            if left.is_zero() {
+                return Ok(None);
+            }
+            let until_timer = self
+                .next_timer()
+                .map_or(Duration::MAX, |t| t.saturating_duration_since(now));
+            let sleep = left.min(until_timer).min(MAX_SLEEP);
+            match self.poll_window(now) {
                 Window::Open(close) => {
-                    if now.saturating_duration_since(self.last_round.get()) >= SERVICE_PERIOD {
-                        let (exit, handled) = self.waitset_round(Duration::ZERO, on_wake)?;
-                        if exit.is_some() || handled {
-                            return Ok(exit);
-                        }
-                    }
-                    let close = end.map_or(close, |end| close.min(end));
-                    match self.poll_until(close, on_wake)? {
-                        Polled::Handled(exit) => return Ok(exit),
-                        Polled::Nothing => (None, false),
+                    let close = close.min(now + sleep);
+                    if let Polled::Handled(exit) = self.poll_until(close, on_wake)? {
+                        return Ok(exit);
                     }
                 }
-                // Sleep until the window opens (or something fires). The WaitSet rounds its
-                // timeout up to whole milliseconds, so it sleeps the bulk and `ppoll` on the
-                // listeners (nanosecond timeout) the last stretch.
-                // Timer wake-ups are late themselves (on a virtual machine, tens of µs when the
-                // CPU had halted): open that much earlier, as measured.
                 Window::OpensAt(open) => {
                     let open = open.checked_sub(self.lateness.get()).unwrap_or(open);
-                    let wait = left.min(open.saturating_duration_since(now));
-                    if wait > 2 * COARSE {
-                        self.waitset_round(wait - COARSE, on_wake)?
-                    } else if self.ppoll_listeners(wait)? {
-                        self.waitset_round(Duration::ZERO, on_wake)?
-                    } else {
-                        if wait == open.saturating_duration_since(now) {
-                            let late = Instant::now()
-                                .saturating_duration_since(open)
-                                .min(MAX_LATENESS);
-                            self.lateness.set((self.lateness.get() * 3 + late) / 4);
-                        }
-                        (None, false)
+                    let to_open = open.saturating_duration_since(now);
+                    if self.sleep(seen, sleep.min(to_open)) == Woken::TimedOut && to_open <= sleep {
+                        let late = Instant::now()
+                            .saturating_duration_since(open)
+                            .min(MAX_LATENESS);
+                        self.lateness.set((self.lateness.get() * 3 + late) / 4);
                     }
                 }
-                Window::None => self.waitset_round(left, on_wake)?,
-            };
-            match exit_or_handled {
-                (Some(exit), _) => return Ok(Some(exit)),
-                (None, true) => return Ok(None),
-                (None, false) if left.is_zero() => return Ok(None),
-                (None, false) => {}
+                Window::None => {
+                    self.sleep(seen, sleep);
+                }
             }
         }
     }
 
-    /// Sleeps until a data listener is notified or `timeout` has passed (precisely, unlike the
-    /// WaitSet); true if a listener was notified. Intervals and deadlines wait meanwhile (at
-    /// most [`COARSE`] twice over).
-    fn ppoll_listeners(&self, timeout: Duration) -> Result<bool, BusError> {
-        let mut fds: Vec<libc::pollfd> = self
-            .data_attachments()
-            .map(|(_, _, port)| libc::pollfd {
-                // SAFETY: the listener outlives this call; the descriptor is only polled.
-                fd: unsafe { port.listener().file_descriptor().native_handle() },
-                events: libc::POLLIN,
-                revents: 0,
-            })
-            .collect();
-        let ts = libc::timespec {
-            tv_sec: timeout.as_secs() as libc::time_t,
-            tv_nsec: timeout.subsec_nanos() as libc::c_long,
-        };
-        // SAFETY: ppoll reads `fds.len()` pollfds and the timespec, writes only `revents`.
-        let n = unsafe {
-            libc::ppoll(
-                fds.as_mut_ptr(),
-                fds.len() as libc::nfds_t,
-                &ts,
-                std::ptr::null(),
-            )
-        };
-        if n < 0 {
-            let e = std::io::Error::last_os_error();
-            if e.kind() == std::io::ErrorKind::Interrupted {
-                // A signal: the next WaitSet round reports a termination request.
-                return Ok(true);
-            }
-            return Err(BusError::WaitSet {
-                operation: "polling the listeners",
-                source: Box::new(e),
-            });
+    /// The earliest interval, heartbeat or deadline still to come.
+    fn next_timer(&self) -> Option<Instant> {
+        self.attachments
+            .iter()
+            .filter_map(Attachment::next_timer)
+            .min()
+    }
+
+    /// One round: calls back, in attachment order, every due interval (and publishes a due
+    /// heartbeat), every missed deadline and every subscriber with samples rung for since its
+    /// last callback (`seen`: the doorbell's count read before the round).
+    fn dispatch(
+        &self,
+        seen: u32,
+        on_wake: &mut impl FnMut(Wake) -> Flow,
+    ) -> Result<Round, BusError> {
+        let now = Instant::now();
+        if self.wait.polls() {
+            self.observe_arrivals(now, false)?;
         }
-        Ok(n > 0)
+        let mut handled = false;
+        for (index, attachment) in self.attachments.iter().enumerate() {
+            let source = SourceId(index);
+            let wake = match attachment.kind {
+                Kind::Interval | Kind::Heartbeat(_) => {
+                    let (Some(due), Some(period)) = (attachment.next_due.get(), attachment.period)
+                    else {
+                        continue;
+                    };
+                    if due > now {
+                        continue;
+                    }
+                    let next = due + period;
+                    attachment
+                        .next_due
+                        .set(Some(if next > now { next } else { now + period }));
+                    match attachment.kind {
+                        Kind::Heartbeat(heartbeat) => {
+                            heartbeat.publish_or_count();
+                            continue;
+                        }
+                        _ => Wake::Tick(source),
+                    }
+                }
+                Kind::Data(port) => {
+                    let pending = port.attach()?;
+                    if pending {
+                        if attachment.called_at_ring.get() == Some(seen) {
+                            continue;
+                        }
+                        attachment.called_at_ring.set(Some(seen));
+                        self.count(|s| s.woken += 1);
+                        Wake::Data(source)
+                    } else {
+                        match attachment.deadline_due(port) {
+                            Some(due) if due <= now => {
+                                attachment.last_miss.set(Some(now));
+                                attachment.missed.set(attachment.missed.get() + 1);
+                                Wake::DeadlineMissed(source)
+                            }
+                            _ => continue,
+                        }
+                    }
+                }
+            };
+            handled = true;
+            let flow = on_wake(wake);
+            if matches!(wake, Wake::Data(_)) {
+                self.handled_data();
+            }
+            if flow == Flow::Stop {
+                return Ok(Round::Exit(LoopExit::Stopped));
+            }
+        }
+        Ok(if handled {
+            Round::Handled
+        } else {
+            Round::Nothing
+        })
     }
 
     /// Where the current poll window stands at `now`.
@@ -509,7 +516,7 @@ impl<'w, 'a> EventLoop<'w, 'a> {
 
     fn data_attachments(
         &self,
-    ) -> impl Iterator<Item = (usize, &Attachment<'w, 'a>, &'a dyn SubscriberPort)> {
+    ) -> impl Iterator<Item = (usize, &Attachment<'a>, &'a dyn SubscriberPort)> {
         self.attachments
             .iter()
             .enumerate()
@@ -559,11 +566,12 @@ impl<'w, 'a> EventLoop<'w, 'a> {
         on_wake: &mut impl FnMut(Wake) -> Flow,
     ) -> Result<Polled, BusError> {
         loop {
-            for (index, _, port) in self.data_attachments() {
+            for (index, attachment, port) in self.data_attachments() {
                 if port.attach()? {
                     let now = Instant::now();
                     self.observe_arrivals(now, true)?;
                     self.count(|s| s.polled += 1);
+                    attachment.called_at_ring.set(Some(self.rings()));
                     let flow = on_wake(Wake::Data(SourceId(index)));
                     self.handled_data();
                     return Ok(Polled::Handled(match flow {
@@ -580,146 +588,16 @@ impl<'w, 'a> EventLoop<'w, 'a> {
             std::thread::yield_now();
         }
     }
+}
 
-    /// One round of the WaitSet, sleeping at most `timeout`. Returns the exit, if any, and
-    /// whether anything was called back.
-    fn waitset_round(
-        &self,
-        timeout: Duration,
-        on_wake: &mut impl FnMut(Wake) -> Flow,
-    ) -> Result<(Option<LoopExit>, bool), BusError> {
-        let polls = self.wait.polls();
-        let mut failure = None;
-        let mut handled = false;
-        let mut observed = false;
-        let attachments = &self.attachments;
-        let callback = |id: WaitSetAttachmentId<ipc::Service>| {
-            let Some((index, attachment)) = attachments
-                .iter()
-                .enumerate()
-                .find(|(_, a)| a.guard.fired(&id))
-            else {
-                return CallbackProgression::Continue;
-            };
-            let source = SourceId(index);
-            let wake = match attachment.kind {
-                Kind::Data(port) => {
-                    if attachment.guard.missed_deadline(&id) {
-                        // Supervised only once the stream has started: before its first
-                        // sample nothing can be late (the pipeline is still starting).
-                        let Some(last) = port.last_received() else {
-                            return CallbackProgression::Continue;
-                        };
-                        let received_in_time = attachment
-                            .deadline
-                            .is_some_and(|deadline| last.elapsed() < deadline);
-                        if received_in_time {
-                            return CallbackProgression::Continue;
-                        }
-                        attachment.missed.set(attachment.missed.get() + 1);
-                        Wake::DeadlineMissed(source)
-                    } else {
-                        // Drain before calling back: an undrained listener keeps its file
-                        // descriptor readable and the WaitSet would spin.
-                        let pending = match drain_listener(port.listener(), port.event_name()) {
-                            Ok(pending) => pending,
-                            Err(e) => {
-                                failure = Some(e);
-                                return CallbackProgression::Stop;
-                            }
-                        };
-                        if pending.new_publisher
-                            && let Err(e) = port.attach()
-                        {
-                            failure = Some(e);
-                            return CallbackProgression::Stop;
-                        }
-                        if !pending.samples {
-                            return CallbackProgression::Continue;
-                        }
-                        if polls {
-                            // Polling may have taken the samples before their notification
-                            // came; then there is nothing to call back for.
-                            let now = Instant::now();
-                            if !observed {
-                                if let Err(e) = self.observe_arrivals(now, false) {
-                                    failure = Some(e);
-                                    return CallbackProgression::Stop;
-                                }
-                                observed = true;
-                            }
-                            match port.attach() {
-                                Ok(true) => self.count(|s| s.woken += 1),
-                                Ok(false) => {
-                                    self.count(|s| s.stale_notifications += 1);
-                                    return CallbackProgression::Continue;
-                                }
-                                Err(e) => {
-                                    failure = Some(e);
-                                    return CallbackProgression::Stop;
-                                }
-                            }
-                        } else {
-                            self.count(|s| s.woken += 1);
-                        }
-                        Wake::Data(source)
-                    }
-                }
-                Kind::Interval => Wake::Tick(source),
-                Kind::Heartbeat(heartbeat) => {
-                    heartbeat.publish_or_count();
-                    return CallbackProgression::Continue;
-                }
-            };
-            handled = true;
-            let flow = on_wake(wake);
-            if matches!(wake, Wake::Data(_)) {
-                self.handled_data();
-            }
-            match flow {
-                Flow::Continue => CallbackProgression::Continue,
-                Flow::Stop => CallbackProgression::Stop,
-            }
-        };
-        let has_data = self.data_attachments().next().is_some();
-        let timeout = if has_data {
-            timeout.min(LISTENER_SWEEP_MAX_SLEEP)
-        } else {
-            timeout
-        };
-        let result = self
-            .waitset
-            .wait_and_process_once_with_timeout(callback, timeout)
-            .map_err(|e| BusError::WaitSet {
-                operation: "waiting",
-                source: Box::new(e),
-            });
-        self.last_round.set(Instant::now());
-        match result? {
-            WaitSetRunResult::TerminationRequest => {
-                tracing::info!("termination requested (SIGINT/SIGTERM)");
-                Ok((Some(LoopExit::TerminationRequested), handled))
-            }
-            WaitSetRunResult::StopRequest => match failure {
-                Some(e) => Err(e),
-                None => Ok((Some(LoopExit::Stopped), handled)),
-            },
-            // An interrupting signal: the next wait reports it if it asked for termination.
-            WaitSetRunResult::Interrupt | WaitSetRunResult::AllEventsHandled => {
-                let now = Instant::now();
-                if !has_data
-                    || now.saturating_duration_since(self.last_sweep.get()) < LISTENER_SWEEP_PERIOD
-                {
-                    return Ok((None, handled));
-                }
-                self.last_sweep.set(now);
-                match self.sweep(on_wake)? {
-                    (Flow::Continue, swept) => Ok((None, handled || swept)),
-                    (Flow::Stop, _) => Ok((Some(LoopExit::Stopped), true)),
-                }
-            }
-        }
-    }
+/// What one round of [`EventLoop::dispatch`] did.
+enum Round {
+    /// A callback stopped the loop.
+    Exit(LoopExit),
+    /// Something was called back.
+    Handled,
+    /// Nothing was due.
+    Nothing,
 }
 
 /// Timer slack of 1 µs for the calling thread if `wait` sleeps until poll windows open.
@@ -746,95 +624,4 @@ enum Polled {
     Handled(Option<LoopExit>),
     /// The window closed without a sample.
     Nothing,
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::{Bus, BusConfig, remove_all};
-    use ipc_types::{GyroSample, SampleHeader};
-
-    fn gyro(sequence: u64) -> GyroSample {
-        GyroSample {
-            header: SampleHeader::new(sequence, sequence, SampleHeader::VALID),
-            ..GyroSample::default()
-        }
-    }
-
-    /// Whether `fd` becomes readable within `timeout`.
-    fn readable(fd: i32, timeout: Duration) -> bool {
-        let mut pfd = libc::pollfd {
-            fd,
-            events: libc::POLLIN,
-            revents: 0,
-        };
-        // SAFETY: one valid pollfd.
-        unsafe { libc::poll(&mut pfd, 1, timeout.as_millis() as libc::c_int) == 1 }
-    }
-
-    /// Puts a listener into the state iceoryx2's notifier/listener race leaves behind (see
-    /// [`LISTENER_SWEEP_PERIOD`]): its wake-up datagram consumed while the shared state still
-    /// says "notified". Further notifications then send nothing; the sweep must still deliver.
-    #[test]
-    fn the_sweep_delivers_samples_to_a_listener_whose_wake_up_was_lost() {
-        let config = BusConfig::isolated();
-        {
-            let bus = Bus::open("deaf", &config).expect("bus");
-            let subscriber = bus.subscriber::<GyroSample>().expect("subscriber");
-            let publisher = bus.publisher::<GyroSample>().expect("publisher");
-            // SAFETY: the listener outlives its descriptor's use here.
-            let fd = unsafe {
-                SubscriberPort::listener(&subscriber)
-                    .file_descriptor()
-                    .native_handle()
-            };
-            // Drop the publisher-created wake-up so that the socket starts empty.
-            let _ = drain_listener(SubscriberPort::listener(&subscriber), "test");
-
-            publisher.publish(&gyro(0)).expect("publish 0");
-            assert!(
-                readable(fd, Duration::from_secs(5)),
-                "a first notification wakes the listener"
-            );
-            let mut byte = [0u8; 16];
-            // SAFETY: reads at most 16 bytes into `byte`.
-            let n =
-                unsafe { libc::recv(fd, byte.as_mut_ptr().cast(), byte.len(), libc::MSG_DONTWAIT) };
-            assert_eq!(n, 1, "the wake-up is one datagram");
-
-            publisher.publish(&gyro(1)).expect("publish 1");
-            // iceoryx2 0.10 behaviour behind the sweep: with the state still "notified", the
-            // next notification sends no datagram (if this starts failing, iceoryx2 changed and
-            // the sweep may be unnecessary).
-            assert!(
-                !readable(fd, Duration::from_millis(300)),
-                "the listener stays deaf"
-            );
-
-            let waiter = Waiter::new().expect("waiter");
-            let mut events = EventLoop::with_wait_strategy(&waiter, WaitStrategy::Block);
-            let source = events.on_data(&subscriber).expect("attach");
-            let mut received = Vec::new();
-            let started = Instant::now();
-            while received.len() < 2 && started.elapsed() < Duration::from_secs(10) {
-                events
-                    .run_once(Duration::from_secs(1), |wake| {
-                        assert_eq!(wake, Wake::Data(source));
-                        subscriber
-                            .drain(|s| received.push(s.header.sequence))
-                            .expect("drain");
-                        Flow::Continue
-                    })
-                    .expect("run_once");
-            }
-            assert_eq!(received, vec![0, 1], "both samples delivered by the sweep");
-            assert!(events.wait_stats().swept >= 1, "{:?}", events.wait_stats());
-            assert_eq!(
-                events.wait_stats().woken,
-                0,
-                "no wake-up came through the WaitSet"
-            );
-        }
-        remove_all(&config).expect("remove_all");
-    }
 }

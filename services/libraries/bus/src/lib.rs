@@ -47,18 +47,16 @@
 //!   `TESTBED_BUS_ROOT`, set by the launcher), the run's [`Delivery`] mode
 //!   (`TESTBED_BUS_DELIVERY`) and the [`ServiceLimits`] all processes share.
 //! - [`Bus`]: one iceoryx2 node per process, named after the process.
-//! - [`TopicPublisher`] / [`TopicSubscriber`]: one data service per topic (`T::NAME`) paired
-//!   with an event service (`T::EVENT_NAME`). `publish` sends then notifies; a subscriber owns a
-//!   listener, so a [`Waiter`] wakes on arrival, and [`TopicSubscriber::drain`] copies out every
-//!   pending sample (they are small `Copy` types) after draining the listener.
-//! - [`EventLoop`]: an iceoryx2 `WaitSet` with the subscribers' listeners, intervals and
-//!   deadlines attached; returns [`LoopExit::TerminationRequested`] on SIGINT/SIGTERM. How it
-//!   waits is its [`WaitStrategy`]: sleep until notified (default), or also poll the
-//!   subscribers in short windows where a sample is expected (`TESTBED_BUS_WAIT`, [`ENV_WAIT`]).
-//!   On its wake-ups, at most every [`LISTENER_SWEEP_PERIOD`] and at least every
-//!   [`LISTENER_SWEEP_MAX_SLEEP`], it also drains each listener and calls back for samples it
-//!   was not woken for: iceoryx2 0.10 can leave a listener that never wakes again (a
-//!   notifier/listener race, described there), which without the sweep stops a lockstep run.
+//! - [`TopicPublisher`] / [`TopicSubscriber`]: one data service per topic (`T::NAME`).
+//!   Zero-copy both ways: [`TopicPublisher::publish_with`] fills a sample loaned in shared
+//!   memory in place, [`TopicSubscriber::drain`] hands out every pending sample by reference and
+//!   releases it after the visit. After sending, a publisher rings the *doorbell* of every
+//!   process subscribed to the topic (one futex word per process in shared memory, see the
+//!   `doorbell` module): one wake-up per consumer, however many of its topics were published.
+//! - [`EventLoop`]: waits on the process's doorbell with its subscribers, intervals and
+//!   deadlines; returns [`LoopExit::TerminationRequested`] on SIGINT/SIGTERM. How it waits is its
+//!   [`WaitStrategy`]: sleep until rung (default), or also poll the subscribers in short windows
+//!   where a sample is expected (`TESTBED_BUS_WAIT`, [`ENV_WAIT`]).
 //! - [`HeartbeatPublisher`]: the periodic [`ipc_types::Heartbeat`] of a process.
 //! - [`cleanup_dead_nodes`] (launcher, before a run) and [`remove_all`] (tests, after a run).
 //!
@@ -72,11 +70,13 @@
 //! iceoryx2 installs a catching handler for SIGINT, SIGTERM and the other non-fatal signals
 //! the first time anything waits; [`Bus::open`] does so at once, so a SIGINT arriving after
 //! `open` always ends up as a termination request instead of killing the process. A signal
-//! landing in the instant between the loop's termination check and its `epoll_wait` is seen at
-//! the next wake-up (a data sample, interval or deadline; the launcher follows up with SIGTERM).
+//! interrupting the loop's sleep (a futex wait) ends it at once; one landing in the instant
+//! between the loop's termination check and its sleep is seen at the next wake-up, at most
+//! [`MAX_SLEEP`] later (the launcher follows up with SIGTERM).
 
 mod cleanup;
 mod config;
+mod doorbell;
 mod event_loop;
 mod heartbeat;
 mod ports;
@@ -94,10 +94,8 @@ pub use config::{
     BusConfig, DEFAULT_PREFIX, DEFAULT_ROOT, Delivery, ENV_DELIVERY, ENV_PREFIX, ENV_ROOT,
     MAX_PREFIX_LEN, MAX_ROOT_LEN, ServiceLimits,
 };
-pub use event_loop::{
-    EventLoop, Flow, LISTENER_SWEEP_MAX_SLEEP, LISTENER_SWEEP_PERIOD, LoopExit, SourceId, Waiter,
-    Wake,
-};
+pub use doorbell::{MAX_CONSUMERS, MAX_TOPICS};
+pub use event_loop::{EventLoop, Flow, LoopExit, MAX_SLEEP, SourceId, Waiter, Wake};
 pub use heartbeat::HeartbeatPublisher;
 pub use ports::{SubscriberOptions, TopicPublisher, TopicSubscriber};
 pub use private::{CollectReport, PrivateRun, collect_dead_runs};
@@ -162,6 +160,14 @@ pub enum BusError {
         operation: &'static str,
         /// iceoryx2's error.
         source: Source,
+    },
+    /// The doorbell table (`/dev/shm/<prefix>doorbells`) could not be opened or is full.
+    #[error("doorbell table {path}: {reason}")]
+    Doorbell {
+        /// The table's file.
+        path: String,
+        /// What went wrong.
+        reason: String,
     },
     /// Listing or cleaning up nodes failed.
     #[error("cleaning up the bus resources under {root:?} with prefix {prefix:?} failed: {source}")]
@@ -243,6 +249,9 @@ fn logging_iceoryx2_level(directives: &str) -> tracing_subscriber::filter::Level
 
 /// One process's connection to the bus: an iceoryx2 node named after the process.
 pub struct Bus {
+    // Field order is drop order: the doorbell is freed before the table is unmapped.
+    bell: std::rc::Rc<doorbell::Bell>,
+    doorbells: std::rc::Rc<doorbell::Doorbells>,
     node: Node<ipc::Service>,
     config: BusConfig,
     name: String,
@@ -277,13 +286,27 @@ impl Bus {
         // wait. A termination request cannot be pending yet: before the handler existed, SIGINT
         // or SIGTERM would have ended the process.
         let _ = node.wait(Duration::ZERO);
+        let doorbells = doorbell::Doorbells::open(&config.prefix)?;
+        let bell = std::rc::Rc::new(doorbells.claim()?);
         tracing::debug!(node = name, prefix = %config.prefix, root = %config.root_string(),
             delivery = %config.delivery, "bus opened");
         Ok(Self {
+            bell,
+            doorbells,
             node,
             config: config.clone(),
             name: name.to_owned(),
         })
+    }
+
+    /// The doorbell table of the bus's prefix.
+    pub(crate) fn doorbells(&self) -> &std::rc::Rc<doorbell::Doorbells> {
+        &self.doorbells
+    }
+
+    /// This process's doorbell: every subscriber created from this bus has it rung.
+    pub(crate) fn bell(&self) -> &std::rc::Rc<doorbell::Bell> {
+        &self.bell
     }
 
     /// The process (node) name.

@@ -1,18 +1,18 @@
-//! Typed publisher and subscriber ports: one data service per topic paired with its event
-//! service.
+//! Typed publisher and subscriber ports: one iceoryx2 publish/subscribe service per topic; a
+//! publish rings the [doorbell](crate::doorbell) of every process subscribed to the topic.
 
 use std::cell::Cell;
 use std::fmt;
+use std::rc::Rc;
 use std::time::Instant;
 
-use iceoryx2::port::listener::Listener;
-use iceoryx2::port::notifier::Notifier;
 use iceoryx2::port::publisher::Publisher;
 use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::prelude::*;
-use iceoryx2::service::port_factory::{event, publish_subscribe};
+use iceoryx2::service::port_factory::publish_subscribe;
 use ipc_types::Topic;
 
+use crate::doorbell::{Bell, TopicBells};
 use crate::{Bus, BusError, Delivery};
 
 /// Options of a [`TopicSubscriber`].
@@ -80,36 +80,12 @@ fn open_data_service<T: Topic>(
         })
 }
 
-/// Event id of the notifications `publish` sends.
-pub(crate) const SAMPLE_EVENT: EventId = EventId::new(0);
-/// Event id iceoryx2 emits to all listeners when a notifier (that is, a publisher) is created:
-/// it wakes subscribers so that they attach to the new publisher's connection before it sends
-/// much (see [`Delivery::Lossless`](crate::Delivery::Lossless)).
-pub(crate) const PUBLISHER_CREATED_EVENT: EventId = EventId::new(1);
-
-fn open_event_service<T: Topic>(bus: &Bus) -> Result<event::PortFactory<ipc::Service>, BusError> {
-    let limits = bus.config().limits;
-    bus.node()
-        .service_builder(&Bus::service_name(T::EVENT_NAME)?)
-        .event()
-        .notifier_created_event(PUBLISHER_CREATED_EVENT)
-        .max_notifiers(limits.max_publishers)
-        .max_listeners(limits.max_subscribers)
-        .max_nodes(limits.max_nodes)
-        .open_or_create()
-        .map_err(|e| BusError::Service {
-            service: T::EVENT_NAME.to_owned(),
-            source: Box::new(e),
-        })
-}
-
-/// Publishes samples of `T` on `T::NAME` and notifies `T::EVENT_NAME` after each.
+/// Publishes samples of `T` on `T::NAME` and rings the doorbells of its subscribers after each.
 pub struct TopicPublisher<T: Topic> {
     // Field order is drop order: ports before their services.
     publisher: Publisher<ipc::Service, T, ()>,
-    notifier: Notifier<ipc::Service>,
     data: publish_subscribe::PortFactory<ipc::Service, T, ()>,
-    _event: event::PortFactory<ipc::Service>,
+    bells: TopicBells,
     lossless: bool,
     sent: Cell<u64>,
     undelivered: Cell<u64>,
@@ -127,7 +103,6 @@ impl<T: Topic> fmt::Debug for TopicPublisher<T> {
 impl<T: Topic> TopicPublisher<T> {
     pub(crate) fn create(bus: &Bus) -> Result<Self, BusError> {
         let data = open_data_service::<T>(bus)?;
-        let event = open_event_service::<T>(bus)?;
         let strategy = match delivery_of::<T>(bus) {
             Delivery::Lossless => BackpressureStrategy::RetryUntilDelivered,
             Delivery::Overflow => BackpressureStrategy::DiscardData,
@@ -141,68 +116,72 @@ impl<T: Topic> TopicPublisher<T> {
                 service: T::NAME.to_owned(),
                 source: Box::new(e),
             })?;
-        let notifier = event
-            .notifier_builder()
-            .default_event_id(SAMPLE_EVENT)
-            .create()
-            .map_err(|e| BusError::Port {
-                port: "notifier",
-                service: T::EVENT_NAME.to_owned(),
-                source: Box::new(e),
-            })?;
+        let bells = bus.doorbells().topic(T::NAME)?;
+        // Subscribers connect to a new publisher the next time they look at their samples:
+        // wake them for that before the first sample (see `Delivery::Lossless`).
+        bells.ring();
         Ok(Self {
             publisher,
-            notifier,
             data,
-            _event: event,
+            bells,
             lossless: delivery_of::<T>(bus) == Delivery::Lossless,
             sent: Cell::new(0),
             undelivered: Cell::new(0),
         })
     }
 
-    /// Sends a copy of `sample` to every subscriber, then notifies their listeners. Returns the
-    /// number of subscribers the sample was delivered to.
+    /// Sends a copy of `sample` to every subscriber, then rings their doorbells. Returns the
+    /// number of subscribers the sample was delivered to. Same as [`publish_with`](Self::publish_with)
+    /// with `|slot| *slot = *sample`.
+    pub fn publish(&self, sample: &T) -> Result<usize, BusError> {
+        self.publish_with(|slot| *slot = *sample)
+    }
+
+    /// Loans a sample in shared memory (initialised with `T::default()`), lets `write` fill it
+    /// in place, sends it to every subscriber and rings their doorbells. Returns the number of
+    /// subscribers the sample was delivered to.
     ///
     /// In [`Delivery::Lossless`] runs this blocks while an attached subscriber's buffer is full.
     /// A subscriber attaches to a publisher's connection the first time it reads after the
-    /// publisher appeared (its event loop is woken for that when the publisher is created);
-    /// until then up to its buffer size of samples are queued for it, and iceoryx2 drops what
-    /// does not fit rather than block on a reader that may never come. Such a drop is logged
-    /// and counted in [`undelivered`](Self::undelivered). Start bursts only after a first
-    /// sample was answered (lockstep does this by construction).
-    pub fn publish(&self, sample: &T) -> Result<usize, BusError> {
+    /// publisher appeared (its doorbell is rung for that when the publisher is created); until
+    /// then up to its buffer size of samples are queued for it, and iceoryx2 drops what does
+    /// not fit rather than block on a reader that may never come. Such a drop is logged and
+    /// counted in [`undelivered`](Self::undelivered). Start bursts only after a first sample
+    /// was answered (lockstep does this by construction).
+    pub fn publish_with(&self, write: impl FnOnce(&mut T)) -> Result<usize, BusError> {
+        let io_error = |operation| {
+            move |e: Box<dyn std::error::Error + Send + Sync>| BusError::Io {
+                operation,
+                service: T::NAME.to_owned(),
+                source: e,
+            }
+        };
         let subscribers = if self.lossless {
             self.subscriber_count()
         } else {
             0
         };
-        let delivered = self
+        let mut sample = self
             .publisher
-            .send_copy(*sample)
-            .map_err(|e| BusError::Io {
-                operation: "send",
-                service: T::NAME.to_owned(),
-                source: Box::new(e),
-            })?;
+            .loan()
+            .map_err(|e| io_error("loan")(Box::new(e)))?;
+        write(sample.payload_mut());
+        let sequence = sample.payload().header().sequence;
+        let delivered = sample.send().map_err(|e| io_error("send")(Box::new(e)))?;
         self.sent.set(self.sent.get() + 1);
         if delivered < subscribers {
             let missed = (subscribers - delivered) as u64;
             if self.undelivered.get() == 0 {
                 tracing::warn!(
                     topic = T::NAME,
-                    sequence = sample.header().sequence,
+                    sequence,
                     "lossless delivery: sample dropped for {missed} subscriber(s) that have not \
                      attached yet and whose buffer is full (further drops are only counted)"
                 );
             }
             self.undelivered.set(self.undelivered.get() + missed);
         }
-        self.notifier.notify().map_err(|e| BusError::Io {
-            operation: "notify",
-            service: T::EVENT_NAME.to_owned(),
-            source: Box::new(e),
-        })?;
+        self.bells.ring();
         Ok(delivered)
     }
 
@@ -228,13 +207,13 @@ impl<T: Topic> TopicPublisher<T> {
     }
 }
 
-/// Receives samples of `T` from `T::NAME`; owns a listener on `T::EVENT_NAME` that an
-/// [`crate::EventLoop`] waits on.
+/// Receives samples of `T` from `T::NAME`; every publish on the topic rings the doorbell of the
+/// [`Bus`] it was created from, which that bus's [`crate::EventLoop`]s wait on.
 pub struct TopicSubscriber<T: Topic> {
     subscriber: Subscriber<ipc::Service, T, ()>,
-    listener: Listener<ipc::Service>,
     data: publish_subscribe::PortFactory<ipc::Service, T, ()>,
-    _event: event::PortFactory<ipc::Service>,
+    bell: Rc<Bell>,
+    bells: TopicBells,
     received: Cell<u64>,
     last_received: Cell<Option<Instant>>,
 }
@@ -270,22 +249,20 @@ impl<T: Topic> TopicSubscriber<T> {
             });
         }
         let data = open_data_service::<T>(bus)?;
-        let event = open_event_service::<T>(bus)?;
         let subscriber = data
             .subscriber_builder()
             .buffer_size(options.buffer_size)
             .history_request(options.history)
             .create()
             .map_err(|e| port_error("subscriber", T::NAME, Box::new(e)))?;
-        let listener = event
-            .listener_builder()
-            .create()
-            .map_err(|e| port_error("listener", T::EVENT_NAME, Box::new(e)))?;
+        let bells = bus.doorbells().topic(T::NAME)?;
+        let bell = bus.bell().clone();
+        bell.subscribe(&bells);
         let this = Self {
             subscriber,
-            listener,
             data,
-            _event: event,
+            bell,
+            bells,
             received: Cell::new(0),
             last_received: Cell::new(None),
         };
@@ -293,48 +270,38 @@ impl<T: Topic> TopicSubscriber<T> {
         Ok(this)
     }
 
-    /// Consumes the pending notifications, then calls `visit` with a copy of every pending
-    /// sample, oldest first. Returns the number of samples visited.
+    /// Calls `visit` with every pending sample, oldest first, by reference into shared memory
+    /// (no copy); each sample is released when `visit` returns. Returns the number visited.
     ///
-    /// Notifications are consumed before the samples are read, so a sample published while
-    /// draining either is visited now or comes with a notification that wakes the loop again:
-    /// no sample is left behind without a wake-up.
-    ///
-    /// Without pending samples it returns at once (a look at shared memory) and leaves the
-    /// notifications alone: consuming them costs a system call, which every process paid for
-    /// every subscriber it drained on every wake-up (the latency benchmark's chain: 3 to 4 µs
-    /// per stage). A notification so left behind belongs to samples already taken and wakes
-    /// the loop once more for nothing.
-    pub fn drain(&self, mut visit: impl FnMut(T)) -> Result<usize, BusError> {
-        if !self.attach()? {
-            return Ok(0);
-        }
-        self.drain_events()?;
+    /// A sample published while draining is either visited now or rings the doorbell after the
+    /// event loop read it, which wakes the loop again: none is left behind without a wake-up.
+    pub fn drain(&self, mut visit: impl FnMut(&T)) -> Result<usize, BusError> {
         let mut count = 0;
-        while let Some(sample) = self.receive_one()? {
+        while self.receive_one(&mut visit)? {
             count += 1;
-            visit(sample);
         }
         Ok(count)
     }
 
     /// Like [`drain`](Self::drain), appending the samples to `out`.
     pub fn drain_into(&self, out: &mut Vec<T>) -> Result<usize, BusError> {
-        self.drain(|sample| out.push(sample))
+        self.drain(|sample| out.push(*sample))
     }
 
     /// Drains everything pending and returns the newest sample, if any.
     pub fn latest(&self) -> Result<Option<T>, BusError> {
         let mut last = None;
-        self.drain(|sample| last = Some(sample))?;
+        self.drain(|sample| last = Some(*sample))?;
         Ok(last)
     }
 
-    /// Takes one pending sample without consuming notifications. Inside an
-    /// [`crate::EventLoop`] callback prefer [`drain`](Self::drain): samples left in the buffer
-    /// are only revisited at the next wake-up of this source.
+    /// Takes a copy of one pending sample. Inside an [`crate::EventLoop`] callback prefer
+    /// [`drain`](Self::drain): samples left in the buffer are only revisited at the next
+    /// wake-up of this source.
     pub fn try_receive(&self) -> Result<Option<T>, BusError> {
-        self.receive_one()
+        let mut value = None;
+        self.receive_one(&mut |sample: &T| value = Some(*sample))?;
+        Ok(value)
     }
 
     /// Samples received so far.
@@ -357,11 +324,6 @@ impl<T: Topic> TopicSubscriber<T> {
         T::NAME
     }
 
-    /// Consumes all pending notifications of the listener.
-    fn drain_events(&self) -> Result<Pending, BusError> {
-        drain_listener(&self.listener, T::EVENT_NAME)
-    }
-
     /// Attaches to the connections of all publishers present (iceoryx2 does this on every
     /// receive; `has_samples` does it without taking a sample).
     fn attach(&self) -> Result<bool, BusError> {
@@ -372,16 +334,16 @@ impl<T: Topic> TopicSubscriber<T> {
         })
     }
 
-    fn receive_one(&self) -> Result<Option<T>, BusError> {
+    /// Visits one pending sample in place; false if there was none.
+    fn receive_one(&self, visit: &mut impl FnMut(&T)) -> Result<bool, BusError> {
         match self.subscriber.receive() {
             Ok(Some(sample)) => {
-                let value = *sample.payload();
-                drop(sample);
                 self.received.set(self.received.get() + 1);
                 self.last_received.set(Some(Instant::now()));
-                Ok(Some(value))
+                visit(sample.payload());
+                Ok(true)
             }
-            Ok(None) => Ok(None),
+            Ok(None) => Ok(false),
             Err(e) => Err(BusError::Io {
                 operation: "receive",
                 service: T::NAME.to_owned(),
@@ -391,50 +353,24 @@ impl<T: Topic> TopicSubscriber<T> {
     }
 }
 
-/// What a drained listener had pending.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
-pub(crate) struct Pending {
-    /// A sample notification (or an unknown event id).
-    pub(crate) samples: bool,
-    /// A publisher was created.
-    pub(crate) new_publisher: bool,
-}
-
-pub(crate) fn drain_listener(
-    listener: &Listener<ipc::Service>,
-    service: &str,
-) -> Result<Pending, BusError> {
-    let mut pending = Pending::default();
-    listener
-        .try_wait(|activation| {
-            if activation.id == PUBLISHER_CREATED_EVENT {
-                pending.new_publisher = true;
-            } else {
-                pending.samples = true;
-            }
-        })
-        .map_err(|e| BusError::Io {
-            operation: "draining the listener",
-            service: service.to_owned(),
-            source: Box::new(e),
-        })?;
-    Ok(pending)
+impl<T: Topic> Drop for TopicSubscriber<T> {
+    fn drop(&mut self) {
+        self.bell.unsubscribe(&self.bells);
+    }
 }
 
 /// The type-erased view of a [`TopicSubscriber`] that the event loop needs.
 pub(crate) trait SubscriberPort {
-    fn listener(&self) -> &Listener<ipc::Service>;
-    fn event_name(&self) -> &'static str;
+    /// The doorbell its publishers ring.
+    fn bell(&self) -> &Rc<Bell>;
+    /// Connects to new publishers; whether samples are pending.
     fn attach(&self) -> Result<bool, BusError>;
     fn last_received(&self) -> Option<Instant>;
 }
 
 impl<T: Topic> SubscriberPort for TopicSubscriber<T> {
-    fn listener(&self) -> &Listener<ipc::Service> {
-        &self.listener
-    }
-    fn event_name(&self) -> &'static str {
-        T::EVENT_NAME
+    fn bell(&self) -> &Rc<Bell> {
+        &self.bell
     }
     fn attach(&self) -> Result<bool, BusError> {
         TopicSubscriber::attach(self)

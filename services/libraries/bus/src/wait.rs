@@ -1,9 +1,9 @@
-//! How an [`EventLoop`](crate::EventLoop) waits between wake-ups: sleep in the WaitSet
-//! (default), or sleep and poll the subscribers briefly where a sample is expected.
+//! How an [`EventLoop`](crate::EventLoop) waits between wake-ups: sleep on the process's
+//! doorbell (default), or sleep and poll the subscribers briefly where a sample is expected.
 //!
-//! Why polling helps: a publisher's notification reaches a sleeping process through a Unix
-//! datagram socket and `epoll_wait`, and the scheduler then has to wake the process (on a
-//! virtual machine, often a halted virtual CPU). That wake-up, not the shared-memory transfer,
+//! Why polling helps: a publisher's ring reaches a sleeping process through `FUTEX_WAKE`, and
+//! the scheduler then has to wake the process (on a virtual machine, often a halted virtual
+//! CPU). That wake-up, not the shared-memory transfer,
 //! is most of a hop's latency. A process that is already polling its subscribers when the
 //! sample lands sees it within about a microsecond. Polling all the time burns a core, so the
 //! strategies here poll only in short windows: right after a wake-up (bursts), or around the
@@ -38,12 +38,12 @@ pub(crate) fn set_process_name(name: &str) {
 /// Every strategy delivers the same wake-ups in the same order for the same arrivals; they
 /// differ only in how soon a data wake-up follows a sample's arrival and in CPU time. While
 /// polling, the loop yields the CPU between polls (`sched_yield`), so a poll window never
-/// starves another runnable process, and it still serves termination requests, intervals,
-/// deadlines and heartbeats at least every millisecond.
+/// starves another runnable process, and a window closes early when an interval, a deadline
+/// or the heartbeat is due.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub enum WaitStrategy {
-    /// Sleep in `epoll_wait` (iceoryx2 WaitSet) until an attachment fires. Costs no CPU
-    /// between wake-ups; every sample pays a scheduler wake-up.
+    /// Sleep on the doorbell (a futex) until it rings or a timer is due. Costs no CPU between
+    /// wake-ups; every sample that finds the process asleep pays a scheduler wake-up.
     #[default]
     Block,
     /// Sleep, and after every handled data wake-up poll the subscribers for up to `spin`
@@ -182,18 +182,15 @@ impl FromStr for WaitStrategy {
 /// How a loop's wake-ups came about (for benchmarks and diagnostics).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct WaitStats {
-    /// Data wake-ups delivered after sleeping in the WaitSet.
+    /// Data wake-ups delivered by a round of the loop (after a ring, or pending at its start).
     pub woken: u64,
     /// Data wake-ups delivered by polling (no scheduler wake-up on the way).
     pub polled: u64,
     /// Poll windows that ended without a sample.
     pub empty_windows: u64,
-    /// Notifications whose samples had already been taken by polling or by an earlier
-    /// callback (no callback; only with a polling strategy).
+    /// Rings that woke the loop with nothing to call back: their samples were already taken
+    /// (by polling or by an earlier callback), or the ring announced a new publisher.
     pub stale_notifications: u64,
-    /// Data wake-ups delivered by the listener sweep ([`crate::LISTENER_SWEEP_PERIOD`]):
-    /// samples that were pending at a sweep, including ones whose wake-up iceoryx2 lost.
-    pub swept: u64,
 }
 
 /// Samples of one source seen closer together than this are one arrival (a burst); periods

@@ -149,7 +149,7 @@ impl SoftwareBusTransport {
                     stats.own += 1;
                     return;
                 }
-                match CanFrame::from_bus_frame(&sample) {
+                match CanFrame::from_bus_frame(sample) {
                     Ok(frame) => {
                         stats.received += 1;
                         queue.push_back(TimestampedFrame {

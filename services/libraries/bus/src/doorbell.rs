@@ -1,0 +1,585 @@
+//! Doorbells: one wake-up word per consuming process in shared memory, rung by every publisher
+//! to that process after it sent a sample.
+//!
+//! # Why not iceoryx2's events
+//!
+//! An iceoryx2 0.10 event is a Unix datagram per listener: a process subscribed to three topics
+//! owns three sockets, each publish costs a `sendto` per listener, and each wake-up costs an
+//! `epoll_wait`, an `fcntl` per fired descriptor and two or three `recvfrom` to drain. Its
+//! notifier/listener race can also leave a listener deaf for good (`docs/upstream/`). A
+//! doorbell is instead one 32-bit counter per consumer in a shared-memory table:
+//!
+//! - **Ring** (publisher, after `send`): add one to the counter of every consumer subscribed to
+//!   the topic, and only if that consumer is asleep, `futex(FUTEX_WAKE)`. A publish to a busy or
+//!   polling consumer costs no system call at all.
+//! - **Wait** (consumer): read the counter, look at *all* its subscribers, and if nothing is
+//!   pending, `futex(FUTEX_WAIT, counter == seen, timeout)`. Every topic of the consumer shares
+//!   the one counter, so samples published while it works are one wake-up, not one per topic.
+//!
+//! # No lost wake-up
+//!
+//! The consumer reads the counter *before* looking at its subscribers, and the kernel's
+//! `FUTEX_WAIT` sleeps only while the counter still equals what it read. A publisher adds to the
+//! counter *after* its sample is in shared memory. So a sample is either seen by the look, or its
+//! ring changed the counter first and the wait returns at once. The "asleep" check is a Dekker
+//! pair: the consumer raises `sleepers` then the kernel reads the counter; the publisher raises
+//! the counter then reads `sleepers`; both are sequentially consistent read-modify-writes, so at
+//! least one side sees the other's write and no ring is skipped for a sleeping consumer. There
+//! is no state that a drain must reset (the iceoryx2 race was a reset racing a send), hence
+//! nothing to race. `tests` ping-pong between threads with no timeout fallback to catch one.
+//!
+//! # The table
+//!
+//! One file per bus prefix, `/dev/shm/<prefix>doorbells`, created zero-filled by whichever
+//! process comes first (all zeroes is the valid empty table, so concurrent creators agree) and
+//! removed with the bus's other shared memory ([`crate::remove_all`]). It holds
+//! [`MAX_CONSUMERS`] doorbells, each claimed by one [`Bus`](crate::Bus) and freed when it is
+//! dropped (a dead process's doorbell is taken over when no free one is left), and
+//! [`MAX_TOPICS`] topic entries, each a topic name's hash and the set of doorbells subscribed to
+//! it.
+
+use std::fs::OpenOptions;
+use std::io;
+use std::os::fd::AsRawFd;
+use std::path::{Path, PathBuf};
+use std::rc::Rc;
+use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
+use std::time::Duration;
+
+use crate::BusError;
+
+/// Consumers (buses) one table has room for.
+pub const MAX_CONSUMERS: usize = 64;
+/// Topics one table has room for.
+pub const MAX_TOPICS: usize = 64;
+
+/// The table's first word once initialised: layout name and version.
+const MAGIC: u64 = u64::from_le_bytes(*b"tbbell01");
+
+/// One consumer's doorbell, alone on its cache line (publishers of other consumers do not
+/// contend for it).
+#[repr(C, align(64))]
+struct BellSlot {
+    /// Rings so far (wrapping); the futex word.
+    rings: AtomicU32,
+    /// Threads of the owner waiting in `FUTEX_WAIT` on `rings`.
+    sleepers: AtomicU32,
+    /// Process id of the owner; 0 when free.
+    owner: AtomicU32,
+}
+
+#[repr(C)]
+struct TopicSlot {
+    /// Hash of the topic name ([`topic_key`]); 0 when free.
+    key: AtomicU64,
+    /// Bit `i` set: doorbell `i` is rung on every publish.
+    consumers: AtomicU64,
+}
+
+#[repr(C)]
+struct Table {
+    magic: AtomicU64,
+    bells: [BellSlot; MAX_CONSUMERS],
+    topics: [TopicSlot; MAX_TOPICS],
+}
+
+/// A mapping of one bus prefix's table.
+pub(crate) struct Doorbells {
+    table: *const Table,
+    path: PathBuf,
+}
+
+impl Drop for Doorbells {
+    fn drop(&mut self) {
+        // SAFETY: `table` is the start of a mapping of exactly `size_of::<Table>()` bytes made by
+        // `open`, unmapped only here.
+        unsafe { libc::munmap(self.table as *mut libc::c_void, size_of::<Table>()) };
+    }
+}
+
+fn table_error(path: &Path, what: &str, e: impl std::fmt::Display) -> BusError {
+    BusError::Doorbell {
+        path: path.display().to_string(),
+        reason: format!("{what}: {e}"),
+    }
+}
+
+impl Doorbells {
+    /// Maps the table of the bus whose shared-memory files start with `prefix`, creating it if
+    /// it does not exist.
+    pub(crate) fn open(prefix: &str) -> Result<Rc<Self>, BusError> {
+        Self::open_at(&PathBuf::from(format!("/dev/shm/{prefix}doorbells")))
+    }
+
+    fn open_at(path: &Path) -> Result<Rc<Self>, BusError> {
+        let file = OpenOptions::new()
+            .read(true)
+            .write(true)
+            .create(true)
+            .truncate(false)
+            .open(path)
+            .map_err(|e| table_error(path, "opening", e))?;
+        let size = size_of::<Table>() as u64;
+        let len = file
+            .metadata()
+            .map_err(|e| table_error(path, "reading its size", e))?
+            .len();
+        if len == 0 {
+            // Zero-filled is the empty table; a concurrent creator truncating to the same size
+            // changes nothing.
+            file.set_len(size)
+                .map_err(|e| table_error(path, "sizing", e))?;
+        } else if len != size {
+            return Err(table_error(
+                path,
+                "unexpected size",
+                format!("{len} bytes, this version's table has {size} (another version's run?)"),
+            ));
+        }
+        // SAFETY: maps `size` bytes of a file of that size, shared, for reading and writing;
+        // the result is checked before use.
+        let map = unsafe {
+            libc::mmap(
+                std::ptr::null_mut(),
+                size as usize,
+                libc::PROT_READ | libc::PROT_WRITE,
+                libc::MAP_SHARED,
+                file.as_raw_fd(),
+                0,
+            )
+        };
+        if map == libc::MAP_FAILED {
+            return Err(table_error(path, "mapping", io::Error::last_os_error()));
+        }
+        let this = Self {
+            table: map as *const Table,
+            path: path.to_owned(),
+        };
+        match this
+            .table()
+            .magic
+            .compare_exchange(0, MAGIC, Ordering::AcqRel, Ordering::Acquire)
+        {
+            Ok(_) => {}
+            Err(MAGIC) => {}
+            Err(other) => {
+                return Err(table_error(
+                    path,
+                    "not a doorbell table of this version",
+                    format!("first word {other:#x}"),
+                ));
+            }
+        }
+        Ok(Rc::new(this))
+    }
+
+    fn table(&self) -> &Table {
+        // SAFETY: the mapping lives as long as `self`, has the size and alignment of `Table`
+        // (page aligned), and every field is an atomic, valid for any bit pattern.
+        unsafe { &*self.table }
+    }
+
+    /// Claims a free doorbell for this process (or one whose owner died).
+    pub(crate) fn claim(self: &Rc<Self>) -> Result<Bell, BusError> {
+        let pid = std::process::id();
+        let table = self.table();
+        let free = (0..MAX_CONSUMERS).find(|&i| {
+            table.bells[i]
+                .owner
+                .compare_exchange(0, pid, Ordering::AcqRel, Ordering::Acquire)
+                .is_ok()
+        });
+        let index = match free {
+            Some(i) => i,
+            None => (0..MAX_CONSUMERS)
+                .find(|&i| {
+                    let owner = table.bells[i].owner.load(Ordering::Acquire);
+                    owner != pid
+                        && !process_alive(owner)
+                        && table.bells[i]
+                            .owner
+                            .compare_exchange(owner, pid, Ordering::AcqRel, Ordering::Acquire)
+                            .is_ok()
+                })
+                .ok_or_else(|| {
+                    table_error(
+                        &self.path,
+                        "claiming a doorbell",
+                        format!("all {MAX_CONSUMERS} are taken by live processes"),
+                    )
+                })?,
+        };
+        // A doorbell taken over from a dead process: nobody sleeps on it and it is subscribed
+        // to nothing of ours yet.
+        table.bells[index].sleepers.store(0, Ordering::SeqCst);
+        let bit = !(1u64 << index);
+        for topic in &table.topics {
+            topic.consumers.fetch_and(bit, Ordering::AcqRel);
+        }
+        Ok(Bell {
+            doorbells: self.clone(),
+            index,
+            subscriptions: std::cell::RefCell::new([0; MAX_TOPICS]),
+        })
+    }
+
+    /// The entry of topic `name`, claimed if it has none yet.
+    pub(crate) fn topic(self: &Rc<Self>, name: &str) -> Result<TopicBells, BusError> {
+        let key = topic_key(name);
+        let table = self.table();
+        for (index, slot) in table.topics.iter().enumerate() {
+            match slot
+                .key
+                .compare_exchange(0, key, Ordering::AcqRel, Ordering::Acquire)
+            {
+                Ok(_) => {
+                    return Ok(TopicBells {
+                        doorbells: self.clone(),
+                        index,
+                    });
+                }
+                Err(existing) if existing == key => {
+                    return Ok(TopicBells {
+                        doorbells: self.clone(),
+                        index,
+                    });
+                }
+                Err(_) => {}
+            }
+        }
+        Err(table_error(
+            &self.path,
+            "registering a topic",
+            format!("all {MAX_TOPICS} topic entries are taken (topic {name:?})"),
+        ))
+    }
+}
+
+/// 64-bit FNV-1a of the topic name, never 0 (0 marks a free entry).
+fn topic_key(name: &str) -> u64 {
+    let hash = name.bytes().fold(0xcbf2_9ce4_8422_2325_u64, |h, b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3)
+    });
+    hash.max(1)
+}
+
+fn process_alive(pid: u32) -> bool {
+    let Ok(pid) = libc::pid_t::try_from(pid) else {
+        return false;
+    };
+    // SAFETY: signal 0 only checks that the process exists.
+    let r = unsafe { libc::kill(pid, 0) };
+    r == 0 || io::Error::last_os_error().raw_os_error() != Some(libc::ESRCH)
+}
+
+/// How a [`Bell::wait`] ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Woken {
+    /// The doorbell was rung (the counter differs from the one waited on).
+    Rung,
+    /// The timeout passed.
+    TimedOut,
+    /// A signal arrived (a termination request is checked by the caller).
+    Interrupted,
+}
+
+/// The doorbell a [`Bus`](crate::Bus) owns: every subscriber created from the bus has it rung.
+pub(crate) struct Bell {
+    doorbells: Rc<Doorbells>,
+    index: usize,
+    /// How many subscribers of this bus each topic entry has (the bit is cleared at zero).
+    subscriptions: std::cell::RefCell<[u32; MAX_TOPICS]>,
+}
+
+impl Drop for Bell {
+    fn drop(&mut self) {
+        let slot = self.slot();
+        let bit = !(1u64 << self.index);
+        for topic in &self.doorbells.table().topics {
+            topic.consumers.fetch_and(bit, Ordering::AcqRel);
+        }
+        slot.owner.store(0, Ordering::Release);
+    }
+}
+
+impl Bell {
+    fn slot(&self) -> &BellSlot {
+        &self.doorbells.table().bells[self.index]
+    }
+
+    /// Has this doorbell rung by every publish on `topic` until [`unsubscribe`](Self::unsubscribe).
+    pub(crate) fn subscribe(&self, topic: &TopicBells) {
+        let mut counts = self.subscriptions.borrow_mut();
+        counts[topic.index] += 1;
+        self.doorbells.table().topics[topic.index]
+            .consumers
+            .fetch_or(1 << self.index, Ordering::AcqRel);
+    }
+
+    /// Undoes one [`subscribe`](Self::subscribe).
+    pub(crate) fn unsubscribe(&self, topic: &TopicBells) {
+        let mut counts = self.subscriptions.borrow_mut();
+        counts[topic.index] = counts[topic.index].saturating_sub(1);
+        if counts[topic.index] == 0 {
+            self.doorbells.table().topics[topic.index]
+                .consumers
+                .fetch_and(!(1 << self.index), Ordering::AcqRel);
+        }
+    }
+
+    /// The ring counter now. Read it *before* looking for samples, and wait on it.
+    pub(crate) fn rings(&self) -> u32 {
+        self.slot().rings.load(Ordering::SeqCst)
+    }
+
+    /// Sleeps until the doorbell rings after `seen` was read, `timeout` passes or a signal
+    /// arrives. Returns at once if it rang already.
+    pub(crate) fn wait(&self, seen: u32, timeout: Duration) -> Woken {
+        let slot = self.slot();
+        slot.sleepers.fetch_add(1, Ordering::SeqCst);
+        let woken = futex_wait(&slot.rings, seen, timeout);
+        slot.sleepers.fetch_sub(1, Ordering::SeqCst);
+        woken
+    }
+}
+
+/// The doorbells subscribed to one topic: what a publisher rings.
+pub(crate) struct TopicBells {
+    doorbells: Rc<Doorbells>,
+    index: usize,
+}
+
+impl TopicBells {
+    /// Rings every doorbell subscribed to the topic; returns how many.
+    pub(crate) fn ring(&self) -> u32 {
+        let table = self.doorbells.table();
+        let mut consumers = table.topics[self.index].consumers.load(Ordering::Acquire);
+        let mut rung = 0;
+        while consumers != 0 {
+            let index = consumers.trailing_zeros() as usize;
+            consumers &= consumers - 1;
+            ring_slot(&table.bells[index]);
+            rung += 1;
+        }
+        rung
+    }
+}
+
+fn ring_slot(slot: &BellSlot) {
+    slot.rings.fetch_add(1, Ordering::SeqCst);
+    if slot.sleepers.load(Ordering::SeqCst) != 0 {
+        futex_wake(&slot.rings);
+    }
+}
+
+/// A doorbell private to one process, for an event loop without subscribers (intervals only):
+/// it is never rung, and waiting on it is a sleep that a signal interrupts.
+pub(crate) struct LocalBell {
+    rings: AtomicU32,
+}
+
+impl LocalBell {
+    pub(crate) fn new() -> Self {
+        Self {
+            rings: AtomicU32::new(0),
+        }
+    }
+
+    pub(crate) fn rings(&self) -> u32 {
+        self.rings.load(Ordering::SeqCst)
+    }
+
+    pub(crate) fn wait(&self, seen: u32, timeout: Duration) -> Woken {
+        futex_wait(&self.rings, seen, timeout)
+    }
+}
+
+/// `FUTEX_WAIT` (shared: the word may be in memory mapped by several processes) on `word` while
+/// it equals `seen`, for at most `timeout`.
+fn futex_wait(word: &AtomicU32, seen: u32, timeout: Duration) -> Woken {
+    if timeout.is_zero() {
+        return if word.load(Ordering::SeqCst) == seen {
+            Woken::TimedOut
+        } else {
+            Woken::Rung
+        };
+    }
+    // Longer than any loop waits; keeps the timespec in range.
+    let timeout = timeout.min(Duration::from_secs(3600));
+    let ts = libc::timespec {
+        tv_sec: timeout.as_secs() as libc::time_t,
+        tv_nsec: timeout.subsec_nanos() as libc::c_long,
+    };
+    // SAFETY: FUTEX_WAIT reads the aligned 32-bit word `word` points to and the timespec; it
+    // writes nothing.
+    let r = unsafe {
+        libc::syscall(
+            libc::SYS_futex,
+            word.as_ptr(),
+            libc::FUTEX_WAIT,
+            seen,
+            &ts as *const libc::timespec,
+            std::ptr::null::<u32>(),
+            0,
+        )
+    };
+    if r == 0 {
+        return Woken::Rung;
+    }
+    match io::Error::last_os_error().raw_os_error() {
+        Some(libc::EAGAIN) => Woken::Rung,
+        Some(libc::ETIMEDOUT) => Woken::TimedOut,
+        // EINTR; anything else (cannot happen for a valid word) is treated like a signal: the
+        // caller looks again and waits again.
+        _ => Woken::Interrupted,
+    }
+}
+
+fn futex_wake(word: &AtomicU32) {
+    // SAFETY: FUTEX_WAKE only uses the address as a key; it reads and writes no memory.
+    unsafe {
+        libc::syscall(
+            libc::SYS_futex,
+            word.as_ptr(),
+            libc::FUTEX_WAKE,
+            i32::MAX,
+            std::ptr::null::<libc::timespec>(),
+            std::ptr::null::<u32>(),
+            0,
+        );
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::sync::Arc;
+    use std::sync::atomic::AtomicBool;
+    use std::time::Instant;
+
+    fn table_path(name: &str) -> PathBuf {
+        PathBuf::from(format!(
+            "/dev/shm/tbtest{}_{name}_doorbells",
+            std::process::id()
+        ))
+    }
+
+    #[test]
+    fn a_ring_wakes_a_waiter_and_a_ring_before_the_wait_is_not_lost() {
+        let path = table_path("ring");
+        let doorbells = Doorbells::open_at(&path).expect("table");
+        let bell = doorbells.claim().expect("bell");
+        let topic = doorbells.topic("a/topic").expect("topic");
+        bell.subscribe(&topic);
+
+        // Rung between reading the counter and waiting: the wait returns at once.
+        let seen = bell.rings();
+        assert_eq!(topic.ring(), 1);
+        let started = Instant::now();
+        assert_eq!(bell.wait(seen, Duration::from_secs(5)), Woken::Rung);
+        assert!(started.elapsed() < Duration::from_secs(1));
+
+        // Nothing rung: times out.
+        let seen = bell.rings();
+        assert_eq!(bell.wait(seen, Duration::from_millis(20)), Woken::TimedOut);
+
+        // Unsubscribed: the topic rings nobody.
+        bell.unsubscribe(&topic);
+        assert_eq!(topic.ring(), 0);
+        drop(bell);
+        drop(topic);
+        drop(doorbells);
+        std::fs::remove_file(&path).expect("removing the table");
+    }
+
+    #[test]
+    fn doorbells_are_claimed_once_and_freed_on_drop() {
+        let path = table_path("claim");
+        let doorbells = Doorbells::open_at(&path).expect("table");
+        let bells: Vec<Bell> = (0..MAX_CONSUMERS)
+            .map(|_| doorbells.claim().expect("a free doorbell"))
+            .collect();
+        let mut indices: Vec<usize> = bells.iter().map(|b| b.index).collect();
+        indices.dedup();
+        assert_eq!(indices.len(), MAX_CONSUMERS);
+        let err = doorbells.claim().err().expect("the table is full");
+        assert!(err.to_string().contains("doorbells"), "{err}");
+        drop(bells);
+        doorbells.claim().expect("freed on drop");
+        // The same table opened again (another process) agrees; a table of another size is
+        // refused with its path.
+        drop(Doorbells::open_at(&path).expect("reopened"));
+        drop(doorbells);
+        std::fs::write(&path, [1u8; 10]).expect("overwrite");
+        let err = Doorbells::open_at(&path)
+            .err()
+            .expect("wrong size")
+            .to_string();
+        assert!(err.contains(&path.display().to_string()), "{err}");
+        std::fs::remove_file(&path).expect("removing the table");
+    }
+
+    /// The lost wake-up a doorbell must never have: a consumer that reads the counter, finds
+    /// nothing, and sleeps through a ring that came in between. Two threads exchange 100 000
+    /// messages through two doorbells as fast as they can (each side waits only when it finds
+    /// nothing new), with a 5-s timeout standing in for "forever": a lost wake-up shows as a
+    /// timed-out wait. The bound is zero timeouts: any lost ring is a bug, not noise.
+    #[test]
+    fn no_wake_up_is_lost_in_a_fast_ping_pong() {
+        let path = table_path("pingpong");
+        const MESSAGES: u64 = 100_000;
+        // Each side publishes a counter in plain shared memory (an atomic) and rings the other.
+        let sent = Arc::new([AtomicU64::new(0), AtomicU64::new(0)]);
+        let timeouts = Arc::new(AtomicU64::new(0));
+        let failed = Arc::new(AtomicBool::new(false));
+        let run = |me: usize| {
+            let (sent, timeouts, failed, path) =
+                (sent.clone(), timeouts.clone(), failed.clone(), path.clone());
+            std::thread::spawn(move || {
+                let doorbells = Doorbells::open_at(&path).expect("table");
+                let bell = doorbells.claim().expect("bell");
+                let mine = doorbells.topic(&format!("to/{me}")).expect("topic");
+                let theirs = doorbells.topic(&format!("to/{}", 1 - me)).expect("topic");
+                bell.subscribe(&mine);
+                // A ring before the other side subscribed is not needed: each side looks at
+                // the other's counter before it waits.
+                let mut received = 0;
+                for i in 1..=MESSAGES {
+                    // Side 0 starts; each side answers the other's message i.
+                    if me == 0 {
+                        sent[0].store(i, Ordering::SeqCst);
+                        theirs.ring();
+                    }
+                    loop {
+                        let seen = bell.rings();
+                        received = sent[1 - me].load(Ordering::SeqCst);
+                        if received >= i || failed.load(Ordering::Relaxed) {
+                            break;
+                        }
+                        if bell.wait(seen, Duration::from_secs(5)) == Woken::TimedOut {
+                            timeouts.fetch_add(1, Ordering::SeqCst);
+                            failed.store(true, Ordering::Relaxed);
+                        }
+                    }
+                    if failed.load(Ordering::Relaxed) {
+                        break;
+                    }
+                    if me == 1 {
+                        sent[1].store(i, Ordering::SeqCst);
+                        theirs.ring();
+                    }
+                }
+                received
+            })
+        };
+        let (a, b) = (run(0), run(1));
+        let (ra, rb) = (a.join().expect("side 0"), b.join().expect("side 1"));
+        assert_eq!(
+            timeouts.load(Ordering::SeqCst),
+            0,
+            "a wait slept through a ring (side 0 got {ra}, side 1 got {rb})"
+        );
+        assert_eq!((ra, rb), (MESSAGES, MESSAGES));
+        std::fs::remove_file(&path).expect("removing the table");
+    }
+}
