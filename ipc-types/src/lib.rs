@@ -29,9 +29,8 @@
 //!
 //! # Services
 //!
-//! Each topic is one iceoryx2 publish/subscribe service named by a constant of [`topic`], paired
-//! with an event service of the same name plus [`topic::EVENT_SUFFIX`] that publishers notify
-//! after sending. The [`Topic`] trait ties each sample type to its service names.
+//! Each topic is one iceoryx2 publish/subscribe service named by a constant of [`topic`]. The
+//! [`Topic`] trait ties each sample type to its service name.
 
 mod actuators;
 mod can;
@@ -68,8 +67,6 @@ pub trait Topic:
 {
     /// Name of the publish/subscribe service (one of the [`topic`] constants).
     const NAME: &'static str;
-    /// Name of the paired event service ([`NAME`](Self::NAME) + [`topic::EVENT_SUFFIX`]).
-    const EVENT_NAME: &'static str;
 
     /// The sample's common header.
     fn header(&self) -> &SampleHeader;
@@ -78,10 +75,9 @@ pub trait Topic:
 }
 
 macro_rules! impl_topic {
-    ($($ty:ty => $name:ident / $event:ident),* $(,)?) => {$(
+    ($($ty:ty => $name:ident),* $(,)?) => {$(
         impl Topic for $ty {
             const NAME: &'static str = topic::$name;
-            const EVENT_NAME: &'static str = topic::$event;
             fn header(&self) -> &SampleHeader { &self.header }
             fn header_mut(&mut self) -> &mut SampleHeader { &mut self.header }
         }
@@ -89,23 +85,23 @@ macro_rules! impl_topic {
 }
 
 impl_topic! {
-    GyroSample => GYRO / GYRO_EVENT,
-    InclinometerSample => INCLINOMETER / INCLINOMETER_EVENT,
-    MagnetometerSample => MAGNETOMETER / MAGNETOMETER_EVENT,
-    WheelTelemetry => WHEEL_TELEMETRY / WHEEL_TELEMETRY_EVENT,
-    WheelCommand => WHEEL_COMMAND / WHEEL_COMMAND_EVENT,
-    CmgTelemetry => CMG_TELEMETRY / CMG_TELEMETRY_EVENT,
-    CmgCommand => CMG_COMMAND / CMG_COMMAND_EVENT,
-    AttitudeEstimate => ATTITUDE_ESTIMATE / ATTITUDE_ESTIMATE_EVENT,
-    ControllerStatus => CONTROLLER_STATUS / CONTROLLER_STATUS_EVENT,
-    SimTruth => SIM_TRUTH / SIM_TRUTH_EVENT,
-    SimClockTick => SIM_CLOCK / SIM_CLOCK_EVENT,
-    Heartbeat => HEARTBEAT / HEARTBEAT_EVENT,
-    CanBusFrame => CAN_BUS / CAN_BUS_EVENT,
-    CanLinkStatus => CAN_STATUS / CAN_STATUS_EVENT,
-    AppliedWheelCommand => WHEEL_APPLIED / WHEEL_APPLIED_EVENT,
-    AppliedCmgCommand => CMG_APPLIED / CMG_APPLIED_EVENT,
-    HealthEvent => HEALTH / HEALTH_EVENT,
-    GroundCommand => GROUND_COMMAND / GROUND_COMMAND_EVENT,
-    GroundCommandAck => GROUND_COMMAND_ACK / GROUND_COMMAND_ACK_EVENT,
+    GyroSample => GYRO,
+    InclinometerSample => INCLINOMETER,
+    MagnetometerSample => MAGNETOMETER,
+    WheelTelemetry => WHEEL_TELEMETRY,
+    WheelCommand => WHEEL_COMMAND,
+    CmgTelemetry => CMG_TELEMETRY,
+    CmgCommand => CMG_COMMAND,
+    AttitudeEstimate => ATTITUDE_ESTIMATE,
+    ControllerStatus => CONTROLLER_STATUS,
+    SimTruth => SIM_TRUTH,
+    SimClockTick => SIM_CLOCK,
+    Heartbeat => HEARTBEAT,
+    CanBusFrame => CAN_BUS,
+    CanLinkStatus => CAN_STATUS,
+    AppliedWheelCommand => WHEEL_APPLIED,
+    AppliedCmgCommand => CMG_APPLIED,
+    HealthEvent => HEALTH,
+    GroundCommand => GROUND_COMMAND,
+    GroundCommandAck => GROUND_COMMAND_ACK,
 }

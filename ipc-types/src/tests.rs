@@ -77,17 +77,13 @@ fn layouts_are_pinned() {
     assert_eq!(size_of::<ProcessState>(), 4);
 }
 
-/// Type name, topic name and event name of a sample type.
-fn names<T: Topic>() -> (&'static str, &'static str, &'static str) {
+/// Type name and topic name of a sample type.
+fn names<T: Topic>() -> (&'static str, &'static str) {
     // SAFETY: `type_name` only returns the string given to `#[type_name]`.
-    (
-        unsafe { <T as ZeroCopySend>::type_name() },
-        T::NAME,
-        T::EVENT_NAME,
-    )
+    (unsafe { <T as ZeroCopySend>::type_name() }, T::NAME)
 }
 
-fn all_names() -> Vec<(&'static str, &'static str, &'static str)> {
+fn all_names() -> Vec<(&'static str, &'static str)> {
     vec![
         names::<GyroSample>(),
         names::<InclinometerSample>(),
@@ -118,7 +114,7 @@ fn all_names() -> Vec<(&'static str, &'static str, &'static str)> {
 fn type_names_are_versioned_and_unique() {
     let all = all_names();
     let mut seen = HashSet::new();
-    for (type_name, _, _) in &all {
+    for (type_name, _) in &all {
         assert!(type_name.starts_with("testbed::"), "{type_name}");
         assert!(type_name.contains(".v"), "{type_name}");
         assert!(seen.insert(*type_name), "duplicate type name {type_name}");
@@ -132,25 +128,18 @@ fn type_names_are_versioned_and_unique() {
 }
 
 #[test]
-fn topic_names_are_unique_valid_and_paired() {
-    assert_eq!(topic::ALL.len(), topic::ALL_EVENTS.len());
+fn topic_names_are_unique_and_valid() {
     let mut seen = HashSet::new();
-    for name in topic::ALL.iter().chain(topic::ALL_EVENTS) {
+    for name in topic::ALL {
         assert!(seen.insert(*name), "duplicate service name {name}");
         assert!(name.starts_with("testbed/"), "{name}");
         ServiceName::new(name).unwrap_or_else(|e| panic!("{name}: {e:?}"));
     }
-    for (data, event) in topic::ALL.iter().zip(topic::ALL_EVENTS) {
-        assert_eq!(topic::event_service_name(data), *event);
-    }
     // Every topic carries exactly one sample type.
     let all = all_names();
     assert_eq!(all.len(), topic::ALL.len());
-    let by_type: HashSet<_> = all.iter().map(|(_, name, _)| *name).collect();
+    let by_type: HashSet<_> = all.iter().map(|(_, name)| *name).collect();
     assert_eq!(by_type, topic::ALL.iter().copied().collect::<HashSet<_>>());
-    for (_, name, event) in all {
-        assert_eq!(topic::event_service_name(name), event);
-    }
 }
 
 #[test]

@@ -10,10 +10,7 @@ use iceoryx2::prelude::*;
 /// Number of thrusters.
 pub const THRUSTERS: usize = 6;
 
-pub use crate::topic::{
-    THRUSTER_APPLIED, THRUSTER_APPLIED_EVENT, THRUSTER_COMMAND, THRUSTER_COMMAND_EVENT,
-    THRUSTER_STATUS, THRUSTER_STATUS_EVENT,
-};
+pub use crate::topic::{THRUSTER_APPLIED, THRUSTER_COMMAND, THRUSTER_STATUS};
 
 /// Valve on-times for one control period, from the controller.
 #[derive(Debug, Clone, Copy, PartialEq, Default, ZeroCopySend)]
@@ -67,7 +64,6 @@ pub struct AppliedThrusterCommand {
 
 impl Topic for AppliedThrusterCommand {
     const NAME: &'static str = THRUSTER_APPLIED;
-    const EVENT_NAME: &'static str = THRUSTER_APPLIED_EVENT;
     fn header(&self) -> &SampleHeader {
         &self.header
     }
@@ -78,7 +74,6 @@ impl Topic for AppliedThrusterCommand {
 
 impl Topic for ThrusterCommand {
     const NAME: &'static str = THRUSTER_COMMAND;
-    const EVENT_NAME: &'static str = THRUSTER_COMMAND_EVENT;
     fn header(&self) -> &SampleHeader {
         &self.header
     }
@@ -89,7 +84,6 @@ impl Topic for ThrusterCommand {
 
 impl Topic for ThrusterStatus {
     const NAME: &'static str = THRUSTER_STATUS;
-    const EVENT_NAME: &'static str = THRUSTER_STATUS_EVENT;
     fn header(&self) -> &SampleHeader {
         &self.header
     }
@@ -104,7 +98,7 @@ mod tests {
     use core::mem::{align_of, offset_of, size_of};
 
     #[test]
-    fn layouts_are_pinned_and_names_pair() {
+    fn layouts_are_pinned() {
         assert_eq!(size_of::<ThrusterCommand>(), 72);
         assert_eq!(align_of::<ThrusterCommand>(), 8);
         assert_eq!(offset_of!(ThrusterCommand, on_time), 24);
@@ -114,14 +108,6 @@ mod tests {
         assert_eq!(offset_of!(ThrusterStatus, disabled), 76);
         assert_eq!(offset_of!(ThrusterStatus, refused), 80);
         assert_eq!(offset_of!(ThrusterStatus, propellant_used), 88);
-        assert_eq!(
-            crate::topic::event_service_name(THRUSTER_COMMAND),
-            THRUSTER_COMMAND_EVENT
-        );
-        assert_eq!(
-            crate::topic::event_service_name(THRUSTER_STATUS),
-            THRUSTER_STATUS_EVENT
-        );
         assert_eq!(size_of::<AppliedThrusterCommand>(), 80);
         assert_eq!(offset_of!(AppliedThrusterCommand, on_time), 24);
         assert_eq!(offset_of!(AppliedThrusterCommand, latch_shut), 72);

@@ -135,7 +135,6 @@ pub type Pong<const N: usize> = Blob<N, 1>;
 
 impl<const N: usize> Topic for Blob<N, 0> {
     const NAME: &'static str = "bench/hop/ping";
-    const EVENT_NAME: &'static str = "bench/hop/ping/event";
     fn header(&self) -> &SampleHeader {
         &self.header
     }
@@ -146,7 +145,6 @@ impl<const N: usize> Topic for Blob<N, 0> {
 
 impl<const N: usize> Topic for Blob<N, 1> {
     const NAME: &'static str = "bench/hop/pong";
-    const EVENT_NAME: &'static str = "bench/hop/pong/event";
     fn header(&self) -> &SampleHeader {
         &self.header
     }

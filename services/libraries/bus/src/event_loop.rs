@@ -235,7 +235,7 @@ impl<'w, 'a> EventLoop<'w, 'a> {
             None => self.bell = Some(subscriber.bell().clone()),
             Some(bell) if Rc::ptr_eq(bell, subscriber.bell()) => {}
             Some(_) => {
-                return Err(BusError::WaitSet {
+                return Err(BusError::EventLoop {
                     operation: "attaching a subscriber",
                     source: "the subscribers of one event loop must come from one Bus \
                              (they ring that bus's doorbell)"
@@ -278,7 +278,7 @@ impl<'w, 'a> EventLoop<'w, 'a> {
 
     fn attach_periodic(&mut self, kind: Kind<'a>, period: Duration) -> Result<SourceId, BusError> {
         if period.is_zero() {
-            return Err(BusError::WaitSet {
+            return Err(BusError::EventLoop {
                 operation: "attaching an interval",
                 source: "the period must be longer than zero".into(),
             });

@@ -153,12 +153,12 @@ pub enum BusError {
         /// iceoryx2's error.
         source: Source,
     },
-    /// The WaitSet could not be created, attached to or waited on.
+    /// Something could not be attached to the event loop.
     #[error("event loop: {operation} failed: {source}")]
-    WaitSet {
+    EventLoop {
         /// What was done.
         operation: &'static str,
-        /// iceoryx2's error.
+        /// Why.
         source: Source,
     },
     /// The doorbell table (`/dev/shm/<prefix>doorbells`) could not be opened or is full.

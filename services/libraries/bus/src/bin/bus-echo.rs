@@ -25,7 +25,7 @@ fn main() -> anyhow::Result<()> {
         .heartbeat(Duration::from_millis(200))
         .context("creating the heartbeat")?;
 
-    let waiter = Waiter::new().context("creating the WaitSet")?;
+    let waiter = Waiter::new().context("creating the waiter")?;
     let mut events = EventLoop::new(&waiter);
     let on_gyro = events.on_data(&gyro).context("attaching gyro")?;
     heartbeat.set_state(ProcessState::Running);

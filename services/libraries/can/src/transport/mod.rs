@@ -20,8 +20,8 @@
 //!   a `RawCanFrame` holding a `SampleHeader` with the receive time, then these 16 bytes)
 //!   converts with [`CanFrame::can_id`], [`CanFrame::dlc`], [`CanFrame::data_padded`] and back
 //!   with [`CanFrame::from_linux_parts`], which validates.
-//! - `send` publishes one sample; `recv(timeout)` waits on the topic's event service for at
-//!   most `timeout` and returns `Ok(None)` when nothing came, `Err(TransportError::Closed)`
+//! - `send` publishes one sample; `recv(timeout)` waits on the bus's doorbell for at most
+//!   `timeout` and returns `Ok(None)` when nothing came, `Err(TransportError::Closed)`
 //!   when the publisher is gone for good.
 //! - Time stamps: [`TimeSource::Host`] with the publisher's receive time.
 //!
