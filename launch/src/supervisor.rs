@@ -34,6 +34,10 @@ pub const ENV_RUN_LOG: &str = "TESTBED_RUN_LOG";
 pub const ENV_RUN_PROFILE: &str = "TESTBED_RUN_PROFILE";
 /// Environment variable with the run configuration file (`[run] config`), when there is one.
 pub const ENV_RUN_CONFIG: &str = "TESTBED_RUN_CONFIG";
+/// Environment variable naming a file the launcher writes, at the end of the run, with the CPU
+/// time each process used (tab-separated: `process`, `user_s`, `system_s`, `starts`; a last
+/// row `launcher` for the launcher itself): benches measure per-process cost with it.
+pub const ENV_CPU_REPORT: &str = "TESTBED_CPU_REPORT";
 /// Environment variable with how often the process was restarted in this run (0 at first).
 pub const ENV_RESTART_COUNT: &str = ipc_types::ENV_RESTART_COUNT;
 /// Prefix of the per-device variables (`TESTBED_DEVICE_GYRO=real|simulated`).
@@ -161,6 +165,10 @@ struct Proc<'p> {
     pid: Option<libc::pid_t>,
     restarts: u32,
     restart_at: Option<Instant>,
+    /// CPU time of every life of the process that ended so far (restarts add up).
+    cpu: sys::CpuTime,
+    /// How often the process was started.
+    starts: u32,
 }
 
 /// Supervises one run.
@@ -193,6 +201,8 @@ impl<'p> Supervisor<'p> {
                 pid: None,
                 restarts: 0,
                 restart_at: None,
+                cpu: sys::CpuTime::default(),
+                starts: 0,
             })
             .collect();
         Self {
@@ -255,10 +265,50 @@ impl<'p> Supervisor<'p> {
         // The bus node goes before the cleanup, which would otherwise find it alive.
         self.watchdog = None;
         self.cleanup("after the run");
+        self.report_cpu();
         let exit_code = i32::from(self.failed || self.killed);
         let reason = self.stop_reason.unwrap_or_default();
         tracing::info!("run ended: {reason}; exit status {exit_code}");
         Outcome { exit_code, reason }
+    }
+
+    /// Logs the CPU time each process used over the run (all its lives), and writes it to the
+    /// file named by [`ENV_CPU_REPORT`] if set: which process costs what is the first question
+    /// of any CPU budget, and `wait4` answers it for free when the launcher reaps.
+    fn report_cpu(&self) {
+        let launcher = sys::own_cpu();
+        let rows: Vec<(&str, sys::CpuTime, u32)> = self
+            .procs
+            .iter()
+            .map(|p| (p.spec.name.as_str(), p.cpu, p.starts))
+            .chain(std::iter::once((watchdog::LAUNCHER, launcher, 1)))
+            .collect();
+        let total: f64 = rows.iter().map(|(_, cpu, _)| cpu.total_s()).sum();
+        tracing::info!("CPU time per process (user + system), {total:.3} s in all:");
+        for (name, cpu, _) in &rows {
+            tracing::info!(
+                "  {name:<20} {:>9.3} s (user {:.3} s, system {:.3} s)",
+                cpu.total_s(),
+                cpu.user_s,
+                cpu.system_s
+            );
+        }
+        let Some(path) = std::env::var_os(ENV_CPU_REPORT) else {
+            return;
+        };
+        let mut text = String::from("process\tuser_s\tsystem_s\tstarts\n");
+        for (name, cpu, starts) in &rows {
+            text.push_str(&format!(
+                "{name}\t{}\t{}\t{starts}\n",
+                cpu.user_s, cpu.system_s
+            ));
+        }
+        if let Err(e) = std::fs::write(&path, text) {
+            tracing::warn!(
+                "cannot write the CPU report {}: {e}",
+                Path::new(&path).display()
+            );
+        }
     }
 
     fn cleanup(&self, when: &str) {
@@ -384,6 +434,7 @@ impl<'p> Supervisor<'p> {
                     spec.args.join(" ")
                 );
                 self.procs[index].pid = Some(pid);
+                self.procs[index].starts += 1;
             }
             Err(e) => {
                 let placement = if spec.cpus.is_some() || spec.scheduling.is_some() {
@@ -460,8 +511,9 @@ impl<'p> Supervisor<'p> {
         }
         let _ = sys::signal_group(pid, sys::SIGKILL);
         match sys::reap(pid) {
-            Ok(Some(how)) => {
+            Ok(Some((how, cpu))) => {
                 self.procs[index].pid = None;
+                self.procs[index].cpu += cpu;
                 Some((pid, how))
             }
             Ok(None) => None,

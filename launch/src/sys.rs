@@ -150,14 +150,63 @@ pub fn has_exited(pid: libc::pid_t) -> io::Result<bool> {
     }
 }
 
-/// Reaps child `pid` if it has ended.
-pub fn reap(pid: libc::pid_t) -> io::Result<Option<ExitHow>> {
+/// CPU time a reaped child used over its life (its own threads plus the descendants it
+/// waited for), as `wait4` reports it.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct CpuTime {
+    /// User-mode CPU time, s.
+    pub user_s: f64,
+    /// Kernel-mode CPU time, s.
+    pub system_s: f64,
+}
+
+impl CpuTime {
+    /// User plus kernel time, s.
+    pub fn total_s(self) -> f64 {
+        self.user_s + self.system_s
+    }
+}
+
+impl std::ops::AddAssign for CpuTime {
+    fn add_assign(&mut self, other: Self) {
+        self.user_s += other.user_s;
+        self.system_s += other.system_s;
+    }
+}
+
+fn seconds(t: libc::timeval) -> f64 {
+    t.tv_sec as f64 + t.tv_usec as f64 * 1e-6
+}
+
+/// CPU time the calling process used so far (all its threads; not its children).
+pub fn own_cpu() -> CpuTime {
+    // SAFETY: getrusage writes into the zeroed struct we own.
+    let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
+    unsafe { libc::getrusage(libc::RUSAGE_SELF, &mut usage) };
+    CpuTime {
+        user_s: seconds(usage.ru_utime),
+        system_s: seconds(usage.ru_stime),
+    }
+}
+
+/// Reaps child `pid` if it has ended: how it ended and the CPU time it used. `wait4` rather
+/// than `waitpid` so the launcher can say which process of a run costs what, at no extra cost.
+pub fn reap(pid: libc::pid_t) -> io::Result<Option<(ExitHow, CpuTime)>> {
     let mut status = 0;
-    // SAFETY: waitpid writes the status it is given.
-    let rc = unsafe { libc::waitpid(pid, &mut status, libc::WNOHANG) };
+    // SAFETY: wait4 writes the status and the zeroed rusage it is given.
+    let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
+    let rc = unsafe { libc::wait4(pid, &mut status, libc::WNOHANG, &mut usage) };
     match rc {
         0 => Ok(None),
-        r if r == pid => Ok(decode(status)),
+        r if r == pid => Ok(decode(status).map(|how| {
+            (
+                how,
+                CpuTime {
+                    user_s: seconds(usage.ru_utime),
+                    system_s: seconds(usage.ru_stime),
+                },
+            )
+        })),
         _ => Err(io::Error::last_os_error()),
     }
 }

@@ -258,7 +258,13 @@ impl<W: Write + Seek> RunLogWriter<W> {
         data.clear();
         record.encode_json(&mut data);
         let header = record.header();
-        let result = self.put(record.kind(), header.time_ns, header.sequence, &data);
+        let result = self.put(
+            record.kind(),
+            header.time_ns,
+            header.sequence,
+            &data,
+            Some(record),
+        );
         self.scratch = data;
         result
     }
@@ -271,15 +277,20 @@ impl<W: Write + Seek> RunLogWriter<W> {
             record.time_ns(),
             record.sequence(),
             record.data(),
+            None,
         )
     }
 
+    /// Writes one message, and its derived transform if it has one: taken from `record` when
+    /// the caller has it (decoding the message back, as an already encoded record needs, was
+    /// most of the cost of logging an estimate or a truth sample), else from `data`.
     fn put(
         &mut self,
         kind: TopicKind,
         time_ns: u64,
         sequence: u64,
         data: &[u8],
+        record: Option<&LogRecord>,
     ) -> Result<(), LogError> {
         let index = kind as usize;
         let (Some(mcap), Some(&channel_id)) = (&mut self.mcap, self.channel_ids.get(index)) else {
@@ -299,12 +310,17 @@ impl<W: Write + Seek> RunLogWriter<W> {
         }
         if foxglove::has_transform(kind) {
             // A record that does not decode has no transform; its sample is logged all the same.
-            if let Some((topic, child, q)) = kind
-                .decode(data)
-                .ok()
-                .as_ref()
-                .and_then(foxglove::transform_of)
-            {
+            // The message round-trips exactly (shortest round-trip floats, NaN as "NaN"), so
+            // the record gives the same transform as its decoded message.
+            let transform = match record {
+                Some(record) => foxglove::transform_of(record),
+                None => kind
+                    .decode(data)
+                    .ok()
+                    .as_ref()
+                    .and_then(foxglove::transform_of),
+            };
+            if let Some((topic, child, q)) = transform {
                 let channel_id = if topic == foxglove::TF_ESTIMATE_TOPIC {
                     self.tf_channel_ids[0]
                 } else {

@@ -127,6 +127,11 @@ impl Shared {
             .unwrap_or_else(std::sync::PoisonError::into_inner)
     }
 
+    /// Whether any viewer is connected (the node skips encoding what no one would get).
+    pub fn has_viewers(&self) -> bool {
+        !self.viewers().is_empty()
+    }
+
     /// The header of a message the link itself makes.
     pub fn header(&self) -> SampleHeader {
         SampleHeader::new(

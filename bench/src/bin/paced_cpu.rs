@@ -1,0 +1,365 @@
+//! Where the CPU of a paced (1× wall time) run goes, process by process (issue 18, item 5:
+//! target ≤ 0.5 % of one core per second of run, all processes):
+//! - per-process CPU of a short and a long paced `testbed run`, from the launcher's `wait4`
+//!   accounting (`TESTBED_CPU_REPORT`): the marginal cost per second of run (the slope between
+//!   the two runs) and the long run's total over its wall time, medians of `--repeats` pairs;
+//!   the `testbed` command itself (the launcher's parent, summary included) is counted from
+//!   this process's `RUSAGE_CHILDREN`;
+//! - with `--baseline-bin-dir DIR` (the binaries of another build, e.g. the commit before),
+//!   the same runs of that build interleaved with this one's, and the ratio of the two;
+//! - the logger's per-record cost, side by side in one process: the log writer on records as
+//!   it has them (the transform taken from the record) against the same records already
+//!   encoded (the transform decoded back from the JSON message, as every record was before),
+//!   records per second, medians.
+//!
+//! `cargo build --release --workspace --bins && target/release/paced_cpu [--repeats 3]
+//!  [--short 5 --long 60] [--baseline-bin-dir DIR] [--json]`
+
+use anyhow::{Context, Result, bail};
+use clap::Parser;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::Instant;
+use testbed_bench::median_time;
+use testbed_log::{EncodedRecord, LogRecord, RunInfo, RunLog, RunLogWriter, WriterOptions};
+
+#[derive(Parser)]
+struct Args {
+    /// Wall seconds of the short paced run.
+    #[arg(long, default_value_t = 5.0)]
+    short: f64,
+    /// Wall seconds of the long paced run.
+    #[arg(long, default_value_t = 60.0)]
+    long: f64,
+    /// Pairs of runs per build (medians are reported).
+    #[arg(long, default_value_t = 3)]
+    repeats: usize,
+    /// Directory with the binaries of a baseline build (`testbed`, `testbed-launch`, the
+    /// processes) to measure side by side; the launcher used is always this build's (the CPU
+    /// report needs it), the processes are the baseline's.
+    #[arg(long)]
+    baseline_bin_dir: Option<PathBuf>,
+    #[arg(long)]
+    json: bool,
+}
+
+/// CPU time (user + system) of this process's waited-for descendants so far, s.
+fn children_cpu_s() -> f64 {
+    // SAFETY: getrusage writes into the zeroed struct we own.
+    let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
+    unsafe { libc::getrusage(libc::RUSAGE_CHILDREN, &mut usage) };
+    let tv = |t: libc::timeval| t.tv_sec as f64 + t.tv_usec as f64 * 1e-6;
+    tv(usage.ru_utime) + tv(usage.ru_stime)
+}
+
+/// CPU seconds of one paced run: per process (launcher included), plus `testbed` itself.
+struct PacedRun {
+    wall_s: f64,
+    per_process: BTreeMap<String, f64>,
+}
+
+impl PacedRun {
+    fn total_s(&self) -> f64 {
+        self.per_process.values().sum()
+    }
+}
+
+/// A build under test: where its binaries are.
+struct Build {
+    name: &'static str,
+    bin_dir: PathBuf,
+}
+
+fn paced_run(build: &Build, scratch: &Path, seconds: f64) -> Result<PacedRun> {
+    let log = scratch.join(format!("{}.mcap", build.name));
+    let report = scratch.join(format!("{}.cpu.tsv", build.name));
+    let _ = std::fs::remove_file(&report);
+    let testbed = build.bin_dir.join("testbed");
+    let before = children_cpu_s();
+    let start = Instant::now();
+    let out = Command::new(&testbed)
+        .args([
+            "run",
+            "--paced",
+            "--duration",
+            &seconds.to_string(),
+            "--log",
+        ])
+        .arg(&log)
+        .env("RUST_LOG", "warn")
+        .env("TESTBED_CPU_REPORT", &report)
+        .output()
+        .with_context(|| format!("running {}", testbed.display()))?;
+    let wall_s = start.elapsed().as_secs_f64();
+    if !out.status.success() {
+        bail!(
+            "{} run failed: {}",
+            build.name,
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    let all_s = children_cpu_s() - before;
+    let text = std::fs::read_to_string(&report)
+        .with_context(|| format!("reading the launcher's CPU report {}", report.display()))?;
+    let mut per_process = BTreeMap::new();
+    for line in text.lines().skip(1) {
+        let cols: Vec<&str> = line.split('\t').collect();
+        let [name, user, system, ..] = cols[..] else {
+            bail!("bad CPU report line {line:?}");
+        };
+        let cpu: f64 = user.parse::<f64>()? + system.parse::<f64>()?;
+        *per_process.entry(name.to_owned()).or_default() += cpu;
+    }
+    // What the launcher's report does not hold: `testbed run` itself (start, summary of the log).
+    let reported: f64 = per_process.values().sum();
+    per_process.insert("testbed run".to_owned(), (all_s - reported).max(0.0));
+    Ok(PacedRun {
+        wall_s,
+        per_process,
+    })
+}
+
+fn median(mut xs: Vec<f64>) -> f64 {
+    xs.sort_by(f64::total_cmp);
+    xs.get(xs.len() / 2).copied().unwrap_or(f64::NAN)
+}
+
+/// Per-process medians of a build: (marginal fraction of one core, long run's fraction).
+struct BuildResult {
+    marginal: BTreeMap<String, f64>,
+    total_over_wall: BTreeMap<String, f64>,
+    marginal_all: f64,
+    total_over_wall_all: f64,
+    long_wall_s: f64,
+}
+
+fn summarise(pairs: &[(PacedRun, PacedRun)]) -> BuildResult {
+    let names: Vec<String> = pairs
+        .iter()
+        .flat_map(|(s, l)| s.per_process.keys().chain(l.per_process.keys()).cloned())
+        .collect::<std::collections::BTreeSet<_>>()
+        .into_iter()
+        .collect();
+    let slope = |s: &PacedRun, l: &PacedRun, f: &dyn Fn(&PacedRun) -> f64| {
+        (f(l) - f(s)) / (l.wall_s - s.wall_s)
+    };
+    let mut marginal = BTreeMap::new();
+    let mut total_over_wall = BTreeMap::new();
+    for name in &names {
+        let cpu = |r: &PacedRun| r.per_process.get(name).copied().unwrap_or(0.0);
+        marginal.insert(
+            name.clone(),
+            median(pairs.iter().map(|(s, l)| slope(s, l, &cpu)).collect()),
+        );
+        total_over_wall.insert(
+            name.clone(),
+            median(pairs.iter().map(|(_, l)| cpu(l) / l.wall_s).collect()),
+        );
+    }
+    BuildResult {
+        marginal,
+        total_over_wall,
+        marginal_all: median(
+            pairs
+                .iter()
+                .map(|(s, l)| slope(s, l, &PacedRun::total_s))
+                .collect(),
+        ),
+        total_over_wall_all: median(pairs.iter().map(|(_, l)| l.total_s() / l.wall_s).collect()),
+        long_wall_s: median(pairs.iter().map(|(_, l)| l.wall_s).collect()),
+    }
+}
+
+/// Records/s of the log writer, new path against old, on `records` (medians of `repeats`).
+fn writer_speed(records: &[LogRecord], repeats: usize) -> Result<(f64, f64)> {
+    let info = RunInfo {
+        profile: "bench".to_owned(),
+        seed: 1,
+        mode: "paced".to_owned(),
+        config_toml: String::new(),
+        start_time_ns: 0,
+        extra: Default::default(),
+    };
+    let options = WriterOptions::default();
+    let mut check = RunLogWriter::new(std::io::Cursor::new(Vec::new()), &info, options)?;
+    for r in records {
+        check.write_record(r)?;
+    }
+    let new_time = median_time(repeats, || {
+        let mut w = RunLogWriter::new(std::io::Cursor::new(Vec::new()), &info, options)
+            .expect("in-memory writer");
+        for r in records {
+            w.write_record(r).expect("in-memory write");
+        }
+        std::hint::black_box(w.finish().expect("in-memory finish"));
+    });
+    let old_time = median_time(repeats, || {
+        let mut w = RunLogWriter::new(std::io::Cursor::new(Vec::new()), &info, options)
+            .expect("in-memory writer");
+        for r in records {
+            // As every record was written before: encoded first, its transform decoded back.
+            w.write_encoded(&EncodedRecord::new(r))
+                .expect("in-memory write");
+        }
+        std::hint::black_box(w.finish().expect("in-memory finish"));
+    });
+    let n = records.len() as f64;
+    Ok((n / new_time.as_secs_f64(), n / old_time.as_secs_f64()))
+}
+
+/// A directory with the baseline's executables but this build's launcher (the one that writes
+/// the CPU report): `testbed` and the launcher find their programs beside themselves.
+fn baseline_bins(dir: &Path, launcher: &Path, scratch: &Path) -> Result<PathBuf> {
+    use std::os::unix::fs::PermissionsExt as _;
+    let out = scratch.join("baseline-bin");
+    std::fs::create_dir_all(&out)?;
+    let entries =
+        std::fs::read_dir(dir).with_context(|| format!("--baseline-bin-dir {}", dir.display()))?;
+    for entry in entries {
+        let entry = entry?;
+        let meta = entry.metadata()?;
+        if !meta.is_file() || meta.permissions().mode() & 0o111 == 0 {
+            continue;
+        }
+        std::fs::copy(entry.path(), out.join(entry.file_name()))?;
+    }
+    std::fs::copy(launcher, out.join("testbed-launch"))?;
+    Ok(out)
+}
+
+fn main() -> Result<()> {
+    let args = Args::parse();
+    let bin_dir = std::env::current_exe()?
+        .parent()
+        .context("bench binary has a directory")?
+        .to_path_buf();
+    let launcher = bin_dir.join("testbed-launch");
+    for needed in ["testbed", "testbed-launch", "logger"] {
+        if !bin_dir.join(needed).exists() {
+            bail!(
+                "{} not found: cargo build --release --workspace --bins first",
+                bin_dir.join(needed).display()
+            );
+        }
+    }
+    let scratch = std::env::temp_dir().join(format!("paced-cpu-{}", std::process::id()));
+    std::fs::create_dir_all(&scratch)?;
+    let mut builds = vec![Build {
+        name: "this build",
+        bin_dir,
+    }];
+    if let Some(dir) = &args.baseline_bin_dir {
+        builds.push(Build {
+            name: "baseline",
+            bin_dir: baseline_bins(dir, &launcher, &scratch)?,
+        });
+    }
+    let mut pairs: Vec<Vec<(PacedRun, PacedRun)>> = builds.iter().map(|_| Vec::new()).collect();
+    for repeat in 0..args.repeats.max(1) {
+        // Interleaved, so both builds see the same load on a shared machine.
+        for (build, runs) in builds.iter().zip(&mut pairs) {
+            eprintln!(
+                "repeat {} of {}: {} ({} s and {} s paced)",
+                repeat + 1,
+                args.repeats.max(1),
+                build.name,
+                args.short,
+                args.long
+            );
+            let short = paced_run(build, &scratch, args.short)?;
+            let long = paced_run(build, &scratch, args.long)?;
+            runs.push((short, long));
+        }
+    }
+    let results: Vec<BuildResult> = pairs.iter().map(|p| summarise(p)).collect();
+
+    // The writer micro-bench on the records of this build's last long run.
+    let log = RunLog::open(scratch.join("this build.mcap"))?;
+    let records: Vec<LogRecord> = log.records()?.collect::<Result<_, _>>()?;
+    let (new_rate, old_rate) = writer_speed(&records, 5)?;
+    let _ = std::fs::remove_dir_all(&scratch);
+
+    let this = &results[0];
+    let base = results.get(1);
+    if args.json {
+        let table = |r: &BuildResult| {
+            serde_json::json!({
+                "long_run_wall_s": r.long_wall_s,
+                "marginal_cpu_fraction_of_one_core": r.marginal_all,
+                "cpu_fraction_of_one_core_over_wall": r.total_over_wall_all,
+                "per_process_marginal": r.marginal,
+                "per_process_over_wall": r.total_over_wall,
+            })
+        };
+        let report = serde_json::json!({
+            "short_s": args.short,
+            "long_s": args.long,
+            "repeats": args.repeats,
+            "this_build": table(this),
+            "baseline": base.map(table),
+            "log_writer": {
+                "records": records.len(),
+                "records_per_s": new_rate,
+                "records_per_s_decoding_transforms": old_rate,
+                "speed_ratio": new_rate / old_rate,
+            },
+        });
+        println!("{}", serde_json::to_string_pretty(&report)?);
+        return Ok(());
+    }
+    println!(
+        "paced runs of {} s and {} s, {} pairs per build; CPU in % of one core, medians",
+        args.short, args.long, args.repeats
+    );
+    print!("{:<20} {:>12} {:>12}", "process", "marginal", "over wall");
+    if base.is_some() {
+        print!(" {:>14} {:>14}", "baseline marg.", "baseline wall");
+    }
+    println!();
+    for (name, m) in &this.marginal {
+        print!(
+            "{name:<20} {:>12.3} {:>12.3}",
+            100.0 * m,
+            100.0 * this.total_over_wall[name]
+        );
+        if let Some(b) = base {
+            print!(
+                " {:>14.3} {:>14.3}",
+                100.0 * b.marginal.get(name).copied().unwrap_or(f64::NAN),
+                100.0 * b.total_over_wall.get(name).copied().unwrap_or(f64::NAN)
+            );
+        }
+        println!();
+    }
+    print!(
+        "{:<20} {:>12.3} {:>12.3}",
+        "all",
+        100.0 * this.marginal_all,
+        100.0 * this.total_over_wall_all
+    );
+    if let Some(b) = base {
+        print!(
+            " {:>14.3} {:>14.3}",
+            100.0 * b.marginal_all,
+            100.0 * b.total_over_wall_all
+        );
+    }
+    println!();
+    if let Some(b) = base {
+        println!(
+            "baseline / this build: {:.2}× (marginal), {:.2}× (over wall)",
+            b.marginal_all / this.marginal_all,
+            b.total_over_wall_all / this.total_over_wall_all
+        );
+    }
+    println!(
+        "log writer, {} records of a paced run: {:.0} records/s, {:.0} records/s decoding each \
+         transform back (before): {:.2}×",
+        records.len(),
+        new_rate,
+        old_rate,
+        new_rate / old_rate
+    );
+    Ok(())
+}
