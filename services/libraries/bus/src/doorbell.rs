@@ -41,6 +41,7 @@
 use std::fs::OpenOptions;
 use std::io;
 use std::os::fd::AsRawFd;
+use std::os::unix::fs::OpenOptionsExt;
 use std::path::{Path, PathBuf};
 use std::rc::Rc;
 use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
@@ -112,11 +113,14 @@ impl Doorbells {
     }
 
     fn open_at(path: &Path) -> Result<Rc<Self>, BusError> {
+        // Owner only, like the run's other shared memory: nobody else may ring or stop a
+        // doorbell.
         let file = OpenOptions::new()
             .read(true)
             .write(true)
             .create(true)
             .truncate(false)
+            .mode(0o600)
             .open(path)
             .map_err(|e| table_error(path, "opening", e))?;
         let size = size_of::<Table>() as u64;
