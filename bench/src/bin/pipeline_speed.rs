@@ -1,13 +1,17 @@
 //! What the process pipeline costs, next to its baseline in the same run:
 //! - lockstep speed of the full multi-process pipeline (plant, five simulated gateways,
 //!   estimator, controller, logger over iceoryx2) in simulated time per wall time, beside the
-//!   in-process closed loop running the same scenario (target: ≥ 200× real time);
+//!   in-process closed loop running the same scenario (target: ≥ 1000× real time while
+//!   ticking);
+//! - both against Basilisk's dynamics alone on the same scenario, measured in the same run
+//!   (`bench/basilisk_speed.py`: Basilisk's hub + three reaction wheels with friction at
+//!   0.01 s; needs `python3` with `bsk` installed, else the report says "not installed");
 //! - CPU time of all the processes of a paced (1× wall time) run per second of run
 //!   (target: < 2 % of one core): from a short and a long paced run, the marginal cost per
 //!   second (the slope) and the fixed cost of starting and stopping nine processes (the
 //!   intercept), and the long run's total over its wall time.
 //!
-//! `cargo build --release --workspace --bins && cargo run --release -p testbed-bench --bin pipeline_speed [-- --json]`
+//! `cargo build --release --workspace --bins && cargo run --release -p testbed-bench --bin pipeline_speed [-- --json] [--no-paced]`
 
 use anyhow::{Context, Result, bail};
 use clap::Parser;
@@ -31,6 +35,70 @@ struct Args {
     paced_duration: f64,
     #[arg(long)]
     json: bool,
+    /// Skip the paced CPU measurement (a minute of wall time).
+    #[arg(long)]
+    no_paced: bool,
+    /// The Python interpreter that runs `bench/basilisk_speed.py`.
+    #[arg(long, default_value = "python3")]
+    python: String,
+}
+
+/// The tracing filter of the benchmarked runs: warnings, and the plant's "plant done" line
+/// (target `testbed_processes::plant`) that carries `x_real_time`.
+const RUN_LOG_FILTER: &str = "warn,testbed_processes::plant=info";
+
+/// The plant's own speed measure from a run's stderr: the `x_real_time=` of "plant done".
+fn plant_x_real_time(stderr: &str) -> Option<f64> {
+    stderr
+        .lines()
+        .find(|l| l.contains("plant done"))?
+        .split("x_real_time=")
+        .nth(1)?
+        .split_whitespace()
+        .next()?
+        .parse()
+        .ok()
+}
+
+/// What `bench/basilisk_speed.py` measured: Basilisk's simulated seconds per wall second, or
+/// why there is no number.
+enum Basilisk {
+    Measured { x_real_time: f64, version: String },
+    NotInstalled(String),
+}
+
+fn basilisk(python: &str, duration_s: f64) -> Basilisk {
+    let script = concat!(env!("CARGO_MANIFEST_DIR"), "/basilisk_speed.py");
+    let out = Command::new(python)
+        .arg(script)
+        .args(["--duration", &duration_s.to_string(), "--repeats", "1"])
+        .output();
+    let out = match out {
+        Ok(out) if out.status.success() => out,
+        Ok(out) => {
+            return Basilisk::NotInstalled(format!(
+                "{script} failed: {}",
+                String::from_utf8_lossy(&out.stderr).trim()
+            ));
+        }
+        Err(e) => return Basilisk::NotInstalled(format!("{python}: {e}")),
+    };
+    let Ok(report) = serde_json::from_slice::<serde_json::Value>(&out.stdout) else {
+        return Basilisk::NotInstalled(format!("{script} printed no JSON"));
+    };
+    match (
+        report["installed"].as_bool(),
+        report["x_real_time"].as_f64(),
+    ) {
+        (Some(true), Some(x_real_time)) => Basilisk::Measured {
+            x_real_time,
+            version: report["bsk_version"].as_str().unwrap_or("?").to_owned(),
+        },
+        _ => Basilisk::NotInstalled(format!(
+            "not installed ({}): pip install bsk==2.12.1",
+            report["error"].as_str().unwrap_or("no Basilisk")
+        )),
+    }
 }
 
 /// CPU time (user + system) of this process's waited-for descendants so far.
@@ -55,7 +123,7 @@ fn testbed_run(testbed: &PathBuf, log: &PathBuf, args: &[&str]) -> Result<Pipeli
         .args(args)
         .arg("--log")
         .arg(log)
-        .env("RUST_LOG", "warn,plant=info")
+        .env("RUST_LOG", RUN_LOG_FILTER)
         .output()
         .with_context(|| format!("running {}", testbed.display()))?;
     let wall = start.elapsed();
@@ -63,11 +131,7 @@ fn testbed_run(testbed: &PathBuf, log: &PathBuf, args: &[&str]) -> Result<Pipeli
     if !out.status.success() {
         bail!("testbed run failed: {stderr}");
     }
-    let plant_x_real_time = stderr
-        .split("x_real_time=")
-        .nth(1)
-        .and_then(|rest| rest.split_whitespace().next())
-        .and_then(|n| n.parse().ok());
+    let plant_x_real_time = plant_x_real_time(&stderr);
     Ok(PipelineRun {
         wall,
         plant_x_real_time,
@@ -97,12 +161,28 @@ fn main() -> Result<()> {
     let log = scratch.join("run.mcap");
     let duration = args.duration.to_string();
 
+    // Side by side: each repeat runs the pipeline, then Basilisk, so both see the same load.
     let mut whole = Vec::new();
     let mut ticking = Vec::new();
+    let mut bsk = Vec::new();
+    let mut bsk_missing = None;
+    let mut bsk_version = String::new();
     for _ in 0..args.repeats.max(1) {
         let run = testbed_run(&testbed, &log, &["--duration", &duration])?;
         whole.push(args.duration / run.wall.as_secs_f64());
         ticking.extend(run.plant_x_real_time);
+        if bsk_missing.is_none() {
+            match basilisk(&args.python, args.duration) {
+                Basilisk::Measured {
+                    x_real_time,
+                    version,
+                } => {
+                    bsk.push(x_real_time);
+                    bsk_version = version;
+                }
+                Basilisk::NotInstalled(why) => bsk_missing = Some(why),
+            }
+        }
     }
     let mut scenario = Scenario::paper_stabilisation(ModelConfig::default(), 1);
     scenario.duration_s = args.duration;
@@ -112,6 +192,9 @@ fn main() -> Result<()> {
     let in_process_x = args.duration / in_process.as_secs_f64();
 
     let paced_cpu = |seconds: f64| -> Result<(f64, f64)> {
+        if args.no_paced {
+            return Ok((f64::NAN, f64::NAN));
+        }
         let before = children_cpu();
         let run = testbed_run(
             &testbed,
@@ -136,6 +219,7 @@ fn main() -> Result<()> {
     } else {
         median(ticking)
     };
+    let bsk_x = (!bsk.is_empty()).then(|| median(bsk));
     let report = serde_json::json!({
         "simulated_s": args.duration,
         "repeats": args.repeats,
@@ -145,6 +229,16 @@ fn main() -> Result<()> {
         },
         "in_process_loop": { "x_real_time": in_process_x },
         "pipeline_over_in_process_cost": in_process_x / ticking_x,
+        "basilisk_dynamics": match bsk_x {
+            Some(x) => serde_json::json!({
+                "bsk_version": bsk_version,
+                "x_real_time": x,
+                "lockstep_pipeline_ticking_over_basilisk": ticking_x / x,
+                "lockstep_pipeline_whole_run_over_basilisk": whole_x / x,
+                "in_process_over_basilisk": in_process_x / x,
+            }),
+            None => serde_json::json!({ "not_installed": bsk_missing }),
+        },
         "paced": {
             "wall_s": long_wall,
             "cpu_s_all_processes": long_cpu,
@@ -170,10 +264,36 @@ fn main() -> Result<()> {
         "{:<58} {:>12.0}",
         "in-process closed loop, same scenario (baseline)", in_process_x
     );
+    match bsk_x {
+        Some(x) => println!(
+            "{:<58} {:>12.0}",
+            format!("Basilisk {bsk_version} dynamics alone (hub + 3 wheels, 0.01 s)"),
+            x
+        ),
+        None => println!(
+            "{:<58} {:>12}",
+            "Basilisk dynamics alone: not installed", "-"
+        ),
+    }
     println!(
         "the process split costs {:.0}× the in-process loop's time per tick",
         in_process_x / ticking_x
     );
+    match bsk_x {
+        Some(x) => println!(
+            "lockstep pipeline ÷ Basilisk: {:.2} while ticking, {:.2} whole run; in-process ÷ Basilisk: {:.1}",
+            ticking_x / x,
+            whole_x / x,
+            in_process_x / x
+        ),
+        None => println!(
+            "Basilisk: not installed ({})",
+            bsk_missing.as_deref().unwrap_or("?")
+        ),
+    }
+    if args.no_paced {
+        return Ok(());
+    }
     println!(
         "paced, all processes: {:.2} % of one core per second of run (marginal), {:.2} s CPU to start and stop;",
         100.0 * marginal,
@@ -184,4 +304,27 @@ fn main() -> Result<()> {
         100.0 * cpu_fraction
     );
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn reads_the_plants_speed_from_its_done_line() {
+        let stderr = "2026-11-25T15:50:48.051584Z  INFO testbed_processes::plant: plant done \
+            exit=Stopped simulated_s=60.00000000000001 wall_s=0.256103176 \
+            x_real_time=234.28057760595678 deadline_misses=0\n";
+        assert_eq!(plant_x_real_time(stderr), Some(234.28057760595678));
+        assert_eq!(
+            plant_x_real_time("INFO something else x_real_time=3\n"),
+            None
+        );
+    }
+
+    #[test]
+    fn the_run_filter_lets_the_plants_done_line_through() {
+        // The plant logs under its module path; a bare `plant=info` directive missed it.
+        assert!(RUN_LOG_FILTER.contains("testbed_processes::plant=info"));
+    }
 }

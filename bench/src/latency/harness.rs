@@ -69,6 +69,9 @@ struct Args {
 }
 
 /// `latency`, or `latency worker <spec>` for one of its processes.
+/// Tries of one round of a configuration before it counts as failed.
+const ROUND_TRIES: usize = 3;
+
 pub fn main() -> Result<()> {
     let argv: Vec<String> = std::env::args().collect();
     if argv.get(1).map(String::as_str) == Some("worker") {
@@ -224,7 +227,20 @@ fn run(args: &Args, command: String) -> Result<()> {
             plan.len()
         );
         for (p, parts) in plan.iter().zip(parts.iter_mut()) {
-            let part = ctx.round(p, (p.count / rounds).max(1));
+            // A round that fails (a worker slow to start on a loaded machine, say) is tried
+            // again on fresh processes, ports and sockets, up to ROUND_TRIES in all; only a
+            // configuration that fails every time is reported as failed.
+            let mut part = ctx.round(p, (p.count / rounds).max(1));
+            for attempt in 2..=ROUND_TRIES {
+                let Err(e) = &part else { break };
+                eprintln!(
+                    "  {:?} {} {}: {e} (trying again, {attempt} of {ROUND_TRIES})",
+                    p.kind,
+                    p.transport.label(),
+                    if p.load { "load" } else { "idle" }
+                );
+                part = ctx.round(p, (p.count / rounds).max(1));
+            }
             if let Err(e) = &part {
                 eprintln!(
                     "  {:?} {} {}: {e}",

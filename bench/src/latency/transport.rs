@@ -18,7 +18,7 @@ use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::prelude::*;
 use iceoryx2::service::port_factory::publish_subscribe;
 use ipc_types::Topic;
-use std::cell::Cell;
+use std::cell::{Cell, RefCell};
 use std::io::ErrorKind;
 use std::net::UdpSocket;
 use std::os::fd::{AsRawFd, RawFd};
@@ -246,9 +246,9 @@ pub const UDP_CHUNK: usize = 65_000;
 /// A datagram socket of either family, blocking.
 pub struct Sock {
     inner: Inner,
-    /// Until the first datagram has gone through: how long to keep trying a peer that is not
-    /// there yet.
-    startup: Cell<Option<Instant>>,
+    /// The peers a datagram has gone through to: until then a peer may not be there yet, and
+    /// sending to it is tried again (see [`send_to`](Self::send_to)).
+    reached: RefCell<Vec<Addr>>,
     /// Nothing received yet: receives wait up to [`STARTUP`], not [`STALL`].
     patient: Cell<bool>,
 }
@@ -263,10 +263,9 @@ impl Sock {
         if let Inner::Udp(s) = &inner {
             set_buffers(s.as_raw_fd());
         }
-        let startup = Cell::new(Some(Instant::now() + STARTUP));
         let sock = Self {
             inner,
-            startup,
+            reached: RefCell::new(Vec::new()),
             patient: Cell::new(true),
         };
         sock.set_timeout(STARTUP)?;
@@ -304,11 +303,25 @@ impl Sock {
         Ok(sock)
     }
 
-    /// Sends `bytes` to `to` (UDP: in chunks of at most [`UDP_CHUNK`]). Until the first
-    /// datagram has gone through, a peer that is not there yet (no such socket, connection
-    /// refused) is tried again until [`STARTUP`] has passed. `false`: dropped, the receiver's
-    /// queue was full (only a [`sender`](Self::sender) drops).
+    /// Sends `bytes` to `to` (UDP: in chunks of at most [`UDP_CHUNK`]). Until a datagram has
+    /// gone through to `to`, a peer that is not there yet (no such socket, connection refused:
+    /// on a loaded machine a peer may be slow to bind, or a socket file may exist before its
+    /// socket is bound) is tried again, backing off from 100 µs to 20 ms, until [`STARTUP`]
+    /// has passed since the first try; each peer on its own, so having reached one peer does
+    /// not make a first send to another fatal. `false`: dropped, the receiver's queue was full
+    /// (only a [`sender`](Self::sender) drops).
     pub fn send_to(&self, bytes: &[u8], to: &Addr) -> Result<bool> {
+        self.send_to_within(bytes, to, STARTUP)
+    }
+
+    /// [`send_to`](Self::send_to), trying a peer that is not there yet for at most `patience`.
+    pub(crate) fn send_to_within(
+        &self,
+        bytes: &[u8],
+        to: &Addr,
+        patience: Duration,
+    ) -> Result<bool> {
+        let mut first_contact: Option<(Instant, Duration)> = None;
         loop {
             let sent = match (&self.inner, to) {
                 (Inner::Uds(s), Addr::Uds(path)) => s.send_to(bytes, path).map(drop),
@@ -317,19 +330,31 @@ impl Sock {
                     .try_for_each(|chunk| s.send_to(chunk, a).map(drop)),
                 _ => bail!("socket and address families differ"),
             };
-            match (sent, self.startup.get()) {
-                (Ok(()), _) => {
-                    self.startup.set(None);
+            match sent {
+                Ok(()) => {
+                    // A few peers at most, compared only while sending: tens of ns beside
+                    // the system call.
+                    if !self.reached.borrow().contains(to) {
+                        self.reached.borrow_mut().push(to.clone());
+                    }
                     return Ok(true);
                 }
-                (Err(e), _) if e.kind() == ErrorKind::WouldBlock => return Ok(false),
-                (Err(e), Some(deadline))
+                Err(e) if e.kind() == ErrorKind::WouldBlock => return Ok(false),
+                Err(e)
                     if matches!(e.kind(), ErrorKind::NotFound | ErrorKind::ConnectionRefused)
-                        && Instant::now() < deadline =>
+                        && !self.reached.borrow().contains(to) =>
                 {
-                    std::thread::sleep(Duration::from_millis(1));
+                    let (since, backoff) =
+                        first_contact.get_or_insert((Instant::now(), Duration::from_micros(100)));
+                    if since.elapsed() >= patience {
+                        return Err(e).with_context(|| {
+                            format!("sending to {to:?}: no peer there for {patience:?}")
+                        });
+                    }
+                    std::thread::sleep(*backoff);
+                    *backoff = (*backoff * 2).min(Duration::from_millis(20));
                 }
-                (Err(e), _) => return Err(e).with_context(|| format!("sending to {to:?}")),
+                Err(e) => return Err(e).with_context(|| format!("sending to {to:?}")),
             }
         }
     }
@@ -411,5 +436,67 @@ fn set_buffers(fd: RawFd) {
                 size_of::<libc::c_int>() as u32,
             );
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn scratch(name: &str) -> std::path::PathBuf {
+        let dir = std::env::temp_dir().join(format!("sock-test-{}-{name}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        dir
+    }
+
+    /// A peer that binds late (a loaded machine) is waited for, also where its socket file
+    /// exists before a socket is bound to it ("connection refused"), and also after another
+    /// peer has been reached.
+    #[test]
+    fn a_first_send_waits_for_a_peer_that_binds_late() {
+        let dir = scratch("late");
+        let (a, b) = (Addr::Uds(dir.join("a.sock")), Addr::Uds(dir.join("b.sock")));
+        let sender = Sock::sender(&a).unwrap();
+        let receiver_a = Sock::bind(&a).unwrap();
+        assert!(sender.send_to(b"first", &a).unwrap());
+        // b.sock: a socket file with nobody bound to it.
+        drop(UnixDatagram::bind(dir.join("b.sock")).unwrap());
+        let late = b.clone();
+        let binder = std::thread::spawn(move || {
+            std::thread::sleep(Duration::from_millis(150));
+            Sock::bind(&late).unwrap()
+        });
+        assert!(sender.send_to(b"second", &b).unwrap());
+        let receiver_b = binder.join().unwrap();
+        let mut buf = [0_u8; 16];
+        assert_eq!(receiver_a.recv(&mut buf).unwrap(), 5);
+        assert_eq!(&buf[..5], b"first");
+        assert_eq!(receiver_b.recv(&mut buf).unwrap(), 6);
+        assert_eq!(&buf[..6], b"second");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// A peer that was reached and is gone fails at once (a run's end), and one that never
+    /// comes fails after the patience given, naming the peer.
+    #[test]
+    fn a_peer_gone_fails_at_once_and_one_never_there_after_the_patience() {
+        let dir = scratch("gone");
+        let a = Addr::Uds(dir.join("a.sock"));
+        let sender = Sock::sender(&a).unwrap();
+        let receiver = Sock::bind(&a).unwrap();
+        assert!(sender.send_to(b"x", &a).unwrap());
+        drop(receiver);
+        let start = Instant::now();
+        assert!(sender.send_to(b"x", &a).is_err());
+        assert!(start.elapsed() < Duration::from_secs(1));
+        let never = Addr::Uds(dir.join("never.sock"));
+        let start = Instant::now();
+        let error = sender
+            .send_to_within(b"x", &never, Duration::from_millis(100))
+            .unwrap_err();
+        assert!(start.elapsed() >= Duration::from_millis(100));
+        assert!(format!("{error:#}").contains("never.sock"), "{error:#}");
+        let _ = std::fs::remove_dir_all(&dir);
     }
 }

@@ -168,6 +168,8 @@ impl Node for ControllerProcess {
                 port.publish(thrusters)?;
                 io.heartbeat.add_samples_out(1);
             }
+            // The CMG command last: in lockstep the plant wakes on it alone and takes the
+            // cycle's other commands with it (see the plant's `wake_on`).
             ports.wheel_command.publish(&cycle.wheels)?;
             ports.cmg_command.publish(&cycle.cmg)?;
             io.heartbeat.add_samples_out(3);

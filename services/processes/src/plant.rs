@@ -231,6 +231,14 @@ impl Node for PlantProcess {
         wake: &mut WakeOn<'_, '_, 'a>,
     ) -> anyhow::Result<()> {
         match &ports.commands {
+            // Lockstep: one wake-up a tick, not one per command. The controller publishes a
+            // cycle's commands in one go, thrusters, wheels, then the CMG last (each in shared
+            // memory before its notification), so when the CMG command wakes the plant the
+            // others of the tick are there; `on_wake` takes them all, and the plant advances
+            // only once every command of the tick is in, as before.
+            CommandPorts::Direct { cmg, .. } if wake.mode() == ClockMode::Lockstep => {
+                wake.data(cmg)?;
+            }
             CommandPorts::Direct { wheels, cmg } => {
                 wake.data(wheels)?;
                 wake.data(cmg)?;
@@ -241,6 +249,7 @@ impl Node for PlantProcess {
             }
         }
         match &ports.thrusters {
+            Some(ThrusterPorts::Direct { .. }) if wake.mode() == ClockMode::Lockstep => {}
             Some(ThrusterPorts::Direct { commands, .. }) => {
                 wake.data(commands)?;
             }

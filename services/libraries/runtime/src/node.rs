@@ -189,8 +189,11 @@ pub fn run<N: Node>(
             watch: &mut watch,
         },
     )?;
-    events.with_heartbeat(&heartbeat)?;
+    // Running before the first heartbeat goes out (`with_heartbeat` publishes one at once): a
+    // clock owner's start barrier then passes as soon as the last participant is attached,
+    // not a heartbeat period (500 ms) later.
     heartbeat.set_state(ProcessState::Running);
+    events.with_heartbeat(&heartbeat)?;
     let io = Io {
         name,
         mode: config.run.mode,

@@ -7,7 +7,9 @@ use std::collections::BTreeSet;
 use std::path::PathBuf;
 use std::time::Duration;
 use std::time::Instant;
-use testbed_bus::{Bus, BusConfig, EventLoop, Flow, LoopExit, SubscriberOptions, Waiter};
+use testbed_bus::{
+    Bus, BusConfig, EventLoop, Flow, LoopExit, SubscriberOptions, TopicSubscriber, Waiter,
+};
 
 /// How long the participants of a run have to come up.
 pub const START_TIMEOUT: Duration = Duration::from_secs(60);
@@ -35,6 +37,21 @@ pub fn start(name: &str) -> anyhow::Result<(RunConfig, Bus)> {
     Ok((config, bus))
 }
 
+/// Takes the pending heartbeats; the names of the processes running among them go to `seen`.
+fn running(heartbeats: &TopicSubscriber<Heartbeat>, seen: &mut Vec<String>) {
+    let _ = heartbeats.drain(|h| {
+        // Degraded is running too (its ports exist): a CAN gateway that has not yet heard its
+        // node, slow to start on a loaded machine, reports Degraded and must not hold the
+        // barrier until the node (itself waiting for the barrier) speaks.
+        if matches!(
+            h.state(),
+            Some(ProcessState::Running | ProcessState::Degraded)
+        ) {
+            seen.push(h.name().to_string());
+        }
+    });
+}
+
 /// The start barrier of a clock owner (plant, replay): block until every process named in
 /// `participants` has published a `Running` (or `Degraded`) heartbeat, so every subscriber exists before the
 /// first sample.
@@ -44,11 +61,22 @@ pub fn wait_for_participants(bus: &Bus, participants: &[String]) -> anyhow::Resu
         return Ok(LoopExit::Stopped);
     }
     // Dropped on return: nothing subscribes to heartbeats during the run, so a heartbeat can
-    // never block a lossless publisher.
-    let heartbeats = bus.subscriber_with::<Heartbeat>(SubscriberOptions::buffer(64))?;
+    // never block a lossless publisher. With the last heartbeat of every publisher already
+    // there (history 1): a participant that said `Running` before this subscriber existed is
+    // seen at once, not at its next heartbeat (a heartbeat period, 500 ms, of start-up).
+    let heartbeats = bus.subscriber_with::<Heartbeat>(SubscriberOptions {
+        history: 1,
+        ..SubscriberOptions::buffer(64)
+    })?;
     let waiter = Waiter::new()?;
     let mut events = EventLoop::new(&waiter);
     events.on_data(&heartbeats)?;
+    // The history came with no notification: take it before waiting.
+    let mut seen = Vec::new();
+    running(&heartbeats, &mut seen);
+    for name in &seen {
+        waiting.remove(name.as_str());
+    }
     let deadline = Instant::now() + START_TIMEOUT;
     while !waiting.is_empty() {
         let left = deadline.saturating_duration_since(Instant::now());
@@ -58,17 +86,7 @@ pub fn wait_for_participants(bus: &Bus, participants: &[String]) -> anyhow::Resu
         );
         let mut seen = Vec::new();
         let exit = events.run_once(left, |_| {
-            let _ = heartbeats.drain(|h| {
-                // Degraded is running too (its ports exist): a CAN gateway that has not yet
-                // heard its node, slow to start on a loaded machine, reports Degraded and must
-                // not hold the barrier until the node (itself waiting for the barrier) speaks.
-                if matches!(
-                    h.state(),
-                    Some(ProcessState::Running | ProcessState::Degraded)
-                ) {
-                    seen.push(h.name().to_string());
-                }
-            });
+            running(&heartbeats, &mut seen);
             Flow::Continue
         });
         if let Some(exit) = exit.context("waiting for the participants")? {

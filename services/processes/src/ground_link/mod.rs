@@ -29,10 +29,12 @@ use testbed_model::attitude::{self, Attitude};
 use testbed_model::config::DEG;
 use testbed_model::physics::cmg_pyramid::CmgPyramid;
 use testbed_runtime::ground::ENV_GROUND_TOKEN;
-use testbed_runtime::{Context, Io, Node, WakeOn};
+use testbed_runtime::{ClockMode, Context, Io, Node, WakeOn};
 
 /// How often the node looks at the viewers' commands and sends the link's own status.
 const SERVICE_PERIOD: Duration = Duration::from_millis(100);
+/// How often the link drains its subscribers in a lockstep run (see `wake_on`).
+const LOCKSTEP_DRAIN: Duration = Duration::from_millis(5);
 /// Period of `testbed/ground/link`.
 const STATUS_PERIOD: Duration = Duration::from_secs(1);
 
@@ -137,17 +139,12 @@ pub fn channels() -> Vec<Channel> {
 
 /// A subscriber whose samples go to the viewers, whatever their type.
 trait Streamed {
-    fn attach<'a>(&'a self, wake: &mut WakeOn<'_, '_, 'a>) -> anyhow::Result<()>;
     fn drain(&self, sink: &mut dyn FnMut(LogRecord)) -> anyhow::Result<usize>;
 }
 
 struct Stream<T: Topic>(TopicSubscriber<T>);
 
 impl<T: Topic + LogEncode> Streamed for Stream<T> {
-    fn attach<'a>(&'a self, wake: &mut WakeOn<'_, '_, 'a>) -> anyhow::Result<()> {
-        wake.data(&self.0)?;
-        Ok(())
-    }
     fn drain(&self, sink: &mut dyn FnMut(LogRecord)) -> anyhow::Result<usize> {
         Ok(self.0.drain(|s| sink(s.into_record()))?)
     }
@@ -401,18 +398,20 @@ impl Node for GroundLinkProcess {
 
     fn wake_on<'a>(
         &mut self,
-        ports: &'a GroundLinkPorts,
+        _ports: &'a GroundLinkPorts,
         wake: &mut WakeOn<'_, '_, 'a>,
     ) -> anyhow::Result<()> {
-        // Paced, the service period's wake-ups take every sample: a viewer sees it at most one
-        // period later (it draws at a few hertz), and the link no longer wakes for each of
-        // some 150 samples a second (issue 18: it cost 0.5 % of a core with no viewer at all).
-        // Lockstep runs far faster than real time on lossless delivery, where a subscriber
-        // drained only every period would hold its publishers up: there it wakes on data.
-        if wake.mode() == testbed_runtime::ClockMode::Lockstep {
-            for s in &ports.streams {
-                s.attach(wake)?;
-            }
+        // The link never wakes per sample: it drains every stream on a timer. Paced, the
+        // service period's wake-ups take every sample: a viewer sees it at most one period
+        // later (it draws at a few hertz), and the link no longer wakes for each of some 150
+        // samples a second (issue 18: it cost 0.5 % of a core with no viewer at all).
+        // Lockstep runs as fast as the machine allows: a wake-up for every sample of every
+        // topic (about ten a tick) took as much CPU as the tick's own processes, on the same
+        // cores. It instead drains everything every LOCKSTEP_DRAIN of wall time: at 10 000
+        // ticks per second that is 50 samples a topic, within the 256 of the buffers, so a
+        // lossless publisher never waits for the link.
+        if wake.mode() == ClockMode::Lockstep {
+            wake.interval(LOCKSTEP_DRAIN)?;
         }
         wake.interval(SERVICE_PERIOD)?;
         Ok(())
