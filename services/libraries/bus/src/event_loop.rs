@@ -231,9 +231,20 @@ impl<'w, 'a> EventLoop<'w, 'a> {
         subscriber: &'a dyn SubscriberPort,
         deadline: Option<Duration>,
     ) -> Result<SourceId, BusError> {
+        let Some(bell) = subscriber.bell() else {
+            return Err(BusError::EventLoop {
+                operation: "attaching a subscriber",
+                source: format!(
+                    "the subscriber of {} was created polled (SubscriberOptions::polled): its \
+                     topic rings no doorbell, so it cannot wake a loop; drain it on an interval",
+                    subscriber.topic()
+                )
+                .into(),
+            });
+        };
         match &self.bell {
-            None => self.bell = Some(subscriber.bell().clone()),
-            Some(bell) if Rc::ptr_eq(bell, subscriber.bell()) => {}
+            None => self.bell = Some(bell.clone()),
+            Some(mine) if Rc::ptr_eq(mine, bell) => {}
             Some(_) => {
                 return Err(BusError::EventLoop {
                     operation: "attaching a subscriber",

@@ -26,6 +26,10 @@ pub struct SubscriberOptions {
     /// [`crate::ServiceLimits::history_size`] and `buffer_size`. 0 by default: a lockstep
     /// process must not see a sample from before it joined.
     pub history: usize,
+    /// Whether publishing on the topic rings this process's doorbell (true by default). A
+    /// subscriber that is only drained on a timer ([`polled`](Self::polled)) should not: every
+    /// ring that finds the process asleep on its doorbell costs a wake-up.
+    pub wake_on_publish: bool,
 }
 
 impl Default for SubscriberOptions {
@@ -33,6 +37,7 @@ impl Default for SubscriberOptions {
         Self {
             buffer_size: 16,
             history: 0,
+            wake_on_publish: true,
         }
     }
 }
@@ -43,6 +48,15 @@ impl SubscriberOptions {
         Self {
             buffer_size,
             ..Self::default()
+        }
+    }
+
+    /// The same options for a subscriber that is drained on a timer, never woken for: its
+    /// topic does not ring the doorbell, and [`crate::EventLoop::on_data`] refuses it.
+    pub fn polled(self) -> Self {
+        Self {
+            wake_on_publish: false,
+            ..self
         }
     }
 }
@@ -214,6 +228,8 @@ pub struct TopicSubscriber<T: Topic> {
     data: publish_subscribe::PortFactory<ipc::Service, T, ()>,
     bell: Rc<Bell>,
     bells: TopicBells,
+    /// Publishes ring `bell` ([`SubscriberOptions::wake_on_publish`]).
+    wakes: bool,
     received: Cell<u64>,
     last_received: Cell<Option<Instant>>,
 }
@@ -257,12 +273,15 @@ impl<T: Topic> TopicSubscriber<T> {
             .map_err(|e| port_error("subscriber", T::NAME, Box::new(e)))?;
         let bells = bus.doorbells().topic(T::NAME)?;
         let bell = bus.bell().clone();
-        bell.subscribe(&bells);
+        if options.wake_on_publish {
+            bell.subscribe(&bells);
+        }
         let this = Self {
             subscriber,
             data,
             bell,
             bells,
+            wakes: options.wake_on_publish,
             received: Cell::new(0),
             last_received: Cell::new(None),
         };
@@ -355,22 +374,28 @@ impl<T: Topic> TopicSubscriber<T> {
 
 impl<T: Topic> Drop for TopicSubscriber<T> {
     fn drop(&mut self) {
-        self.bell.unsubscribe(&self.bells);
+        if self.wakes {
+            self.bell.unsubscribe(&self.bells);
+        }
     }
 }
 
 /// The type-erased view of a [`TopicSubscriber`] that the event loop needs.
 pub(crate) trait SubscriberPort {
-    /// The doorbell its publishers ring.
-    fn bell(&self) -> &Rc<Bell>;
+    /// The doorbell its publishers ring, if they ring one ([`SubscriberOptions::polled`]).
+    fn bell(&self) -> Option<&Rc<Bell>>;
+    fn topic(&self) -> &'static str;
     /// Connects to new publishers; whether samples are pending.
     fn attach(&self) -> Result<bool, BusError>;
     fn last_received(&self) -> Option<Instant>;
 }
 
 impl<T: Topic> SubscriberPort for TopicSubscriber<T> {
-    fn bell(&self) -> &Rc<Bell> {
-        &self.bell
+    fn bell(&self) -> Option<&Rc<Bell>> {
+        self.wakes.then_some(&self.bell)
+    }
+    fn topic(&self) -> &'static str {
+        T::NAME
     }
     fn attach(&self) -> Result<bool, BusError> {
         TopicSubscriber::attach(self)

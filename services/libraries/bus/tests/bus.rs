@@ -325,14 +325,17 @@ fn subscriber_options_are_checked() {
             SubscriberOptions {
                 buffer_size: 0,
                 history: 0,
+                ..SubscriberOptions::default()
             },
             SubscriberOptions {
                 buffer_size: 100_000,
                 history: 0,
+                ..SubscriberOptions::default()
             },
             SubscriberOptions {
                 buffer_size: 4,
                 history: 5,
+                ..SubscriberOptions::default()
             },
         ] {
             let err = bus
@@ -420,6 +423,7 @@ fn two_processes_round_trip_and_stop_on_sigint() {
             .subscriber_with::<Heartbeat>(SubscriberOptions {
                 buffer_size: 16,
                 history: 1,
+                ..SubscriberOptions::default()
             })
             .expect("heartbeat subscriber");
         // Room for every answer: the parent publishes the whole burst before reading, and in
@@ -488,6 +492,7 @@ fn resources_of_a_killed_process_are_cleaned_up() {
             .subscriber_with::<Heartbeat>(SubscriberOptions {
                 buffer_size: 16,
                 history: 1,
+                ..SubscriberOptions::default()
             })
             .expect("heartbeat subscriber");
         let child = Child::spawn_echo(&iso.config);

@@ -153,9 +153,10 @@ impl<T: Topic + LogEncode> Streamed for Stream<T> {
 fn stream<T: Topic + LogEncode>(bus: &Bus) -> anyhow::Result<Box<dyn Streamed>> {
     // Deep buffers: in lockstep (lossless delivery) a publisher waits only if the link falls
     // 256 samples behind, and the link's thread does nothing but copy samples to queues.
-    Ok(Box::new(Stream(
-        bus.subscriber_with::<T>(SubscriberOptions::buffer(256))?,
-    )))
+    // Drained on timers only (see `wake_on`): publishing rings no doorbell of the link.
+    Ok(Box::new(Stream(bus.subscriber_with::<T>(
+        SubscriberOptions::buffer(256).polled(),
+    )?)))
 }
 
 /// The ground link's ports.
