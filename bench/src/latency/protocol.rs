@@ -48,7 +48,7 @@ impl Transport {
 
     pub fn label(self) -> String {
         match self {
-            Self::IoxEvent(wait) => format!("iceoryx2 event ({wait})"),
+            Self::IoxEvent(wait) => format!("iceoryx2 + doorbell ({wait})"),
             Self::IoxPoll => "iceoryx2 busy-poll (floor)".into(),
             Self::Uds => "Unix datagram socket".into(),
             Self::Udp => "UDP loopback".into(),
