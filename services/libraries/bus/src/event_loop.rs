@@ -94,6 +94,9 @@ pub enum LoopExit {
 /// lands between the check and the sleep.
 pub const MAX_SLEEP: Duration = Duration::from_millis(500);
 
+/// How soon a loop looks again at a timer that was due but had nothing to fire.
+const OVERDUE_RECHECK: Duration = Duration::from_millis(1);
+
 /// Most a poll window is opened early to make up for late timer wake-ups.
 const MAX_LATENESS: Duration = Duration::from_micros(200);
 
@@ -386,9 +389,13 @@ impl<'w, 'a> EventLoop<'w, 'a> {
             if left.is_zero() {
                 return Ok(None);
             }
-            let until_timer = self
-                .next_timer()
-                .map_or(Duration::MAX, |t| t.saturating_duration_since(now));
+            // A timer still due after a round that handled nothing is a deadline whose subscriber
+            // has samples its callback left pending: not a miss, and not a reason to spin.
+            let until_timer = match self.next_timer() {
+                None => Duration::MAX,
+                Some(t) if t <= now => OVERDUE_RECHECK,
+                Some(t) => t - now,
+            };
             let sleep = left.min(until_timer).min(MAX_SLEEP);
             match self.poll_window(now) {
                 Window::Open(close) => {

@@ -368,3 +368,58 @@ fn draining_an_empty_subscriber_leaves_no_sample_behind() {
     }
     remove_all(&config).expect("remove_all");
 }
+
+/// CPU time of the calling thread.
+fn thread_cpu() -> Duration {
+    let mut ts = libc::timespec {
+        tv_sec: 0,
+        tv_nsec: 0,
+    };
+    // SAFETY: writes one timespec we own.
+    unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut ts) };
+    Duration::new(ts.tv_sec as u64, ts.tv_nsec as u32)
+}
+
+#[test]
+fn samples_a_callback_leaves_pending_neither_repeat_nor_make_the_loop_spin() {
+    // A callback that does not drain: its samples are not news until the next ring, and a
+    // deadline that runs out while they wait is not a miss (they did arrive). The loop must
+    // sleep meanwhile, not poll its overdue deadline in a tight loop.
+    let config = BusConfig::isolated();
+    {
+        let bus = Bus::open("lazy", &config).expect("bus");
+        let sub = bus.subscriber::<GyroSample>().expect("subscriber");
+        let publisher = bus.publisher::<GyroSample>().expect("publisher");
+        let waiter = Waiter::new().expect("waiter");
+        let mut events = EventLoop::with_wait_strategy(&waiter, WaitStrategy::Block);
+        let on_gyro = events
+            .on_data_with_deadline(&sub, Duration::from_millis(20))
+            .expect("attach");
+        // One sample taken (the deadline is supervised from then on), one left pending.
+        publisher.publish(&gyro(0)).expect("publish");
+        assert_eq!(sub.drain(|_| {}).expect("drain"), 1);
+        publisher.publish(&gyro(1)).expect("publish");
+        let (mut data, mut misses) = (0, 0);
+        let cpu_before = thread_cpu();
+        let started = Instant::now();
+        while started.elapsed() < Duration::from_millis(300) {
+            events
+                .run_once(Duration::from_millis(50), |wake| {
+                    match wake {
+                        Wake::Data(_) => data += 1,
+                        Wake::DeadlineMissed(_) => misses += 1,
+                        Wake::Tick(_) => {}
+                    }
+                    Flow::Continue
+                })
+                .expect("event loop");
+        }
+        let cpu = thread_cpu() - cpu_before;
+        assert_eq!(data, 1, "the pending sample is called back once, for its ring");
+        assert_eq!(misses, 0);
+        assert_eq!(events.missed_deadlines(on_gyro), 0);
+        // Sleeping, the loop uses well under a tenth of the 300 ms; spinning it would use them.
+        assert!(cpu < Duration::from_millis(30), "{cpu:?} of CPU in 300 ms");
+    }
+    remove_all(&config).expect("remove_all");
+}
