@@ -415,7 +415,10 @@ fn samples_a_callback_leaves_pending_neither_repeat_nor_make_the_loop_spin() {
                 .expect("event loop");
         }
         let cpu = thread_cpu() - cpu_before;
-        assert_eq!(data, 1, "the pending sample is called back once, for its ring");
+        assert_eq!(
+            data, 1,
+            "the pending sample is called back once, for its ring"
+        );
         assert_eq!(misses, 0);
         assert_eq!(events.missed_deadlines(on_gyro), 0);
         // Sleeping, the loop uses well under a tenth of the 300 ms; spinning it would use them.
