@@ -89,15 +89,15 @@ fn quick_mode_writes_a_well_formed_report() {
     assert!(check_tables(&markdown) >= 6, "too few tables");
     assert!(markdown.contains("quick mode"), "a quick report says so");
     // The conclusions are hand-written text (bench/src/latency/report.md) around the generated
-    // tables: one verdict on the wait strategy, and the event chain explained against the
-    // Unix-socket chain.
+    // tables: one verdict on the wait strategy, and the bus chain explained against the
+    // Unix-socket chain (how a doorbell hop works, the checks read).
     assert!(
         markdown.contains("**Keep `block`**") ^ markdown.contains("**Adopt `"),
         "exactly one decision on the wait strategy"
     );
     assert!(
-        markdown.contains("## Why the event chain's p99 is above the Unix socket's")
-            || markdown.contains("## The event chain against the Unix-socket chain"),
+        markdown.contains("## How a bus hop works, and why it now matches a socket")
+            && markdown.contains("## The checks, read"),
         "report.md lacks the event chain against the socket chain"
     );
     assert!(
