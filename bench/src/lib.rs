@@ -4,7 +4,31 @@
 
 pub mod latency;
 
+use std::path::PathBuf;
 use std::time::{Duration, Instant};
+
+/// Median of `xs` (the upper one of an even count); NaN when empty.
+pub fn median(mut xs: Vec<f64>) -> f64 {
+    xs.sort_by(f64::total_cmp);
+    xs.get(xs.len() / 2).copied().unwrap_or(f64::NAN)
+}
+
+/// CPU time (user + system) of this process's waited-for descendants so far.
+pub fn children_cpu() -> Duration {
+    // SAFETY: getrusage writes into the zeroed struct we own.
+    let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
+    unsafe { libc::getrusage(libc::RUSAGE_CHILDREN, &mut usage) };
+    let tv = |t: libc::timeval| Duration::new(t.tv_sec as u64, t.tv_usec as u32 * 1000);
+    tv(usage.ru_utime) + tv(usage.ru_stime)
+}
+
+/// The directory of the running bench binary, where cargo also puts the workspace's binaries.
+pub fn binary_dir() -> std::io::Result<PathBuf> {
+    let exe = std::env::current_exe()?;
+    exe.parent()
+        .map(PathBuf::from)
+        .ok_or_else(|| std::io::Error::other(format!("{} has no directory", exe.display())))
+}
 
 /// Median wall time of `repeats` calls of `f` (after one warm-up call).
 pub fn median_time(repeats: usize, mut f: impl FnMut()) -> Duration {

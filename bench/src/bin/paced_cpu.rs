@@ -21,7 +21,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Instant;
-use testbed_bench::median_time;
+use testbed_bench::{binary_dir, children_cpu, median, median_time};
 use testbed_log::{EncodedRecord, LogRecord, RunInfo, RunLog, RunLogWriter, WriterOptions};
 
 #[derive(Parser)]
@@ -42,15 +42,6 @@ struct Args {
     baseline_bin_dir: Option<PathBuf>,
     #[arg(long)]
     json: bool,
-}
-
-/// CPU time (user + system) of this process's waited-for descendants so far, s.
-fn children_cpu_s() -> f64 {
-    // SAFETY: getrusage writes into the zeroed struct we own.
-    let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
-    unsafe { libc::getrusage(libc::RUSAGE_CHILDREN, &mut usage) };
-    let tv = |t: libc::timeval| t.tv_sec as f64 + t.tv_usec as f64 * 1e-6;
-    tv(usage.ru_utime) + tv(usage.ru_stime)
 }
 
 /// CPU seconds of one paced run: per process (launcher included), plus `testbed` itself.
@@ -76,7 +67,7 @@ fn paced_run(build: &Build, scratch: &Path, seconds: f64) -> Result<PacedRun> {
     let report = scratch.join(format!("{}.cpu.tsv", build.name));
     let _ = std::fs::remove_file(&report);
     let testbed = build.bin_dir.join("testbed");
-    let before = children_cpu_s();
+    let before = children_cpu().as_secs_f64();
     let start = Instant::now();
     let out = Command::new(&testbed)
         .args([
@@ -99,7 +90,7 @@ fn paced_run(build: &Build, scratch: &Path, seconds: f64) -> Result<PacedRun> {
             String::from_utf8_lossy(&out.stderr)
         );
     }
-    let all_s = children_cpu_s() - before;
+    let all_s = children_cpu().as_secs_f64() - before;
     let text = std::fs::read_to_string(&report)
         .with_context(|| format!("reading the launcher's CPU report {}", report.display()))?;
     let mut per_process = BTreeMap::new();
@@ -118,11 +109,6 @@ fn paced_run(build: &Build, scratch: &Path, seconds: f64) -> Result<PacedRun> {
         wall_s,
         per_process,
     })
-}
-
-fn median(mut xs: Vec<f64>) -> f64 {
-    xs.sort_by(f64::total_cmp);
-    xs.get(xs.len() / 2).copied().unwrap_or(f64::NAN)
 }
 
 /// Per-process medians of a build: (marginal fraction of one core, long run's fraction).
@@ -230,10 +216,7 @@ fn baseline_bins(dir: &Path, launcher: &Path, scratch: &Path) -> Result<PathBuf>
 
 fn main() -> Result<()> {
     let args = Args::parse();
-    let bin_dir = std::env::current_exe()?
-        .parent()
-        .context("bench binary has a directory")?
-        .to_path_buf();
+    let bin_dir = binary_dir()?;
     let launcher = bin_dir.join("testbed-launch");
     for needed in ["testbed", "testbed-launch", "logger"] {
         if !bin_dir.join(needed).exists() {

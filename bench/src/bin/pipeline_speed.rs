@@ -18,7 +18,7 @@ use clap::Parser;
 use std::path::PathBuf;
 use std::process::Command;
 use std::time::{Duration, Instant};
-use testbed_bench::median_time;
+use testbed_bench::{binary_dir, children_cpu, median, median_time};
 use testbed_model::ModelConfig;
 use testbed_sim::closed_loop::{self, Scenario};
 
@@ -101,15 +101,6 @@ fn basilisk(python: &str, duration_s: f64) -> Basilisk {
     }
 }
 
-/// CPU time (user + system) of this process's waited-for descendants so far.
-fn children_cpu() -> Duration {
-    // SAFETY: getrusage writes into the zeroed struct we own.
-    let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
-    unsafe { libc::getrusage(libc::RUSAGE_CHILDREN, &mut usage) };
-    let tv = |t: libc::timeval| Duration::new(t.tv_sec as u64, t.tv_usec as u32 * 1000);
-    tv(usage.ru_utime) + tv(usage.ru_stime)
-}
-
 struct PipelineRun {
     wall: Duration,
     /// The plant's own measure: simulated time over wall time from its first tick to its last.
@@ -138,17 +129,9 @@ fn testbed_run(testbed: &PathBuf, log: &PathBuf, args: &[&str]) -> Result<Pipeli
     })
 }
 
-fn median(mut xs: Vec<f64>) -> f64 {
-    xs.sort_by(f64::total_cmp);
-    xs[xs.len() / 2]
-}
-
 fn main() -> Result<()> {
     let args = Args::parse();
-    let bin_dir = std::env::current_exe()?
-        .parent()
-        .context("bench binary has a directory")?
-        .to_path_buf();
+    let bin_dir = binary_dir()?;
     let testbed = bin_dir.join("testbed");
     if !testbed.exists() {
         bail!(
