@@ -2,7 +2,9 @@
 //! - lockstep speed of the full multi-process pipeline (plant, five simulated gateways,
 //!   estimator, controller, logger over iceoryx2) in simulated time per wall time, beside the
 //!   in-process closed loop running the same scenario (target: ≥ 1000× real time while
-//!   ticking);
+//!   ticking), and beside itself waiting with `block` (every process sleeps on its doorbell
+//!   between samples) instead of the lockstep default `run.lockstep_wait` (`spin:500`), with
+//!   the CPU time each costs per simulated second;
 //! - both against Basilisk's dynamics alone on the same scenario, measured in the same run
 //!   (`bench/basilisk_speed.py`: Basilisk's hub + three reaction wheels with friction at
 //!   0.01 s; needs `python3` with `bsk` installed, else the report says "not installed");
@@ -103,21 +105,38 @@ fn basilisk(python: &str, duration_s: f64) -> Basilisk {
 
 struct PipelineRun {
     wall: Duration,
+    /// CPU time of all the run's processes (user + system).
+    cpu: Duration,
     /// The plant's own measure: simulated time over wall time from its first tick to its last.
     plant_x_real_time: Option<f64>,
 }
 
-fn testbed_run(testbed: &PathBuf, log: &PathBuf, args: &[&str]) -> Result<PipelineRun> {
+/// `testbed run args…`; `wait`: the `TESTBED_BUS_WAIT` of every process (the run's own
+/// default when `None`).
+fn testbed_run(
+    testbed: &PathBuf,
+    log: &PathBuf,
+    args: &[&str],
+    wait: Option<&str>,
+) -> Result<PipelineRun> {
+    let cpu_before = children_cpu();
     let start = Instant::now();
-    let out = Command::new(testbed)
+    let mut command = Command::new(testbed);
+    command
         .arg("run")
         .args(args)
         .arg("--log")
         .arg(log)
-        .env("RUST_LOG", RUN_LOG_FILTER)
+        .env("RUST_LOG", RUN_LOG_FILTER);
+    match wait {
+        Some(wait) => command.env(testbed_bus::ENV_WAIT, wait),
+        None => command.env_remove(testbed_bus::ENV_WAIT),
+    };
+    let out = command
         .output()
         .with_context(|| format!("running {}", testbed.display()))?;
     let wall = start.elapsed();
+    let cpu = children_cpu().saturating_sub(cpu_before);
     let stderr = String::from_utf8_lossy(&out.stderr);
     if !out.status.success() {
         bail!("testbed run failed: {stderr}");
@@ -125,6 +144,7 @@ fn testbed_run(testbed: &PathBuf, log: &PathBuf, args: &[&str]) -> Result<Pipeli
     let plant_x_real_time = plant_x_real_time(&stderr);
     Ok(PipelineRun {
         wall,
+        cpu,
         plant_x_real_time,
     })
 }
@@ -147,13 +167,20 @@ fn main() -> Result<()> {
     // Side by side: each repeat runs the pipeline, then Basilisk, so both see the same load.
     let mut whole = Vec::new();
     let mut ticking = Vec::new();
+    let mut cpu_per_simulated_s = Vec::new();
+    let mut ticking_blocking = Vec::new();
+    let mut blocking_cpu_per_simulated_s = Vec::new();
     let mut bsk = Vec::new();
     let mut bsk_missing = None;
     let mut bsk_version = String::new();
     for _ in 0..args.repeats.max(1) {
-        let run = testbed_run(&testbed, &log, &["--duration", &duration])?;
+        let run = testbed_run(&testbed, &log, &["--duration", &duration], None)?;
         whole.push(args.duration / run.wall.as_secs_f64());
         ticking.extend(run.plant_x_real_time);
+        cpu_per_simulated_s.push(run.cpu.as_secs_f64() / args.duration);
+        let blocking = testbed_run(&testbed, &log, &["--duration", &duration], Some("block"))?;
+        ticking_blocking.extend(blocking.plant_x_real_time);
+        blocking_cpu_per_simulated_s.push(blocking.cpu.as_secs_f64() / args.duration);
         if bsk_missing.is_none() {
             match basilisk(&args.python, args.duration) {
                 Basilisk::Measured {
@@ -178,16 +205,13 @@ fn main() -> Result<()> {
         if args.no_paced {
             return Ok((f64::NAN, f64::NAN));
         }
-        let before = children_cpu();
         let run = testbed_run(
             &testbed,
             &log,
             &["--paced", "--duration", &seconds.to_string()],
+            None,
         )?;
-        Ok((
-            run.wall.as_secs_f64(),
-            (children_cpu() - before).as_secs_f64(),
-        ))
+        Ok((run.wall.as_secs_f64(), run.cpu.as_secs_f64()))
     };
     let (short_wall, short_cpu) = paced_cpu(5.0)?;
     let (long_wall, long_cpu) = paced_cpu(args.paced_duration)?;
@@ -197,11 +221,11 @@ fn main() -> Result<()> {
     let _ = std::fs::remove_dir_all(&scratch);
 
     let whole_x = median(whole);
-    let ticking_x = if ticking.is_empty() {
-        f64::NAN
-    } else {
-        median(ticking)
-    };
+    let median_or_nan = |v: Vec<f64>| if v.is_empty() { f64::NAN } else { median(v) };
+    let ticking_x = median_or_nan(ticking);
+    let blocking_x = median_or_nan(ticking_blocking);
+    let cpu_ms = 1e3 * median_or_nan(cpu_per_simulated_s);
+    let blocking_cpu_ms = 1e3 * median_or_nan(blocking_cpu_per_simulated_s);
     let bsk_x = (!bsk.is_empty()).then(|| median(bsk));
     let report = serde_json::json!({
         "simulated_s": args.duration,
@@ -209,6 +233,11 @@ fn main() -> Result<()> {
         "lockstep_pipeline": {
             "x_real_time_whole_run": whole_x,
             "x_real_time_ticking": ticking_x,
+            "cpu_ms_per_simulated_s": cpu_ms,
+            "waiting_with_block": {
+                "x_real_time_ticking": blocking_x,
+                "cpu_ms_per_simulated_s": blocking_cpu_ms,
+            },
         },
         "in_process_loop": { "x_real_time": in_process_x },
         "pipeline_over_in_process_cost": in_process_x / ticking_x,
@@ -241,6 +270,10 @@ fn main() -> Result<()> {
     );
     println!(
         "{:<58} {:>12.0}",
+        "  the same, every process waiting with `block`", blocking_x
+    );
+    println!(
+        "{:<58} {:>12.0}",
         "lockstep pipeline, whole `testbed run` incl. start-up", whole_x
     );
     println!(
@@ -261,6 +294,13 @@ fn main() -> Result<()> {
     println!(
         "the process split costs {:.0}× the in-process loop's time per tick",
         in_process_x / ticking_x
+    );
+    println!(
+        "lockstep wait: {:.2}× the speed of `block`, at {:.1} ms CPU (all processes, whole run) \
+         per simulated second against {:.1} ms",
+        ticking_x / blocking_x,
+        cpu_ms,
+        blocking_cpu_ms
     );
     match bsk_x {
         Some(x) => println!(

@@ -81,6 +81,12 @@ impl WaitStrategy {
         Self::from_lookup(|key| std::env::var(key).ok())
     }
 
+    /// Whether [`ENV_WAIT`] is set (and not empty): it then chooses every loop's strategy,
+    /// over any default a process has for its mode.
+    pub fn set_in_env() -> bool {
+        std::env::var_os(ENV_WAIT).is_some_and(|v| !v.is_empty())
+    }
+
     /// Like [`from_env`](Self::from_env), reading the variable through `lookup`.
     pub fn from_lookup(lookup: impl Fn(&str) -> Option<String>) -> Result<Self, BusError> {
         Self::from_lookup_for(lookup, PROCESS_NAME.get().map(String::as_str))

@@ -29,7 +29,7 @@ use ipc_types::{ProcessState, Topic};
 use std::time::{Duration, Instant};
 use testbed_bus::{
     Bus, BusError, EventLoop, Flow, HeartbeatPublisher, LoopExit, SourceId, TopicSubscriber,
-    Waiter, Wake,
+    WaitStrategy, Waiter, Wake,
 };
 
 /// What a node is opened with.
@@ -180,6 +180,10 @@ pub fn run<N: Node>(
     }
     let waiter = Waiter::new()?;
     let mut events = EventLoop::new(&waiter);
+    if config.run.mode == ClockMode::Lockstep && !WaitStrategy::set_in_env() {
+        // Validated with the configuration: a bad value never gets this far.
+        events.set_wait_strategy(config.lockstep_wait().map_err(anyhow::Error::msg)?);
+    }
     let mut watch = InputWatch::default();
     node.wake_on(
         &ports,

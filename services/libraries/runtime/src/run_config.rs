@@ -6,6 +6,7 @@ pub use ipc_types::ClockMode;
 use ipc_types::Device;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
+use testbed_bus::{BusError, WaitStrategy};
 use testbed_flight::manoeuvre::Manoeuvre;
 use testbed_flight::mekf::MekfConfig;
 use testbed_flight::schedule::{Schedule, ScheduleError};
@@ -15,6 +16,9 @@ use testbed_model::ModelConfig;
 
 /// Environment variable holding the path of the run configuration.
 pub const ENV_RUN_CONFIG: &str = "TESTBED_RUN_CONFIG";
+
+/// Default of [`RunSection::lockstep_wait`] (measured: `bench/README.md`).
+pub const DEFAULT_LOCKSTEP_WAIT: &str = "spin:500";
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -47,6 +51,14 @@ pub struct RunSection {
     /// (`--start-time-ns` pins it, to reproduce a log byte for byte); unset, the logger takes
     /// the time it opens the log.
     pub start_time_ns: Option<u64>,
+    /// How every process of a lockstep run waits for its next sample, in the syntax of
+    /// `TESTBED_BUS_WAIT` (which, when set, overrides it): `block`, `spin:<µs>`, `anticipate`.
+    /// Default `spin:500`: after each data wake-up a process polls its subscribers for up to
+    /// 500 µs (yielding the CPU between polls) before it sleeps, so the next stage of the tick
+    /// finds it awake instead of paying a scheduler wake-up. That doubles lockstep speed on a
+    /// 2-core machine (`bench/README.md`) at the cost of CPU that a lockstep run, which runs as
+    /// fast as it can, spends anyway. Paced runs ignore it: they block (or follow the variable).
+    pub lockstep_wait: String,
 }
 
 impl Default for RunSection {
@@ -63,6 +75,7 @@ impl Default for RunSection {
             replay: None,
             actuation: Actuation::Direct,
             start_time_ns: None,
+            lockstep_wait: DEFAULT_LOCKSTEP_WAIT.to_owned(),
         }
     }
 }
@@ -150,6 +163,18 @@ impl RunConfig {
         toml::to_string_pretty(self).expect("a RunConfig always serialises")
     }
 
+    /// How the processes of a lockstep run wait ([`RunSection::lockstep_wait`]); the reason
+    /// when it is not a wait strategy.
+    pub fn lockstep_wait(&self) -> Result<WaitStrategy, String> {
+        self.run
+            .lockstep_wait
+            .parse()
+            .map_err(|e: BusError| match e {
+                BusError::Config { reason, .. } => reason,
+                other => other.to_string(),
+            })
+    }
+
     pub fn validate(&self, origin: &str) -> Result<(), RunConfigError> {
         self.model
             .validate()
@@ -184,6 +209,13 @@ impl RunConfig {
                 "must be > 0",
             ));
         }
+        self.lockstep_wait()
+            .map_err(|reason| RunConfigError::Invalid {
+                path: origin.to_string(),
+                key: "run.lockstep_wait".to_string(),
+                value: format!("{:?}", self.run.lockstep_wait),
+                reason,
+            })?;
         // What the estimator and controller processes would refuse at start, refused before
         // anything is launched.
         let component = |component, message: String| RunConfigError::Component {
@@ -423,6 +455,21 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(err.contains("platform.mass_kg"), "{err}");
+        let err = RunConfig::from_toml_str("[run]\nlockstep_wait = \"spin:fast\"\n", "run.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("run.lockstep_wait")
+                && err.contains("spin:fast")
+                && err.contains("run.toml"),
+            "{err}"
+        );
+        assert_eq!(
+            config.lockstep_wait(),
+            Ok(WaitStrategy::SpinAfterWake {
+                spin: std::time::Duration::from_micros(500)
+            })
+        );
     }
 
     #[test]
