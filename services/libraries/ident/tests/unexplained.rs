@@ -281,7 +281,10 @@ fn soft_iron_with_a_com_offset() {
         .as_ref()
         .expect("the second pass ran with a magnetometer correction");
     assert!(
-        id.report.summary.iter().any(|l| l.starts_with("Second pass")),
+        id.report
+            .summary
+            .iter()
+            .any(|l| l.starts_with("Second pass")),
         "{:?}",
         id.report.summary
     );
@@ -300,10 +303,11 @@ fn soft_iron_with_a_com_offset() {
 }
 
 /// The magnetometer correction of the extended model against the hidden soft iron: over the
-/// experiment's attitudes (headings all round, tilts of a few degrees) the fitted error
-/// `ΔM(q)` must match `S A(q) M_L` up to a rotation about the vertical (a constant heading
-/// offset, which no magnetometer-only correction can see: the filter takes it as attitude), to
-/// within 20 % of the soft iron's RMS. Measured values are printed.
+/// attitudes the experiment covers (headings within its ±amplitude, tilts of a few degrees; a
+/// fit says nothing outside them) the fitted error `ΔM(q)` plus any hard iron named must match
+/// `S A(q) M_L` up to a rotation about the vertical (a constant heading offset, which no
+/// magnetometer-only correction can see: the filter takes it as attitude), to within 20 % of
+/// the soft iron's RMS. Measured values are printed.
 fn soft_iron_reproduced(label: &str, truth: &testbed_model::ModelConfig, id: &Identification) {
     use nalgebra::{Matrix3, Vector3};
     use testbed_model::attitude::from_heading_pitch_roll;
@@ -316,11 +320,19 @@ fn soft_iron_reproduced(label: &str, truth: &testbed_model::ModelConfig, id: &Id
         .matrix;
     let s = Matrix3::from_fn(|i, j| s[i][j]);
     let field_l = truth.platform.field_l_t();
-    let fitted =
-        FittedFieldModel::from_config(id.extended.effects.fitted_field.as_ref(), &field_l);
-    let attitudes: Vec<_> = (0..72)
+    let fitted = FittedFieldModel::from_config(id.extended.effects.fitted_field.as_ref(), &field_l);
+    let hard_iron = id
+        .extended
+        .effects
+        .magnetic_disturbance
+        .as_ref()
+        .map_or_else(Vector3::zeros, |d| {
+            Vector3::from(d.hard_iron_gauss) * testbed_model::config::GAUSS
+        });
+    let amplitude = testbed_ident::experiment::ExperimentOptions::default().heading_amplitude_deg;
+    let attitudes: Vec<_> = (-24..=24)
         .flat_map(|k| {
-            let psi = k as f64 * 5f64.to_radians();
+            let psi = (k as f64 / 24.0 * amplitude).to_radians();
             [(0.03, -0.02), (-0.02, 0.03)]
                 .map(|(pitch, roll)| from_heading_pitch_roll(psi, pitch, roll))
         })
@@ -332,7 +344,7 @@ fn soft_iron_reproduced(label: &str, truth: &testbed_model::ModelConfig, id: &Id
         .map(|q| {
             let b = q * field_l;
             let axis = q * Vector3::z();
-            (fitted.error_t(q), s * b, b.cross(&axis))
+            (fitted.error_t(q) + hard_iron, s * b, b.cross(&axis))
         })
         .collect();
     let eps = rows.iter().map(|(f, t, r)| (f - t).dot(r)).sum::<f64>()

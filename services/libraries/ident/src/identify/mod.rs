@@ -611,7 +611,10 @@ fn identify_pass(
             base_held.clone()
         };
         // What carrying the fitted torque adds: the named causes alone.
-        let named_only = match (&extension.fitted_torque, selected.is_empty() && !second_pass) {
+        let named_only = match (
+            &extension.fitted_torque,
+            selected.is_empty() && !second_pass,
+        ) {
             (None, _) => None,
             (Some(_), true) => Some(base_held.clone()),
             (Some(_), false) => Some(predict::predict(
@@ -657,12 +660,8 @@ fn identify_pass(
                     fold.fit(&selected, &warm_j)?
                 };
                 cv_extended.add(&fit_j.evaluation.held_out);
-                let without_terms = predict::predict(
-                    aligned,
-                    &fit_j.state.recon,
-                    &fit_j.config,
-                    &fold_windows[j],
-                )?;
+                let without_terms =
+                    predict::predict(aligned, &fit_j.state.recon, &fit_j.config, &fold_windows[j])?;
                 if carry {
                     let (config_j, _, _) = with_terms(&fit_j.config, Coefficients::WithoutFold(j));
                     parts.push(predict::predict(
@@ -742,6 +741,26 @@ fn identify_pass(
         .filter_map(|(g, a)| extended_rms.groups.get(g).map(|b| (*g, a / b)))
         .collect();
 
+    // The second pass: the first pass's field effects (the correction's form) lead the
+    // unexplained effects (what remains after the named causes includes them: the correction is
+    // an unexplained term, not a cause).
+    let (effects, sensor_correction, first_pass) = match prior {
+        Some(p) => {
+            let mut all = p.effects;
+            all.extend(effects.into_iter().map(|mut e| {
+                e.pass = 2;
+                e
+            }));
+            let rest = (
+                p.filter_runs,
+                p.nominal_residuals,
+                p.nominal_prediction,
+                p.nominal_equation,
+            );
+            (all, Some(p.correction), Some(rest))
+        }
+        None => (effects, None, None),
+    };
     let remaining = remaining(&problem, &current, options, &effects, &extended_rms);
     let figures = FigureData {
         nominal_prediction: prediction_curves(&nominal_prediction),
@@ -779,25 +798,14 @@ fn identify_pass(
                 .collect()
         })
         .unwrap_or_default();
-    // The second pass: the first pass's field effects (the correction's form) lead the
-    // unexplained effects; the nominal residuals are the first pass's (of the configuration
-    // given).
+    // The second pass reports the first pass's nominal residuals (of the configuration given).
     let (mut nominal_report, mut figures, mut filter_runs) = (nominal_report, figures, 0);
-    let (effects, sensor_correction) = match prior {
-        Some(p) => {
-            nominal_report = p.nominal_residuals;
-            figures.nominal_prediction = p.nominal_prediction;
-            figures.nominal_equation = p.nominal_equation;
-            filter_runs += p.filter_runs + 1;
-            let mut all = p.effects;
-            all.extend(effects.into_iter().map(|mut e| {
-                e.pass = 2;
-                e
-            }));
-            (all, Some(p.correction))
-        }
-        None => (effects, None),
-    };
+    if let Some((runs, residuals, prediction, equation)) = first_pass {
+        nominal_report = residuals;
+        figures.nominal_prediction = prediction;
+        figures.nominal_equation = equation;
+        filter_runs += runs + 1;
+    }
     let summary = report::summary(
         &causes,
         &cause_tests,

@@ -21,17 +21,29 @@ use super::unexplained::UnexplainedEffect;
 use crate::error::IdentError;
 use crate::fit::Problem;
 use crate::reconstruct::{Reconstruction, reconstruct};
-use nalgebra::DMatrix;
+use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
 use testbed_model::ModelConfig;
 use testbed_model::config::{FittedField, FittedFieldTerm};
 use testbed_model::devices::fitted_field::FieldFunction;
 
-/// Most filter runs of the correction's fit.
-pub const MAX_ITERATIONS: usize = 5;
+/// Most Gauss-Newton steps of the correction's fit (each one filter run; the Jacobian is
+/// computed once, at zero correction: the filter's innovations are close to linear in an
+/// additive reading error).
+pub const MAX_ITERATIONS: usize = 4;
 
-/// Relative size of the last update at which the fit stops.
+/// Relative drop of the innovations' sum of squares below which the fit stops.
 const CONVERGED: f64 = 0.01;
+
+/// Finite-difference step of a coefficient, tesla (about a tenth of the magnetometer's noise).
+const STEP_T: f64 = 1e-8;
+
+/// Singular values of the Jacobian below this fraction of the largest are left out of the
+/// steps (functions the data cannot tell apart get the smallest coefficients that fit).
+const RCOND: f64 = 1e-4;
+
+/// Innovation mask bits of the three field components.
+const FIELD_MASK: u8 = 0b11100;
 
 /// The equations the correction comes from.
 const FIELD_PREFIX: &str = "innovation_field_";
@@ -117,59 +129,82 @@ pub(super) fn fit_field_correction(
     if !constant_found {
         columns.push(FieldFunction::One);
     }
-    let field_l = base.platform.field_l_t();
-    let field_unit_l = field_l / field_l.norm().max(1e-300);
-    let mut coefficients = DMatrix::<f64>::zeros(columns.len(), 3);
-    let mut iterations = 0;
-    let mut rms_before_t = f64::NAN;
-    let mut rms_after_t = f64::NAN;
-    let config_with = |c: &DMatrix<f64>| {
+    let n = columns.len() * 3;
+    let config_with = |theta: &DVector<f64>, all: bool| {
         let mut config = base.clone();
-        config.effects.fitted_field = Some(to_config(&columns, c, constant_found));
+        let c = DMatrix::from_column_slice(columns.len(), 3, theta.as_slice());
+        let fitted = to_config(&columns, &c, all || constant_found);
+        match config.effects.fitted_field.as_mut() {
+            Some(old) => old.terms.extend(fitted.terms),
+            None => config.effects.fitted_field = Some(fitted),
+        }
         config
     };
-    for _ in 0..MAX_ITERATIONS {
-        let config = config_with(&coefficients);
+    let keep = |tick: usize| !problem.held_out.get(tick).copied().unwrap_or(true);
+    let run = |theta: &DVector<f64>| -> Result<Reconstruction, IdentError> {
         problem.filter_runs.set(problem.filter_runs.get() + 1);
-        let recon = reconstruct(problem.data, &config)?;
-        iterations += 1;
-        let Some((x, y)) = design(problem, &recon, &columns, &field_unit_l) else {
-            return Ok(None);
+        reconstruct(problem.data, &config_with(theta, true))
+    };
+    let field_rms =
+        |recon: &Reconstruction| {
+            let (mut sum, mut count) = (0.0, 0usize);
+            for i in recon.innovations.iter().filter(|i| {
+                i.mask & FIELD_MASK == FIELD_MASK && i.tick >= recon.start && keep(i.tick)
+            }) {
+                sum += i.field_residual_t.norm_squared();
+                count += 3;
+            }
+            (sum / count.max(1) as f64).sqrt()
         };
-        let rms = (y.norm_squared() / (y.len().max(1) as f64)).sqrt();
-        if iterations == 1 {
-            rms_before_t = rms;
+    // The Jacobian of the whitened innovations of the fit ticks, by forward differences.
+    let mut theta = DVector::<f64>::zeros(n);
+    let recon0 = run(&theta)?;
+    let r0 = DVector::from_vec(recon0.innovation_vector(|k| keep(k)));
+    if r0.len() < 10 * n {
+        return Ok(None);
+    }
+    let mut jacobian = DMatrix::<f64>::zeros(r0.len(), n);
+    for j in 0..n {
+        let mut step = theta.clone();
+        step[j] += STEP_T;
+        let r = run(&step)?.innovation_vector(|k| keep(k));
+        if r.len() != r0.len() {
+            return Ok(None);
         }
-        rms_after_t = rms;
-        if iterations == MAX_ITERATIONS {
-            break;
+        for (i, v) in r.iter().enumerate() {
+            jacobian[(i, j)] = (v - r0[i]) / STEP_T;
         }
-        let Ok(update) = x.clone().svd(true, true).solve(&y, 1e-12) else {
+    }
+    let svd = jacobian.svd(true, true);
+    let tolerance = RCOND * svd.singular_values.max();
+    let mut iterations = n + 1;
+    let (mut r, mut rss) = (r0.clone(), r0.norm_squared());
+    let mut recon = recon0.clone();
+    for _ in 0..MAX_ITERATIONS {
+        let Ok(update) = svd.solve(&r, tolerance) else {
             return Ok(None);
         };
         if !update.iter().all(|v| v.is_finite()) {
             return Ok(None);
         }
-        // The carried functions accumulate; the nuisance constant (never subtracted from the
-        // readings) is refitted each time.
-        let carried = functions.len();
-        coefficients += &update;
-        if !constant_found {
-            coefficients.row_mut(carried).copy_from(&update.row(carried));
+        let trial = &theta - &update;
+        let recon_trial = run(&trial)?;
+        iterations += 1;
+        let r_trial = DVector::from_vec(recon_trial.innovation_vector(|k| keep(k)));
+        if r_trial.len() != r0.len() {
+            return Ok(None);
         }
-        let size = coefficients.rows(0, carried).amax();
-        if update.rows(0, carried).amax() <= CONVERGED * size {
-            // The last update is in; its residual is one filter run away.
-            let config = config_with(&coefficients);
-            problem.filter_runs.set(problem.filter_runs.get() + 1);
-            let recon = reconstruct(problem.data, &config)?;
-            iterations += 1;
-            if let Some((_, y)) = design(problem, &recon, &columns, &field_unit_l) {
-                rms_after_t = (y.norm_squared() / (y.len().max(1) as f64)).sqrt();
-            }
+        let rss_trial = r_trial.norm_squared();
+        if rss_trial >= rss {
+            break;
+        }
+        let improvement = (rss - rss_trial) / rss;
+        (theta, r, rss, recon) = (trial, r_trial, rss_trial, recon_trial);
+        if improvement < CONVERGED {
             break;
         }
     }
+    let coefficients = DMatrix::from_column_slice(columns.len(), 3, theta.as_slice());
     let fitted_field = to_config(&columns, &coefficients, constant_found);
     if fitted_field.terms.is_empty() {
         return Ok(None);
@@ -178,37 +213,9 @@ pub(super) fn fit_field_correction(
         fitted_field,
         not_carried,
         iterations,
-        rms_before_t,
-        rms_after_t,
+        rms_before_t: field_rms(&recon0),
+        rms_after_t: field_rms(&recon),
     }))
-}
-
-/// The least-squares problem of one iteration: per field update on a fit tick (all three axes
-/// present), the functions at the filter's attitude of that tick, and the raw residual, tesla
-/// (`rows × 3`). `None` with fewer rows than 10 per function.
-fn design(
-    problem: &Problem,
-    recon: &Reconstruction,
-    columns: &[FieldFunction],
-    field_unit_l: &nalgebra::Vector3<f64>,
-) -> Option<(DMatrix<f64>, DMatrix<f64>)> {
-    let rows: Vec<_> = recon
-        .innovations
-        .iter()
-        .filter(|i| {
-            i.mask & 0b11100 == 0b11100
-                && i.tick >= recon.start
-                && !problem.held_out.get(i.tick).copied().unwrap_or(true)
-        })
-        .collect();
-    if rows.len() < 10 * columns.len() {
-        return None;
-    }
-    let x = DMatrix::from_fn(rows.len(), columns.len(), |r, j| {
-        columns[j].value(&recon.q[rows[r].tick], field_unit_l)
-    });
-    let y = DMatrix::from_fn(rows.len(), 3, |r, a| rows[r].field_residual_t[a]);
-    Some((x, y))
 }
 
 /// The coefficients (`functions × axes`, tesla per unit) as `[effects.fitted_field]`; the
