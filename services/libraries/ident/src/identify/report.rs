@@ -238,6 +238,8 @@ pub struct ModelExtension {
     pub rejected: Option<String>,
 }
 
+// One argument per part of the report the summary speaks of.
+#[allow(clippy::too_many_arguments)]
 pub(super) fn summary(
     causes: &[CauseReport],
     tests: &[super::CauseTest],
@@ -320,7 +322,7 @@ pub(super) fn summary(
             parts.join("; ")
         ));
     }
-    if !causes.is_empty() || extension.fitted_torque.is_some() {
+    if !causes.is_empty() || extension.fitted_torque.is_some() || correction.is_some() {
         out.push(format!(
             "Held-out prediction gain of the extended model: {gain:.2}× (nominal RMS / extended RMS)."
         ));
@@ -338,7 +340,7 @@ pub(super) fn summary(
         out.push("Unexplained effect: none found (no candidate function carries a significant part of the remaining residuals).".to_string());
     }
     for e in effects {
-        let pass = if e.pass == 1 {
+        let pass = if e.pass == 1 && correction.is_some() {
             "; first pass, carried as the magnetometer correction"
         } else {
             ""

@@ -159,7 +159,7 @@ pub(super) fn fit_field_correction(
     // The Jacobian of the whitened innovations of the fit ticks, by forward differences.
     let mut theta = DVector::<f64>::zeros(n);
     let recon0 = run(&theta)?;
-    let r0 = DVector::from_vec(recon0.innovation_vector(|k| keep(k)));
+    let r0 = DVector::from_vec(recon0.innovation_vector(keep));
     if r0.len() < 10 * n {
         return Ok(None);
     }
@@ -167,7 +167,7 @@ pub(super) fn fit_field_correction(
     for j in 0..n {
         let mut step = theta.clone();
         step[j] += STEP_T;
-        let r = run(&step)?.innovation_vector(|k| keep(k));
+        let r = run(&step)?.innovation_vector(keep);
         if r.len() != r0.len() {
             return Ok(None);
         }
@@ -190,7 +190,7 @@ pub(super) fn fit_field_correction(
         let trial = &theta - &update;
         let recon_trial = run(&trial)?;
         iterations += 1;
-        let r_trial = DVector::from_vec(recon_trial.innovation_vector(|k| keep(k)));
+        let r_trial = DVector::from_vec(recon_trial.innovation_vector(keep));
         if r_trial.len() != r0.len() {
             return Ok(None);
         }
