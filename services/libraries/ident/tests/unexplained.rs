@@ -452,7 +452,7 @@ fn clean_data_give_no_unexplained_effect_on_20_of_20_seeds() {
     assert!(named.is_empty(), "causes named on clean data: {named:?}");
 }
 
-/// How often the checks above hold on other seeds (ignored: 24 identifications; prints the
+/// How often the checks above hold on other seeds (ignored: 28 identifications; prints the
 /// share per scenario; run with `--ignored --nocapture`).
 #[test]
 #[ignore]
@@ -495,6 +495,14 @@ fn out_of_library_checks_over_more_seeds() {
             "soft iron + wheel scale",
             format!("{SOFT_IRON}{WHEEL_SCALE}"),
             vec![Cause::WheelTorqueScale],
+            field_eq.to_vec(),
+            field.to_vec(),
+            1.05,
+        ),
+        (
+            "soft iron + com offset",
+            format!("{SOFT_IRON}{COM}"),
+            vec![Cause::ComOffset],
             field_eq.to_vec(),
             field.to_vec(),
             1.05,

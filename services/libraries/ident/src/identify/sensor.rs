@@ -125,7 +125,19 @@ pub(super) fn fit_field_correction(
     // A constant is always fitted (it would otherwise load the other functions with a hard
     // iron), carried only when found.
     let constant_found = functions.contains(&FieldFunction::One);
+    // The magnetometer's own error model, a linear map of the field (soft iron, scale factors,
+    // misalignment), is always fitted beside the found functions: the search finds the
+    // strongest terms of each whitened component, not necessarily all of a map's.
     let mut columns = functions.clone();
+    for f in [
+        FieldFunction::FieldX,
+        FieldFunction::FieldY,
+        FieldFunction::FieldZ,
+    ] {
+        if !columns.contains(&f) {
+            columns.push(f);
+        }
+    }
     if !constant_found {
         columns.push(FieldFunction::One);
     }
