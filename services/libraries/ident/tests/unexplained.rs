@@ -538,3 +538,30 @@ fn out_of_library_checks_over_more_seeds() {
         println!("ROBUSTNESS {label}: {ok}/4 seeds pass");
     }
 }
+
+/// Known limit (ignored; run with `--ignored`): soft iron with a hard iron. Beside the soft
+/// iron the hard iron fails its consistency test in the first pass (nothing is named, as before
+/// the second pass existed). The magnetometer correction of the second pass carries a constant
+/// (on the experiment's ±60° of heading the soft iron's mean cannot be told from one), so the
+/// hard iron ends up in the correction's constant terms instead of being named as
+/// `magnetic_disturbance`; on seed 57 the second pass then names a gyro scale error of
+/// 1.6e3 ppm about Z (the heading-dependent part of the correction is not exact).
+#[test]
+#[ignore]
+fn soft_iron_with_a_hard_iron_known_limit() {
+    let t = truth(&format!("{SOFT_IRON}{HARD_IRON}"));
+    let id = identify_blind(&t, 57, 600.0);
+    check(
+        "soft iron + hard iron",
+        &t,
+        &id,
+        &[Cause::MagneticDisturbance],
+        &[
+            "innovation_field_x",
+            "innovation_field_y",
+            "innovation_field_z",
+        ],
+        &["B_x", "B_y", "cos ψ", "sin ψ", "cos 2ψ", "sin 2ψ"],
+        1.05,
+    );
+}

@@ -7,15 +7,21 @@
 //! the readings are corrected with it (`[effects.fitted_field]`, which the filter subtracts) and
 //! the analysis runs again on the corrected estimate.
 //!
-//! The fit: every found function on every axis of the reading (the innovations are whitened
-//! with the Cholesky factor of their covariance, which mixes the axes, so the form found in one
-//! whitened component need not be confined to one axis of the reading), plus a constant that
-//! is carried only if the search found one (otherwise it stands for a library cause, the hard
-//! iron, which the second pass names). The filter's attitude takes up part of a sensor error
-//! (its heading follows a distorted field), so the fit is repeated on the filter run with the
-//! correction so far, and the corrections added, until the update is below a hundredth of the
-//! correction (at most [`MAX_ITERATIONS`] filter runs). Fitted on the ticks not held out (with
-//! k-fold cross-validation: all of them).
+//! The form: every found function on every axis of the reading (the innovations are whitened
+//! with the Cholesky factor of their covariance, which mixes the axes, so a form found in one
+//! whitened component need not be confined to one axis of the reading), completed by the
+//! magnetometer's own error model, a linear map of the horizontal field (`B_x`, `B_y`), and a
+//! constant (see [`fit_field_correction`]).
+//!
+//! The fit: the coefficients, tesla per unit, minimise the whitened innovations of the filter
+//! run on the corrected readings (the fit's ticks: those not held out; with k-fold
+//! cross-validation all of them), as a library sensor cause is fitted: the filter's attitude
+//! takes up part of a sensor error (its heading follows a distorted field), so the innovations
+//! are differentiated through the filter (forward differences, one filter run per coefficient)
+//! and Gauss-Newton steps taken (one filter run each, at most [`MAX_ITERATIONS`] per Jacobian
+//! and [`MAX_JACOBIANS`] Jacobians, until the sum of squares drops by less than 1 %). Directions the data cannot tell apart (singular
+//! values of the Jacobian below 1e-4 of the largest) are left out of the steps, so the
+//! coefficients are the smallest that fit.
 
 use super::unexplained::UnexplainedEffect;
 use crate::error::IdentError;
@@ -27,10 +33,14 @@ use testbed_model::ModelConfig;
 use testbed_model::config::{FittedField, FittedFieldTerm};
 use testbed_model::devices::fitted_field::FieldFunction;
 
-/// Most Gauss-Newton steps of the correction's fit (each one filter run; the Jacobian is
-/// computed once, at zero correction: the filter's innovations are close to linear in an
-/// additive reading error).
+/// Most Gauss-Newton steps of the correction's fit per Jacobian (each one filter run; the
+/// filter's innovations are close to linear in an additive reading error, so a Jacobian serves
+/// several steps).
 pub const MAX_ITERATIONS: usize = 4;
+
+/// Most Jacobians of the correction's fit (the second only when the first's steps have not
+/// converged: a large error, which the filter's attitude follows nonlinearly).
+pub const MAX_JACOBIANS: usize = 2;
 
 /// Relative drop of the innovations' sum of squares below which the fit stops.
 const CONVERGED: f64 = 0.01;
@@ -122,30 +132,29 @@ pub(super) fn fit_field_correction(
     if functions.is_empty() {
         return Ok(None);
     }
-    // A constant is always fitted (it would otherwise load the other functions with a hard
-    // iron), carried only when found.
-    let constant_found = functions.contains(&FieldFunction::One);
     // The magnetometer's own error model, a linear map of the field (soft iron, scale factors,
-    // misalignment), is always fitted beside the found functions: the search finds the
-    // strongest terms of each whitened component, not necessarily all of a map's.
+    // misalignment), is always fitted beside the found functions (the search finds the
+    // strongest terms of each whitened component, not necessarily all of a map's): its columns
+    // on the horizontal field, `B_x` and `B_y`. The column on the vertical field, `B_z`, is
+    // within a fraction of a percent of a constant on a platform that tilts by a few degrees:
+    // only when found. A constant is always fitted and carried: on the headings an experiment
+    // covers (±60° by default) the linear map's mean over them cannot be told from a constant,
+    // and a constant left out would come back as a hard iron named for it in the second pass.
     let mut columns = functions.clone();
     for f in [
         FieldFunction::FieldX,
         FieldFunction::FieldY,
-        FieldFunction::FieldZ,
+        FieldFunction::One,
     ] {
         if !columns.contains(&f) {
             columns.push(f);
         }
     }
-    if !constant_found {
-        columns.push(FieldFunction::One);
-    }
     let n = columns.len() * 3;
-    let config_with = |theta: &DVector<f64>, all: bool| {
+    let config_with = |theta: &DVector<f64>| {
         let mut config = base.clone();
         let c = DMatrix::from_column_slice(columns.len(), 3, theta.as_slice());
-        let fitted = to_config(&columns, &c, all || constant_found);
+        let fitted = to_config(&columns, &c);
         match config.effects.fitted_field.as_mut() {
             Some(old) => old.terms.extend(fitted.terms),
             None => config.effects.fitted_field = Some(fitted),
@@ -155,7 +164,7 @@ pub(super) fn fit_field_correction(
     let keep = |tick: usize| !problem.held_out.get(tick).copied().unwrap_or(true);
     let run = |theta: &DVector<f64>| -> Result<Reconstruction, IdentError> {
         problem.filter_runs.set(problem.filter_runs.get() + 1);
-        reconstruct(problem.data, &config_with(theta, true))
+        reconstruct(problem.data, &config_with(theta))
     };
     let field_rms =
         |recon: &Reconstruction| {
@@ -168,56 +177,61 @@ pub(super) fn fit_field_correction(
             }
             (sum / count.max(1) as f64).sqrt()
         };
-    // The Jacobian of the whitened innovations of the fit ticks, by forward differences.
     let mut theta = DVector::<f64>::zeros(n);
     let recon0 = run(&theta)?;
     let r0 = DVector::from_vec(recon0.innovation_vector(keep));
     if r0.len() < 10 * n {
         return Ok(None);
     }
-    let mut jacobian = DMatrix::<f64>::zeros(r0.len(), n);
-    for j in 0..n {
-        let mut step = theta.clone();
-        step[j] += STEP_T;
-        let r = run(&step)?.innovation_vector(keep);
-        if r.len() != r0.len() {
-            return Ok(None);
-        }
-        for (i, v) in r.iter().enumerate() {
-            jacobian[(i, j)] = (v - r0[i]) / STEP_T;
-        }
-    }
-    let svd = jacobian.svd(true, true);
-    let tolerance = RCOND * svd.singular_values.max();
-    let mut iterations = n + 1;
+    let mut iterations = 1;
     let (mut r, mut rss) = (r0.clone(), r0.norm_squared());
     let mut recon = recon0.clone();
-    for _ in 0..MAX_ITERATIONS {
-        let Ok(update) = svd.solve(&r, tolerance) else {
-            return Ok(None);
-        };
-        if !update.iter().all(|v| v.is_finite()) {
-            return Ok(None);
+    'jacobians: for _ in 0..MAX_JACOBIANS {
+        // The Jacobian of the whitened innovations of the fit ticks at `theta`, by forward
+        // differences.
+        let mut jacobian = DMatrix::<f64>::zeros(r0.len(), n);
+        for j in 0..n {
+            let mut step = theta.clone();
+            step[j] += STEP_T;
+            let r_j = run(&step)?.innovation_vector(keep);
+            iterations += 1;
+            if r_j.len() != r0.len() {
+                return Ok(None);
+            }
+            for (i, v) in r_j.iter().enumerate() {
+                jacobian[(i, j)] = (v - r[i]) / STEP_T;
+            }
         }
-        let trial = &theta - &update;
-        let recon_trial = run(&trial)?;
-        iterations += 1;
-        let r_trial = DVector::from_vec(recon_trial.innovation_vector(keep));
-        if r_trial.len() != r0.len() {
-            return Ok(None);
-        }
-        let rss_trial = r_trial.norm_squared();
-        if rss_trial >= rss {
-            break;
-        }
-        let improvement = (rss - rss_trial) / rss;
-        (theta, r, rss, recon) = (trial, r_trial, rss_trial, recon_trial);
-        if improvement < CONVERGED {
-            break;
+        let svd = jacobian.svd(true, true);
+        let tolerance = RCOND * svd.singular_values.max();
+        for _ in 0..MAX_ITERATIONS {
+            let Ok(update) = svd.solve(&r, tolerance) else {
+                return Ok(None);
+            };
+            if !update.iter().all(|v| v.is_finite()) {
+                return Ok(None);
+            }
+            let trial = &theta - &update;
+            let recon_trial = run(&trial)?;
+            iterations += 1;
+            let r_trial = DVector::from_vec(recon_trial.innovation_vector(keep));
+            if r_trial.len() != r0.len() {
+                return Ok(None);
+            }
+            let rss_trial = r_trial.norm_squared();
+            if rss_trial >= rss {
+                // Past the linear range: a new Jacobian here.
+                continue 'jacobians;
+            }
+            let improvement = (rss - rss_trial) / rss;
+            (theta, r, rss, recon) = (trial, r_trial, rss_trial, recon_trial);
+            if improvement < CONVERGED {
+                break 'jacobians;
+            }
         }
     }
     let coefficients = DMatrix::from_column_slice(columns.len(), 3, theta.as_slice());
-    let fitted_field = to_config(&columns, &coefficients, constant_found);
+    let fitted_field = to_config(&columns, &coefficients);
     if fitted_field.terms.is_empty() {
         return Ok(None);
     }
@@ -230,14 +244,10 @@ pub(super) fn fit_field_correction(
     }))
 }
 
-/// The coefficients (`functions × axes`, tesla per unit) as `[effects.fitted_field]`; the
-/// constant only if `constant_found`.
-fn to_config(columns: &[FieldFunction], c: &DMatrix<f64>, constant_found: bool) -> FittedField {
+/// The coefficients (`functions × axes`, tesla per unit) as `[effects.fitted_field]`.
+fn to_config(columns: &[FieldFunction], c: &DMatrix<f64>) -> FittedField {
     let mut terms = Vec::new();
     for (j, f) in columns.iter().enumerate() {
-        if *f == FieldFunction::One && !constant_found {
-            continue;
-        }
         for (a, axis) in ["x", "y", "z"].iter().enumerate() {
             let value = c[(j, a)];
             if value != 0.0 && value.is_finite() {
