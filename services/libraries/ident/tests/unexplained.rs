@@ -301,8 +301,9 @@ fn the_extended_model_reproduces_a_soft_iron_in_simulation() {
 }
 
 /// Soft iron with a centre-of-mass offset. The soft iron distorts the estimated heading and the
-/// torque channel is built on that estimate: on the data as measured the com offset fails its
-/// consistency test and a gyro scale error stands in for the heading error. The first pass's
+/// torque channel is built on that estimate: on the data as measured a gyro scale error and an
+/// inertia error are named beside the com offset (on other seeds the com offset fails its
+/// consistency test). The first pass's
 /// field-innovation effect is carried into the filter as a magnetometer correction
 /// (`[effects.fitted_field]`) and the analysis redone: the com offset is named with its
 /// values, the soft iron is reported as the first pass's unexplained field effect, no library
