@@ -33,6 +33,10 @@
 //!    each equation's residual (torque per axis, each innovation component) on a fixed library
 //!    of candidate functions of the state and time, with k-fold cross-validation and
 //!    cluster-robust standard errors; what it finds is reported as an unexplained effect.
+//! 7. **Second pass** (`sensor`): when the field innovations hold an unexplained effect that
+//!    is a function of the attitude (a soft iron), the readings are corrected with it (fitted
+//!    in tesla through the filter, carried as `[effects.fitted_field]`) and steps 1–6 are
+//!    redone on the corrected estimate; the gain's baseline stays the configuration given.
 //!
 //! What remains after the chosen causes is checked on the equation-error channels (RMS against
 //! the noise the model expects), by the unexplained-effect search, and, if something remains,

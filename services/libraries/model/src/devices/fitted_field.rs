@@ -175,6 +175,30 @@ mod tests {
         assert_eq!(FieldFunction::from_name("t"), None);
     }
 
+    /// The configuration refuses an unknown function or axis, naming the key; a valid table
+    /// reads back from TOML unchanged.
+    #[test]
+    fn a_fitted_field_with_an_unknown_function_or_axis_is_refused() {
+        let mut config = crate::ModelConfig::default();
+        config.effects.fitted_field = Some(FittedField {
+            terms: vec![term("x", "w_z", 1e-7)],
+        });
+        let e = config.validate().expect_err("w_z refused").to_string();
+        assert!(e.contains("effects.fitted_field.terms[0].function"), "{e}");
+        config.effects.fitted_field = Some(FittedField {
+            terms: vec![term("q", "B_x", 1e-7)],
+        });
+        let e = config.validate().expect_err("axis q refused").to_string();
+        assert!(e.contains("effects.fitted_field.terms[0].axis"), "{e}");
+        config.effects.fitted_field = Some(FittedField {
+            terms: vec![term("y", "cos 2ψ", -3e-7), term("z", "B_x", 2e-7)],
+        });
+        config.validate().expect("valid fitted field");
+        let back = crate::ModelConfig::from_toml_str(&config.to_toml_string(), "round trip")
+            .expect("reads back");
+        assert_eq!(back.effects.fitted_field, config.effects.fitted_field);
+    }
+
     /// A soft-iron matrix written as `B_*` terms gives `|M_L| S B̂` at any attitude.
     #[test]
     fn field_terms_reproduce_a_soft_iron_matrix() {

@@ -125,6 +125,33 @@ mod tests {
         assert!((soft.expected_t(&q) - want).norm() < 1e-18);
     }
 
+    /// `effects.fitted_field` adds its error, evaluated at the attitude, to the reading.
+    #[test]
+    fn a_fitted_field_is_added_to_the_reading() {
+        use crate::config::{FittedField, FittedFieldTerm};
+        let mut config = ModelConfig::default();
+        let plain = Magnetometer::new(&config, 1);
+        config.effects.fitted_field = Some(FittedField {
+            terms: vec![
+                FittedFieldTerm {
+                    axis: "x".into(),
+                    function: "1".into(),
+                    coefficient: 2e-7,
+                },
+                FittedFieldTerm {
+                    axis: "z".into(),
+                    function: "sin ψ".into(),
+                    coefficient: -5e-7,
+                },
+            ],
+        });
+        let fitted = Magnetometer::new(&config, 1);
+        let q = crate::attitude::from_heading_pitch_roll(0.8, 0.1, -0.05);
+        let psi = crate::attitude::heading(&q);
+        let want = plain.expected_t(&q) + Vector3::new(2e-7, 0.0, -5e-7 * psi.sin());
+        assert!((fitted.expected_t(&q) - want).norm() < 1e-18);
+    }
+
     #[test]
     fn noise_matches_configured_sigma_about_rotated_field_plus_hard_iron() {
         let mut config = ModelConfig::default();
