@@ -16,6 +16,7 @@ use testbed_flight::mekf::{Mekf, MekfConfig, VectorMeasurements};
 use testbed_model::ModelConfig;
 use testbed_model::attitude::{self, Attitude};
 use testbed_model::config::{DEG, EARTH_RATE_RAD_S, GAUSS};
+use testbed_model::devices::fitted_field::FittedFieldModel;
 
 /// Components of one innovation row: gravity (2, tangent plane) then field (3).
 pub const INNOVATION_LEN: usize = 5;
@@ -33,6 +34,8 @@ pub struct SensorModel {
     pub hard_iron_t: Vector3<f64>,
     /// Lab field in the level frame, tesla.
     pub field_l_t: Vector3<f64>,
+    /// The fitted field error of `effects.fitted_field` (a function of the attitude), tesla.
+    pub fitted_field: FittedFieldModel,
 }
 
 impl SensorModel {
@@ -61,6 +64,10 @@ impl SensorModel {
                 .as_ref()
                 .map_or_else(Vector3::zeros, |d| Vector3::from(d.hard_iron_gauss) * GAUSS),
             field_l_t: config.platform.field_l_t(),
+            fitted_field: FittedFieldModel::from_config(
+                e.fitted_field.as_ref(),
+                &config.platform.field_l_t(),
+            ),
         }
     }
 
@@ -80,14 +87,15 @@ impl SensorModel {
         self.gyro_matrix * (w + q * self.earth_rate_l + bias)
     }
 
-    /// The field reading with the hard iron taken out, tesla.
-    pub fn correct_field(&self, m: &Vector3<f64>) -> Vector3<f64> {
-        m - self.hard_iron_t
+    /// The field reading `m` (tesla, body axes) with the hard iron and the fitted field error
+    /// at attitude `q` (the filter's estimate when the sample is applied) taken out, tesla.
+    pub fn correct_field(&self, m: &Vector3<f64>, q: &Attitude) -> Vector3<f64> {
+        m - self.hard_iron_t - self.fitted_field.error_t(q)
     }
 
     /// The noise-free field reading at attitude `q`, tesla.
     pub fn field_reading(&self, q: &Attitude) -> Vector3<f64> {
-        q * self.field_l_t + self.hard_iron_t
+        q * self.field_l_t + self.hard_iron_t + self.fitted_field.error_t(q)
     }
 }
 
@@ -100,6 +108,9 @@ pub struct Innovation {
     pub values: [f64; INNOVATION_LEN],
     /// Bit i set: component i present.
     pub mask: u8,
+    /// The field block's raw residual, corrected reading minus the reading predicted from the
+    /// prior attitude, tesla, body axes (zero without a field sample).
+    pub field_residual_t: Vector3<f64>,
 }
 
 /// The filter's estimates on the data's ticks.
@@ -198,7 +209,8 @@ pub fn reconstruct(data: &Aligned, config: &ModelConfig) -> Result<Reconstructio
             {
                 i_field += 1;
                 if field.iter().all(|x| x.abs() < field_range) {
-                    meas.field_b_t = Some(sensors.correct_field(&field));
+                    let q_now = mekf.as_ref().map_or(q_prior, Mekf::attitude);
+                    meas.field_b_t = Some(sensors.correct_field(&field, &q_now));
                 }
             }
             if t_sample < -1e-9 || (meas.tilt_rad.is_none() && meas.field_b_t.is_none()) {
@@ -212,10 +224,16 @@ pub fn reconstruct(data: &Aligned, config: &ModelConfig) -> Result<Reconstructio
                     let v = [values[0], values[1], values[3], values[4], values[5]];
                     let m = (mask & 0b11) as u8 | (((mask >> 3) & 0b111) as u8) << 2;
                     if m != 0 {
+                        let field_residual_t = report
+                            .magnetic
+                            .stats
+                            .as_ref()
+                            .map_or_else(Vector3::zeros, |s| s.residual);
                         out.innovations.push(Innovation {
                             tick: k,
                             values: v,
                             mask: m,
+                            field_residual_t,
                         });
                     }
                 }

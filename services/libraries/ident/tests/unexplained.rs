@@ -149,8 +149,8 @@ fn com_drift_alone_and_with_a_hard_iron() {
 
 #[test]
 fn soft_iron_alone_and_with_a_wheel_torque_scale() {
-    // Not yet with a torque cause: the soft iron distorts the heading the filter estimates,
-    // which the torque channel is built on (see `soft_iron_with_a_com_offset_known_limit`).
+    // The field effect is carried into the filter as a magnetometer correction and the analysis
+    // redone (the second pass); the correction must reproduce the soft iron.
     for (label, effects, library, seed) in [
         ("soft iron", SOFT_IRON.to_string(), vec![], 53),
         (
@@ -175,6 +175,11 @@ fn soft_iron_alone_and_with_a_wheel_torque_scale() {
             &["B_x", "B_y", "cos ψ", "sin ψ", "cos 2ψ", "sin 2ψ"],
             1.05,
         );
+        assert!(
+            id.report.sensor_correction.is_some(),
+            "{label}: no second pass"
+        );
+        soft_iron_reproduced(label, &t, &id);
     }
 }
 
@@ -250,13 +255,62 @@ fn the_extended_model_reproduces_an_unexplained_drift_in_simulation() {
     assert!(nom > 5.0 * ext, "nominal {nom} rad/s, extended {ext} rad/s");
 }
 
-/// Known limit (ignored; run with `--ignored`): soft iron with a centre-of-mass offset. The
-/// soft iron distorts the estimated heading; the torque channel is built on that estimate, so
-/// the com offset fails its consistency test and a gyro scale error is kept in its place.
-/// Carrying the found sensor term into the filter and analysing again would be the fix.
+/// The extended model carries the magnetometer correction into simulation: the same
+/// experiment (same seed, so the same sensor noise) run on the extended model reads a field
+/// closer to the truth's readings than the nominal model does. Bound: at least 3× closer in
+/// RMS over the run (the soft iron is about 0.9 µT against 0.07 µT of noise per axis; a
+/// correction of the wrong sign or form would not come within 3×; measured: 662 nT for the
+/// nominal model, 13.4 nT for the extended one, 49.5× closer).
 #[test]
-#[ignore]
-fn soft_iron_with_a_com_offset_known_limit() {
+fn the_extended_model_reproduces_a_soft_iron_in_simulation() {
+    use testbed_ident::experiment::{self, ExperimentOptions};
+    let t = truth(SOFT_IRON);
+    let id = identify_blind(&t, 53, 600.0);
+    let text = id.extended.to_toml_string();
+    assert!(text.contains("[[effects.fitted_field.terms]]"), "{text}");
+    let extended = testbed_model::ModelConfig::from_toml_str(&text, "extended model")
+        .expect("the extended model reads back");
+    let options = ExperimentOptions {
+        duration_s: 600.0,
+        seed: 53,
+        ..ExperimentOptions::default()
+    };
+    let field = |model: &testbed_model::ModelConfig| {
+        experiment::run(model, &options)
+            .expect("experiment runs")
+            .0
+            .magnetometer
+    };
+    let (truth_run, extended_run, nominal_run) = (field(&t), field(&extended), field(&nominal()));
+    let rms = |run: &[testbed_ident::data::FieldRow]| {
+        let sum: f64 = truth_run
+            .iter()
+            .zip(run)
+            .map(|(a, b)| (a.field_t - b.field_t).norm_squared())
+            .sum();
+        (sum / (3 * truth_run.len().max(1)) as f64).sqrt()
+    };
+    let (ext, nom) = (rms(&extended_run), rms(&nominal_run));
+    println!(
+        "field RMS difference from the truth's readings: nominal {:.1} nT, extended {:.1} nT ({:.1}× closer)",
+        nom * 1e9,
+        ext * 1e9,
+        nom / ext
+    );
+    assert!(nom > 3.0 * ext, "nominal {nom} T, extended {ext} T");
+}
+
+/// Soft iron with a centre-of-mass offset. The soft iron distorts the estimated heading and the
+/// torque channel is built on that estimate: on the data as measured a gyro scale error and an
+/// inertia error are named beside the com offset (on other seeds the com offset fails its
+/// consistency test). The first pass's
+/// field-innovation effect is carried into the filter as a magnetometer correction
+/// (`[effects.fitted_field]`) and the analysis redone: the com offset is named with its
+/// values, the soft iron is reported as the first pass's unexplained field effect, no library
+/// cause stands in for it, and the correction reproduces the hidden matrix's effect on the
+/// reading (checked against `|M_L| S B̂`, see below).
+#[test]
+fn soft_iron_with_a_com_offset() {
     let t = truth(&format!("{SOFT_IRON}{COM}"));
     let id = identify_blind(&t, 54, 600.0);
     check(
@@ -272,6 +326,96 @@ fn soft_iron_with_a_com_offset_known_limit() {
         &["B_x", "B_y", "cos ψ", "sin ψ", "cos 2ψ", "sin 2ψ"],
         1.05,
     );
+    let correction = id
+        .report
+        .sensor_correction
+        .as_ref()
+        .expect("the second pass ran with a magnetometer correction");
+    assert!(
+        id.report
+            .summary
+            .iter()
+            .any(|l| l.starts_with("Second pass")),
+        "{:?}",
+        id.report.summary
+    );
+    assert_eq!(
+        id.extended.effects.fitted_field.as_ref(),
+        Some(&correction.fitted_field),
+        "the extended model carries the correction"
+    );
+    assert!(
+        correction.residual_rms_after_t < 0.5 * correction.residual_rms_before_t,
+        "field residual {} T before, {} T after",
+        correction.residual_rms_before_t,
+        correction.residual_rms_after_t
+    );
+    soft_iron_reproduced("soft iron + com offset", &t, &id);
+}
+
+/// The magnetometer correction of the extended model against the hidden soft iron: over the
+/// attitudes the experiment covers (headings within its ±amplitude, tilts of a few degrees; a
+/// fit says nothing outside them) the fitted error `ΔM(q)` plus any hard iron named must match
+/// `S A(q) M_L` up to a rotation about the vertical (a constant heading offset, which no
+/// magnetometer-only correction can see: the filter takes it as attitude), to within 20 % of
+/// the soft iron's RMS. Measured values are printed.
+fn soft_iron_reproduced(label: &str, truth: &testbed_model::ModelConfig, id: &Identification) {
+    use nalgebra::{Matrix3, Vector3};
+    use testbed_model::attitude::from_heading_pitch_roll;
+    use testbed_model::devices::fitted_field::FittedFieldModel;
+    let s = truth
+        .effects
+        .soft_iron
+        .as_ref()
+        .expect("the truth has soft iron")
+        .matrix;
+    let s = Matrix3::from_fn(|i, j| s[i][j]);
+    let field_l = truth.platform.field_l_t();
+    let fitted = FittedFieldModel::from_config(id.extended.effects.fitted_field.as_ref(), &field_l);
+    let hard_iron = id
+        .extended
+        .effects
+        .magnetic_disturbance
+        .as_ref()
+        .map_or_else(Vector3::zeros, |d| {
+            Vector3::from(d.hard_iron_gauss) * testbed_model::config::GAUSS
+        });
+    let amplitude = testbed_ident::experiment::ExperimentOptions::default().heading_amplitude_deg;
+    let attitudes: Vec<_> = (-24..=24)
+        .flat_map(|k| {
+            let psi = (k as f64 / 24.0 * amplitude).to_radians();
+            [(0.03, -0.02), (-0.02, 0.03)]
+                .map(|(pitch, roll)| from_heading_pitch_roll(psi, pitch, roll))
+        })
+        .collect();
+    // Best rotation about the vertical: ΔM ≈ S b + ε (b × z_B) with z_B the level z in body
+    // axes; ε fitted by least squares.
+    let rows: Vec<(Vector3<f64>, Vector3<f64>, Vector3<f64>)> = attitudes
+        .iter()
+        .map(|q| {
+            let b = q * field_l;
+            let axis = q * Vector3::z();
+            (fitted.error_t(q) + hard_iron, s * b, b.cross(&axis))
+        })
+        .collect();
+    let eps = rows.iter().map(|(f, t, r)| (f - t).dot(r)).sum::<f64>()
+        / rows.iter().map(|(_, _, r)| r.norm_squared()).sum::<f64>();
+    let n = rows.len() as f64;
+    let err = (rows
+        .iter()
+        .map(|(f, t, r)| (f - t - eps * r).norm_squared())
+        .sum::<f64>()
+        / n)
+        .sqrt();
+    let size = (rows.iter().map(|(_, t, _)| t.norm_squared()).sum::<f64>() / n).sqrt();
+    println!(
+        "{label}: fitted field correction vs the hidden soft iron: RMS difference {:.1} nT of {:.1} nT ({:.0} %), heading offset absorbed {:.2e} rad",
+        err * 1e9,
+        size * 1e9,
+        100.0 * err / size,
+        eps
+    );
+    assert!(err < 0.2 * size, "{label}: {err} T vs {size} T");
 }
 
 /// Clean data (the nominal model simulated, seeds 100–119, as the library's own clean-data
@@ -309,7 +453,7 @@ fn clean_data_give_no_unexplained_effect_on_20_of_20_seeds() {
     assert!(named.is_empty(), "causes named on clean data: {named:?}");
 }
 
-/// How often the checks above hold on other seeds (ignored: 24 identifications; prints the
+/// How often the checks above hold on other seeds (ignored: 28 identifications; prints the
 /// share per scenario; run with `--ignored --nocapture`).
 #[test]
 #[ignore]
@@ -357,6 +501,14 @@ fn out_of_library_checks_over_more_seeds() {
             1.05,
         ),
         (
+            "soft iron + com offset",
+            format!("{SOFT_IRON}{COM}"),
+            vec![Cause::ComOffset],
+            field_eq.to_vec(),
+            field.to_vec(),
+            1.05,
+        ),
+        (
             "heading torque",
             HEADING.into(),
             vec![],
@@ -386,4 +538,31 @@ fn out_of_library_checks_over_more_seeds() {
         }
         println!("ROBUSTNESS {label}: {ok}/4 seeds pass");
     }
+}
+
+/// Known limit (ignored; run with `--ignored`): soft iron with a hard iron. Beside the soft
+/// iron the hard iron fails its consistency test in the first pass (nothing is named, as before
+/// the second pass existed). The magnetometer correction of the second pass carries a constant
+/// (on the experiment's ±60° of heading the soft iron's mean cannot be told from one), so the
+/// hard iron ends up in the correction's constant terms instead of being named as
+/// `magnetic_disturbance`; on seed 57 the second pass then names a gyro scale error of
+/// 1.6e3 ppm about Z (the heading-dependent part of the correction is not exact).
+#[test]
+#[ignore]
+fn soft_iron_with_a_hard_iron_known_limit() {
+    let t = truth(&format!("{SOFT_IRON}{HARD_IRON}"));
+    let id = identify_blind(&t, 57, 600.0);
+    check(
+        "soft iron + hard iron",
+        &t,
+        &id,
+        &[Cause::MagneticDisturbance],
+        &[
+            "innovation_field_x",
+            "innovation_field_y",
+            "innovation_field_z",
+        ],
+        &["B_x", "B_y", "cos ψ", "sin ψ", "cos 2ψ", "sin 2ψ"],
+        1.05,
+    );
 }

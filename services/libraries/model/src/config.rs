@@ -276,6 +276,10 @@ pub struct EffectsConfig {
     /// model): see [`crate::physics::fitted_torque`].
     #[serde(skip_serializing_if = "Option::is_none")]
     pub fitted_torque: Option<FittedTorque>,
+    /// A magnetometer error fitted to data (an unexplained effect of `testbed identify` in the
+    /// field innovations, carried into the model): see [`crate::devices::fitted_field`].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub fitted_field: Option<FittedField>,
 }
 
 /// A torque fitted to data, `M_a = Σ coefficient × function` per body axis `a`, written by
@@ -300,6 +304,29 @@ pub struct FittedTorqueTerm {
     /// The function, by name (`1`, `t_s`, `sin 2ψ`, `w_z`, …).
     pub function: String,
     /// Nm per unit of the function (Nm/s for `t_s`, Nm/(rad/s) for a rate).
+    pub coefficient: f64,
+}
+
+/// A magnetometer error fitted to data, `ΔM_a = Σ coefficient × function(q)` per body axis `a`
+/// of the reading, written by `testbed identify` from the unexplained effects it finds in the
+/// field innovations (or by hand). The simulated magnetometer adds it to its reading;
+/// identification's filter takes it out of the readings. Functions:
+/// [`crate::devices::fitted_field::FieldFunction`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FittedField {
+    pub terms: Vec<FittedFieldTerm>,
+}
+
+/// One term of a [`FittedField`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FittedFieldTerm {
+    /// Body axis of the reading: `x`, `y` or `z`.
+    pub axis: String,
+    /// The function, by name (`1`, `cos 2ψ`, `B_y`, …).
+    pub function: String,
+    /// Tesla per unit of the function.
     pub coefficient: f64,
 }
 
@@ -632,6 +659,29 @@ impl ModelConfig {
                 }
                 if TorqueFunction::from_name(&term.function).is_none() {
                     let known: Vec<&str> = TorqueFunction::ALL.iter().map(|f| f.name()).collect();
+                    v.fail(
+                        &format!("{key}.function"),
+                        term.function.clone(),
+                        &format!("unknown function; known: {}", known.join(", ")),
+                    );
+                }
+                v.finite(&format!("{key}.coefficient"), term.coefficient);
+            }
+        }
+        if let Some(x) = &e.fitted_field {
+            use crate::devices::fitted_field::FieldFunction;
+            use crate::physics::fitted_torque::axis_index;
+            for (i, term) in x.terms.iter().enumerate() {
+                let key = format!("effects.fitted_field.terms[{i}]");
+                if axis_index(&term.axis).is_none() {
+                    v.fail(
+                        &format!("{key}.axis"),
+                        term.axis.clone(),
+                        "must be x, y or z",
+                    );
+                }
+                if FieldFunction::from_name(&term.function).is_none() {
+                    let known: Vec<&str> = FieldFunction::ALL.iter().map(|f| f.name()).collect();
                     v.fail(
                         &format!("{key}.function"),
                         term.function.clone(),

@@ -490,9 +490,14 @@ fn render_report(r: &Report) -> Result<String, std::fmt::Error> {
         writeln!(out, "  none")?;
     }
     for e in &r.unexplained {
+        let pass = match (&r.sensor_correction, e.pass) {
+            (Some(_), 1) => " (first pass, carried as the magnetometer correction)",
+            (Some(_), _) => " (second pass)",
+            (None, _) => "",
+        };
         writeln!(
             out,
-            "  {}: {} rows in {} clusters; |z| threshold {:.2}; held-out gain {:.3}, cross-validated gain {:.3}",
+            "  {}{pass}: {} rows in {} clusters; |z| threshold {:.2}; held-out gain {:.3}, cross-validated gain {:.3}",
             e.equation, e.rows, e.clusters, e.z_threshold, e.held_out_gain, e.cv_gain
         )?;
         for t in &e.terms {
@@ -512,6 +517,28 @@ fn render_report(r: &Report) -> Result<String, std::fmt::Error> {
                 t.name,
                 testbed_ident::identify::with_error(t.value, t.stderr)
             )?;
+        }
+    }
+    if let Some(c) = &r.sensor_correction {
+        writeln!(
+            out,
+            "  magnetometer correction of the second pass ([effects.fitted_field], from {}): field residual RMS {:.1} nT before, {:.1} nT after; {} filter runs; first pass: {} (gain {:.2}x)",
+            c.equations.join(", "),
+            c.residual_rms_before_t * 1e9,
+            c.residual_rms_after_t * 1e9,
+            c.iterations,
+            c.first_pass_verdict,
+            c.first_pass_gain
+        )?;
+        for t in &c.fitted_field.terms {
+            writeln!(
+                out,
+                "    {} {:<14} {:+.3e}  [T per unit]",
+                t.axis, t.function, t.coefficient
+            )?;
+        }
+        if !c.not_carried.is_empty() {
+            writeln!(out, "    not carried: {}", c.not_carried.join(", "))?;
         }
     }
     writeln!(out, "  {}", r.remaining.message)?;

@@ -192,10 +192,11 @@ pub struct Problem<'a> {
 }
 
 /// Cache key of a filter run: the sensor causes present in a configuration and their values,
-/// exactly (bit patterns), in [`Cause::ALL`] order. Configurations with equal keys give the same
-/// filter run.
+/// exactly (bit patterns), in [`Cause::ALL`] order, and the fitted field error's terms
+/// (`effects.fitted_field`, which the filter takes out of the readings). Configurations with
+/// equal keys give the same filter run.
 #[derive(Debug, Clone, PartialEq, Eq, Hash, Default)]
-pub struct SensorKey(Vec<(Cause, Vec<u64>)>);
+pub struct SensorKey(Vec<(Cause, Vec<u64>)>, Vec<(String, String, u64)>);
 
 impl SensorKey {
     pub fn of(config: &ModelConfig) -> Self {
@@ -205,10 +206,18 @@ impl SensorKey {
                 .filter(|c| c.kind() == Kind::Sensor && c.present(config))
                 .map(|c| (c, c.values(config).iter().map(|x| x.to_bits()).collect()))
                 .collect(),
+            config
+                .effects
+                .fitted_field
+                .iter()
+                .flat_map(|f| &f.terms)
+                .map(|t| (t.axis.clone(), t.function.clone(), t.coefficient.to_bits()))
+                .collect(),
         )
     }
 
-    /// No sensor cause present (the nominal filter run).
+    /// No sensor cause present (the filter run of the base configuration, which is where a
+    /// fitted field error comes from).
     pub fn is_nominal(&self) -> bool {
         self.0.is_empty()
     }

@@ -33,6 +33,10 @@
 //!    each equation's residual (torque per axis, each innovation component) on a fixed library
 //!    of candidate functions of the state and time, with k-fold cross-validation and
 //!    cluster-robust standard errors; what it finds is reported as an unexplained effect.
+//! 7. **Second pass** (`sensor`): when the field innovations hold an unexplained effect that
+//!    is a function of the attitude (a soft iron), the readings are corrected with it (fitted
+//!    in tesla through the filter, carried as `[effects.fitted_field]`) and steps 1–6 are
+//!    redone on the corrected estimate; the gain's baseline stays the configuration given.
 //!
 //! What remains after the chosen causes is checked on the equation-error channels (RMS against
 //! the noise the model expects), by the unexplained-effect search, and, if something remains,
@@ -44,9 +48,11 @@
 mod falsify;
 mod report;
 mod residuals;
+mod sensor;
 mod unexplained;
 
 pub use falsify::{CauseTest, Consistency};
+pub use sensor::SensorCorrection;
 pub use unexplained::UnexplainedEffect;
 
 pub use report::{
@@ -195,6 +201,11 @@ pub fn held_out_mask(aligned: &Aligned, options: &Options) -> Vec<bool> {
 }
 
 /// Identify what the model gets wrong in `data` (see the module documentation).
+///
+/// When the first pass finds an unexplained effect in the field innovations whose functions
+/// the magnetometer's model can take, the readings are corrected with it ([`sensor`]) and the
+/// analysis runs again on the corrected estimate (the second pass, whose report this is; the
+/// first pass's field effects and the correction are in it).
 pub fn identify(
     data: &Dataset,
     model: &ModelConfig,
@@ -204,11 +215,87 @@ pub fn identify(
     model.validate()?;
     data.check()?;
     let aligned = Aligned::new(data);
-    let block = |t: f64| (t / options.block_s).floor().max(0.0) as usize;
-    let cross_validated = options.folds >= 2;
-    let held_out = held_out_mask(&aligned, options);
+    let first = identify_pass(data, &aligned, model, options, None)?;
+    let equations = sensor::field_equations(&first.report.unexplained);
+    if equations.is_empty() {
+        return Ok(first);
+    }
     let problem = Problem::new(
         &aligned,
+        model.clone(),
+        held_out_mask(&aligned, options),
+        options.fit.clone(),
+    );
+    let Some(fit) = sensor::fit_field_correction(&problem, model, &first.report.unexplained)?
+    else {
+        return Ok(first);
+    };
+    let mut corrected = model.clone();
+    match corrected.effects.fitted_field.as_mut() {
+        Some(old) => old.terms.extend(fit.fitted_field.terms.iter().cloned()),
+        None => corrected.effects.fitted_field = Some(fit.fitted_field.clone()),
+    }
+    corrected.validate()?;
+    let first_effects: Vec<UnexplainedEffect> = first
+        .report
+        .unexplained
+        .iter()
+        .filter(|e| equations.contains(&e.equation))
+        .cloned()
+        .map(|mut e| {
+            e.pass = 1;
+            e
+        })
+        .collect();
+    let prior = FirstPass {
+        original: model,
+        effects: first_effects,
+        correction: SensorCorrection {
+            equations,
+            fitted_field: fit.fitted_field,
+            not_carried: fit.not_carried,
+            iterations: fit.iterations,
+            residual_rms_before_t: fit.rms_before_t,
+            residual_rms_after_t: fit.rms_after_t,
+            first_pass_verdict: first.report.verdict.clone(),
+            first_pass_gain: first.report.gain,
+        },
+        filter_runs: first.report.filter_runs + problem.filter_runs.get(),
+        nominal_residuals: first.report.nominal_residuals,
+        nominal_prediction: first.figures.nominal_prediction,
+        nominal_equation: first.figures.nominal_equation,
+    };
+    identify_pass(data, &aligned, &corrected, options, Some(prior))
+}
+
+/// What the second pass takes from the first.
+struct FirstPass<'m> {
+    /// The configuration given (the second pass's is it plus the correction): the baseline of
+    /// the gain.
+    original: &'m ModelConfig,
+    /// The first pass's field-innovation effects (the correction's form).
+    effects: Vec<UnexplainedEffect>,
+    correction: SensorCorrection,
+    filter_runs: usize,
+    nominal_residuals: ResidualReport,
+    nominal_prediction: Vec<Curve>,
+    nominal_equation: Vec<Curve>,
+}
+
+/// One pass of the analysis on the estimate of `model`'s sensor model; the second (`prior`
+/// given) reports against the configuration given and carries the first's findings.
+fn identify_pass(
+    data: &Dataset,
+    aligned: &Aligned,
+    model: &ModelConfig,
+    options: &Options,
+    prior: Option<FirstPass>,
+) -> Result<Identification, IdentError> {
+    let block = |t: f64| (t / options.block_s).floor().max(0.0) as usize;
+    let cross_validated = options.folds >= 2;
+    let held_out = held_out_mask(aligned, options);
+    let problem = Problem::new(
+        aligned,
         model.clone(),
         held_out.clone(),
         options.fit.clone(),
@@ -496,18 +583,30 @@ pub fn identify(
     ModelConfig::from_toml_str(&extended.to_toml_string(), "extended model")?;
 
     // Gain: cross-validated (each fold predicted by the named causes fitted without it) or on
-    // the held-out blocks.
+    // the held-out blocks. In the second pass the baseline is the configuration given, on its
+    // own (uncorrected) estimate, and the extended model always differs from it (the
+    // correction).
     let start = nominal.state.recon.start;
+    let baseline_recon = match &prior {
+        Some(p) => Some(crate::reconstruct::reconstruct(aligned, p.original)?),
+        None => None,
+    };
+    let (baseline_recon, baseline_model) = match (&baseline_recon, &prior) {
+        (Some(r), Some(p)) => (r, p.original),
+        _ => (&nominal.state.recon, model),
+    };
+    let second_pass = prior.is_some();
+    let extends = extends || second_pass;
     // `named_only`: the same predictions without the fitted torque (when it is carried).
     let (base_held, ext_held, held_fraction, named_only) = if !cross_validated {
         let held_fraction =
             held_out.iter().filter(|h| **h).count() as f64 / held_out.len().max(1) as f64;
         let spans = held_out_spans(&held_out, start);
-        let windows = predict::windows(&aligned, &spans, options.horizon_s);
-        let base_held = predict::predict(&aligned, &nominal.state.recon, model, &windows)?;
+        let windows = predict::windows(aligned, &spans, options.horizon_s);
+        let base_held = predict::predict(aligned, baseline_recon, baseline_model, &windows)?;
         let ext_held = if extends {
             predict::predict(
-                &aligned,
+                aligned,
                 &current.state.recon,
                 &extended_fit_blocks,
                 &windows,
@@ -516,11 +615,14 @@ pub fn identify(
             base_held.clone()
         };
         // What carrying the fitted torque adds: the named causes alone.
-        let named_only = match (&extension.fitted_torque, selected.is_empty()) {
+        let named_only = match (
+            &extension.fitted_torque,
+            selected.is_empty() && !second_pass,
+        ) {
             (None, _) => None,
             (Some(_), true) => Some(base_held.clone()),
             (Some(_), false) => Some(predict::predict(
-                &aligned,
+                aligned,
                 &current.state.recon,
                 &current.config,
                 &windows,
@@ -530,13 +632,13 @@ pub fn identify(
     } else {
         let fold_windows: Vec<Vec<(usize, usize)>> = fold_masks
             .iter()
-            .map(|mask| predict::windows(&aligned, &held_out_spans(mask, start), options.horizon_s))
+            .map(|mask| predict::windows(aligned, &held_out_spans(mask, start), options.horizon_s))
             .collect();
         let mut windows: Vec<(usize, usize)> = fold_windows.iter().flatten().copied().collect();
         windows.sort_unstable();
         let held_fraction = windows.iter().map(|(a, b)| b + 1 - a).sum::<usize>() as f64
             / aligned.len().max(1) as f64;
-        let base_held = predict::predict(&aligned, &nominal.state.recon, model, &windows)?;
+        let base_held = predict::predict(aligned, baseline_recon, baseline_model, &windows)?;
         let mut cv_nominal = crate::fit::ChannelRss::default();
         let mut cv_extended = crate::fit::ChannelRss::default();
         let carry = extension.gain_includes_fitted_torque;
@@ -562,16 +664,12 @@ pub fn identify(
                     fold.fit(&selected, &warm_j)?
                 };
                 cv_extended.add(&fit_j.evaluation.held_out);
-                let without_terms = predict::predict(
-                    &aligned,
-                    &fit_j.state.recon,
-                    &fit_j.config,
-                    &fold_windows[j],
-                )?;
+                let without_terms =
+                    predict::predict(aligned, &fit_j.state.recon, &fit_j.config, &fold_windows[j])?;
                 if carry {
                     let (config_j, _, _) = with_terms(&fit_j.config, Coefficients::WithoutFold(j));
                     parts.push(predict::predict(
-                        &aligned,
+                        aligned,
                         &fit_j.state.recon,
                         &config_j,
                         &fold_windows[j],
@@ -613,16 +711,17 @@ pub fn identify(
         }
         None => ext_held,
     };
-    let extends = !selected.is_empty() || extension.fitted_torque.is_some();
+    let extends = !selected.is_empty() || extension.fitted_torque.is_some() || second_pass;
 
     // Residual reports, nominal and extended.
     let all_spans = [(nominal.state.recon.start, aligned.len())];
-    let all_windows = predict::windows(&aligned, &all_spans, options.horizon_s);
-    let nominal_prediction = predict::predict(&aligned, &nominal.state.recon, model, &all_windows)?;
+    let all_windows = predict::windows(aligned, &all_spans, options.horizon_s);
+    let nominal_prediction =
+        predict::predict(aligned, baseline_recon, baseline_model, &all_windows)?;
     let (nominal_equation, nominal_report) =
         equation_error(&problem, &nominal, &nominal_prediction);
     let extended_prediction = if extends {
-        predict::predict(&aligned, &current.state.recon, &extended, &all_windows)?
+        predict::predict(aligned, &current.state.recon, &extended, &all_windows)?
     } else {
         nominal_prediction.clone()
     };
@@ -646,13 +745,33 @@ pub fn identify(
         .filter_map(|(g, a)| extended_rms.groups.get(g).map(|b| (*g, a / b)))
         .collect();
 
+    // The second pass: the first pass's field effects (the correction's form) lead the
+    // unexplained effects (what remains after the named causes includes them: the correction is
+    // an unexplained term, not a cause).
+    let (effects, sensor_correction, first_pass) = match prior {
+        Some(p) => {
+            let mut all = p.effects;
+            all.extend(effects.into_iter().map(|mut e| {
+                e.pass = 2;
+                e
+            }));
+            let rest = (
+                p.filter_runs,
+                p.nominal_residuals,
+                p.nominal_prediction,
+                p.nominal_equation,
+            );
+            (all, Some(p.correction), Some(rest))
+        }
+        None => (effects, None, None),
+    };
     let remaining = remaining(&problem, &current, options, &effects, &extended_rms);
     let figures = FigureData {
         nominal_prediction: prediction_curves(&nominal_prediction),
         nominal_equation,
         extended_equation,
-        held_out_nominal: window_curves(&base_held, &aligned),
-        held_out_extended: window_curves(&ext_held, &aligned),
+        held_out_nominal: window_curves(&base_held, aligned),
+        held_out_extended: window_curves(&ext_held, aligned),
     };
     let devices = [
         (!data.gyro.is_empty(), "gyro"),
@@ -683,6 +802,14 @@ pub fn identify(
                 .collect()
         })
         .unwrap_or_default();
+    // The second pass reports the first pass's nominal residuals (of the configuration given).
+    let (mut nominal_report, mut figures, mut filter_runs) = (nominal_report, figures, 0);
+    if let Some((runs, residuals, prediction, equation)) = first_pass {
+        nominal_report = residuals;
+        figures.nominal_prediction = prediction;
+        figures.nominal_equation = equation;
+        filter_runs += runs + 1;
+    }
     let summary = report::summary(
         &causes,
         &cause_tests,
@@ -691,6 +818,7 @@ pub fn identify(
         &remaining,
         gain,
         &extension,
+        sensor_correction.as_ref(),
     );
     let report = Report {
         summary,
@@ -718,7 +846,9 @@ pub fn identify(
         gain,
         gain_by_component,
         gain_by_group,
-        filter_runs: problem.filter_runs.get()
+        sensor_correction,
+        filter_runs: filter_runs
+            + problem.filter_runs.get()
             + folds.iter().map(|f| f.filter_runs.get()).sum::<usize>(),
     };
     Ok(Identification {

@@ -149,7 +149,13 @@ pub struct Report {
     pub gain: f64,
     pub gain_by_component: BTreeMap<&'static str, f64>,
     pub gain_by_group: BTreeMap<&'static str, f64>,
-    /// Filter runs the analysis took.
+    /// The magnetometer correction of the second pass: present when the first pass found an
+    /// unexplained effect in the field innovations that the magnetometer's model can take; the
+    /// readings were then corrected with it and everything above (except the nominal
+    /// residuals and the effects marked `pass: 1`) is the analysis of the corrected estimate.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sensor_correction: Option<super::SensorCorrection>,
+    /// Filter runs the analysis took (both passes).
     pub filter_runs: usize,
 }
 
@@ -232,6 +238,8 @@ pub struct ModelExtension {
     pub rejected: Option<String>,
 }
 
+// One argument per part of the report the summary speaks of.
+#[allow(clippy::too_many_arguments)]
 pub(super) fn summary(
     causes: &[CauseReport],
     tests: &[super::CauseTest],
@@ -240,8 +248,27 @@ pub(super) fn summary(
     remaining: &Remaining,
     gain: f64,
     extension: &ModelExtension,
+    correction: Option<&super::SensorCorrection>,
 ) -> Vec<String> {
     let mut out = Vec::new();
+    if let Some(c) = correction {
+        let terms: Vec<String> = c
+            .fitted_field
+            .terms
+            .iter()
+            .map(|t| format!("{} {:+.3e} T × {}", t.axis, t.coefficient, t.function))
+            .collect();
+        out.push(format!(
+            "Second pass: the first pass found an unexplained effect in {} (a magnetometer error the filter took as attitude); the readings were corrected with it as [effects.fitted_field] ({}; field residual RMS {:.1} nT before, {:.1} nT after, {} filter runs) and the estimate and the analysis redone. First pass, uncorrected: {} (held-out gain {:.2}×).",
+            c.equations.join(", "),
+            terms.join(", "),
+            c.residual_rms_before_t * 1e9,
+            c.residual_rms_after_t * 1e9,
+            c.iterations,
+            c.first_pass_verdict,
+            c.first_pass_gain
+        ));
+    }
     if causes.is_empty() {
         out.push("Named cause: none.".to_string());
     }
@@ -295,7 +322,7 @@ pub(super) fn summary(
             parts.join("; ")
         ));
     }
-    if !causes.is_empty() || extension.fitted_torque.is_some() {
+    if !causes.is_empty() || extension.fitted_torque.is_some() || correction.is_some() {
         out.push(format!(
             "Held-out prediction gain of the extended model: {gain:.2}× (nominal RMS / extended RMS)."
         ));
@@ -313,8 +340,13 @@ pub(super) fn summary(
         out.push("Unexplained effect: none found (no candidate function carries a significant part of the remaining residuals).".to_string());
     }
     for e in effects {
+        let pass = if e.pass == 1 && correction.is_some() {
+            "; first pass, carried as the magnetometer correction"
+        } else {
+            ""
+        };
         out.push(format!(
-            "Unexplained effect (not a library cause): {}; held-out gain {:.2}×, cross-validated {:.2}× in that equation.",
+            "Unexplained effect (not a library cause{pass}): {}; held-out gain {:.2}×, cross-validated {:.2}× in that equation.",
             e.proposed, e.held_out_gain, e.cv_gain
         ));
     }
@@ -335,6 +367,12 @@ pub(super) fn summary(
         out.push(format!(
             "Not carried into the model (a forward simulation cannot apply them as a torque): {}.",
             extension.not_carried.join(", ")
+        ));
+    }
+    if let Some(c) = correction.filter(|c| !c.not_carried.is_empty()) {
+        out.push(format!(
+            "Not carried into the magnetometer correction (not a function of the attitude): {}.",
+            c.not_carried.join(", ")
         ));
     }
     out.push(remaining.message.clone());

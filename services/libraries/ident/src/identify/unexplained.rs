@@ -61,6 +61,9 @@ pub struct UnexplainedEffect {
     /// Rows and clusters (independent units) behind the evidence.
     pub rows: usize,
     pub clusters: usize,
+    /// The analysis pass that found it: 1 on the data as measured, 2 after the magnetometer
+    /// correction of the first pass's field effects (see `Report::sensor_correction`).
+    pub pass: u8,
 }
 
 /// Per-row values of every torque candidate, already in the channel's integral form.
@@ -643,6 +646,7 @@ fn effect(
         held_out_gain: result.held_out_gain,
         rows: design.rows(),
         clusters: design.clusters(),
+        pass: 1,
     })
 }
 
@@ -737,6 +741,7 @@ mod tests {
             held_out_gain: 2.0,
             rows: 100,
             clusters: 10,
+            pass: 1,
         }
     }
 

@@ -1,5 +1,6 @@
 //! The three-axis magnetometer (CXM-539): `M_meas = A(q) M_L + M_hard + eta_M`.
 
+use super::fitted_field::FittedFieldModel;
 use super::{DeviceId, device_rng, saturate};
 use crate::attitude::Attitude;
 use crate::config::{GAUSS, ModelConfig};
@@ -33,6 +34,8 @@ pub struct Magnetometer {
     hard_iron_b_t: Vector3<f64>,
     /// `1 + S` of `effects.soft_iron`; `None` without it (the reading is then bit-identical).
     soft_iron: Option<Matrix3<f64>>,
+    /// `effects.fitted_field`, added to the reading (zero without it).
+    fitted: FittedFieldModel,
     noise_t: Vector3<f64>,
     range_t: f64,
     rng: ChaCha8Rng,
@@ -56,6 +59,10 @@ impl Magnetometer {
                 .soft_iron
                 .as_ref()
                 .map(|s| Matrix3::identity() + Matrix3::from_fn(|i, j| s.matrix[i][j])),
+            fitted: FittedFieldModel::from_config(
+                config.effects.fitted_field.as_ref(),
+                &config.platform.field_l_t(),
+            ),
             noise_t: c.noise_t(),
             range_t: c.range_gauss * GAUSS,
             rng: device_rng(seed, DeviceId::Magnetometer),
@@ -67,12 +74,18 @@ impl Magnetometer {
         self.period_s
     }
 
-    /// The noise-free reading at attitude `q`: lab field in body axes plus hard iron, tesla.
+    /// The noise-free reading at attitude `q`: lab field in body axes (times `1 + S` with soft
+    /// iron) plus hard iron plus the fitted error of `effects.fitted_field`, tesla.
     pub fn expected_t(&self, q: &Attitude) -> Vector3<f64> {
         let body = q * self.field_l_t;
-        match &self.soft_iron {
+        let reading = match &self.soft_iron {
             Some(m) => m * body + self.hard_iron_b_t,
             None => body + self.hard_iron_b_t,
+        };
+        if self.fitted.is_active() {
+            reading + self.fitted.error_t(q)
+        } else {
+            reading
         }
     }
 
@@ -110,6 +123,33 @@ mod tests {
         let s = nalgebra::Matrix3::new(0.03, 0.02, 0.0, 0.02, -0.03, 0.0, 0.0, 0.0, 0.01);
         let want = body + s * body;
         assert!((soft.expected_t(&q) - want).norm() < 1e-18);
+    }
+
+    /// `effects.fitted_field` adds its error, evaluated at the attitude, to the reading.
+    #[test]
+    fn a_fitted_field_is_added_to_the_reading() {
+        use crate::config::{FittedField, FittedFieldTerm};
+        let mut config = ModelConfig::default();
+        let plain = Magnetometer::new(&config, 1);
+        config.effects.fitted_field = Some(FittedField {
+            terms: vec![
+                FittedFieldTerm {
+                    axis: "x".into(),
+                    function: "1".into(),
+                    coefficient: 2e-7,
+                },
+                FittedFieldTerm {
+                    axis: "z".into(),
+                    function: "sin ψ".into(),
+                    coefficient: -5e-7,
+                },
+            ],
+        });
+        let fitted = Magnetometer::new(&config, 1);
+        let q = crate::attitude::from_heading_pitch_roll(0.8, 0.1, -0.05);
+        let psi = crate::attitude::heading(&q);
+        let want = plain.expected_t(&q) + Vector3::new(2e-7, 0.0, -5e-7 * psi.sin());
+        assert!((fitted.expected_t(&q) - want).norm() < 1e-18);
     }
 
     #[test]

@@ -12,6 +12,7 @@
 
 pub mod cmg_encoder;
 pub mod cmg_stepper;
+pub mod fitted_field;
 pub mod gyro;
 pub mod inclinometer;
 pub mod magnetometer;
