@@ -28,14 +28,27 @@ use testbed_log::{LogEncode, LogRecord, RunInfo, RunLogWriter, WriterOptions};
 use testbed_runtime::run_config::CanLink;
 use testbed_runtime::{ClockMode, Context, Io, Node, WakeOn};
 
-/// How often a paced logger drains its subscribers. Paced, it wakes on this interval rather than
-/// on every sample: each wake-up costs a look at all 22 subscribers and a `write` of the log
-/// whatever it carries, and one per sample (some 150 per second, most alone) was the largest
-/// CPU cost of the paced pipeline (issue 18). A period holds about one sample per 10 Hz topic,
-/// far below the subscribers' 256-sample buffers (a CAN bus of up to some 2500 frames per
-/// second fits too); a logger killed outright loses at most the records of the last period,
-/// as it lost those since its last wake-up before.
-pub const PACED_DRAIN_PERIOD: std::time::Duration = std::time::Duration::from_millis(100);
+/// How often a paced logger drains its subscribers while every topic is slow. Paced, it wakes
+/// on an interval rather than on every sample: each wake-up costs a look at all 22
+/// subscribers and a `write` of the log whatever it carries, and one per sample (some 150 per
+/// second, most alone) was the largest CPU cost of the paced pipeline (issue 18); at 100 ms
+/// it was still the largest process (0.25 % of a core). A period holds under three samples
+/// of a 10 Hz topic. A logger killed outright loses at most the records of the last period;
+/// a stopped one loses nothing (it drains everything before it closes the log).
+pub const PACED_DRAIN_PERIOD: std::time::Duration = std::time::Duration::from_millis(250);
+
+/// How often a paced logger drains while some topic is fast (a software CAN bus): 256
+/// samples a period is 2560 a second. The logger starts at this period and relaxes to
+/// [`PACED_DRAIN_PERIOD`] once a drain takes at most [`RELAX_BELOW`] samples of every topic
+/// (under 250 a second), and comes back when a relaxed drain takes more than [`TIGHTEN_ABOVE`]
+/// of one (over 256 a second), a quarter of its buffer: a topic never fills its buffer
+/// between two drains unless its rate jumps fourfold at once.
+pub const BUSY_DRAIN_PERIOD: std::time::Duration = std::time::Duration::from_millis(100);
+const RELAX_BELOW: usize = 25;
+const TIGHTEN_ABOVE: usize = LOGGED_BUFFER / 4;
+
+/// Samples each logged topic's subscriber holds.
+const LOGGED_BUFFER: usize = 256;
 
 /// How often a lockstep logger drains its subscribers (wall time). Lockstep runs as fast as the
 /// machine allows, and a logger woken for every tick (or every sample) took a third of the
@@ -61,19 +74,21 @@ impl<T: Topic + LogEncode> LoggedTopic for Logged<T> {
     }
 }
 
-/// A logged topic, drained on [`LOCKSTEP_DRAIN_PERIOD`] or [`PACED_DRAIN_PERIOD`] and never
+/// A logged topic, drained on [`LOCKSTEP_DRAIN_PERIOD`] or [`PACED_DRAIN_PERIOD`] ([`BUSY_DRAIN_PERIOD`]) and never
 /// woken for: it rings no doorbell, so a publish to the logger costs its publisher no system
 /// call.
 fn logged<T: Topic + LogEncode + 'static>(bus: &Bus) -> anyhow::Result<Box<dyn LoggedTopic>> {
     // Deep buffers absorb bursts; in lockstep, publishers wait rather than drop when full.
     Ok(Box::new(Logged {
-        subscriber: bus.subscriber_with::<T>(SubscriberOptions::buffer(256).polled())?,
+        subscriber: bus.subscriber_with::<T>(SubscriberOptions::buffer(LOGGED_BUFFER).polled())?,
     }))
 }
 
 /// The logger's ports: one subscriber per logged topic.
 pub struct LoggerPorts {
     topics: Vec<Box<dyn LoggedTopic>>,
+    /// The paced drain interval's period ([`PACED_DRAIN_PERIOD`] or [`BUSY_DRAIN_PERIOD`]).
+    drain_period: std::cell::Cell<std::time::Duration>,
 }
 
 /// The logger process: the log writer and the CAN recording.
@@ -171,12 +186,16 @@ impl LoggerProcess {
                 previous_tick_ns: None,
                 interface,
             },
-            LoggerPorts { topics },
+            LoggerPorts {
+                topics,
+                drain_period: std::cell::Cell::new(BUSY_DRAIN_PERIOD),
+            },
         ))
     }
 
-    /// Writes every queued sample; the time of the newest clock tick among them, if any.
-    fn write_pass(&mut self, ports: &LoggerPorts, io: &Io) -> anyhow::Result<Option<u64>> {
+    /// Writes every queued sample; the time of the newest clock tick among them, if any, and
+    /// the most samples taken from one topic.
+    fn write_pass(&mut self, ports: &LoggerPorts, io: &Io) -> anyhow::Result<(Option<u64>, usize)> {
         let writer = self
             .writer
             .as_mut()
@@ -184,8 +203,9 @@ impl LoggerProcess {
         let candump = &mut self.candump;
         let mut newest_tick = None;
         let mut failure = None;
+        let mut most = 0;
         for topic in &ports.topics {
-            topic.drain(&mut |record| {
+            let taken = topic.drain(&mut |record| {
                 if let LogRecord::SimClock(tick) = &record {
                     newest_tick = Some(tick.header.time_ns);
                 }
@@ -197,8 +217,9 @@ impl LoggerProcess {
                     failure.get_or_insert(e);
                 }
             })?;
+            most = most.max(taken);
         }
-        failure.map_or(Ok(newest_tick), |e| Err(e.into()))
+        failure.map_or(Ok((newest_tick, most)), |e| Err(e.into()))
     }
 }
 
@@ -207,14 +228,14 @@ impl Node for LoggerProcess {
 
     fn wake_on<'a>(
         &mut self,
-        _ports: &'a LoggerPorts,
+        ports: &'a LoggerPorts,
         wake: &mut WakeOn<'_, '_, 'a>,
     ) -> anyhow::Result<()> {
-        wake.interval(if self.lockstep {
-            LOCKSTEP_DRAIN_PERIOD
+        if self.lockstep {
+            wake.interval(LOCKSTEP_DRAIN_PERIOD)?;
         } else {
-            PACED_DRAIN_PERIOD
-        })?;
+            wake.variable_interval(&ports.drain_period)?;
+        }
         if self.interface.is_some() {
             wake.interval(crate::can_gateway::POLL_PERIOD)?;
         }
@@ -225,7 +246,16 @@ impl Node for LoggerProcess {
         if let Some(recording) = self.interface.as_mut() {
             recording.drain()?;
         }
-        match self.write_pass(ports, io)? {
+        let (newest_tick, most) = self.write_pass(ports, io)?;
+        if !self.lockstep {
+            let period = &ports.drain_period;
+            if period.get() == BUSY_DRAIN_PERIOD && most <= RELAX_BELOW {
+                period.set(PACED_DRAIN_PERIOD);
+            } else if period.get() == PACED_DRAIN_PERIOD && most > TIGHTEN_ABOVE {
+                period.set(BUSY_DRAIN_PERIOD);
+            }
+        }
+        match newest_tick {
             // Everything published before tick k's clock sample is queued by now; one more pass
             // collects what landed in subscribers drained before the clock's.
             Some(t_ns) if self.lockstep && t_ns > 0 => {

@@ -230,33 +230,27 @@ impl Node for PlantProcess {
         ports: &'a PlantPorts,
         wake: &mut WakeOn<'_, '_, 'a>,
     ) -> anyhow::Result<()> {
-        match &ports.commands {
-            // Lockstep: one wake-up a tick, not one per command. The controller publishes a
-            // cycle's commands in one go, thrusters, wheels, then the CMG last (each in shared
-            // memory before its notification), so when the CMG command wakes the plant the
-            // others of the tick are there; `on_wake` takes them all, and the plant advances
-            // only once every command of the tick is in, as before.
-            CommandPorts::Direct { cmg, .. } if wake.mode() == ClockMode::Lockstep => {
-                wake.data(cmg)?;
+        // Paced: the plant advances on its own interval and integrates the commands that
+        // answer the current tick; `on_wake` drains them at that wake-up, so waking for each
+        // as it arrives (two or three wake-ups a tick) changed nothing but the CPU.
+        if wake.mode() == ClockMode::Lockstep {
+            match &ports.commands {
+                // One wake-up a tick, not one per command. The controller publishes a cycle's
+                // commands in one go, thrusters, wheels, then the CMG last (each in shared
+                // memory before its ring), so when the CMG command wakes the plant the others
+                // of the tick are there; `on_wake` takes them all, and the plant advances only
+                // once every command of the tick is in.
+                CommandPorts::Direct { cmg, .. } => {
+                    wake.data(cmg)?;
+                }
+                CommandPorts::Applied { wheels, cmg } => {
+                    wake.data(wheels)?;
+                    wake.data(cmg)?;
+                }
             }
-            CommandPorts::Direct { wheels, cmg } => {
-                wake.data(wheels)?;
-                wake.data(cmg)?;
-            }
-            CommandPorts::Applied { wheels, cmg } => {
-                wake.data(wheels)?;
-                wake.data(cmg)?;
-            }
-        }
-        match &ports.thrusters {
-            Some(ThrusterPorts::Direct { .. }) if wake.mode() == ClockMode::Lockstep => {}
-            Some(ThrusterPorts::Direct { commands, .. }) => {
-                wake.data(commands)?;
-            }
-            Some(ThrusterPorts::Applied { applied }) => {
+            if let Some(ThrusterPorts::Applied { applied }) = &ports.thrusters {
                 wake.data(applied)?;
             }
-            None => {}
         }
         if wake.mode() == ClockMode::Paced {
             self.pace = Some(wake.interval(self.period)?);

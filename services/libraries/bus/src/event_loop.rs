@@ -94,6 +94,12 @@ pub enum LoopExit {
 /// lands between the check and the sleep.
 pub const MAX_SLEEP: Duration = Duration::from_millis(500);
 
+/// How late, in heartbeat periods, a heartbeat may go out while it waits for a wake-up the
+/// process has anyway: at most 1.5 periods between heartbeats (750 ms with the pipeline's
+/// 500 ms), well within the launcher's 1.5-s hang timeout. Waking for the heartbeat alone
+/// cost every pipeline process two wake-ups a second of its paced CPU.
+pub const HEARTBEAT_SLACK: f64 = 0.5;
+
 /// How soon a loop looks again at a timer that was due but had nothing to fire.
 const OVERDUE_RECHECK: Duration = Duration::from_millis(1);
 
@@ -110,6 +116,8 @@ struct Attachment<'a> {
     kind: Kind<'a>,
     /// Intervals and the heartbeat: the period and the next time it is due.
     period: Option<Duration>,
+    /// An interval whose period its owner changes ([`EventLoop::on_variable_interval`]).
+    variable_period: Option<&'a Cell<Duration>>,
     next_due: Cell<Option<Instant>>,
     /// A subscriber attached with a deadline: the deadline and when the last miss was reported.
     deadline: Option<Duration>,
@@ -125,6 +133,7 @@ impl<'a> Attachment<'a> {
         Self {
             kind,
             period: None,
+            variable_period: None,
             next_due: Cell::new(None),
             deadline: None,
             last_miss: Cell::new(None),
@@ -143,11 +152,20 @@ impl<'a> Attachment<'a> {
         anchor.checked_add(deadline)
     }
 
-    /// The next time this attachment has something to do without a ring.
+    /// The next time this attachment has something to do without a ring. A heartbeat is due
+    /// at `next_due` but goes out with the first wake-up after it, whatever its reason; the
+    /// loop wakes for it alone only [`HEARTBEAT_SLACK`] of a period later. A process woken
+    /// by its data more often than that never wakes for its heartbeat.
     fn next_timer(&self) -> Option<Instant> {
         match self.kind {
             Kind::Data(port) => self.deadline_due(port),
-            Kind::Interval | Kind::Heartbeat(_) => self.next_due.get(),
+            Kind::Interval => self.next_due.get(),
+            Kind::Heartbeat(_) => {
+                let slack = self
+                    .period
+                    .map_or(Duration::ZERO, |p| p.mul_f64(HEARTBEAT_SLACK));
+                self.next_due.get().and_then(|due| due.checked_add(slack))
+            }
         }
     }
 }
@@ -257,6 +275,9 @@ impl<'w, 'a> EventLoop<'w, 'a> {
                 });
             }
         }
+        // Samples published before this are found by the first round, which looks at every
+        // subscriber whatever the doorbell says.
+        subscriber.start_ringing();
         let mut attachment = Attachment::new(Kind::Data(subscriber));
         attachment.deadline = deadline;
         Ok(self.push(attachment))
@@ -307,6 +328,18 @@ impl<'w, 'a> EventLoop<'w, 'a> {
     /// served once, late, and the next one is a period after it).
     pub fn on_interval(&mut self, period: Duration) -> Result<SourceId, BusError> {
         self.attach_periodic(Kind::Interval, period)
+    }
+
+    /// Wakes with [`Wake::Tick`] every `period`, read anew at each tick: the owner may change it
+    /// from any callback, and the next tick is then the new period after the callback returned
+    /// (no catching up). A zero period counts as one millisecond.
+    pub fn on_variable_interval(
+        &mut self,
+        period: &'a Cell<Duration>,
+    ) -> Result<SourceId, BusError> {
+        let source = self.attach_periodic(Kind::Interval, variable(period))?;
+        self.attachments[source.0].variable_period = Some(period);
+        Ok(source)
     }
 
     /// Publishes `heartbeat` now and then every [`HeartbeatPublisher::period`], without calling
@@ -488,6 +521,11 @@ impl<'w, 'a> EventLoop<'w, 'a> {
             };
             handled = true;
             let flow = on_wake(wake);
+            if let (Wake::Tick(_), Some(period)) = (wake, attachment.variable_period) {
+                attachment
+                    .next_due
+                    .set(Instant::now().checked_add(variable(period)));
+            }
             if matches!(wake, Wake::Data(_)) {
                 self.handled_data();
             }
@@ -604,6 +642,19 @@ impl<'w, 'a> EventLoop<'w, 'a> {
                 return Ok(Polled::Nothing);
             }
             std::thread::yield_now();
+        }
+    }
+}
+
+/// The period of a variable interval now (at least 1 ms: a zero period would spin).
+fn variable(period: &Cell<Duration>) -> Duration {
+    period.get().max(Duration::from_millis(1))
+}
+
+impl Drop for EventLoop<'_, '_> {
+    fn drop(&mut self) {
+        for (_, _, port) in self.data_attachments() {
+            port.stop_ringing();
         }
     }
 }

@@ -51,13 +51,18 @@
 //!   Zero-copy both ways: [`TopicPublisher::publish_with`] fills a sample loaned in shared
 //!   memory in place, [`TopicSubscriber::drain`] hands out every pending sample by reference and
 //!   releases it after the visit. After sending, a publisher rings the *doorbell* of every
-//!   process subscribed to the topic (one futex word per process in shared memory, see the
+//!   process waiting for the topic (one futex word per process in shared memory, see the
 //!   `doorbell` module): one wake-up per consumer, however many of its topics were published.
+//!   A subscriber counts as waiting only while it is attached to an event loop
+//!   ([`EventLoop::on_data`]); one drained along with another source, or on a timer, never
+//!   wakes its process.
 //! - [`EventLoop`]: waits on the process's doorbell with its subscribers, intervals and
 //!   deadlines; returns [`LoopExit::TerminationRequested`] on SIGINT/SIGTERM. How it waits is its
 //!   [`WaitStrategy`]: sleep until rung (default), or also poll the subscribers in short windows
 //!   where a sample is expected (`TESTBED_BUS_WAIT`, [`ENV_WAIT`]).
-//! - [`HeartbeatPublisher`]: the periodic [`ipc_types::Heartbeat`] of a process.
+//! - [`HeartbeatPublisher`]: the periodic [`ipc_types::Heartbeat`] of a process. An event loop
+//!   sends it with the first wake-up after it is due, and wakes for it alone only
+//!   [`HEARTBEAT_SLACK`] of a period later.
 //! - [`cleanup_dead_nodes`] (launcher, before a run) and [`remove_all`] (tests, after a run).
 //!
 //! # Threads
@@ -95,7 +100,9 @@ pub use config::{
     MAX_PREFIX_LEN, MAX_ROOT_LEN, ServiceLimits,
 };
 pub use doorbell::{MAX_CONSUMERS, MAX_TOPICS};
-pub use event_loop::{EventLoop, Flow, LoopExit, MAX_SLEEP, SourceId, Waiter, Wake};
+pub use event_loop::{
+    EventLoop, Flow, HEARTBEAT_SLACK, LoopExit, MAX_SLEEP, SourceId, Waiter, Wake,
+};
 pub use heartbeat::HeartbeatPublisher;
 pub use ports::{SubscriberOptions, TopicPublisher, TopicSubscriber};
 pub use private::{CollectReport, PrivateRun, collect_dead_runs};

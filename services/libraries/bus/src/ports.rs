@@ -26,9 +26,11 @@ pub struct SubscriberOptions {
     /// [`crate::ServiceLimits::history_size`] and `buffer_size`. 0 by default: a lockstep
     /// process must not see a sample from before it joined.
     pub history: usize,
-    /// Whether publishing on the topic rings this process's doorbell (true by default). A
-    /// subscriber that is only drained on a timer ([`polled`](Self::polled)) should not: every
-    /// ring that finds the process asleep on its doorbell costs a wake-up.
+    /// Whether the subscriber may wake an [`crate::EventLoop`] (true by default). Publishing
+    /// on the topic rings this process's doorbell only while the subscriber is attached to a
+    /// loop ([`crate::EventLoop::on_data`]): a subscriber drained inside another source's
+    /// callback or on a timer never wakes the process, since every ring that finds it asleep
+    /// costs a wake-up. A [`polled`](Self::polled) subscriber cannot be attached at all.
     pub wake_on_publish: bool,
 }
 
@@ -228,8 +230,10 @@ pub struct TopicSubscriber<T: Topic> {
     data: publish_subscribe::PortFactory<ipc::Service, T, ()>,
     bell: Rc<Bell>,
     bells: TopicBells,
-    /// Publishes ring `bell` ([`SubscriberOptions::wake_on_publish`]).
+    /// It may be attached to an event loop ([`SubscriberOptions::wake_on_publish`]).
     wakes: bool,
+    /// Event loops it is attached to: while there is one, publishes ring `bell`.
+    ringing: Cell<u32>,
     received: Cell<u64>,
     last_received: Cell<Option<Instant>>,
 }
@@ -273,15 +277,13 @@ impl<T: Topic> TopicSubscriber<T> {
             .map_err(|e| port_error("subscriber", T::NAME, Box::new(e)))?;
         let bells = bus.doorbells().topic(T::NAME)?;
         let bell = bus.bell().clone();
-        if options.wake_on_publish {
-            bell.subscribe(&bells);
-        }
         let this = Self {
             subscriber,
             data,
             bell,
             bells,
             wakes: options.wake_on_publish,
+            ringing: Cell::new(0),
             received: Cell::new(0),
             last_received: Cell::new(None),
         };
@@ -374,7 +376,8 @@ impl<T: Topic> TopicSubscriber<T> {
 
 impl<T: Topic> Drop for TopicSubscriber<T> {
     fn drop(&mut self) {
-        if self.wakes {
+        // Loops borrow their subscribers and so end first; this only guards the table.
+        for _ in 0..self.ringing.get() {
             self.bell.unsubscribe(&self.bells);
         }
     }
@@ -387,6 +390,10 @@ pub(crate) trait SubscriberPort {
     fn topic(&self) -> &'static str;
     /// Connects to new publishers; whether samples are pending.
     fn attach(&self) -> Result<bool, BusError>;
+    /// An event loop waits for it: publishes ring its doorbell from now on.
+    fn start_ringing(&self);
+    /// Undoes one [`start_ringing`](Self::start_ringing) (the loop has ended).
+    fn stop_ringing(&self);
     fn last_received(&self) -> Option<Instant>;
 }
 
@@ -399,6 +406,16 @@ impl<T: Topic> SubscriberPort for TopicSubscriber<T> {
     }
     fn attach(&self) -> Result<bool, BusError> {
         TopicSubscriber::attach(self)
+    }
+    fn start_ringing(&self) {
+        self.ringing.set(self.ringing.get() + 1);
+        self.bell.subscribe(&self.bells);
+    }
+    fn stop_ringing(&self) {
+        if self.ringing.get() > 0 {
+            self.ringing.set(self.ringing.get() - 1);
+            self.bell.unsubscribe(&self.bells);
+        }
     }
     fn last_received(&self) -> Option<Instant> {
         TopicSubscriber::last_received(self)

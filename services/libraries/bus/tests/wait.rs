@@ -8,7 +8,7 @@ use std::sync::mpsc;
 use std::thread;
 use std::time::{Duration, Instant};
 
-use ipc_types::{GyroSample, SampleHeader};
+use ipc_types::{GyroSample, InclinometerSample, SampleHeader};
 use testbed_bus::{
     Bus, BusConfig, BusError, Delivery, EventLoop, Flow, LoopExit, TopicPublisher, WaitStrategy,
     Waiter, Wake, remove_all,
@@ -423,6 +423,149 @@ fn samples_a_callback_leaves_pending_neither_repeat_nor_make_the_loop_spin() {
         assert_eq!(events.missed_deadlines(on_gyro), 0);
         // Sleeping, the loop uses well under a tenth of the 300 ms; spinning it would use them.
         assert!(cpu < Duration::from_millis(30), "{cpu:?} of CPU in 300 ms");
+    }
+    remove_all(&config).expect("remove_all");
+}
+
+#[test]
+fn only_a_subscriber_a_loop_waits_for_wakes_the_process() {
+    // A subscriber drained inside another source's callback (a gateway's commands, the
+    // plant's commands in a paced run) must not wake the process each time its topic is
+    // published: each such wake-up finds nothing to call back and only costs CPU.
+    let config = BusConfig::isolated();
+    {
+        let bus = Bus::open("consumer", &config).expect("bus");
+        let waited = bus.subscriber::<GyroSample>().expect("gyro subscriber");
+        let drained_along = bus
+            .subscriber_with::<InclinometerSample>(testbed_bus::SubscriberOptions::buffer(32))
+            .expect("inclinometer subscriber");
+        let waiter = Waiter::new().expect("waiter");
+        let mut events = EventLoop::with_wait_strategy(&waiter, WaitStrategy::Block);
+        let on_gyro = events.on_data(&waited).expect("attach");
+
+        let publisher_config = config.clone();
+        let (ready_tx, ready_rx) = mpsc::channel::<()>();
+        let (ports_tx, ports_rx) = mpsc::channel::<()>();
+        let publisher = thread::spawn(move || -> Result<(), BusError> {
+            let bus = Bus::open("publisher", &publisher_config)?;
+            let inclinometer = bus.publisher::<InclinometerSample>()?;
+            let gyro_publisher = bus.publisher::<GyroSample>()?;
+            let _ = ports_tx.send(());
+            let _ = ready_rx.recv_timeout(HANG_GUARD);
+            // Apart enough that the consumer is asleep for each.
+            for i in 0..20 {
+                inclinometer.publish(&InclinometerSample {
+                    header: SampleHeader::new(i, i, SampleHeader::VALID),
+                    ..InclinometerSample::default()
+                })?;
+                thread::sleep(Duration::from_millis(5));
+            }
+            gyro_publisher.publish(&gyro(1))?;
+            let _ = ready_rx.recv_timeout(HANG_GUARD);
+            Ok(())
+        });
+        // A new publisher rings its topic's waiting subscribers (they connect to it): the
+        // ports exist before the loop first looks, so that ring is not a wake-up.
+        ports_rx.recv_timeout(HANG_GUARD).expect("publisher ports");
+        ready_tx.send(()).expect("start");
+        let (mut gyros, mut inclinations) = (0, 0);
+        let begin = Instant::now();
+        while gyros == 0 {
+            assert!(
+                begin.elapsed() < HANG_GUARD,
+                "the gyro sample never woke the loop"
+            );
+            events
+                .run_once(Duration::from_secs(1), |wake| {
+                    assert_eq!(wake, Wake::Data(on_gyro));
+                    gyros += waited.drain(|_| {}).expect("drain gyro");
+                    inclinations += drained_along.drain(|_| {}).expect("drain inclinometer");
+                    Flow::Continue
+                })
+                .expect("event loop");
+        }
+        let _ = ready_tx.send(());
+        publisher
+            .join()
+            .expect("publisher thread")
+            .expect("publisher");
+        assert_eq!((gyros, inclinations), (1, 20), "every sample is taken");
+        let stats = events.wait_stats();
+        assert_eq!(
+            (stats.woken, stats.stale_notifications),
+            (1, 0),
+            "one wake-up, for the gyro; none for the 20 inclinometer samples: {stats:?}"
+        );
+    }
+    remove_all(&config).expect("remove_all");
+}
+
+#[test]
+fn heartbeats_ride_on_other_wake_ups_and_still_come_when_nothing_else_does() {
+    // A heartbeat goes out with the first wake-up after it is due, and on its own
+    // HEARTBEAT_SLACK of a period later when nothing wakes the loop. Bound checked: no gap
+    // between heartbeats longer than 1.5 periods plus 40 ms of scheduling allowance, with
+    // data every 20 ms (first half) and with none (second half).
+    const PERIOD: Duration = Duration::from_millis(100);
+    const RUN: Duration = Duration::from_millis(1600);
+    let config = BusConfig::isolated();
+    {
+        let bus = Bus::open("beating", &config).expect("bus");
+        let sub = bus.subscriber::<GyroSample>().expect("subscriber");
+        let heartbeat = bus.heartbeat(PERIOD).expect("heartbeat");
+        let waiter = Waiter::new().expect("waiter");
+        let mut events = EventLoop::with_wait_strategy(&waiter, WaitStrategy::Block);
+        events.on_data(&sub).expect("attach");
+        events.with_heartbeat(&heartbeat).expect("heartbeat");
+
+        let watcher_config = config.clone();
+        let (done_tx, done_rx) = mpsc::channel::<()>();
+        let watcher = thread::spawn(move || -> Result<Vec<Instant>, BusError> {
+            let bus = Bus::open("watcher", &watcher_config)?;
+            let heartbeats = bus.subscriber_with::<ipc_types::Heartbeat>(
+                testbed_bus::SubscriberOptions::buffer(64).polled(),
+            )?;
+            let publisher = bus.publisher::<GyroSample>()?;
+            let mut seen = Vec::new();
+            let begin = Instant::now();
+            let mut next_sample = begin;
+            let mut i = 0;
+            while done_rx.try_recv().is_err() && begin.elapsed() < HANG_GUARD {
+                let now = Instant::now();
+                if now < begin + RUN / 2 && now >= next_sample {
+                    i += 1;
+                    publisher.publish(&gyro(i))?;
+                    next_sample += Duration::from_millis(20);
+                }
+                if heartbeats.drain(|_| {})? > 0 {
+                    seen.push(now);
+                }
+                thread::sleep(Duration::from_millis(2));
+            }
+            Ok(seen)
+        });
+        let begin = Instant::now();
+        while begin.elapsed() < RUN {
+            events
+                .run_once(RUN, |_| {
+                    sub.drain(|_| {}).expect("drain");
+                    Flow::Continue
+                })
+                .expect("event loop");
+        }
+        done_tx.send(()).expect("stop the watcher");
+        let seen = watcher.join().expect("watcher thread").expect("watcher");
+        assert!(seen.len() >= 8, "{} heartbeats in {RUN:?}", seen.len());
+        let longest = seen
+            .windows(2)
+            .map(|w| w[1] - w[0])
+            .max()
+            .expect("two heartbeats");
+        assert!(
+            longest
+                <= PERIOD.mul_f64(1.0 + testbed_bus::HEARTBEAT_SLACK) + Duration::from_millis(40),
+            "longest gap between heartbeats {longest:?} (period {PERIOD:?})"
+        );
     }
     remove_all(&config).expect("remove_all");
 }

@@ -118,6 +118,15 @@ impl<'a> WakeOn<'_, '_, 'a> {
         self.events.on_interval(period)
     }
 
+    /// Wake with [`Wake::Tick`] every `period` of wall time, read anew at each tick: the node
+    /// changes it in `on_wake` (see [`EventLoop::on_variable_interval`]).
+    pub fn variable_interval(
+        &mut self,
+        period: &'a std::cell::Cell<Duration>,
+    ) -> Result<SourceId, BusError> {
+        self.events.on_variable_interval(period)
+    }
+
     /// Who owns time in this run.
     pub fn mode(&self) -> ClockMode {
         self.mode

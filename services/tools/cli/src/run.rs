@@ -555,7 +555,9 @@ fn supervise_launcher(
             .spawn(move || print_ground_info(&info));
     }
     let status = loop {
-        match signals.wait(Some(std::time::Duration::from_millis(200))) {
+        // SIGCHLD ends the wait as soon as the launcher exits; the timeout is only a fallback
+        // (each wake-up of this loop is CPU of the run, five a second at 200 ms).
+        match signals.wait(Some(std::time::Duration::from_secs(1))) {
             Ok(Some(signal)) if signal != sys::SIGCHLD => {
                 // SAFETY: kill(2) on our own child, not yet reaped (its pid cannot be reused).
                 unsafe { libc::kill(launcher_pid, signal) };
