@@ -10,7 +10,9 @@
 //! 2. **Significance beside the unexplained effect.** The cause must still beat the selection's
 //!    threshold (`max(k ln N, χ²_k(1 − alpha))` on the likelihood ratio of the fit data) when
 //!    the unexplained terms are in the model: a library cause that only stood in for an
-//!    effect of another form is dropped.
+//!    effect of another form is dropped. Torque causes must beat it by the likelihood ratio
+//!    (independent residuals) and by the cluster-robust Wald statistic of their parameters
+//!    (residuals correlated within a segment of the torque channel, as the search assumes).
 //!
 //! Torque causes are linear in the torque channel; sensor causes are linearised through the
 //! attitude filter (forward differences, one filter run per parameter) and tested on the
@@ -594,13 +596,9 @@ fn with_offsets(
     out
 }
 
-/// Cluster-robust (sandwich) Wald statistic `θ_Sᵀ V_SS⁻¹ θ_S` of the parameters `idx` of the
-/// joint torque fit `f` (of the rows `keep` accepts, every named cause's columns, then
-/// `extra`): `V = A (Σ_c s_c s_cᵀ) A` with `A = (XᵀX)⁻¹` and `s_c` the sum of `x_r e_r` over
-/// the rows of cluster c (a segment of the torque channel, its three axes). Under the null
-/// (the parameters are zero) it is χ² on `|idx|` degrees of freedom for residuals correlated
-/// within a segment and independent between segments, as the sparse search assumes. `None`
-/// when `V_SS` cannot be inverted.
+/// Cluster-robust Wald statistic ([`crate::stats::LsFit::cluster_robust_wald`]) of the
+/// parameters `idx` of the joint torque fit `f` (of the rows `keep` accepts, the columns `cols`,
+/// then `extra`); the clusters are the torque channel's segments (their three axes together).
 fn cluster_robust_wald(
     fit: &SetFit,
     cols: &[(Option<Cause>, usize)],
@@ -612,11 +610,11 @@ fn cluster_robust_wald(
 ) -> Option<f64> {
     let ch = &fit.state.torque;
     let p = cols.len() + extra.len();
-    if f.theta.len() != p || idx.is_empty() {
+    if f.theta.len() != p {
         return None;
     }
-    let mut meat = DMatrix::<f64>::zeros(p, p);
     let mut row = vec![0.0; p];
+    let mut scores = Vec::with_capacity(ch.segments.len());
     for seg in &ch.segments {
         let mut score = DVector::<f64>::zeros(p);
         for i in seg.clone().filter(|&i| keep(i)) {
@@ -639,14 +637,9 @@ fn cluster_robust_wald(
                 }
             }
         }
-        meat += &score * score.transpose();
+        scores.push(score);
     }
-    let v = &f.cov_unit * meat * &f.cov_unit;
-    let k = idx.len();
-    let v_ss = DMatrix::from_fn(k, k, |a, b| v[(idx[a], idx[b])]);
-    let theta = DVector::from_fn(k, |a, _| f.theta[idx[a]]);
-    let w = (theta.transpose() * v_ss.try_inverse()? * &theta)[(0, 0)];
-    w.is_finite().then_some(w)
+    f.cluster_robust_wald(&scores, idx)
 }
 
 /// Residual sum at the least-squares solution (`Σ y²` with no unknowns).
