@@ -385,7 +385,7 @@ pub(super) fn test_causes(
             kept: true,
             consistency: None,
             joint_lr: None,
-        joint_wald: None,
+            joint_wald: None,
             joint_threshold: None,
             verdict: "kept (selection test; the falsification tests cover torque and sensor causes, not yet wheel causes)"
                 .into(),
