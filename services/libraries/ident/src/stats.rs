@@ -45,6 +45,28 @@ impl LsFit {
             .map(|i| (self.cov_unit[(i, i)] * s2).max(0.0).sqrt())
             .collect()
     }
+
+    /// Cluster-robust (sandwich) Wald statistic `θ_Sᵀ V_SS⁻¹ θ_S` of the parameters `idx`, with
+    /// `V = A (Σ_c s_c s_cᵀ) A`, `A = (XᵀX)⁻¹` and `scores[c] = s_c = Σ_{r ∈ c} x_r e_r` the
+    /// score of cluster c at θ̂ (rows in the fit's units). Under the null (those parameters
+    /// zero) it is χ² on `|idx|` degrees of freedom when the residuals are independent between
+    /// clusters, whatever their correlation within one. `None` if `V_SS` cannot be inverted.
+    pub fn cluster_robust_wald(&self, scores: &[DVector<f64>], idx: &[usize]) -> Option<f64> {
+        let p = self.theta.len();
+        if idx.is_empty() || idx.iter().any(|&j| j >= p) {
+            return None;
+        }
+        let mut meat = DMatrix::<f64>::zeros(p, p);
+        for s in scores.iter().filter(|s| s.len() == p) {
+            meat += s * s.transpose();
+        }
+        let v = &self.cov_unit * meat * &self.cov_unit;
+        let k = idx.len();
+        let v_ss = DMatrix::from_fn(k, k, |a, b| v[(idx[a], idx[b])]);
+        let theta = DVector::from_fn(k, |a, _| self.theta[idx[a]]);
+        let w = (theta.transpose() * v_ss.try_inverse()? * &theta)[(0, 0)];
+        w.is_finite().then_some(w)
+    }
 }
 
 impl NormalEquations {
@@ -337,6 +359,65 @@ mod tests {
             ne.add(&[1.0, 0.0], i as f64);
         }
         assert!(ne.solve().is_none());
+    }
+
+    /// Rows repeated within a cluster carry no new information: the naive Wald statistic grows
+    /// with the repetition, the cluster-robust one does not (it is the same as for the rows
+    /// once, to rounding), and for independent rows it is close to the naive one.
+    #[test]
+    fn cluster_robust_wald_ignores_rows_repeated_within_a_cluster() {
+        let mut state = 2024u64;
+        let mut uniform = || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        let rows: Vec<(f64, f64, f64)> = (0..400)
+            .map(|_| {
+                let (a, b) = (uniform(), uniform());
+                (a, b, 0.05 * a + uniform())
+            })
+            .collect();
+        // (naive Wald of θ_1, cluster-robust Wald of θ_1) with each row `m` times in its cluster.
+        let wald = |m: usize| {
+            let mut ne = NormalEquations::new(2);
+            for &(a, b, y) in &rows {
+                for _ in 0..m {
+                    ne.add(&[a, b], y);
+                }
+            }
+            let fit = ne.solve().expect("determined");
+            let scores: Vec<DVector<f64>> = rows
+                .iter()
+                .map(|&(a, b, y)| {
+                    let e = y - fit.theta[0] * a - fit.theta[1] * b;
+                    DVector::from_vec(vec![a * e * m as f64, b * e * m as f64])
+                })
+                .collect();
+            let naive = fit.theta[0] * fit.theta[0] / fit.cov()[(0, 0)];
+            (
+                naive,
+                fit.cluster_robust_wald(&scores, &[0]).expect("invertible"),
+            )
+        };
+        let (naive1, robust1) = wald(1);
+        let (naive4, robust4) = wald(4);
+        assert!((naive4 / naive1 - 4.0).abs() < 0.05, "{naive1} {naive4}");
+        assert!(
+            (robust4 / robust1 - 1.0).abs() < 1e-9,
+            "{robust1} {robust4}"
+        );
+        assert!((robust1 / naive1 - 1.0).abs() < 0.3, "{robust1} {naive1}");
+        assert!(fit_none_for_bad_index());
+    }
+
+    fn fit_none_for_bad_index() -> bool {
+        let mut ne = NormalEquations::new(1);
+        ne.add(&[1.0], 1.0);
+        ne.add(&[1.0], 2.0);
+        let fit = ne.solve().expect("determined");
+        fit.cluster_robust_wald(&[], &[3]).is_none() && fit.cluster_robust_wald(&[], &[]).is_none()
     }
 
     #[test]

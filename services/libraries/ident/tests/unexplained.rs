@@ -210,6 +210,44 @@ fn heading_torque_alone_and_with_a_com_offset() {
     }
 }
 
+/// Beside an unexplained torque effect every torque cause selected is tested for significance
+/// (its likelihood ratio and cluster-robust Wald statistic beside the effect are reported), also
+/// when a constant torque acts on the effect's axis: its column there is the effect's offset.
+/// (Before, the offset was added a second time, that fit was singular, and every cause but the
+/// constant torque went untested.) Seed 70: a constant torque, a com offset and a heading torque;
+/// the constant torque's Z part takes the heading torque's mean, so only the names are checked.
+#[test]
+fn every_torque_cause_is_tested_beside_an_effect_on_a_constant_torque_axis() {
+    let t = truth(&format!(
+        "{HEADING}{COM}[effects.constant_torque]\ntorque_nm = [1.5e-3, -1.0e-3, 2.0e-3]\n"
+    ));
+    let id = identify_blind(&t, 70, 600.0);
+    print("constant torque + com offset + heading torque", &id);
+    let mut found = names(&id);
+    found.sort();
+    assert_eq!(found, vec!["com_offset", "constant_torque"]);
+    assert!(
+        id.report
+            .unexplained
+            .iter()
+            .any(|e| e.equation == "torque_z"),
+        "{:?}",
+        id.report.unexplained
+    );
+    for test in &id.report.cause_tests {
+        assert!(
+            test.joint_lr.is_some() && test.joint_wald.is_some() && test.joint_threshold.is_some(),
+            "{}: not tested beside the unexplained effect: {test:?}",
+            test.name
+        );
+        assert!(
+            !test.kept
+                || test.joint_lr.unwrap_or(0.0) > test.joint_threshold.unwrap_or(f64::INFINITY),
+            "{test:?}"
+        );
+    }
+}
+
 /// The extended model, written to TOML and read back, reproduces a drifting centre of mass that
 /// no library cause names: the same experiment (same seed, so the same sensor noise) run on the
 /// extended model follows the truth's wheel speeds (in closed loop the wheels take up the

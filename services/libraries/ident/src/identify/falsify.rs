@@ -10,7 +10,9 @@
 //! 2. **Significance beside the unexplained effect.** The cause must still beat the selection's
 //!    threshold (`max(k ln N, χ²_k(1 − alpha))` on the likelihood ratio of the fit data) when
 //!    the unexplained terms are in the model: a library cause that only stood in for an
-//!    effect of another form is dropped.
+//!    effect of another form is dropped. Torque causes must beat it by the likelihood ratio
+//!    (independent residuals) and by the cluster-robust Wald statistic of their parameters
+//!    (residuals correlated within a segment of the torque channel, as the search assumes).
 //!
 //! Torque causes are linear in the torque channel; sensor causes are linearised through the
 //! attitude filter (forward differences, one filter run per parameter) and tested on the
@@ -35,6 +37,10 @@ pub struct CauseTest {
     /// Likelihood ratio of the cause beside the unexplained terms, and its threshold (`None`:
     /// no unexplained torque term, the selection's test stands).
     pub joint_lr: Option<f64>,
+    /// The cluster-robust Wald statistic of the cause's parameters in the same joint fit
+    /// (torque causes; clusters are the torque channel's segments): the likelihood ratio
+    /// assumes independent residuals, and the cause must beat the threshold by both.
+    pub joint_wald: Option<f64>,
     pub joint_threshold: Option<f64>,
     /// In words: kept, or which test failed.
     pub verdict: String,
@@ -52,7 +58,9 @@ impl CauseTest {
             (Some(c), _, _) if c.p < 1.0 && self.verdict.starts_with("falsified") => {
                 (c.chi2 - c.dof as f64) / (2.0 * c.dof as f64).sqrt()
             }
-            (_, Some(lr), Some(th)) => 1.0 - lr / th.max(1e-300),
+            (_, Some(lr), Some(th)) => {
+                1.0 - lr.min(self.joint_wald.unwrap_or(f64::INFINITY)) / th.max(1e-300)
+            }
             _ => 0.0,
         }
     }
@@ -270,31 +278,63 @@ pub(super) fn test_causes(
                 kept = false;
                 verdict = falsified_text(c, alpha_consistency);
             }
-            let (mut joint_lr, mut joint_threshold) = (None, None);
+            let (mut joint_lr, mut joint_threshold, mut joint_wald) = (None, None, None);
             {
                 // Beside each unexplained effect its offset: a constant part of the cause on
-                // that axis cannot be told apart from it.
-                let mut extra1 = extra.clone();
-                if let Some(one) = candidates.names.iter().position(|n| *n == "1") {
-                    for axis in 0..3 {
-                        if extra.iter().any(|e| e.0 == axis) && !extra1.contains(&(axis, one)) {
-                            extra1.push((axis, one));
-                        }
-                    }
-                }
-                let (with1, _) = normal_equations(fit, &cols, &extra1, candidates, fit_rows, None);
-                let full = with1.solve().or(full.clone());
-                let (without, _) =
-                    normal_equations(fit, &cols, &extra1, candidates, fit_rows, Some(cause));
-                if let (Some(f), Some(w_rss)) = (&full, rss_of(&without)) {
+                // that axis cannot be told apart from it. A named constant torque's column on
+                // such an axis is that offset: in the constant torque's own test it is replaced
+                // by the offset (tested are its other axes), in the others' it stands for it
+                // (adding the offset again would make the model singular).
+                let effect_axes: Vec<usize> = extra.iter().map(|e| e.0).collect();
+                let cols_test: Vec<(Option<Cause>, usize)> = cols
+                    .iter()
+                    .copied()
+                    .filter(|&(c, col)| {
+                        !(cause == Cause::ConstantTorque
+                            && c == Some(cause)
+                            && effect_axes
+                                .iter()
+                                .any(|&a| ch.x.iter().any(|row| row[col][a] != 0.0)))
+                    })
+                    .collect();
+                let idx_test: Vec<usize> = (0..cols_test.len())
+                    .filter(|&j| cols_test[j].0 == Some(cause))
+                    .collect();
+                let extra_with = with_offsets(&extra, &cols_test, candidates, ch);
+                let (with1, _) =
+                    normal_equations(fit, &cols_test, &extra_with, candidates, fit_rows, None);
+                let (without, _) = normal_equations(
+                    fit,
+                    &cols_test,
+                    &extra_with,
+                    candidates,
+                    fit_rows,
+                    Some(cause),
+                );
+                if let (Some(f), Some(w_rss)) = (with1.solve(), rss_of(&without)) {
                     let (lr, threshold) =
-                        levels.joint(full_ne.rows() as f64, w_rss, f.rss, idx.len());
+                        levels.joint(with1.rows() as f64, w_rss, f.rss, idx.len());
+                    let wald = cluster_robust_wald(
+                        fit,
+                        &cols_test,
+                        &extra_with,
+                        candidates,
+                        fit_rows,
+                        &f,
+                        &idx_test,
+                    );
                     joint_lr = Some(lr);
                     joint_threshold = Some(threshold);
+                    joint_wald = wald;
                     if lr <= threshold && kept {
                         kept = false;
                         verdict = format!(
                             "dropped: not significant beside the other named causes and the unexplained effects (likelihood ratio {lr:.1} ≤ threshold {threshold:.1}); it stood in for an effect of another form or for a dropped cause"
+                        );
+                    } else if let Some(w) = wald.filter(|w| *w <= threshold && kept) {
+                        kept = false;
+                        verdict = format!(
+                            "dropped: not significant beside the other named causes and the unexplained effects once the residuals' correlation within a segment is allowed for (cluster-robust Wald statistic {w:.1} ≤ threshold {threshold:.1}; likelihood ratio {lr:.1}); it stood in for an effect of another form or for a dropped cause"
                         );
                     }
                 }
@@ -332,6 +372,7 @@ pub(super) fn test_causes(
                 kept,
                 consistency,
                 joint_lr,
+                joint_wald,
                 joint_threshold,
                 verdict,
             });
@@ -344,6 +385,7 @@ pub(super) fn test_causes(
             kept: true,
             consistency: None,
             joint_lr: None,
+            joint_wald: None,
             joint_threshold: None,
             verdict: "kept (selection test; the falsification tests cover torque and sensor causes, not yet wheel causes)"
                 .into(),
@@ -382,6 +424,7 @@ fn sensor_tests(
         kept: true,
         consistency: None,
         joint_lr: None,
+        joint_wald: None,
         joint_threshold: None,
         verdict: format!("kept (selection test; {why})"),
     };
@@ -515,6 +558,7 @@ fn sensor_tests(
             kept,
             consistency,
             joint_lr,
+            joint_wald: None,
             joint_threshold,
             verdict,
         });
@@ -527,6 +571,75 @@ fn falsified_text(c: &Consistency, alpha: f64) -> String {
         "falsified: its parameters differ between {} time blocks (χ² = {:.1} on {} degrees of freedom, p = {:.1e} < {:.0e}); a time- or state-dependent effect, not a constant one",
         c.blocks, c.chi2, c.dof, c.p, alpha
     )
+}
+
+/// The unexplained terms `extra` with each one's axis offset (`1`) added, except on an axis
+/// where a named constant torque's column in `cols` is that offset already.
+fn with_offsets(
+    extra: &[(usize, usize)],
+    cols: &[(Option<Cause>, usize)],
+    candidates: &TorqueCandidates,
+    ch: &crate::channels::TorqueChannel,
+) -> Vec<(usize, usize)> {
+    let mut out = extra.to_vec();
+    let Some(one) = candidates.names.iter().position(|n| *n == "1") else {
+        return out;
+    };
+    for axis in 0..3 {
+        let covered = cols.iter().any(|&(c, col)| {
+            c == Some(Cause::ConstantTorque) && ch.x.iter().any(|row| row[col][axis] != 0.0)
+        });
+        if extra.iter().any(|e| e.0 == axis) && !covered && !out.contains(&(axis, one)) {
+            out.push((axis, one));
+        }
+    }
+    out
+}
+
+/// Cluster-robust Wald statistic ([`crate::stats::LsFit::cluster_robust_wald`]) of the
+/// parameters `idx` of the joint torque fit `f` (of the rows `keep` accepts, the columns `cols`,
+/// then `extra`); the clusters are the torque channel's segments (their three axes together).
+fn cluster_robust_wald(
+    fit: &SetFit,
+    cols: &[(Option<Cause>, usize)],
+    extra: &[(usize, usize)],
+    candidates: &TorqueCandidates,
+    keep: impl Fn(usize) -> bool,
+    f: &crate::stats::LsFit,
+    idx: &[usize],
+) -> Option<f64> {
+    let ch = &fit.state.torque;
+    let p = cols.len() + extra.len();
+    if f.theta.len() != p {
+        return None;
+    }
+    let mut row = vec![0.0; p];
+    let mut scores = Vec::with_capacity(ch.segments.len());
+    for seg in &ch.segments {
+        let mut score = DVector::<f64>::zeros(p);
+        for i in seg.clone().filter(|&i| keep(i)) {
+            for axis in 0..3 {
+                let s = ch.sigma[axis];
+                for (j, &(_, col)) in cols.iter().enumerate() {
+                    row[j] = ch.x[i][col][axis] / s;
+                }
+                for (j, &(a, c)) in extra.iter().enumerate() {
+                    row[cols.len() + j] = if a == axis {
+                        candidates.values[i][c] / s
+                    } else {
+                        0.0
+                    };
+                }
+                let fitted: f64 = row.iter().zip(f.theta.iter()).map(|(x, t)| x * t).sum();
+                let e = ch.y[i][axis] / s - fitted;
+                for j in 0..p {
+                    score[j] += row[j] * e;
+                }
+            }
+        }
+        scores.push(score);
+    }
+    f.cluster_robust_wald(&scores, idx)
 }
 
 /// Residual sum at the least-squares solution (`Σ y²` with no unknowns).
