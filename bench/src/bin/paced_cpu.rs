@@ -5,6 +5,12 @@
 //!   the two runs) and the long run's total over its wall time, medians of `--repeats` pairs;
 //!   the `testbed` command itself (the launcher's parent, summary included) is counted from
 //!   this process's `RUSAGE_CHILDREN`;
+//! - the steady state of the long run, exactly: the CPU time every process of the run (and
+//!   `testbed run`) spent from 5 s after its start to 2 s before its end, from the kernel's
+//!   per-thread run time (`/proc/<pid>/task/<tid>/schedstat`, nanoseconds). The rusage times
+//!   above are sampled at the scheduler tick, coarse for processes that run 50 µs at a time,
+//!   and the marginal cost also holds what grows with the run's length after it (the summary
+//!   reading the log); this column is the running pipeline alone;
 //! - with `--baseline-bin-dir DIR` (the binaries of another build, e.g. the commit before),
 //!   the same runs of that build interleaved with this one's, and the ratio of the two;
 //! - the logger's per-record cost, side by side in one process: the log writer on records as
@@ -20,7 +26,7 @@ use clap::Parser;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::Command;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 use testbed_bench::{binary_dir, children_cpu, median, median_time};
 use testbed_log::{EncodedRecord, LogRecord, RunInfo, RunLog, RunLogWriter, WriterOptions};
 
@@ -48,6 +54,85 @@ struct Args {
 struct PacedRun {
     wall_s: f64,
     per_process: BTreeMap<String, f64>,
+    /// Steady state (long runs): fraction of one core per process, from schedstat.
+    steady: BTreeMap<String, f64>,
+}
+
+/// Where the steady-state window of a paced run of `seconds` lies: from 5 s after its start
+/// to 2 s before its end (none for runs shorter than 12 s).
+fn steady_window(seconds: f64) -> Option<(Duration, Duration)> {
+    (seconds >= 12.0).then(|| {
+        (
+            Duration::from_secs(5),
+            Duration::from_secs_f64(seconds - 2.0),
+        )
+    })
+}
+
+/// Run time (ns, all threads) of every process descended from `root`, by program name
+/// (`testbed-launch` as "launcher", `testbed` as "testbed run", as the CPU report names them).
+fn schedstat_tree(root: u32) -> BTreeMap<String, u64> {
+    let mut parent_of = Vec::new();
+    if let Ok(entries) = std::fs::read_dir("/proc") {
+        for entry in entries.flatten() {
+            let Some(pid) = entry
+                .file_name()
+                .to_str()
+                .and_then(|n| n.parse::<u32>().ok())
+            else {
+                continue;
+            };
+            // Field 4 of /proc/<pid>/stat, after the parenthesised command name.
+            let ppid = std::fs::read_to_string(entry.path().join("stat"))
+                .ok()
+                .and_then(|stat| {
+                    let after = &stat[stat.rfind(')')? + 1..];
+                    after.split_whitespace().nth(1)?.parse::<u32>().ok()
+                });
+            if let Some(ppid) = ppid {
+                parent_of.push((pid, ppid));
+            }
+        }
+    }
+    let mut tree = vec![root];
+    let mut i = 0;
+    while i < tree.len() {
+        let parent = tree[i];
+        tree.extend(
+            parent_of
+                .iter()
+                .filter(|(_, p)| *p == parent)
+                .map(|(c, _)| *c),
+        );
+        i += 1;
+    }
+    let mut by_name = BTreeMap::new();
+    for pid in tree {
+        let proc_dir = PathBuf::from(format!("/proc/{pid}"));
+        let Some(program) = std::fs::read(proc_dir.join("cmdline")).ok().and_then(|c| {
+            let argv0 = c.split(|&b| b == 0).next()?.to_vec();
+            let path = PathBuf::from(String::from_utf8(argv0).ok()?);
+            Some(path.file_name()?.to_string_lossy().into_owned())
+        }) else {
+            continue;
+        };
+        let name = match program.as_str() {
+            "testbed-launch" => "launcher".to_owned(),
+            "testbed" => "testbed run".to_owned(),
+            _ => program,
+        };
+        let mut ns = 0;
+        if let Ok(tasks) = std::fs::read_dir(proc_dir.join("task")) {
+            for task in tasks.flatten() {
+                ns += std::fs::read_to_string(task.path().join("schedstat"))
+                    .ok()
+                    .and_then(|t| t.split_whitespace().next()?.parse::<u64>().ok())
+                    .unwrap_or(0);
+            }
+        }
+        *by_name.entry(name).or_default() += ns;
+    }
+    by_name
 }
 
 impl PacedRun {
@@ -67,9 +152,10 @@ fn paced_run(build: &Build, scratch: &Path, seconds: f64) -> Result<PacedRun> {
     let report = scratch.join(format!("{}.cpu.tsv", build.name));
     let _ = std::fs::remove_file(&report);
     let testbed = build.bin_dir.join("testbed");
+    let stderr_path = scratch.join(format!("{}.stderr", build.name));
     let before = children_cpu().as_secs_f64();
     let start = Instant::now();
-    let out = Command::new(&testbed)
+    let mut child = Command::new(&testbed)
         .args([
             "run",
             "--paced",
@@ -80,14 +166,31 @@ fn paced_run(build: &Build, scratch: &Path, seconds: f64) -> Result<PacedRun> {
         .arg(&log)
         .env("RUST_LOG", "warn")
         .env("TESTBED_CPU_REPORT", &report)
-        .output()
+        .stdout(std::process::Stdio::null())
+        .stderr(std::fs::File::create(&stderr_path)?)
+        .spawn()
         .with_context(|| format!("running {}", testbed.display()))?;
+    let mut steady = BTreeMap::new();
+    if let Some((from, to)) = steady_window(seconds) {
+        std::thread::sleep(from.saturating_sub(start.elapsed()));
+        let first = schedstat_tree(child.id());
+        let first_at = Instant::now();
+        std::thread::sleep(to.saturating_sub(start.elapsed()));
+        let last = schedstat_tree(child.id());
+        let window_s = first_at.elapsed().as_secs_f64();
+        for (name, ns) in &last {
+            // A process that (re)started inside the window counts from zero.
+            let used = ns.saturating_sub(first.get(name).copied().unwrap_or(0));
+            steady.insert(name.clone(), used as f64 * 1e-9 / window_s);
+        }
+    }
+    let status = child.wait()?;
     let wall_s = start.elapsed().as_secs_f64();
-    if !out.status.success() {
+    if !status.success() {
         bail!(
             "{} run failed: {}",
             build.name,
-            String::from_utf8_lossy(&out.stderr)
+            std::fs::read_to_string(&stderr_path).unwrap_or_default()
         );
     }
     let all_s = children_cpu().as_secs_f64() - before;
@@ -108,6 +211,7 @@ fn paced_run(build: &Build, scratch: &Path, seconds: f64) -> Result<PacedRun> {
     Ok(PacedRun {
         wall_s,
         per_process,
+        steady,
     })
 }
 
@@ -118,6 +222,9 @@ struct BuildResult {
     marginal_all: f64,
     total_over_wall_all: f64,
     long_wall_s: f64,
+    /// Steady state of the long runs (schedstat), fraction of one core.
+    steady: BTreeMap<String, f64>,
+    steady_all: f64,
 }
 
 fn summarise(pairs: &[(PacedRun, PacedRun)]) -> BuildResult {
@@ -154,6 +261,22 @@ fn summarise(pairs: &[(PacedRun, PacedRun)]) -> BuildResult {
         ),
         total_over_wall_all: median(pairs.iter().map(|(_, l)| l.total_s() / l.wall_s).collect()),
         long_wall_s: median(pairs.iter().map(|(_, l)| l.wall_s).collect()),
+        steady: names
+            .iter()
+            .map(|name| {
+                let of = |l: &PacedRun| l.steady.get(name).copied().unwrap_or(0.0);
+                (
+                    name.clone(),
+                    median(pairs.iter().map(|(_, l)| of(l)).collect()),
+                )
+            })
+            .collect(),
+        steady_all: median(
+            pairs
+                .iter()
+                .map(|(_, l)| l.steady.values().sum::<f64>())
+                .collect(),
+        ),
     }
 }
 
@@ -273,6 +396,8 @@ fn main() -> Result<()> {
                 "cpu_fraction_of_one_core_over_wall": r.total_over_wall_all,
                 "per_process_marginal": r.marginal,
                 "per_process_over_wall": r.total_over_wall,
+                "steady_cpu_fraction_of_one_core": r.steady_all,
+                "per_process_steady": r.steady,
             })
         };
         let report = serde_json::json!({
@@ -295,45 +420,65 @@ fn main() -> Result<()> {
         "paced runs of {} s and {} s, {} pairs per build; CPU in % of one core, medians",
         args.short, args.long, args.repeats
     );
-    print!("{:<20} {:>12} {:>12}", "process", "marginal", "over wall");
+    print!(
+        "{:<20} {:>12} {:>12} {:>8}",
+        "process", "marginal", "over wall", "steady"
+    );
     if base.is_some() {
-        print!(" {:>14} {:>14}", "baseline marg.", "baseline wall");
+        print!(
+            " {:>14} {:>14} {:>15}",
+            "baseline marg.", "baseline wall", "baseline steady"
+        );
     }
     println!();
     for (name, m) in &this.marginal {
         print!(
-            "{name:<20} {:>12.3} {:>12.3}",
+            "{name:<20} {:>12.3} {:>12.3} {:>8.3}",
             100.0 * m,
-            100.0 * this.total_over_wall[name]
+            100.0 * this.total_over_wall[name],
+            100.0 * this.steady.get(name).copied().unwrap_or(f64::NAN)
         );
         if let Some(b) = base {
             print!(
-                " {:>14.3} {:>14.3}",
+                " {:>14.3} {:>14.3} {:>15.3}",
                 100.0 * b.marginal.get(name).copied().unwrap_or(f64::NAN),
-                100.0 * b.total_over_wall.get(name).copied().unwrap_or(f64::NAN)
+                100.0 * b.total_over_wall.get(name).copied().unwrap_or(f64::NAN),
+                100.0 * b.steady.get(name).copied().unwrap_or(f64::NAN)
             );
         }
         println!();
     }
     print!(
-        "{:<20} {:>12.3} {:>12.3}",
+        "{:<20} {:>12.3} {:>12.3} {:>8.3}",
         "all",
         100.0 * this.marginal_all,
-        100.0 * this.total_over_wall_all
+        100.0 * this.total_over_wall_all,
+        100.0 * this.steady_all
     );
     if let Some(b) = base {
         print!(
-            " {:>14.3} {:>14.3}",
+            " {:>14.3} {:>14.3} {:>15.3}",
             100.0 * b.marginal_all,
-            100.0 * b.total_over_wall_all
+            100.0 * b.total_over_wall_all,
+            100.0 * b.steady_all
         );
     }
     println!();
+    let pipeline = |r: &BuildResult| r.steady_all - r.steady.get("testbed run").unwrap_or(&0.0);
+    println!(
+        "steady state without `testbed run` (the launcher and its processes): {:.3} %",
+        100.0 * pipeline(this)
+    );
     if let Some(b) = base {
         println!(
-            "baseline / this build: {:.2}× (marginal), {:.2}× (over wall)",
+            "baseline / this build: {:.2}× (marginal), {:.2}× (over wall), {:.2}× (steady), \
+             {:.2}× (steady, launcher and its processes: {:.3} % vs {:.3} %)",
             b.marginal_all / this.marginal_all,
-            b.total_over_wall_all / this.total_over_wall_all
+            b.total_over_wall_all / this.total_over_wall_all,
+            b.steady_all / this.steady_all,
+            pipeline(b) / pipeline(this),
+            100.0 * pipeline(b),
+            100.0 * pipeline(this)
         );
     }
     println!(
