@@ -50,8 +50,9 @@ mod report;
 mod residuals;
 mod sensor;
 mod unexplained;
+mod wheel;
 
-pub use falsify::{CauseTest, Consistency};
+pub use falsify::{CauseTest, Consistency, Whiteness};
 pub use sensor::SensorCorrection;
 pub use unexplained::UnexplainedEffect;
 
