@@ -520,6 +520,10 @@ fn identify_pass(
             }
         }
     }
+    // With unexplained wheel terms, the named wheel causes' linear values (torque scale,
+    // friction levels) take the search's refit beside the terms (its forced columns; the delay
+    // and the Stribeck speed, shared or nonlinear, stay as fitted).
+    wheel::refit_beside_terms(&mut current, &named, &effects);
     let selected = named;
 
     let causes: Vec<CauseReport> = selected

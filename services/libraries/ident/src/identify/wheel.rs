@@ -548,3 +548,40 @@ fn whiteness(
     }
     worst
 }
+
+/// The named wheel causes of `fit` with their linear values (`wheel_torque_scale`,
+/// `wheel_friction`'s levels) changed by the unexplained wheel effects' refit of their forced
+/// columns (`refitted_named`: the change that removes the residual beside the terms, and its
+/// cluster-robust standard error); the configuration updated with them. `actuator_delay` (one
+/// value for three equations) and the Stribeck speed (not a column) stay as fitted.
+pub(super) fn refit_beside_terms(fit: &mut SetFit, named: &[Cause], effects: &[UnexplainedEffect]) {
+    for e in effects.iter().filter(|e| e.equation.starts_with("wheel_")) {
+        for term in &e.refitted_named {
+            for &cause in named
+                .iter()
+                .filter(|c| matches!(c, Cause::WheelTorqueScale | Cause::WheelFriction))
+            {
+                let Some(i) = (0..cause.len()).find(|&i| cause.value_name(i) == term.name) else {
+                    continue;
+                };
+                if !(term.value.is_finite() && term.stderr.is_finite()) {
+                    continue;
+                }
+                if let Some(f) = fit.causes.iter_mut().find(|f| f.cause == cause) {
+                    let (lo, hi) = cause.bounds(i);
+                    f.values[i] = (f.values[i] + term.value).clamp(lo, hi);
+                    f.stderr[i] = term.stderr;
+                    // Without a Stribeck term the breakaway is the larger Coulomb level.
+                    if cause == Cause::WheelFriction {
+                        for w in 0..3 {
+                            if f.values[12 + w] < 0.02 {
+                                f.values[9 + w] = f.values[w].max(f.values[3 + w]);
+                            }
+                        }
+                    }
+                    cause.apply(&mut fit.config, &f.values);
+                }
+            }
+        }
+    }
+}
