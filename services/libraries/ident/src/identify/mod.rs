@@ -26,12 +26,13 @@
 //!    component and overall on the held-out blocks, or with `folds` ≥ 2 on every fold predicted
 //!    by the extended model fitted without it; gain = nominal / extended.
 //!
-//! 5. **Falsify the named causes** (`falsify`): each must have the same parameters in disjoint
-//!    time blocks and stay significant beside the other causes and the unexplained effects;
+//! 5. **Falsify the named causes** (`falsify`, wheel causes in `wheel`): each must have the same
+//!    parameters in disjoint time blocks and stay significant beside the other causes and the
+//!    unexplained effects (a wheel cause also needs white residuals of its wheel equation);
 //!    the worst failure is dropped and the rest refitted and tested again.
 //! 6. **Find the form of what remains** (`unexplained`, [`crate::sparse`]): sparse regression of
-//!    each equation's residual (torque per axis, each innovation component) on a fixed library
-//!    of candidate functions of the state and time, with k-fold cross-validation and
+//!    each equation's residual (torque per axis, each innovation component, each wheel's spin
+//!    equation: `wheel`) on a fixed library of candidate functions of the state and time, with k-fold cross-validation and
 //!    cluster-robust standard errors; what it finds is reported as an unexplained effect.
 //! 7. **Second pass** (`sensor`): when the field innovations hold an unexplained effect that
 //!    is a function of the attitude (a soft iron), the readings are corrected with it (fitted
