@@ -585,3 +585,65 @@ pub(super) fn refit_beside_terms(fit: &mut SetFit, named: &[Cause], effects: &[U
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::{DMatrix, DVector};
+
+    /// Standard normal samples from a fixed linear congruential generator (Box–Muller).
+    fn normals(n: usize, mut state: u64) -> Vec<f64> {
+        let mut uniform = move || {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            ((state >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+        };
+        (0..n)
+            .map(|_| {
+                let (a, b) = (uniform(), uniform());
+                (-2.0 * a.ln()).sqrt() * (std::f64::consts::TAU * b).cos()
+            })
+            .collect()
+    }
+
+    fn rows(y: &[f64]) -> Vec<LinRow> {
+        y.iter()
+            .enumerate()
+            .map(|(i, &y)| LinRow {
+                wheel: 0,
+                k: 2 * i,
+                t: 0.2 * i as f64,
+                y,
+                named: Vec::new(),
+                index: i,
+            })
+            .collect()
+    }
+
+    /// White residuals pass, residuals correlated from row to row (AR(1), coefficient 0.3,
+    /// Ljung–Box expected about 2000 × 0.09 ≈ 180 on 10 lags) fail at 1e-3; seed fixed.
+    #[test]
+    fn whiteness_tells_white_from_correlated_residuals() {
+        let none = crate::stats::LsFit {
+            theta: DVector::zeros(0),
+            cov_unit: DMatrix::zeros(0, 0),
+            rss: 0.0,
+            n: 2000,
+        };
+        let x_of = |_: &LinRow, _: &[usize], _: &[(usize, usize)]| Vec::new();
+        let keep = |_: &LinRow| true;
+        let u = normals(2000, 7);
+        let white = whiteness(&rows(&u), &none, &[], &[], &x_of, &keep, &[0]).expect("tested");
+        assert!(white.p > 1e-3, "{white:?}");
+        let mut ar = u.clone();
+        for i in 1..ar.len() {
+            ar[i] = 0.3 * ar[i - 1] + u[i];
+        }
+        let red = whiteness(&rows(&ar), &none, &[], &[], &x_of, &keep, &[0]).expect("tested");
+        println!("white: {white:?}\nAR(1): {red:?}");
+        assert!(red.p < 1e-3 && red.ljung_box > 100.0, "{red:?}");
+        // Too few rows for the lags: not determined.
+        assert!(whiteness(&rows(&u[..20]), &none, &[], &[], &x_of, &keep, &[0]).is_none());
+    }
+}
