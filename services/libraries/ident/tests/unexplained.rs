@@ -586,8 +586,9 @@ fn wheel_drag_alone_and_with_a_wheel_torque_scale() {
     }
 }
 
-/// How often the checks above hold on other seeds (ignored: 28 identifications; prints the
-/// share per scenario; run with `--ignored --nocapture`).
+/// How often the checks above hold on other seeds (ignored: 36 identifications; prints the
+/// share per scenario; run with `--ignored --nocapture`, `IDENT_SCENARIO=<text>` for the
+/// scenarios whose label contains it).
 #[test]
 #[ignore]
 fn out_of_library_checks_over_more_seeds() {
@@ -657,8 +658,29 @@ fn out_of_library_checks_over_more_seeds() {
             heading.to_vec(),
             1.5,
         ),
+        (
+            "wheel drag",
+            WHEEL_DRAG.into(),
+            vec![],
+            vec!["wheel_y"],
+            vec!["n·|n|", "n²"],
+            1.1,
+        ),
+        (
+            "wheel drag + wheel scale",
+            format!("{WHEEL_DRAG}{WHEEL_SCALE}"),
+            vec![Cause::WheelTorqueScale],
+            vec!["wheel_y"],
+            vec!["n·|n|", "n²"],
+            1.1,
+        ),
     ];
-    for (label, effects, library, equations, regressors, gain) in &scenarios {
+    // `IDENT_SCENARIO=<text>`: only the scenarios whose label contains it.
+    let only = std::env::var("IDENT_SCENARIO").ok();
+    for (label, effects, library, equations, regressors, gain) in scenarios
+        .iter()
+        .filter(|s| only.as_deref().is_none_or(|o| s.0.contains(o)))
+    {
         let t = truth(effects);
         let mut ok = 0;
         for seed in 61..65 {
