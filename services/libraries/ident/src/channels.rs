@@ -413,6 +413,15 @@ pub fn friction_integral(model: &WheelFrictionModel, row: &WheelInterval) -> f64
         * dt
 }
 
+/// `∫ f(n(t)) dt` over an interval with n linear from `n0` to `n1` (4-point Gauss–Legendre),
+/// unit of f times s.
+pub fn speed_integral(row: &WheelInterval, f: impl Fn(f64) -> f64) -> f64 {
+    GL4.iter()
+        .map(|(s, w)| w * f(row.n0 + s * (row.n1 - row.n0)))
+        .sum::<f64>()
+        * (row.t1 - row.t0)
+}
+
 /// Regressors of the friction parameters `[coulomb_pos, coulomb_neg, stribeck, viscous]` for a
 /// Stribeck speed `ns` (rad/s; `None`: no Stribeck term): `∫ T_f dt = Σ θ_j R_j`.
 pub fn friction_regressors(row: &WheelInterval, ns: Option<f64>) -> [f64; 4] {

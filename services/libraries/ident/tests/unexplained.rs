@@ -25,6 +25,10 @@ const HEADING: &str =
 const COM: &str = "[effects.com_offset]\nr_m = [2.5e-6, -1.5e-6, -1.0e-6]\n";
 const WHEEL_SCALE: &str = "[effects.wheel_torque_scale]\nscale = [0.95, 1.04, 0.97]\n";
 const HARD_IRON: &str = "[effects.magnetic_disturbance]\nhard_iron_gauss = [0.08, -0.05, 0.1]\n";
+/// Windage of the Y wheel: `c n |n|` with c = 1e-8 Nm/(rad/s)², 0.9 mNm at the experiment's
+/// 300 rad/s (as much as its nominal viscous friction there), outside the friction library
+/// (Coulomb, Stribeck, viscous).
+const WHEEL_DRAG: &str = "[effects.wheel_drag]\nquadratic_nm_per_rad2_s2 = [0.0, 1.0e-8, 0.0]\n";
 
 fn print(label: &str, id: &Identification) {
     println!("{label}:");
@@ -458,7 +462,8 @@ fn soft_iron_reproduced(label: &str, truth: &testbed_model::ModelConfig, id: &Id
 
 /// Clean data (the nominal model simulated, seeds 100–119, as the library's own clean-data
 /// test): no unexplained effect on any seed. The search's family-wise level is 1e-4 per
-/// equation (8 equations), so the expected number of false finds in 20 records is about 0.02
+/// equation (11 equations: 3 torque axes, 5 innovation components, 3 wheels), so the expected
+/// number of false finds in 20 records is about 0.02
 /// if its null (no structure; clusters independent) holds; 20/20 clean is the bound checked.
 #[test]
 fn clean_data_give_no_unexplained_effect_on_20_of_20_seeds() {
@@ -491,8 +496,147 @@ fn clean_data_give_no_unexplained_effect_on_20_of_20_seeds() {
     assert!(named.is_empty(), "causes named on clean data: {named:?}");
 }
 
-/// How often the checks above hold on other seeds (ignored: 28 identifications; prints the
-/// share per scenario; run with `--ignored --nocapture`).
+/// A quadratic drag on the Y wheel (not a library cause) is reported as an unexplained effect
+/// in the wheel channel (`wheel_y`) with a speed-squared regressor, its coefficient the drag
+/// (a torque opposing the spin, −c per unit of `n·|n|`) within 10 %, and a held-out gain of the
+/// wheel equation above 1.1 (measured 1.15× on seed 57, cross-validated 1.71×: the held-out
+/// blocks happen to hold slower speeds of the Y wheel); no library cause is named (a wheel friction that absorbs part of it
+/// through its viscous level must be falsified), nothing is found on the other wheels. Alone
+/// (seed 57) and beside a wheel torque scale (seed 58), which must still be named with its
+/// values within 10 % (`check`).
+#[test]
+fn wheel_drag_alone_and_with_a_wheel_torque_scale() {
+    for (label, effects, library, seed) in [
+        ("wheel drag", WHEEL_DRAG.to_string(), vec![], 57),
+        (
+            "wheel drag + wheel torque scale",
+            format!("{WHEEL_DRAG}{WHEEL_SCALE}"),
+            vec![Cause::WheelTorqueScale],
+            58,
+        ),
+    ] {
+        let t = truth(&effects);
+        let id = identify_blind(&t, seed, 600.0);
+        for e in &id.report.unexplained {
+            println!(
+                "    {} (held-out gain {:.2}, cv {:.2})",
+                e.proposed, e.held_out_gain, e.cv_gain
+            );
+        }
+        check(
+            label,
+            &t,
+            &id,
+            &library,
+            &["wheel_y"],
+            &["n·|n|", "n²"],
+            1.1,
+        );
+        let hit = id
+            .report
+            .unexplained
+            .iter()
+            .find(|e| e.equation == "wheel_y")
+            .expect("checked");
+        let quadratic: f64 = hit
+            .terms
+            .iter()
+            .filter(|t| t.name == "n·|n|")
+            .map(|t| t.value)
+            .sum();
+        assert!(
+            (quadratic + 1.0e-8).abs() <= 0.1e-8,
+            "{label}: n·|n| coefficient {quadratic} Nm vs −1e-8: {}",
+            hit.proposed
+        );
+        let others: Vec<&str> = id
+            .report
+            .unexplained
+            .iter()
+            .filter(|e| e.equation == "wheel_x" || e.equation == "wheel_z")
+            .map(|e| e.proposed.as_str())
+            .collect();
+        assert!(others.is_empty(), "{label}: {others:?}");
+        // Every named wheel cause went through the wheel tests.
+        for test in id
+            .report
+            .cause_tests
+            .iter()
+            .filter(|t| t.name.starts_with("wheel_"))
+        {
+            println!("    {}: {:?}", test.name, test.whiteness);
+            assert!(
+                test.consistency.is_some() || test.whiteness.is_some(),
+                "{label}: {test:?}"
+            );
+        }
+        // Beside the drag term the torque scale is refitted with it: within 0.003 of the truth
+        // (the tolerance of the scale alone in `tests/causes.rs`; from the selection's fit,
+        // before the refit, the Y scale was 1.0329 ± 0.0010 against 1.04).
+        if library.contains(&Cause::WheelTorqueScale) {
+            let fitted = Cause::WheelTorqueScale.values(&id.extended);
+            let hidden = Cause::WheelTorqueScale.values(&t);
+            for (f, h) in fitted.iter().zip(&hidden) {
+                assert!(
+                    (f - h).abs() <= 0.003,
+                    "{label}: scale {fitted:?} vs {hidden:?}"
+                );
+            }
+        }
+    }
+}
+
+/// A torque on the X wheel that follows the platform's tilt (`[effects.wheel_tilt_torque]`,
+/// 1e-2 Nm per unit of `G_x`: 1.2 mNm at the experiment's 7° steps), not a library cause, is
+/// reported in `wheel_x` with `sin tilt_x`, its coefficient within 10 % of 1e-2 Nm, a held-out
+/// gain above 1.1; nothing is named and nothing is found on the other wheels. Seed 59.
+#[test]
+fn a_wheel_torque_that_follows_the_tilt_is_unexplained_in_the_wheel_channel() {
+    let t = truth(
+        "[effects.wheel_tilt_torque]\nsin_tilt_x_nm = [1.0e-2, 0.0, 0.0]\nsin_tilt_y_nm = [0.0, 0.0, 0.0]\n",
+    );
+    let id = identify_blind(&t, 59, 600.0);
+    for e in &id.report.unexplained {
+        println!(
+            "    {} (held-out gain {:.2}, cv {:.2})",
+            e.proposed, e.held_out_gain, e.cv_gain
+        );
+    }
+    check(
+        "wheel tilt torque",
+        &t,
+        &id,
+        &[],
+        &["wheel_x"],
+        &["sin tilt_x"],
+        1.1,
+    );
+    let hit = id
+        .report
+        .unexplained
+        .iter()
+        .find(|e| e.equation == "wheel_x")
+        .expect("checked");
+    let c: f64 = hit
+        .terms
+        .iter()
+        .filter(|t| t.name == "sin tilt_x")
+        .map(|t| t.value)
+        .sum();
+    assert!((c - 1.0e-2).abs() <= 1.0e-3, "{}", hit.proposed);
+    let others: Vec<&str> = id
+        .report
+        .unexplained
+        .iter()
+        .filter(|e| e.equation == "wheel_y" || e.equation == "wheel_z")
+        .map(|e| e.proposed.as_str())
+        .collect();
+    assert!(others.is_empty(), "{others:?}");
+}
+
+/// How often the checks above hold on other seeds (ignored: 36 identifications; prints the
+/// share per scenario; run with `--ignored --nocapture`, `IDENT_SCENARIO=<text>` for the
+/// scenarios whose label contains it).
 #[test]
 #[ignore]
 fn out_of_library_checks_over_more_seeds() {
@@ -562,8 +706,29 @@ fn out_of_library_checks_over_more_seeds() {
             heading.to_vec(),
             1.5,
         ),
+        (
+            "wheel drag",
+            WHEEL_DRAG.into(),
+            vec![],
+            vec!["wheel_y"],
+            vec!["n·|n|", "n²"],
+            1.1,
+        ),
+        (
+            "wheel drag + wheel scale",
+            format!("{WHEEL_DRAG}{WHEEL_SCALE}"),
+            vec![Cause::WheelTorqueScale],
+            vec!["wheel_y"],
+            vec!["n·|n|", "n²"],
+            1.1,
+        ),
     ];
-    for (label, effects, library, equations, regressors, gain) in &scenarios {
+    // `IDENT_SCENARIO=<text>`: only the scenarios whose label contains it.
+    let only = std::env::var("IDENT_SCENARIO").ok();
+    for (label, effects, library, equations, regressors, gain) in scenarios
+        .iter()
+        .filter(|s| only.as_deref().is_none_or(|o| s.0.contains(o)))
+    {
         let t = truth(effects);
         let mut ok = 0;
         for seed in 61..65 {

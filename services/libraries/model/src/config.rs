@@ -268,6 +268,10 @@ pub struct EffectsConfig {
     pub soft_iron: Option<SoftIron>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub heading_torque: Option<HeadingTorque>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub wheel_drag: Option<WheelDrag>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub wheel_tilt_torque: Option<WheelTiltTorque>,
     /// Thrust of each thruster times a factor (a worn nozzle, a wrong regulator pressure);
     /// acts only with `[thrusters]`.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -359,6 +363,29 @@ pub struct HeadingTorque {
     pub cos_nm: [f64; 3],
     /// Amplitude of the `sin ψ` part per body axis, Nm.
     pub sin_nm: [f64; 3],
+}
+
+/// A drag torque on each wheel growing with the square of its speed (windage of the rotor):
+/// `T_d = c n |n|` opposing the relative motion, added to the bearing friction. Not in
+/// identification's library (its friction is Coulomb, Stribeck and viscous).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WheelDrag {
+    /// Coefficient `c` per wheel, Nm/(rad/s)², ≥ 0.
+    pub quadratic_nm_per_rad2_s2: [f64; 3],
+}
+
+/// A torque between each wheel and the platform that depends on the platform's tilt (a cable to
+/// the rotor, a bearing whose drag follows its load): `T_i = sin_tilt_x_nm[i] G_x +
+/// sin_tilt_y_nm[i] G_y`, `G` the unit down vector in body axes, accelerating the wheel in its
+/// positive sense (the platform takes the reaction). Not in identification's library.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WheelTiltTorque {
+    /// Torque per unit of `G_x` (the sine of the tilt about Y, nearly), per wheel, Nm.
+    pub sin_tilt_x_nm: [f64; 3],
+    /// Torque per unit of `G_y`, per wheel, Nm.
+    pub sin_tilt_y_nm: [f64; 3],
 }
 
 /// Centre of mass offset from the bearing's centre of rotation. Gravity torque on the platform:
@@ -641,6 +668,20 @@ impl ModelConfig {
         if let Some(x) = &e.heading_torque {
             v.finite_all("effects.heading_torque.cos_nm", &x.cos_nm);
             v.finite_all("effects.heading_torque.sin_nm", &x.sin_nm);
+        }
+        if let Some(x) = &e.wheel_drag {
+            for (i, c) in x.quadratic_nm_per_rad2_s2.iter().enumerate() {
+                v.within(
+                    &format!("effects.wheel_drag.quadratic_nm_per_rad2_s2[{i}]"),
+                    *c,
+                    0.0,
+                    1.0,
+                );
+            }
+        }
+        if let Some(x) = &e.wheel_tilt_torque {
+            v.finite_all("effects.wheel_tilt_torque.sin_tilt_x_nm", &x.sin_tilt_x_nm);
+            v.finite_all("effects.wheel_tilt_torque.sin_tilt_y_nm", &x.sin_tilt_y_nm);
         }
         if let Some(x) = &e.thruster_torque_scale {
             v.positive_all("effects.thruster_torque_scale.scale", &x.scale);

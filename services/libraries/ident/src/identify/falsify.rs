@@ -16,7 +16,9 @@
 //!
 //! Torque causes are linear in the torque channel; sensor causes are linearised through the
 //! attitude filter (forward differences, one filter run per parameter) and tested on the
-//! innovations the same way. Wheel causes are not yet tested (reported as such).
+//! innovations the same way. Wheel causes are linear (or linearised, the delay) in the wheel
+//! equation and are tested there, with the whiteness of that equation's residuals as a third
+//! test (see `wheel`).
 
 use super::unexplained::{Candidates, INNOVATION_LABELS, TorqueCandidates, UnexplainedEffect};
 use crate::channels::torque_columns;
@@ -42,8 +44,29 @@ pub struct CauseTest {
     /// assumes independent residuals, and the cause must beat the threshold by both.
     pub joint_wald: Option<f64>,
     pub joint_threshold: Option<f64>,
+    /// Whiteness of the extended equation's residuals (wheel causes: the wheel equation with
+    /// the named causes and the unexplained wheel terms; `None` for other causes).
+    pub whiteness: Option<Whiteness>,
+    /// The test that failed: `consistency`, `joint` (significance beside the others and the
+    /// unexplained effects), `competitor` (a generic form explains its part better),
+    /// `whiteness`; `None` when kept.
+    pub failed: Option<&'static str>,
     /// In words: kept, or which test failed.
     pub verdict: String,
+}
+
+/// The whiteness test of an equation's residuals (the worst of the wheels tested).
+#[derive(Debug, Clone, Serialize)]
+pub struct Whiteness {
+    /// The worst wheel (0 = X).
+    pub wheel: usize,
+    /// Ljung–Box statistic and its lags.
+    pub ljung_box: f64,
+    pub lags: usize,
+    /// Its p value, multiplied by the number of wheels tested (Bonferroni), at most 1.
+    pub p: f64,
+    /// Wheels tested.
+    pub wheels: usize,
 }
 
 impl CauseTest {
@@ -54,8 +77,12 @@ impl CauseTest {
         if self.kept {
             return -1.0;
         }
+        if let (Some("whiteness"), Some(w)) = (self.failed, &self.whiteness) {
+            let dof = w.lags.max(1) as f64;
+            return (w.ljung_box - dof) / (2.0 * dof).sqrt();
+        }
         match (&self.consistency, self.joint_lr, self.joint_threshold) {
-            (Some(c), _, _) if c.p < 1.0 && self.verdict.starts_with("falsified") => {
+            (Some(c), _, _) if c.p < 1.0 && self.failed == Some("consistency") => {
                 (c.chi2 - c.dof as f64) / (2.0 * c.dof as f64).sqrt()
             }
             (_, Some(lr), Some(th)) => {
@@ -189,7 +216,7 @@ impl Levels<'_> {
     /// The test of a cause beside the others: the likelihood ratio `n ln(RSS_without /
     /// RSS_with)` of `n` residuals, and the selection's threshold for its `k` parameters,
     /// `max(k ln N, χ²_k(1 − selection))`.
-    fn joint(&self, n: f64, rss_without: f64, rss_with: f64, k: usize) -> (f64, f64) {
+    pub(super) fn joint(&self, n: f64, rss_without: f64, rss_with: f64, k: usize) -> (f64, f64) {
         let lr = n * (rss_without / rss_with.max(1e-300)).ln();
         let threshold = (k as f64 * self.n_fit.ln())
             .max(chi_square_quantile(1.0 - self.selection, k as f64).unwrap_or(f64::INFINITY));
@@ -272,10 +299,12 @@ pub(super) fn test_causes(
             let consistency = consistency(&per_block, &idx);
             let mut verdict = String::new();
             let mut kept = true;
+            let mut failed = None;
             if let Some(c) = &consistency
                 && c.p < alpha_consistency
             {
                 kept = false;
+                failed = Some("consistency");
                 verdict = falsified_text(c, alpha_consistency);
             }
             let (mut joint_lr, mut joint_threshold, mut joint_wald) = (None, None, None);
@@ -328,11 +357,13 @@ pub(super) fn test_causes(
                     joint_wald = wald;
                     if lr <= threshold && kept {
                         kept = false;
+                        failed = Some("joint");
                         verdict = format!(
                             "dropped: not significant beside the other named causes and the unexplained effects (likelihood ratio {lr:.1} ≤ threshold {threshold:.1}); it stood in for an effect of another form or for a dropped cause"
                         );
                     } else if let Some(w) = wald.filter(|w| *w <= threshold && kept) {
                         kept = false;
+                        failed = Some("joint");
                         verdict = format!(
                             "dropped: not significant beside the other named causes and the unexplained effects once the residuals' correlation within a segment is allowed for (cluster-robust Wald statistic {w:.1} ≤ threshold {threshold:.1}; likelihood ratio {lr:.1}); it stood in for an effect of another form or for a dropped cause"
                         );
@@ -354,6 +385,7 @@ pub(super) fn test_causes(
                 && without < with * (1.0 - COMPETITOR_MARGIN)
             {
                 kept = false;
+                failed = Some("competitor");
                 verdict = format!(
                     "dropped: a form of another kind explains its part better (torque channel's cross-validated residual sum {without:.1} without it, {with:.1} with it); it stood in for that form"
                 );
@@ -374,23 +406,16 @@ pub(super) fn test_causes(
                 joint_lr,
                 joint_wald,
                 joint_threshold,
+                whiteness: None,
+                failed,
                 verdict,
             });
         }
     }
     out.extend(sensor_tests(problem, fit, named, effects, all, levels));
-    for &cause in named.iter().filter(|c| c.kind() == Kind::Wheel) {
-        out.push(CauseTest {
-            name: cause.name(),
-            kept: true,
-            consistency: None,
-            joint_lr: None,
-            joint_wald: None,
-            joint_threshold: None,
-            verdict: "kept (selection test; the falsification tests cover torque and sensor causes, not yet wheel causes)"
-                .into(),
-        });
-    }
+    out.extend(super::wheel::wheel_tests(
+        problem, fit, named, effects, &all.wheel, levels,
+    ));
     (out, joint)
 }
 
@@ -426,6 +451,8 @@ fn sensor_tests(
         joint_lr: None,
         joint_wald: None,
         joint_threshold: None,
+        whiteness: None,
+        failed: None,
         verdict: format!("kept (selection test; {why})"),
     };
     let Some(lin) = linear else {
@@ -518,11 +545,13 @@ fn sensor_tests(
             .collect();
         let consistency = consistency(&per_block, &idx);
         let mut kept = true;
+        let mut failed = None;
         let mut verdict = String::new();
         if let Some(c) = &consistency
             && c.p < alpha_consistency
         {
             kept = false;
+            failed = Some("consistency");
             verdict = falsified_text(c, alpha_consistency);
         }
         let (mut joint_lr, mut joint_threshold) = (None, None);
@@ -538,6 +567,7 @@ fn sensor_tests(
                 joint_threshold = Some(threshold);
                 if lr <= threshold && kept {
                     kept = false;
+                    failed = Some("joint");
                     verdict = format!(
                         "dropped: not significant once the unexplained effect is modelled (likelihood ratio {lr:.1} ≤ threshold {threshold:.1}); it stood in for an effect of another form"
                     );
@@ -560,13 +590,15 @@ fn sensor_tests(
             joint_lr,
             joint_wald: None,
             joint_threshold,
+            whiteness: None,
+            failed,
             verdict,
         });
     }
     out
 }
 
-fn falsified_text(c: &Consistency, alpha: f64) -> String {
+pub(super) fn falsified_text(c: &Consistency, alpha: f64) -> String {
     format!(
         "falsified: its parameters differ between {} time blocks (χ² = {:.1} on {} degrees of freedom, p = {:.1e} < {:.0e}); a time- or state-dependent effect, not a constant one",
         c.blocks, c.chi2, c.dof, c.p, alpha
@@ -643,7 +675,7 @@ fn cluster_robust_wald(
 }
 
 /// Residual sum at the least-squares solution (`Σ y²` with no unknowns).
-fn rss_of(ne: &NormalEquations) -> Option<f64> {
+pub(super) fn rss_of(ne: &NormalEquations) -> Option<f64> {
     if ne.params() == 0 {
         Some(ne.yty())
     } else {
@@ -653,7 +685,10 @@ fn rss_of(ne: &NormalEquations) -> Option<f64> {
 
 /// χ² consistency of the parameters `idx` across the block fits (`None` if a block does not
 /// determine them).
-fn consistency(per_block: &[Option<crate::stats::LsFit>], idx: &[usize]) -> Option<Consistency> {
+pub(super) fn consistency(
+    per_block: &[Option<crate::stats::LsFit>],
+    idx: &[usize],
+) -> Option<Consistency> {
     let k = idx.len();
     let mut thetas = Vec::new();
     let mut weights = Vec::new();

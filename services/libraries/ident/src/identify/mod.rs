@@ -26,12 +26,13 @@
 //!    component and overall on the held-out blocks, or with `folds` ≥ 2 on every fold predicted
 //!    by the extended model fitted without it; gain = nominal / extended.
 //!
-//! 5. **Falsify the named causes** (`falsify`): each must have the same parameters in disjoint
-//!    time blocks and stay significant beside the other causes and the unexplained effects;
+//! 5. **Falsify the named causes** (`falsify`, wheel causes in `wheel`): each must have the same
+//!    parameters in disjoint time blocks and stay significant beside the other causes and the
+//!    unexplained effects (a wheel cause also needs white residuals of its wheel equation);
 //!    the worst failure is dropped and the rest refitted and tested again.
 //! 6. **Find the form of what remains** (`unexplained`, [`crate::sparse`]): sparse regression of
-//!    each equation's residual (torque per axis, each innovation component) on a fixed library
-//!    of candidate functions of the state and time, with k-fold cross-validation and
+//!    each equation's residual (torque per axis, each innovation component, each wheel's spin
+//!    equation: `wheel`) on a fixed library of candidate functions of the state and time, with k-fold cross-validation and
 //!    cluster-robust standard errors; what it finds is reported as an unexplained effect.
 //! 7. **Second pass** (`sensor`): when the field innovations hold an unexplained effect that
 //!    is a function of the attitude (a soft iron), the readings are corrected with it (fitted
@@ -50,8 +51,9 @@ mod report;
 mod residuals;
 mod sensor;
 mod unexplained;
+mod wheel;
 
-pub use falsify::{CauseTest, Consistency};
+pub use falsify::{CauseTest, Consistency, Whiteness};
 pub use sensor::SensorCorrection;
 pub use unexplained::UnexplainedEffect;
 
@@ -519,6 +521,10 @@ fn identify_pass(
             }
         }
     }
+    // With unexplained wheel terms, the named wheel causes' linear values (torque scale,
+    // friction levels) take the search's refit beside the terms (its forced columns; the delay
+    // and the Stribeck speed, shared or nonlinear, stay as fitted).
+    wheel::refit_beside_terms(&mut current, &named, &effects);
     let selected = named;
 
     let causes: Vec<CauseReport> = selected

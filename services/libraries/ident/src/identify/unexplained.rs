@@ -2,7 +2,8 @@
 //! ([`crate::sparse`]) and the report of an **unexplained effect**.
 //!
 //! Equations: the torque channel per body axis (the momentum residual, Nms, in the channel's
-//! integral form) and each filter-innovation component (whitened). The candidate functions are
+//! integral form), each filter-innovation component (whitened), and each wheel's spin equation
+//! (Nms per interval; its own candidate library, see `wheel`). The candidate functions are
 //! of the measured and estimated state and of time, and are the same for every data set:
 //!
 //! | name | function |
@@ -179,7 +180,7 @@ impl TorqueCandidates {
 }
 
 /// Folds and clusters: interleaved blocks of `block_s` (block b in fold `b mod folds`).
-fn fold_of(t: f64, block_s: f64) -> usize {
+pub(super) fn fold_of(t: f64, block_s: f64) -> usize {
     (t / block_s).floor().max(0.0) as usize
 }
 
@@ -190,6 +191,7 @@ pub(super) struct Candidates {
     pub torque: TorqueCandidates,
     pub innovation: InnovationCandidates,
     pub linear: Option<SensorLinear>,
+    pub wheel: super::wheel::WheelCandidates,
 }
 
 impl Candidates {
@@ -198,6 +200,7 @@ impl Candidates {
             torque: TorqueCandidates::new(problem, fit),
             innovation: InnovationCandidates::new(problem, fit),
             linear: SensorLinear::new(problem, fit, named),
+            wheel: super::wheel::WheelCandidates::new(problem, fit),
         }
     }
 }
@@ -228,6 +231,14 @@ pub(super) fn search_all(
         fit,
         &candidates.innovation,
         candidates.linear.as_ref(),
+        block_s,
+        options,
+    ));
+    out.extend(super::wheel::search_wheels(
+        problem,
+        fit,
+        named,
+        &candidates.wheel,
         block_s,
         options,
     ));
@@ -615,7 +626,7 @@ pub(super) const INNOVATION_LABELS: [&str; INNOVATION_LEN] = [
     "innovation_field_z",
 ];
 
-fn effect(
+pub(super) fn effect(
     equation: String,
     unit: &'static str,
     result: SparseResult,

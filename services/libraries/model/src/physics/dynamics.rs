@@ -55,6 +55,8 @@ pub struct Dynamics {
     wheel_inertia: f64,
     cmg: CmgPyramid,
     friction: [WheelFrictionModel; 3],
+    /// `effects.wheel_tilt_torque`: per wheel, torque per unit of `G_x` and of `G_y`, Nm.
+    wheel_tilt: Option<[[f64; 2]; 3]>,
     external: ExternalTorqueModel,
     /// `(I − J·1 + J P_S)⁻¹` for each set S of stuck wheels (bit i = wheel i).
     locked_inverse: [Matrix3<f64>; 8],
@@ -84,6 +86,11 @@ impl Dynamics {
             wheel_inertia,
             cmg: CmgPyramid::from_config(&config.cmg),
             friction: Wheel::ALL.map(|w| WheelFrictionModel::from_config(config, w)),
+            wheel_tilt: config
+                .effects
+                .wheel_tilt_torque
+                .as_ref()
+                .map(|t| std::array::from_fn(|i| [t.sin_tilt_x_nm[i], t.sin_tilt_y_nm[i]])),
             external: ExternalTorqueModel::from_config(config),
             locked_inverse,
             thruster_torque_b: None,
@@ -196,12 +203,16 @@ impl Dynamics {
         }
         let mut net = Vector3::zeros();
         let mut mask = 0;
+        let g = self.wheel_tilt.map(|_| crate::attitude::gravity_b(q));
         for i in 0..3 {
             match input.modes[i] {
                 WheelMode::Stuck => mask |= 1 << i,
                 WheelMode::Sliding { direction } => {
                     net[i] = input.motor_torque_nm[i]
                         - self.friction[i].sliding_torque(wheel_speed[i], direction);
+                    if let (Some(tilt), Some(g)) = (&self.wheel_tilt, &g) {
+                        net[i] += tilt[i][0] * g.x + tilt[i][1] * g.y;
+                    }
                     rhs[i] -= net[i];
                 }
             }
@@ -279,5 +290,53 @@ impl Dynamics {
             }
         }
         input.modes
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `effects.wheel_tilt_torque` adds `a G_x + b G_y` to the sliding wheel's net torque: the
+    /// wheel's momentum changes by it, the platform's by its reaction (total momentum unchanged).
+    #[test]
+    fn wheel_tilt_torque_acts_between_wheel_and_platform() {
+        let nominal = ModelConfig::default();
+        let mut tilted = nominal.clone();
+        tilted.effects.wheel_tilt_torque = Some(crate::config::WheelTiltTorque {
+            sin_tilt_x_nm: [1.0e-2, 0.0, 0.0],
+            sin_tilt_y_nm: [0.0, 0.0, 2.0e-2],
+        });
+        // Tilted 0.1 rad about body Y: G_B has an X component.
+        let q = UnitQuaternion::from_euler_angles(0.0, 0.1, 0.0);
+        let g = crate::attitude::gravity_b(&q);
+        let rate = Vector3::zeros();
+        let n = Vector3::new(100.0, -50.0, 30.0);
+        let input = StepInput {
+            motor_torque_nm: Vector3::zeros(),
+            gimbal_rate_rad_s: Vector4::zeros(),
+            modes: [
+                WheelMode::Sliding { direction: 1.0 },
+                WheelMode::Sliding { direction: -1.0 },
+                WheelMode::Sliding { direction: 1.0 },
+            ],
+        };
+        let gimbal = Vector4::zeros();
+        let a = Dynamics::from_config(&nominal).expect("valid");
+        let b = Dynamics::from_config(&tilted).expect("valid");
+        let (wa, na) = a.accelerations(&q, &rate, &n, &gimbal, &input);
+        let (wb, nb) = b.accelerations(&q, &rate, &n, &gimbal, &input);
+        let j = nominal.wheels.inertia_kgm2;
+        let extra = Vector3::new(1.0e-2 * g.x, 0.0, 2.0e-2 * g.y);
+        assert!(g.x.abs() > 0.05, "{g:?}");
+        // Wheel momentum J (n' + w') gains the torque; the platform's I w' loses it.
+        let dh_wheel = j * ((nb - na) + (wb - wa));
+        assert!(
+            (dh_wheel - extra).norm() < 1e-12 * extra.norm().max(1.0),
+            "{dh_wheel:?} vs {extra:?}"
+        );
+        let inertia = nominal.true_inertia().expect("valid");
+        let dh_total = inertia * (wb - wa) + j * (nb - na);
+        assert!(dh_total.norm() < 1e-12, "{dh_total:?}");
     }
 }

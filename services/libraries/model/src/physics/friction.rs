@@ -6,6 +6,8 @@
 //! and rises towards the breakaway torque `T_s` near zero speed (Stribeck):
 //! `T_f(n) = (T_c(dir) + (T_s − T_c(dir)) exp(−(n/n_s)²)) sign(n) + K n`.
 //!
+//! `effects.wheel_drag` adds `c n |n|` (windage), outside identification's library.
+//!
 //! At `n = 0` friction is not a function of speed: it is whatever torque keeps the wheel stuck, up
 //! to the breakaway torque. [`wheel_friction_torque`] therefore returns 0 there, and the plant
 //! decides stick or slip from [`WheelFrictionModel::breakaway_nm`] (see `plant`).
@@ -42,6 +44,8 @@ pub struct WheelFrictionModel {
     pub breakaway_nm: f64,
     /// Stribeck speed `n_s`, rad/s; `None` for the nominal model (no Stribeck term).
     pub stribeck_speed_rad_s: Option<f64>,
+    /// Quadratic drag `c` of `effects.wheel_drag` (`c n |n|`), Nm/(rad/s)²; 0 without it.
+    pub quadratic_nm_per_rad2_s2: f64,
 }
 
 impl WheelFrictionModel {
@@ -49,6 +53,11 @@ impl WheelFrictionModel {
     /// `wheels.coulomb_nm` also as the breakaway torque.
     pub fn from_config(config: &ModelConfig, wheel: Wheel) -> Self {
         let i = wheel.index();
+        let quadratic_nm_per_rad2_s2 = config
+            .effects
+            .wheel_drag
+            .as_ref()
+            .map_or(0.0, |d| d.quadratic_nm_per_rad2_s2[i]);
         match &config.effects.wheel_friction {
             Some(f) => Self {
                 coulomb_pos_nm: f.coulomb_pos_nm[i],
@@ -56,6 +65,7 @@ impl WheelFrictionModel {
                 viscous_nm_per_rad_s: f.viscous_nm_per_rad_s[i],
                 breakaway_nm: f.stribeck_nm[i],
                 stribeck_speed_rad_s: Some(f.stribeck_speed_rad_s[i]),
+                quadratic_nm_per_rad2_s2,
             },
             None => Self {
                 coulomb_pos_nm: config.wheels.coulomb_nm[i],
@@ -63,6 +73,7 @@ impl WheelFrictionModel {
                 viscous_nm_per_rad_s: config.wheels.viscous_nm_per_rad_s[i],
                 breakaway_nm: config.wheels.coulomb_nm[i],
                 stribeck_speed_rad_s: None,
+                quadratic_nm_per_rad2_s2,
             },
         }
     }
@@ -90,7 +101,9 @@ impl WheelFrictionModel {
             Some(ns) => coulomb + (self.breakaway_nm - coulomb) * (-(n / ns).powi(2)).exp(),
             None => coulomb,
         };
-        level * direction + self.viscous_nm_per_rad_s * n
+        level * direction
+            + self.viscous_nm_per_rad_s * n
+            + self.quadratic_nm_per_rad2_s2 * n * n.abs()
     }
 }
 
@@ -121,6 +134,23 @@ mod tests {
             }
             assert_eq!(wheel_friction_torque(&config, wheel, 0.0), 0.0);
             assert_eq!(wheel_breakaway_torque(&config, wheel), 1.5e-3);
+        }
+    }
+
+    #[test]
+    fn wheel_drag_adds_a_quadratic_term_opposing_the_motion() {
+        let mut config = ModelConfig::default();
+        config.effects.wheel_drag = Some(crate::config::WheelDrag {
+            quadratic_nm_per_rad2_s2: [0.0, 2.0e-8, 0.0],
+        });
+        for n in [-300.0, -2.0, 5.0, 250.0] {
+            let nominal = 1.5e-3 * f64::signum(n) + 3.0e-6 * n;
+            let y = wheel_friction_torque(&config, Wheel::Y, n);
+            assert!(
+                (y - (nominal + 2.0e-8 * n * n.abs())).abs() < 1e-15,
+                "{n}: {y}"
+            );
+            assert!((wheel_friction_torque(&config, Wheel::X, n) - nominal).abs() < 1e-15);
         }
     }
 
