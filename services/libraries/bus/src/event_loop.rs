@@ -621,22 +621,7 @@ impl<'w, 'a> EventLoop<'w, 'a> {
         close: Instant,
         on_wake: &mut impl FnMut(Wake) -> Flow,
     ) -> Result<Polled, BusError> {
-        let after_wake = matches!(self.wait, WaitStrategy::SpinAfterWake { .. });
-        let mut load_checked = None::<Instant>;
         loop {
-            // Polling after a wake-up only pays while a CPU would otherwise idle: on a machine
-            // with more runnable tasks than CPUs, the pollers' yields still take their share of
-            // the CPUs from the processes doing the work (lockstep measured 5× slower than
-            // blocking at load average 6). Looked at when the window opens and every
-            // LOAD_RECHECK of polling.
-            if after_wake && load_checked.is_none_or(|t| t.elapsed() >= LOAD_RECHECK) {
-                load_checked = Some(Instant::now());
-                if !cpus::one_is_free() {
-                    self.count(|s| s.empty_windows += 1);
-                    self.spin_until.set(None);
-                    return Ok(Polled::Nothing);
-                }
-            }
             for (index, attachment, port) in self.data_attachments() {
                 if port.attach()? {
                     let now = Instant::now();
@@ -657,65 +642,6 @@ impl<'w, 'a> EventLoop<'w, 'a> {
                 return Ok(Polled::Nothing);
             }
             std::thread::yield_now();
-        }
-    }
-}
-
-/// How often a poll-after-wake window looks again whether a CPU is free.
-const LOAD_RECHECK: Duration = Duration::from_micros(50);
-
-/// Whether the machine has a CPU to spare, from the kernel's count of runnable tasks.
-mod cpus {
-    use std::cell::RefCell;
-    use std::fs::File;
-    use std::os::unix::fs::FileExt as _;
-    use std::sync::OnceLock;
-
-    /// CPUs this process may run on.
-    fn usable() -> usize {
-        static USABLE: OnceLock<usize> = OnceLock::new();
-        *USABLE.get_or_init(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
-    }
-
-    thread_local! {
-        /// `/proc/loadavg`, kept open: a read at offset 0 makes the kernel write it anew.
-        static LOADAVG: RefCell<Option<File>> = RefCell::new(File::open("/proc/loadavg").ok());
-    }
-
-    /// True while the runnable tasks (this one included; `/proc/loadavg`'s fourth field,
-    /// "running/total") are no more than the usable CPUs. True when it cannot be read, so
-    /// a machine without `/proc` polls as configured.
-    pub(super) fn one_is_free() -> bool {
-        LOADAVG.with(|file| {
-            let file = file.borrow();
-            let Some(file) = file.as_ref() else {
-                return true;
-            };
-            let mut buf = [0u8; 128];
-            let Ok(n) = file.read_at(&mut buf, 0) else {
-                return true;
-            };
-            running_tasks(&buf[..n]).is_none_or(|running| running <= usable())
-        })
-    }
-
-    /// The runnable-task count of a `/proc/loadavg` line ("0.81 1.09 0.99 3/456 12345").
-    pub(super) fn running_tasks(line: &[u8]) -> Option<usize> {
-        let text = std::str::from_utf8(line).ok()?;
-        let field = text.split_whitespace().nth(3)?;
-        field.split_once('/')?.0.parse().ok()
-    }
-
-    #[cfg(test)]
-    mod tests {
-        #[test]
-        fn reads_the_running_count_of_a_loadavg_line() {
-            assert_eq!(
-                super::running_tasks(b"0.81 1.09 0.99 3/456 12345\n"),
-                Some(3)
-            );
-            assert_eq!(super::running_tasks(b"0.81 1.09 0.99\n"), None);
-            assert_eq!(super::running_tasks(b"garbage"), None);
         }
     }
 }

@@ -18,7 +18,7 @@ use testbed_model::ModelConfig;
 pub const ENV_RUN_CONFIG: &str = "TESTBED_RUN_CONFIG";
 
 /// Default of [`RunSection::lockstep_wait`] (measured: `bench/README.md`).
-pub const DEFAULT_LOCKSTEP_WAIT: &str = "spin:500";
+pub const DEFAULT_LOCKSTEP_WAIT: &str = "block";
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -53,11 +53,11 @@ pub struct RunSection {
     pub start_time_ns: Option<u64>,
     /// How every process of a lockstep run waits for its next sample, in the syntax of
     /// `TESTBED_BUS_WAIT` (which, when set, overrides it): `block`, `spin:<µs>`, `anticipate`.
-    /// Default `spin:500`: after each data wake-up a process polls its subscribers for up to
-    /// 500 µs (yielding the CPU between polls) before it sleeps, so the next stage of the tick
-    /// finds it awake instead of paying a scheduler wake-up. That doubles lockstep speed on a
-    /// 2-core machine (`bench/README.md`) at the cost of CPU that a lockstep run, which runs as
-    /// fast as it can, spends anyway. Paced runs ignore it: they block (or follow the variable).
+    /// Default `block`. `spin:500` (after each data wake-up a process polls its subscribers
+    /// for up to 500 µs, yielding the CPU between polls, before it sleeps) doubles lockstep
+    /// speed on an idle 2-core machine, but on a loaded one the pollers take CPU from the
+    /// processes doing the work: 5× slower than `block` at load average 6 (`bench/README.md`).
+    /// Paced runs ignore it: they block (or follow the variable).
     pub lockstep_wait: String,
 }
 
@@ -464,8 +464,12 @@ mod tests {
                 && err.contains("run.toml"),
             "{err}"
         );
+        assert_eq!(config.lockstep_wait(), Ok(WaitStrategy::Block));
+        let spinning =
+            RunConfig::from_toml_str("[run]\nlockstep_wait = \"spin:500\"\n", "run.toml")
+                .expect("spin:500 is a wait strategy");
         assert_eq!(
-            config.lockstep_wait(),
+            spinning.lockstep_wait(),
             Ok(WaitStrategy::SpinAfterWake {
                 spin: std::time::Duration::from_micros(500)
             })
