@@ -55,6 +55,24 @@ pub struct CauseTest {
     pub verdict: String,
 }
 
+impl CauseTest {
+    /// A cause kept on its selection test alone: the falsification tests could not run
+    /// (`why`).
+    pub(crate) fn not_tested(cause: Cause, why: &str) -> Self {
+        Self {
+            name: cause.name(),
+            kept: true,
+            consistency: None,
+            joint_lr: None,
+            joint_wald: None,
+            joint_threshold: None,
+            whiteness: None,
+            failed: None,
+            verdict: format!("kept (selection test; {why})"),
+        }
+    }
+}
+
 /// The whiteness test of an equation's residuals (the worst of the wheels tested).
 #[derive(Debug, Clone, Serialize)]
 pub struct Whiteness {
@@ -444,17 +462,7 @@ fn sensor_tests(
         .copied()
         .filter(|c| c.kind() == Kind::Sensor)
         .collect();
-    let not_tested = |cause: Cause, why: &str| CauseTest {
-        name: cause.name(),
-        kept: true,
-        consistency: None,
-        joint_lr: None,
-        joint_wald: None,
-        joint_threshold: None,
-        whiteness: None,
-        failed: None,
-        verdict: format!("kept (selection test; {why})"),
-    };
+    let not_tested = CauseTest::not_tested;
     let Some(lin) = linear else {
         return sensor
             .iter()

@@ -269,17 +269,7 @@ pub(super) fn wheel_tests(
         .copied()
         .filter(|c| c.kind() == Kind::Wheel)
         .collect();
-    let not_tested = |cause: Cause, why: &str| CauseTest {
-        name: cause.name(),
-        kept: true,
-        consistency: None,
-        joint_lr: None,
-        joint_wald: None,
-        joint_threshold: None,
-        whiteness: None,
-        failed: None,
-        verdict: format!("kept (selection test; {why})"),
-    };
+    let not_tested = CauseTest::not_tested;
     let ch = &fit.state.wheel;
     if wheel_causes.is_empty() {
         return Vec::new();
