@@ -43,3 +43,16 @@ pub fn median_time(repeats: usize, mut f: impl FnMut()) -> Duration {
     times.sort();
     times[times.len() / 2]
 }
+
+/// The ids of the processes now running (the numeric entries of `/proc`); none where it
+/// cannot be read.
+pub fn proc_pids() -> Vec<u32> {
+    std::fs::read_dir("/proc").map_or_else(
+        |_| Vec::new(),
+        |dir| {
+            dir.flatten()
+                .filter_map(|e| e.file_name().to_str()?.parse::<u32>().ok())
+                .collect()
+        },
+    )
+}

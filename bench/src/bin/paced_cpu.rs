@@ -72,28 +72,15 @@ fn steady_window(seconds: f64) -> Option<(Duration, Duration)> {
 /// Run time (ns, all threads) of every process descended from `root`, by program name
 /// (`testbed-launch` as "launcher", `testbed` as "testbed run", as the CPU report names them).
 fn schedstat_tree(root: u32) -> BTreeMap<String, u64> {
-    let mut parent_of = Vec::new();
-    if let Ok(entries) = std::fs::read_dir("/proc") {
-        for entry in entries.flatten() {
-            let Some(pid) = entry
-                .file_name()
-                .to_str()
-                .and_then(|n| n.parse::<u32>().ok())
-            else {
-                continue;
-            };
+    let parent_of: Vec<(u32, u32)> = testbed_bench::proc_pids()
+        .into_iter()
+        .filter_map(|pid| {
             // Field 4 of /proc/<pid>/stat, after the parenthesised command name.
-            let ppid = std::fs::read_to_string(entry.path().join("stat"))
-                .ok()
-                .and_then(|stat| {
-                    let after = &stat[stat.rfind(')')? + 1..];
-                    after.split_whitespace().nth(1)?.parse::<u32>().ok()
-                });
-            if let Some(ppid) = ppid {
-                parent_of.push((pid, ppid));
-            }
-        }
-    }
+            let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).ok()?;
+            let after = &stat[stat.rfind(')')? + 1..];
+            Some((pid, after.split_whitespace().nth(1)?.parse::<u32>().ok()?))
+        })
+        .collect();
     let mut tree = vec![root];
     let mut i = 0;
     while i < tree.len() {

@@ -321,17 +321,7 @@ impl RunProcesses {
 
     /// Looks for new processes of the run and updates the CPU time of the known ones.
     pub fn sample(&mut self) {
-        let Ok(dir) = std::fs::read_dir("/proc") else {
-            return;
-        };
-        for entry in dir.flatten() {
-            let Some(pid) = entry
-                .file_name()
-                .to_str()
-                .and_then(|n| n.parse::<u32>().ok())
-            else {
-                continue;
-            };
+        for pid in crate::proc_pids() {
             if let Some((_, last)) = self.seen.get_mut(&pid) {
                 *last = CpuTime::of(pid).unwrap_or(*last);
                 continue;
