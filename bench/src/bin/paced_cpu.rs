@@ -42,8 +42,8 @@ struct Args {
     #[arg(long, default_value_t = 3)]
     repeats: usize,
     /// Directory with the binaries of a baseline build (`testbed`, `testbed-launch`, the
-    /// processes) to measure side by side; the launcher used is always this build's (the CPU
-    /// report needs it), the processes are the baseline's.
+    /// processes) to measure side by side: its own launcher if it has one (it must write the
+    /// CPU report, `TESTBED_CPU_REPORT`, as builds since 2026-11-25 do), else this build's.
     #[arg(long)]
     baseline_bin_dir: Option<PathBuf>,
     #[arg(long)]
@@ -304,8 +304,10 @@ fn writer_speed(records: &[LogRecord], repeats: usize) -> Result<(f64, f64)> {
     Ok((n / new_time.as_secs_f64(), n / old_time.as_secs_f64()))
 }
 
-/// A directory with the baseline's executables but this build's launcher (the one that writes
-/// the CPU report): `testbed` and the launcher find their programs beside themselves.
+/// A directory with the baseline's executables, and this build's launcher (the one that writes
+/// the CPU report) if the baseline has none: `testbed` and the launcher find their programs
+/// beside themselves. A baseline's own launcher is kept: it opens the bus its processes
+/// expect (a bus layout change makes the two builds' processes refuse each other's tables).
 fn baseline_bins(dir: &Path, launcher: &Path, scratch: &Path) -> Result<PathBuf> {
     use std::os::unix::fs::PermissionsExt as _;
     let out = scratch.join("baseline-bin");
@@ -320,7 +322,9 @@ fn baseline_bins(dir: &Path, launcher: &Path, scratch: &Path) -> Result<PathBuf>
         }
         std::fs::copy(entry.path(), out.join(entry.file_name()))?;
     }
-    std::fs::copy(launcher, out.join("testbed-launch"))?;
+    if !out.join("testbed-launch").exists() {
+        std::fs::copy(launcher, out.join("testbed-launch"))?;
+    }
     Ok(out)
 }
 

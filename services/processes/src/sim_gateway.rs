@@ -4,7 +4,9 @@
 //! On every wake-up the truth samples are taken first, then the commands that preceded them
 //! (in lockstep a command of tick k−1 always precedes the truth of tick k, so telemetry
 //! reports the command in effect deterministically), then each truth gives at most one sample.
-//! Commands do not wake the gateway: only the truth does.
+//! Commands do not wake the gateway: only the truth does, and only the truth of a tick on
+//! which the device samples (a 2.5-Hz sensor on the 10-Hz truth wakes 2.5 times a second:
+//! [`TopicSubscriber::wake_from`]); the truths in between are taken with the next sample's.
 
 use ipc_types::{CmgCommand, SimTruth, Topic, WheelCommand};
 use testbed_bus::{Bus, BusError, Flow, TopicPublisher, TopicSubscriber, Wake};
@@ -20,6 +22,8 @@ pub trait SimDevice: Sized + 'static {
     fn new(config: &RunConfig, schedule: Schedule) -> Self;
     /// The sample of `truth`'s tick, if the device samples then.
     fn on_truth(&mut self, truth: &SimTruth) -> Option<Self::Sample>;
+    /// Ticks between the device's samples (1: every tick).
+    fn ticks_per_sample(&self) -> u64;
     /// The command stream the device follows (wheels, CMG); `None` for sensors.
     fn commands(_bus: &Bus) -> Result<Option<Box<dyn CommandInput<Self>>>, BusError> {
         Ok(None)
@@ -59,6 +63,9 @@ macro_rules! sim_device {
             fn on_truth(&mut self, truth: &SimTruth) -> Option<$sample> {
                 <$device>::on_truth(self, truth)
             }
+            fn ticks_per_sample(&self) -> u64 {
+                <$device>::ticks_per_sample(self)
+            }
             fn commands(bus: &Bus) -> Result<Option<Box<dyn CommandInput<Self>>>, BusError> {
                 $commands(bus)
             }
@@ -87,7 +94,9 @@ pub struct SimGatewayPorts<D: SimDevice> {
 pub struct SimGateway<D> {
     device: D,
     truths: Vec<SimTruth>,
-    /// The plant's tick period (liveness of the truth stream).
+    schedule: Schedule,
+    /// The device's sample period: how often the gateway takes the truth (liveness of the
+    /// truth stream as this gateway sees it).
     period: std::time::Duration,
 }
 
@@ -95,6 +104,8 @@ impl<D: SimDevice> SimGateway<D> {
     pub fn open(cx: &Context) -> anyhow::Result<(Self, SimGatewayPorts<D>)> {
         let schedule = cx.config.schedule()?;
         let device = D::new(cx.config, schedule);
+        let period =
+            std::time::Duration::from_nanos(schedule.period_ns * device.ticks_per_sample());
         let commands = D::commands(cx.bus)?;
         let ports = SimGatewayPorts {
             truth: cx.bus.subscriber()?,
@@ -105,7 +116,8 @@ impl<D: SimDevice> SimGateway<D> {
             Self {
                 device,
                 truths: Vec::new(),
-                period: std::time::Duration::from_nanos(schedule.period_ns),
+                schedule,
+                period,
             },
             ports,
         ))
@@ -125,19 +137,39 @@ impl<D: SimDevice> Node for SimGateway<D> {
     }
 
     fn on_wake(&mut self, ports: &Self::Ports, _wake: Wake, io: &Io) -> anyhow::Result<Flow> {
-        self.truths.clear();
-        ports.truth.drain_into(&mut self.truths)?;
-        if let Some(commands) = &ports.commands {
-            commands.drain_into(&mut self.device)?;
-        }
-        for truth in &self.truths {
-            io.heartbeat.add_samples_in(1);
-            io.heartbeat.set_time_ns(truth.header.time_ns);
-            if let Some(sample) = self.device.on_truth(truth) {
-                ports.output.publish(&sample)?;
-                io.heartbeat.add_samples_out(1);
+        // A gateway that asks to be woken only from its next sample's tick on looks at the
+        // truth once more after asking: a truth published before the publisher could see the
+        // request would otherwise wait, unrung, for the sample after it.
+        loop {
+            self.truths.clear();
+            ports.truth.drain_into(&mut self.truths)?;
+            if let Some(commands) = &ports.commands {
+                commands.drain_into(&mut self.device)?;
+            }
+            if self.truths.is_empty() {
+                return Ok(Flow::Continue);
+            }
+            for truth in &self.truths {
+                io.heartbeat.add_samples_in(1);
+                io.heartbeat.set_time_ns(truth.header.time_ns);
+                if let Some(sample) = self.device.on_truth(truth) {
+                    ports.output.publish(&sample)?;
+                    io.heartbeat.add_samples_out(1);
+                }
+            }
+            let every = self.device.ticks_per_sample();
+            if every == 1 {
+                return Ok(Flow::Continue);
+            }
+            let last_tick = self
+                .truths
+                .last()
+                .and_then(|t| self.schedule.tick_at(t.header.time_ns));
+            if let Some(k) = last_tick {
+                ports
+                    .truth
+                    .wake_from(self.schedule.time_ns(Schedule::next_due(k, every)));
             }
         }
-        Ok(Flow::Continue)
     }
 }

@@ -36,7 +36,9 @@
 //! [`MAX_CONSUMERS`] doorbells, each claimed by one [`Bus`](crate::Bus) and freed when it is
 //! dropped (a dead process's doorbell is taken over when no free one is left), and
 //! [`MAX_TOPICS`] topic entries, each a topic name's hash and the set of doorbells subscribed to
-//! it.
+//! it, and per doorbell and topic the time stamp from which a publish rings
+//! ([`Bell::ring_from`]: a consumer that needs only some samples of a topic to wake, such as a
+//! 2.5-Hz sensor model on a 10-Hz truth stream, is not woken for the others).
 
 use std::fs::OpenOptions;
 use std::io;
@@ -55,7 +57,7 @@ pub const MAX_CONSUMERS: usize = 64;
 pub const MAX_TOPICS: usize = 64;
 
 /// The table's first word once initialised: layout name and version.
-const MAGIC: u64 = u64::from_le_bytes(*b"tbbell01");
+const MAGIC: u64 = u64::from_le_bytes(*b"tbbell02");
 
 /// One consumer's doorbell, alone on its cache line (publishers of other consumers do not
 /// contend for it).
@@ -82,6 +84,10 @@ struct Table {
     magic: AtomicU64,
     bells: [BellSlot; MAX_CONSUMERS],
     topics: [TopicSlot; MAX_TOPICS],
+    /// `ring_from[bell][topic]`: a publish on the topic rings the doorbell only for a sample
+    /// stamped at or after this time, ns (run time of the sample header); 0 rings for every
+    /// sample.
+    ring_from: [[AtomicU64; MAX_TOPICS]; MAX_CONSUMERS],
 }
 
 /// A mapping of one bus prefix's table.
@@ -220,6 +226,9 @@ impl Doorbells {
         for topic in &table.topics {
             topic.consumers.fetch_and(bit, Ordering::AcqRel);
         }
+        for from in &table.ring_from[index] {
+            from.store(0, Ordering::SeqCst);
+        }
         Ok(Bell {
             doorbells: self.clone(),
             index,
@@ -328,7 +337,19 @@ impl Bell {
             self.doorbells.table().topics[topic.index]
                 .consumers
                 .fetch_and(!(1 << self.index), Ordering::AcqRel);
+            self.ring_from(topic, 0);
         }
+    }
+
+    /// From now on publishes on `topic` ring this doorbell only for samples stamped at or after
+    /// `time_ns` (earlier ones are delivered all the same, and taken with the next wake-up);
+    /// 0 rings for every sample. Shared by all subscribers of the topic on this doorbell.
+    ///
+    /// A publisher reads the time after its sample is sent, so a sample stamped at or after
+    /// `time_ns` that was sent before this call may have been sent unrung: the caller looks at
+    /// its subscriber once more after this call, or waits for the next ring.
+    pub(crate) fn ring_from(&self, topic: &TopicBells, time_ns: u64) {
+        self.doorbells.table().ring_from[self.index][topic.index].store(time_ns, Ordering::SeqCst);
     }
 
     /// The ring counter now. Read it *before* looking for samples, and wait on it.
@@ -356,14 +377,27 @@ pub(crate) struct TopicBells {
 impl TopicBells {
     /// Rings every doorbell subscribed to the topic; returns how many.
     pub(crate) fn ring(&self) -> u32 {
+        self.ring_for(u64::MAX)
+    }
+
+    /// Rings every doorbell subscribed to the topic that asked to be rung for a sample stamped
+    /// `time_ns` ([`Bell::ring_from`]); returns how many.
+    pub(crate) fn ring_for(&self, time_ns: u64) -> u32 {
         let table = self.doorbells.table();
+        // The sample was sent before the consumers' times are read, and a consumer sets its
+        // time before it looks for samples: with a full fence on both sides (the consumer's
+        // sequentially consistent store is one) either the consumer finds the sample or this
+        // publisher finds the new time.
+        std::sync::atomic::fence(Ordering::SeqCst);
         let mut consumers = table.topics[self.index].consumers.load(Ordering::Acquire);
         let mut rung = 0;
         while consumers != 0 {
             let index = consumers.trailing_zeros() as usize;
             consumers &= consumers - 1;
-            ring_slot(&table.bells[index]);
-            rung += 1;
+            if time_ns >= table.ring_from[index][self.index].load(Ordering::SeqCst) {
+                ring_slot(&table.bells[index]);
+                rung += 1;
+            }
         }
         rung
     }
@@ -493,6 +527,47 @@ mod tests {
         drop(bell);
         drop(topic);
         drop(doorbells);
+        std::fs::remove_file(&path).expect("removing the table");
+    }
+
+    #[test]
+    fn a_doorbell_is_rung_only_for_samples_from_the_time_it_asked_for() {
+        let path = table_path("from");
+        let doorbells = Doorbells::open_at(&path).expect("table");
+        let sparse = doorbells.claim().expect("bell");
+        let every = doorbells.claim().expect("bell");
+        let topic = doorbells.topic("a/topic").expect("topic");
+        sparse.subscribe(&topic);
+        every.subscribe(&topic);
+
+        sparse.ring_from(&topic, 400);
+        let (sparse_seen, every_seen) = (sparse.rings(), every.rings());
+        // Stamped before 400: only the consumer that wants every sample is rung.
+        assert_eq!(topic.ring_for(100), 1);
+        assert_eq!(sparse.rings(), sparse_seen);
+        assert_eq!(every.rings(), every_seen.wrapping_add(1));
+        // At and after 400: both.
+        assert_eq!(topic.ring_for(400), 2);
+        assert_eq!(topic.ring_for(500), 2);
+        assert_eq!(sparse.rings(), sparse_seen.wrapping_add(2));
+        // A ring without a time (a new publisher) rings everyone.
+        sparse.ring_from(&topic, u64::MAX - 1);
+        assert_eq!(topic.ring(), 2);
+
+        // Unsubscribing resets the time: a later subscription is rung for every sample, and
+        // so is a doorbell claimed after this one was freed.
+        sparse.unsubscribe(&topic);
+        sparse.subscribe(&topic);
+        assert_eq!(topic.ring_for(0), 2);
+        sparse.ring_from(&topic, 1_000);
+        let index = sparse.index;
+        drop(sparse);
+        let again = doorbells.claim().expect("bell");
+        assert_eq!(again.index, index);
+        again.subscribe(&topic);
+        assert_eq!(topic.ring_for(0), 2);
+
+        drop((again, every, topic, doorbells));
         std::fs::remove_file(&path).expect("removing the table");
     }
 

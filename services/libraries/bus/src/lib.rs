@@ -55,7 +55,8 @@
 //!   `doorbell` module): one wake-up per consumer, however many of its topics were published.
 //!   A subscriber counts as waiting only while it is attached to an event loop
 //!   ([`EventLoop::on_data`]); one drained along with another source, or on a timer, never
-//!   wakes its process.
+//!   wakes its process. A subscriber that needs only some samples of its stream to act asks to
+//!   be woken only from a time stamp on ([`TopicSubscriber::wake_from`]).
 //! - [`EventLoop`]: waits on the process's doorbell with its subscribers, intervals and
 //!   deadlines; returns [`LoopExit::TerminationRequested`] on SIGINT/SIGTERM. How it waits is its
 //!   [`WaitStrategy`]: sleep until rung (default), or also poll the subscribers in short windows

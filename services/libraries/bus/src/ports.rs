@@ -154,7 +154,8 @@ impl<T: Topic> TopicPublisher<T> {
     }
 
     /// Loans a sample in shared memory (initialised with `T::default()`), lets `write` fill it
-    /// in place, sends it to every subscriber and rings their doorbells. Returns the number of
+    /// in place, sends it to every subscriber and rings their doorbells (those that asked for
+    /// this sample's time, [`TopicSubscriber::wake_from`]). Returns the number of
     /// subscribers the sample was delivered to.
     ///
     /// In [`Delivery::Lossless`] runs this blocks while an attached subscriber's buffer is full.
@@ -183,6 +184,7 @@ impl<T: Topic> TopicPublisher<T> {
             .map_err(|e| io_error("loan")(Box::new(e)))?;
         write(sample.payload_mut());
         let sequence = sample.payload().header().sequence;
+        let sample_time_ns = sample.payload().header().time_ns;
         let delivered = sample.send().map_err(|e| io_error("send")(Box::new(e)))?;
         self.sent.set(self.sent.get() + 1);
         if delivered < subscribers {
@@ -197,7 +199,7 @@ impl<T: Topic> TopicPublisher<T> {
             }
             self.undelivered.set(self.undelivered.get() + missed);
         }
-        self.bells.ring();
+        self.bells.ring_for(sample_time_ns);
         Ok(delivered)
     }
 
@@ -333,6 +335,19 @@ impl<T: Topic> TopicSubscriber<T> {
     /// When the latest sample was taken (by `drain`, `latest` or `try_receive`), if ever.
     pub fn last_received(&self) -> Option<Instant> {
         self.last_received.get()
+    }
+
+    /// From now on, publishes wake this process only for samples stamped (header `time_ns`)
+    /// at or after `time_ns`; earlier samples are still delivered and taken with the next
+    /// wake-up. `0` (the default) wakes for every sample. For a consumer that needs only some
+    /// samples of a stream to act — a 2.5-Hz sensor model on the 10-Hz truth — the others
+    /// cost it no wake-up. Applies to every subscriber of the topic on this bus, and is reset
+    /// when the last of them stops waking its loop.
+    ///
+    /// Drain once more after calling this: a sample stamped at or after `time_ns` that was
+    /// published just before may not have rung, and the loop calls back only for rings.
+    pub fn wake_from(&self, time_ns: u64) {
+        self.bell.ring_from(&self.bells, time_ns);
     }
 
     /// Publishers currently registered on the topic (from any process).

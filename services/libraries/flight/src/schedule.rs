@@ -63,6 +63,11 @@ impl Schedule {
     pub fn field_due(&self, k: u64) -> bool {
         k.is_multiple_of(self.field_every)
     }
+    /// The first tick after tick `k` on which a device sampling every `every` ticks samples.
+    pub fn next_due(k: u64, every: u64) -> u64 {
+        let every = every.max(1);
+        (k / every + 1) * every
+    }
 }
 
 /// How many ticks between samples of a device at `rate_hz`; it must divide the gyro rate.

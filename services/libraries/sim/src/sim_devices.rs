@@ -42,6 +42,11 @@ impl SimGyro {
         }
     }
 
+    /// Ticks between samples.
+    pub fn ticks_per_sample(&self) -> u64 {
+        1
+    }
+
     /// The gyro samples on every tick.
     pub fn on_truth(&mut self, truth: &SimTruth) -> Option<GyroSample> {
         tick_of(&self.schedule, truth)?;
@@ -68,6 +73,11 @@ impl SimInclinometer {
             schedule,
             seq: Sequence::default(),
         }
+    }
+
+    /// Ticks between samples.
+    pub fn ticks_per_sample(&self) -> u64 {
+        self.schedule.tilt_every
     }
 
     /// A sample on the inclinometer's ticks; out of range is published without `VALID`.
@@ -99,6 +109,11 @@ impl SimMagnetometer {
             schedule,
             seq: Sequence::default(),
         }
+    }
+
+    /// Ticks between samples.
+    pub fn ticks_per_sample(&self) -> u64 {
+        self.schedule.field_every
     }
 
     pub fn on_truth(&mut self, truth: &SimTruth) -> Option<MagnetometerSample> {
@@ -138,6 +153,11 @@ impl SimWheels {
         self.torque_in_effect = c.torque;
     }
 
+    /// Ticks between samples.
+    pub fn ticks_per_sample(&self) -> u64 {
+        1
+    }
+
     pub fn on_truth(&mut self, truth: &SimTruth) -> Option<WheelTelemetry> {
         tick_of(&self.schedule, truth)?;
         let speed = self.tachometer.sample(&v3(&truth.wheel_speed));
@@ -169,6 +189,11 @@ impl SimCmg {
 
     pub fn on_command(&mut self, c: &CmgCommand) {
         self.rate_in_effect = c.gimbal_rate;
+    }
+
+    /// Ticks between samples.
+    pub fn ticks_per_sample(&self) -> u64 {
+        1
     }
 
     pub fn on_truth(&mut self, truth: &SimTruth) -> Option<CmgTelemetry> {
