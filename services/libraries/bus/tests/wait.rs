@@ -569,3 +569,64 @@ fn heartbeats_ride_on_other_wake_ups_and_still_come_when_nothing_else_does() {
     }
     remove_all(&config).expect("remove_all");
 }
+
+#[test]
+fn a_subscriber_woken_from_a_time_on_sleeps_through_earlier_samples_and_takes_them_all() {
+    // A 2.5-Hz sensor model on a 10-Hz stream asks to be woken only for the sample of its own
+    // tick: the three before it arrive unrung and are taken with it.
+    let config = BusConfig::isolated();
+    {
+        let bus = Bus::open("consumer", &config).expect("bus");
+        let truth = bus.subscriber::<GyroSample>().expect("subscriber");
+        let waiter = Waiter::new().expect("waiter");
+        let mut events = EventLoop::with_wait_strategy(&waiter, WaitStrategy::Block);
+        let source = events.on_data(&truth).expect("attach");
+        // Samples are stamped `sequence` × 100 ms: wake for the fourth.
+        truth.wake_from(gyro(4).header.time_ns);
+        let (start, publisher) = publisher_thread(&config, |publisher| {
+            for i in 1..=4 {
+                publisher.publish(&gyro(i)).expect("publish");
+                // Apart enough that the consumer is asleep for each.
+                thread::sleep(Duration::from_millis(5));
+            }
+        });
+        // The publisher's own start-up ring (subscribers connect to a new publisher) comes
+        // before the loop's first look: wait for its port, then drain that round.
+        thread::sleep(Duration::from_millis(200));
+        events
+            .run_once(Duration::ZERO, |_| Flow::Continue)
+            .expect("first look");
+        let woken_before = events.wait_stats().woken;
+        start.send(()).expect("start");
+        let mut taken = Vec::new();
+        let begin = Instant::now();
+        while taken.len() < 4 {
+            assert!(
+                begin.elapsed() < HANG_GUARD,
+                "the fourth sample never woke the loop"
+            );
+            events
+                .run_once(Duration::from_secs(1), |wake| {
+                    assert_eq!(wake, Wake::Data(source));
+                    truth
+                        .drain(|s| taken.push(s.header.sequence))
+                        .expect("drain");
+                    Flow::Continue
+                })
+                .expect("event loop");
+        }
+        let _ = start.send(());
+        publisher
+            .join()
+            .expect("publisher thread")
+            .expect("publisher");
+        assert_eq!(taken, [1, 2, 3, 4], "every sample is taken, in order");
+        assert_eq!(
+            events.wait_stats().woken - woken_before,
+            1,
+            "one wake-up, for the fourth sample: {:?}",
+            events.wait_stats()
+        );
+    }
+    remove_all(&config).expect("remove_all");
+}
