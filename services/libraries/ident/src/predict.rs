@@ -273,8 +273,12 @@ pub fn predict(
             Some(th) => propellant_used_before(&plant_config, th.used_kg(k0)),
             None => plant_config.clone(),
         };
-        // A fitted torque's time runs from the record's start; the window's plant starts at 0.
+        // A fitted (wheel) torque's time runs from the record's start; the window's plant starts
+        // at 0.
         if let Some(fitted) = window_config.effects.fitted_torque.as_mut() {
+            fitted.start_time_s += data.t[k0] - data.t[0];
+        }
+        if let Some(fitted) = window_config.effects.fitted_wheel_torque.as_mut() {
             fitted.start_time_s += data.t[k0] - data.t[0];
         }
         let Ok(mut plant) = Plant::new(&window_config, state) else {

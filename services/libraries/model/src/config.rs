@@ -280,6 +280,11 @@ pub struct EffectsConfig {
     /// model): see [`crate::physics::fitted_torque`].
     #[serde(skip_serializing_if = "Option::is_none")]
     pub fitted_torque: Option<FittedTorque>,
+    /// A torque between each wheel and the platform fitted to data (an unexplained effect of
+    /// `testbed identify` in the wheel channel, carried into the model): see
+    /// [`crate::physics::fitted_wheel_torque`].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub fitted_wheel_torque: Option<FittedWheelTorque>,
     /// A magnetometer error fitted to data (an unexplained effect of `testbed identify` in the
     /// field innovations, carried into the model): see [`crate::devices::fitted_field`].
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -308,6 +313,34 @@ pub struct FittedTorqueTerm {
     /// The function, by name (`1`, `t_s`, `sin 2ψ`, `w_z`, …).
     pub function: String,
     /// Nm per unit of the function (Nm/s for `t_s`, Nm/(rad/s) for a rate).
+    pub coefficient: f64,
+}
+
+/// A torque between each wheel and the platform fitted to data, `T_i = Σ coefficient ×
+/// function` per wheel `i`, accelerating the wheel in its positive sense (the platform takes the
+/// reaction); written by `testbed identify` from the unexplained effects it finds in the wheel
+/// channel (or by hand). Functions:
+/// [`crate::physics::fitted_wheel_torque::WheelFunction`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FittedWheelTorque {
+    /// The terms' time at the plant's start, s (their time is the record's time from its
+    /// start; 0 when the run starts where the record did).
+    #[serde(default)]
+    pub start_time_s: f64,
+    pub terms: Vec<FittedWheelTorqueTerm>,
+}
+
+/// One term of a [`FittedWheelTorque`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FittedWheelTorqueTerm {
+    /// The wheel, by the body axis it spins about: `x`, `y` or `z`.
+    pub wheel: String,
+    /// The function, by name (`1`, `t_s`, `sign n`, `n·|n|`, `τ`, `sin tilt_x`, …).
+    pub function: String,
+    /// Nm per unit of the function (Nm/s for `t_s`, Nm/(rad/s) for `n` or a rate,
+    /// Nm/(rad/s)² for `n·|n|` and `n²`, Nm/Nm for `τ`).
     pub coefficient: f64,
 }
 
@@ -700,6 +733,30 @@ impl ModelConfig {
                 }
                 if TorqueFunction::from_name(&term.function).is_none() {
                     let known: Vec<&str> = TorqueFunction::ALL.iter().map(|f| f.name()).collect();
+                    v.fail(
+                        &format!("{key}.function"),
+                        term.function.clone(),
+                        &format!("unknown function; known: {}", known.join(", ")),
+                    );
+                }
+                v.finite(&format!("{key}.coefficient"), term.coefficient);
+            }
+        }
+        if let Some(x) = &e.fitted_wheel_torque {
+            use crate::physics::fitted_torque::axis_index;
+            use crate::physics::fitted_wheel_torque::WheelFunction;
+            v.finite("effects.fitted_wheel_torque.start_time_s", x.start_time_s);
+            for (i, term) in x.terms.iter().enumerate() {
+                let key = format!("effects.fitted_wheel_torque.terms[{i}]");
+                if axis_index(&term.wheel).is_none() {
+                    v.fail(
+                        &format!("{key}.wheel"),
+                        term.wheel.clone(),
+                        "must be x, y or z (the wheel's spin axis)",
+                    );
+                }
+                if WheelFunction::from_name(&term.function).is_none() {
+                    let known: Vec<&str> = WheelFunction::ALL.iter().map(|f| f.name()).collect();
                     v.fail(
                         &format!("{key}.function"),
                         term.function.clone(),

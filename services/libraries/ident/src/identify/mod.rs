@@ -554,15 +554,21 @@ fn identify_pass(
             .collect::<Vec<_>>()
             .join(" + ")
     };
-    // The unexplained torque terms become a fitted torque in the extended model (added to one
-    // the model already has); held-out predictions use the terms fitted without the held-out
-    // blocks.
+    // The unexplained torque terms become a fitted torque in the extended model, the wheel
+    // channel's a fitted wheel torque (each added to one the model already has); held-out
+    // predictions use the terms fitted without the held-out blocks.
     let span_s = (aligned.t.last().copied().unwrap_or(1.0)
         - aligned.t.first().copied().unwrap_or(0.0))
     .max(1e-9);
     use unexplained::Coefficients;
     let with_terms = |base: &ModelConfig, which: Coefficients| {
-        let (fitted, not_carried) = unexplained::fitted_torque(&effects, span_s, which);
+        let (fitted, mut not_carried) = unexplained::fitted_torque(&effects, span_s, which);
+        // The wheel terms' `τ` is the commanded torque; the plant's is the delivered one
+        // (times the torque scale of `base`).
+        let scale = crate::fit::WheelModel::from_config(base).scale;
+        let (fitted_wheel, wheel_not_carried) =
+            unexplained::fitted_wheel_torque(&effects, span_s, scale, which);
+        not_carried.extend(wheel_not_carried);
         let mut config = base.clone();
         if let Some(new) = &fitted {
             match config.effects.fitted_torque.as_mut() {
@@ -570,17 +576,26 @@ fn identify_pass(
                 None => config.effects.fitted_torque = Some(new.clone()),
             }
         }
-        (config, fitted, not_carried)
+        if let Some(new) = &fitted_wheel {
+            match config.effects.fitted_wheel_torque.as_mut() {
+                Some(old) => old.terms.extend(new.terms.iter().cloned()),
+                None => config.effects.fitted_wheel_torque = Some(new.clone()),
+            }
+        }
+        (config, (fitted, fitted_wheel), not_carried)
     };
-    let (mut extended, fitted_torque, not_carried) = with_terms(&current.config, Coefficients::All);
+    let (mut extended, (fitted_torque, fitted_wheel_torque), not_carried) =
+        with_terms(&current.config, Coefficients::All);
     let (extended_fit_blocks, _, _) = with_terms(&current.config, Coefficients::FitBlocks);
-    let extends = !selected.is_empty() || fitted_torque.is_some();
+    let carries_terms = fitted_torque.is_some() || fitted_wheel_torque.is_some();
+    let extends = !selected.is_empty() || carries_terms;
     // With k-fold cross-validation each fold is predicted with the terms fitted without it,
     // which needs the search's folds to be the selection's (same count, same blocks).
     let fold_terms = options.folds == options.sparse.folds;
     let mut extension = report::ModelExtension {
-        gain_includes_fitted_torque: fitted_torque.is_some() && (!cross_validated || fold_terms),
+        gain_includes_fitted_torque: carries_terms && (!cross_validated || fold_terms),
         fitted_torque,
+        fitted_wheel_torque,
         not_carried,
         gain_without_fitted_torque: None,
         rejected: None,
@@ -620,14 +635,11 @@ fn identify_pass(
         } else {
             base_held.clone()
         };
-        // What carrying the fitted torque adds: the named causes alone.
-        let named_only = match (
-            &extension.fitted_torque,
-            selected.is_empty() && !second_pass,
-        ) {
-            (None, _) => None,
-            (Some(_), true) => Some(base_held.clone()),
-            (Some(_), false) => Some(predict::predict(
+        // What carrying the fitted torques adds: the named causes alone.
+        let named_only = match (carries_terms, selected.is_empty() && !second_pass) {
+            (false, _) => None,
+            (true, true) => Some(base_held.clone()),
+            (true, false) => Some(predict::predict(
                 aligned,
                 &current.state.recon,
                 &current.config,
@@ -704,11 +716,23 @@ fn identify_pass(
             extension.gain_without_fitted_torque = Some(base / without);
             if with > without * (1.0 - MIN_EXTENSION_GAIN) {
                 extension.rejected = Some(format!(
-                    "the fitted torque is not carried into the extended model: it does not improve the held-out prediction by 1 % ({:.2}× without, {:.2}× with)",
+                    "the fitted {} not carried into the extended model: {} not improve the held-out prediction by 1 % ({:.2}× without, {:.2}× with)",
+                    match (&extension.fitted_torque, &extension.fitted_wheel_torque) {
+                        (Some(_), Some(_)) => "torque and wheel torque are",
+                        (None, Some(_)) => "wheel torque is",
+                        _ => "torque is",
+                    },
+                    if extension.fitted_torque.is_some() && extension.fitted_wheel_torque.is_some()
+                    {
+                        "together they do"
+                    } else {
+                        "it does"
+                    },
                     base / without,
                     base / with
                 ));
                 extension.fitted_torque = None;
+                extension.fitted_wheel_torque = None;
                 extended = current.config.clone();
                 named_only
             } else {
@@ -717,7 +741,10 @@ fn identify_pass(
         }
         None => ext_held,
     };
-    let extends = !selected.is_empty() || extension.fitted_torque.is_some() || second_pass;
+    let extends = !selected.is_empty()
+        || extension.fitted_torque.is_some()
+        || extension.fitted_wheel_torque.is_some()
+        || second_pass;
 
     // Residual reports, nominal and extended.
     let all_spans = [(nominal.state.recon.start, aligned.len())];

@@ -226,15 +226,19 @@ pub fn with_error(value: f64, stderr: f64) -> String {
 pub struct ModelExtension {
     /// The unexplained torque terms as a fitted torque (`[effects.fitted_torque]`).
     pub fitted_torque: Option<testbed_model::config::FittedTorque>,
+    /// The unexplained wheel-channel terms as a fitted wheel torque
+    /// (`[effects.fitted_wheel_torque]`).
+    pub fitted_wheel_torque: Option<testbed_model::config::FittedWheelTorque>,
     /// Terms found but not carried (`equation: function`).
     pub not_carried: Vec<String>,
-    /// Whether the held-out gain's predictions include the fitted torque.
+    /// Whether the held-out gain's predictions include the fitted torques (`fitted_torque` and
+    /// `fitted_wheel_torque`, whichever are carried).
     pub gain_includes_fitted_torque: bool,
-    /// Held-out prediction gain of the named causes alone (without the fitted torque), to set
+    /// Held-out prediction gain of the named causes alone (without the fitted torques), to set
     /// against the extended model's.
     pub gain_without_fitted_torque: Option<f64>,
-    /// Why the unexplained torque terms were not carried (they did not improve the held-out
-    /// prediction).
+    /// Why the unexplained torque and wheel terms were not carried (together they did not
+    /// improve the held-out prediction).
     pub rejected: Option<String>,
 }
 
@@ -322,7 +326,11 @@ pub(super) fn summary(
             parts.join("; ")
         ));
     }
-    if !causes.is_empty() || extension.fitted_torque.is_some() || correction.is_some() {
+    if !causes.is_empty()
+        || extension.fitted_torque.is_some()
+        || extension.fitted_wheel_torque.is_some()
+        || correction.is_some()
+    {
         out.push(format!(
             "Held-out prediction gain of the extended model: {gain:.2}× (nominal RMS / extended RMS)."
         ));
@@ -354,6 +362,26 @@ pub(super) fn summary(
         out.push(format!(
             "Model extension: the unexplained torque terms are in the extended model as [effects.fitted_torque] ({} terms), so the plant reproduces them; {}.",
             f.terms.len(),
+            match (extension.gain_includes_fitted_torque, extension.gain_without_fitted_torque) {
+                (true, Some(without)) => format!("the gain above includes them (without them: {without:.2}×)"),
+                _ => "the cross-validated gain above leaves them out (the search's folds differ from --folds)".to_string(),
+            }
+        ));
+    }
+    if let Some(f) = &extension.fitted_wheel_torque {
+        let terms: Vec<String> = f
+            .terms
+            .iter()
+            .map(|t| {
+                format!(
+                    "wheel {} {:+.3e} Nm × {}",
+                    t.wheel, t.coefficient, t.function
+                )
+            })
+            .collect();
+        out.push(format!(
+            "Model extension: the unexplained wheel terms are in the extended model as [effects.fitted_wheel_torque] ({}), so the plant's wheels reproduce them; {}.",
+            terms.join(", "),
             match (extension.gain_includes_fitted_torque, extension.gain_without_fitted_torque) {
                 (true, Some(without)) => format!("the gain above includes them (without them: {without:.2}×)"),
                 _ => "the cross-validated gain above leaves them out (the search's folds differ from --folds)".to_string(),

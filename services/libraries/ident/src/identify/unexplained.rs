@@ -37,8 +37,11 @@ use crate::reconstruct::INNOVATION_LEN;
 use crate::sparse::{Design, Rows, SparseOptions, SparseResult, Term, search};
 use serde::Serialize;
 use testbed_model::attitude;
-use testbed_model::config::{FittedTorque, FittedTorqueTerm};
+use testbed_model::config::{
+    FittedTorque, FittedTorqueTerm, FittedWheelTorque, FittedWheelTorqueTerm,
+};
 use testbed_model::physics::fitted_torque::TorqueFunction;
+use testbed_model::physics::fitted_wheel_torque::WheelFunction;
 
 /// An effect in the residuals that no named cause explains.
 #[derive(Debug, Clone, Serialize)]
@@ -727,6 +730,63 @@ pub(super) fn fitted_torque(
     (fitted, not_carried)
 }
 
+/// The wheel-channel unexplained effects as a model extension, `[effects.fitted_wheel_torque]`:
+/// each term of equation `wheel_x|y|z` on that wheel, in the plant's form. Identification's `t`
+/// (0…1 over the record of `span_s` seconds) becomes `t_s` in seconds from its start, its
+/// coefficient divided by the span; its `τ` (the commanded torque, clamped, at the model's
+/// delay) becomes the plant's delivered torque, which is that times the wheel's torque scale
+/// (`scale`, 1 without `wheel_torque_scale`), so its coefficient is divided by the scale. The
+/// coefficients are those `which` says. The second value lists terms the plant cannot apply
+/// (none of the wheel candidates today), as `equation: function`.
+pub(super) fn fitted_wheel_torque(
+    effects: &[UnexplainedEffect],
+    span_s: f64,
+    scale: [f64; 3],
+    which: Coefficients,
+) -> (Option<FittedWheelTorque>, Vec<String>) {
+    let mut terms = Vec::new();
+    let mut not_carried = Vec::new();
+    for effect in effects {
+        let Some(wheel) = effect.equation.strip_prefix("wheel_") else {
+            continue;
+        };
+        let index = match wheel {
+            "x" => 0,
+            "y" => 1,
+            "z" => 2,
+            _ => continue,
+        };
+        for term in &effect.terms {
+            let value = match which {
+                Coefficients::All => term.value,
+                Coefficients::FitBlocks => term.value_fit_blocks,
+                Coefficients::WithoutFold(f) => {
+                    term.value_without_fold.get(f).copied().unwrap_or(f64::NAN)
+                }
+            };
+            let (name, divisor) = match term.name.as_str() {
+                "t" => ("t_s", span_s),
+                "τ" => ("τ", scale[index]),
+                other => (other, 1.0),
+            };
+            let coefficient = value / divisor;
+            match WheelFunction::from_name(name) {
+                Some(f) if coefficient.is_finite() => terms.push(FittedWheelTorqueTerm {
+                    wheel: wheel.to_string(),
+                    function: f.name().to_string(),
+                    coefficient,
+                }),
+                _ => not_carried.push(format!("{}: {}", effect.equation, term.name)),
+            }
+        }
+    }
+    let fitted = (!terms.is_empty()).then_some(FittedWheelTorque {
+        start_time_s: 0.0,
+        terms,
+    });
+    (fitted, not_carried)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -791,6 +851,46 @@ mod tests {
         // Sensor effects alone: nothing to carry into the plant.
         assert_eq!(
             fitted_torque(&effects[2..], 600.0, Coefficients::All),
+            (None, Vec::new())
+        );
+    }
+
+    #[test]
+    fn wheel_terms_become_a_fitted_wheel_torque_in_the_plants_form() {
+        let effects = [
+            effect("wheel_y", &[("n·|n|", -1e-8), ("t", 6e-4), ("τ", 0.04)]),
+            effect("wheel_x", &[("sin tilt_x", 1e-2)]),
+            effect("torque_z", &[("1", 1e-3)]),
+        ];
+        let scale = [1.0, 0.8, 1.0];
+        let (fitted, not_carried) = fitted_wheel_torque(&effects, 600.0, scale, Coefficients::All);
+        let fitted = fitted.expect("wheel terms carried");
+        let got: Vec<(&str, &str, f64)> = fitted
+            .terms
+            .iter()
+            .map(|t| (t.wheel.as_str(), t.function.as_str(), t.coefficient))
+            .collect();
+        assert_eq!(
+            got,
+            [
+                ("y", "n·|n|", -1e-8),
+                ("y", "t_s", 6e-4 / 600.0),
+                ("y", "τ", 0.04 / 0.8),
+                ("x", "sin tilt_x", 1e-2),
+            ]
+        );
+        assert!(not_carried.is_empty(), "{not_carried:?}");
+        // Every term loads as the model's configuration.
+        let mut config = testbed_model::ModelConfig::default();
+        config.effects.fitted_wheel_torque = Some(fitted);
+        config.validate().expect("valid fitted wheel torque");
+        let (held, _) = fitted_wheel_torque(&effects, 600.0, scale, Coefficients::FitBlocks);
+        assert_eq!(held.expect("carried").terms[3].coefficient, 0.5e-2);
+        let (fold, _) = fitted_wheel_torque(&effects, 600.0, scale, Coefficients::WithoutFold(0));
+        assert_eq!(fold.expect("carried").terms[0].coefficient, -0.25e-8);
+        // Torque effects alone: nothing for the wheels.
+        assert_eq!(
+            fitted_wheel_torque(&effects[2..], 600.0, scale, Coefficients::All),
             (None, Vec::new())
         );
     }

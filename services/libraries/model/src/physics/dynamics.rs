@@ -7,12 +7,16 @@
 //!
 //! ```text
 //! platform:  I w' + h' + w × (I w + h) = M                       (Euler, body axes)
-//! wheel i:   J (w_i' + n_i') = τ_net,i,   τ_net = τ_motor − T_f(n)
+//! wheel i:   J (w_i' + n_i') = τ_net,i,   τ_net = τ_motor − T_f(n) + T_e(…)
 //! CMGs:      h_cmg' = J_cmg(δ) δ',        δ' = servoed gimbal rate
 //! ⇒ (I − J·1) w' = M − w × (I w + h) − τ_net − J_cmg(δ) δ'
 //!    n' = τ_net / J − w'
 //! q' = ½ (0, −w) ⊗ q                                              (Hamilton, L→B, see attitude)
 //! ```
+//!
+//! `T_e` are the wheel effects outside friction, zero unless configured:
+//! `effects.wheel_tilt_torque` and `effects.fitted_wheel_torque`
+//! ([`super::fitted_wheel_torque`]).
 //!
 //! A wheel held by static friction (stuck) has `n_i' = 0`: its unknown friction torque is
 //! eliminated by moving `J w_i'` to the left, `(I − J·1 + J P_S) w' = …` with `P_S` selecting the
@@ -22,6 +26,7 @@
 //! inertia, like the gimbals', is lumped into `I` as a constant: gimbal motion changes only `h`.
 
 use super::environment::ExternalTorqueModel;
+use super::fitted_wheel_torque::FittedWheelTorqueModel;
 use super::friction::{Wheel, WheelFrictionModel};
 use super::state::{PlatformState, StateVector};
 use super::{CmgPyramid, PhysicsError};
@@ -57,6 +62,8 @@ pub struct Dynamics {
     friction: [WheelFrictionModel; 3],
     /// `effects.wheel_tilt_torque`: per wheel, torque per unit of `G_x` and of `G_y`, Nm.
     wheel_tilt: Option<[[f64; 2]; 3]>,
+    /// `effects.fitted_wheel_torque`, resolved (inactive without it).
+    fitted_wheel: FittedWheelTorqueModel,
     external: ExternalTorqueModel,
     /// `(I − J·1 + J P_S)⁻¹` for each set S of stuck wheels (bit i = wheel i).
     locked_inverse: [Matrix3<f64>; 8],
@@ -91,6 +98,9 @@ impl Dynamics {
                 .wheel_tilt_torque
                 .as_ref()
                 .map(|t| std::array::from_fn(|i| [t.sin_tilt_x_nm[i], t.sin_tilt_y_nm[i]])),
+            fitted_wheel: FittedWheelTorqueModel::from_config(
+                config.effects.fitted_wheel_torque.as_ref(),
+            ),
             external: ExternalTorqueModel::from_config(config),
             locked_inverse,
             thruster_torque_b: None,
@@ -120,10 +130,14 @@ impl Dynamics {
     }
 
     /// Re-resolve a time-dependent external torque (`com_drift`) at plant time `t_s` from the
-    /// model at time 0 (`base`). Does nothing for a time-independent one.
+    /// model at time 0 (`base`), and the fitted wheel torque's time terms. Does nothing for
+    /// time-independent ones.
     pub fn set_external_time(&mut self, base: &ExternalTorqueModel, t_s: f64) {
         if base.time_dependent() {
             self.external = ExternalTorqueModel::at_time(base, t_s);
+        }
+        if self.fitted_wheel.uses_time() {
+            self.fitted_wheel.set_time(t_s);
         }
     }
 
@@ -204,6 +218,10 @@ impl Dynamics {
         let mut net = Vector3::zeros();
         let mut mask = 0;
         let g = self.wheel_tilt.map(|_| crate::attitude::gravity_b(q));
+        let fitted = self
+            .fitted_wheel
+            .is_active()
+            .then(|| self.fitted_wheel.platform(q, rate_b));
         for i in 0..3 {
             match input.modes[i] {
                 WheelMode::Stuck => mask |= 1 << i,
@@ -212,6 +230,15 @@ impl Dynamics {
                         - self.friction[i].sliding_torque(wheel_speed[i], direction);
                     if let (Some(tilt), Some(g)) = (&self.wheel_tilt, &g) {
                         net[i] += tilt[i][0] * g.x + tilt[i][1] * g.y;
+                    }
+                    if let Some(platform) = &fitted {
+                        net[i] += self.fitted_wheel.torque(
+                            i,
+                            wheel_speed[i],
+                            direction,
+                            input.motor_torque_nm[i],
+                            platform,
+                        );
                     }
                     rhs[i] -= net[i];
                 }

@@ -7,6 +7,8 @@
 //! * [`friction`]: wheel bearing friction (paper eq. 3, or the asymmetric Stribeck effect);
 //! * [`environment`]: external torques (centre-of-mass offset, drag, constant);
 //! * [`fitted_torque`]: a torque fitted to data (identification's unexplained effect);
+//! * [`fitted_wheel_torque`]: a torque between a wheel and the platform fitted to data
+//!   (identification's unexplained effect in the wheel channel);
 //! * [`tilt_stop`]: the bearing's ±30° mechanical stop;
 //! * [`delay`]: actuator command delay;
 //! * [`integrator`]: fixed-step RK4;
@@ -20,6 +22,7 @@ pub mod dynamics;
 pub mod environment;
 pub mod error;
 pub mod fitted_torque;
+pub mod fitted_wheel_torque;
 pub mod friction;
 pub mod integrator;
 pub mod plant;

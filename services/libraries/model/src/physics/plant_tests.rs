@@ -483,6 +483,118 @@ fn a_fitted_torque_with_an_unknown_function_or_axis_is_refused() {
     assert!(e.contains("effects.fitted_torque.terms[0].axis"), "{e}");
 }
 
+/// The Z wheel spinning at `n0` on a frictionless, diagonal platform with `terms` as its fitted
+/// wheel torque, stepped `steps` × 0.1 s without commands.
+fn fitted_wheel_run(terms: Vec<(&str, f64)>, start_time_s: f64, n0: f64, steps: usize) -> Plant {
+    use crate::config::{FittedWheelTorque, FittedWheelTorqueTerm};
+    let mut config = frictionless(diagonal());
+    config.effects.fitted_wheel_torque = Some(FittedWheelTorque {
+        start_time_s,
+        terms: terms
+            .into_iter()
+            .map(|(function, coefficient)| FittedWheelTorqueTerm {
+                wheel: "z".into(),
+                function: function.into(),
+                coefficient,
+            })
+            .collect(),
+    });
+    config.validate().expect("valid fitted wheel torque");
+    let initial = PlatformState {
+        wheel_speed: Vector3::new(0.0, 0.0, n0),
+        ..Default::default()
+    };
+    let mut p = plant(&config, initial);
+    for _ in 0..steps {
+        step(&mut p, &ActuatorCommand::default(), 0.1);
+    }
+    p
+}
+
+#[test]
+fn a_fitted_wheel_torque_spins_the_wheel_up_and_down_as_the_closed_forms() {
+    let j = j();
+    let j_eff = j * (IZZ - j) / IZZ;
+    let (n0, big_t) = (50.0, 20.0);
+    // A constant torque c between wheel and platform: J_eff n' = c, n = n0 + c t / J_eff; the
+    // platform takes the reaction, (Izz − J) w' = −c; total momentum Izz w + J n stays J n0.
+    let c = 2.0e-3;
+    let p = fitted_wheel_run(vec![("1", c)], 0.0, n0, 200);
+    let s = p.state();
+    let n_truth = n0 + c * big_t / j_eff;
+    assert!(
+        (s.wheel_speed.z - n_truth).abs() < 1e-12 * n_truth,
+        "{} vs {n_truth}",
+        s.wheel_speed.z
+    );
+    let w_truth = -c * big_t / (IZZ - j);
+    assert!(
+        (s.rate_b.z - w_truth).abs() < 1e-12 * w_truth.abs(),
+        "{} vs {w_truth}",
+        s.rate_b.z
+    );
+    assert!((IZZ * s.rate_b.z + j * s.wheel_speed.z - j * n0).abs() < 1e-12);
+    // The frictionless X and Y wheels (breakaway 0) take only rounding (≈ 3e-20 rad/s).
+    assert!(s.wheel_speed.x.abs() < 1e-15 && s.wheel_speed.y.abs() < 1e-15);
+    // Quadratic drag −k n|n| (identification's `n·|n|` with coefficient −k): for n > 0
+    // J_eff n' = −k n², n = n0 / (1 + k n0 t / J_eff) (RK4 at 0.01 s: error far below 1e-9).
+    let k = 1.0e-5;
+    let p = fitted_wheel_run(vec![("n·|n|", -k)], 0.0, n0, 200);
+    let n_truth = n0 / (1.0 + k * n0 * big_t / j_eff);
+    let n = p.state().wheel_speed.z;
+    assert!(n < 0.9 * n0, "the drag must act: {n}");
+    assert!((n - n_truth).abs() < 1e-9 * n0, "{n} vs {n_truth}");
+    // A Coulomb level −d sign n with a torque in time a (t0 + t): n = n0 + (a (t0 T + T²/2) −
+    // d T) / J_eff, less a h T / (2 J_eff) because the plant holds the time at the start of
+    // each 0.01-s substep.
+    let (a, t0, d) = (2.0e-5, 100.0, 1.0e-3);
+    let p = fitted_wheel_run(vec![("t_s", a), ("sign n", -d)], t0, n0, 200);
+    let h = 0.01;
+    let n_truth =
+        n0 + (a * (t0 * big_t + big_t * big_t / 2.0) - d * big_t - a * h * big_t / 2.0) / j_eff;
+    let n = p.state().wheel_speed.z;
+    assert!((n - n_truth).abs() < 1e-12 * n0, "{n} vs {n_truth}");
+}
+
+#[test]
+fn a_fitted_wheel_torque_with_an_unknown_function_or_wheel_is_refused() {
+    use crate::config::{FittedWheelTorque, FittedWheelTorqueTerm};
+    let with = |wheel: &str, function: &str, coefficient: f64| {
+        let mut config = ModelConfig::default();
+        config.effects.fitted_wheel_torque = Some(FittedWheelTorque {
+            start_time_s: 0.0,
+            terms: vec![FittedWheelTorqueTerm {
+                wheel: wheel.into(),
+                function: function.into(),
+                coefficient,
+            }],
+        });
+        config
+    };
+    let e = with("y", "sin 2ψ", 1.0).validate().unwrap_err().to_string();
+    assert!(
+        e.contains("effects.fitted_wheel_torque.terms[0].function") && e.contains("sin 2ψ"),
+        "{e}"
+    );
+    let e = with("4", "1", 1.0).validate().unwrap_err().to_string();
+    assert!(
+        e.contains("effects.fitted_wheel_torque.terms[0].wheel") && e.contains('4'),
+        "{e}"
+    );
+    let e = with("x", "n", f64::NAN).validate().unwrap_err().to_string();
+    assert!(
+        e.contains("effects.fitted_wheel_torque.terms[0].coefficient"),
+        "{e}"
+    );
+    with("x", "n·|n|", -1e-8).validate().expect("valid");
+    // From TOML, as identification writes it.
+    let text = "[effects.fitted_wheel_torque]\n[[effects.fitted_wheel_torque.terms]]\nwheel = \"y\"\nfunction = \"n·|n|\"\ncoefficient = -1.0e-8\n";
+    let config = ModelConfig::from_toml_str(text, "test").expect("loads");
+    let fitted = config.effects.fitted_wheel_torque.expect("present");
+    assert_eq!(fitted.terms[0].coefficient, -1.0e-8);
+    assert!(ModelConfig::from_toml_str(&text.replace("n·|n|", "n^3"), "test").is_err());
+}
+
 #[test]
 fn tilt_stop_fires_once_and_holds_the_platform_on_the_stop() {
     // A constant torque about X from level rotates the platform about X only:
