@@ -161,7 +161,24 @@ impl Node for ControllerProcess {
         } else {
             None
         };
-        for cycle in node.ready().into_iter().chain(silence) {
+        let mut cycles: Vec<_> = node.ready().into_iter().chain(silence).collect();
+        // Telemetry the controller does not wait for wakes nothing (see
+        // `telemetry_wake_from_ns`). Set before the commands go out, so that the telemetry
+        // they cause finds it; then looked at once more, since telemetry sent before the
+        // publisher could see a lower time did not ring.
+        loop {
+            let from = node.telemetry_wake_from_ns();
+            ports.wheels.wake_from(from);
+            ports.cmg.wake_from(from);
+            let late = ports.wheels.drain(|t| node.on_wheel_telemetry(t))?
+                + ports.cmg.drain(|t| node.on_cmg_telemetry(t))?;
+            if late == 0 {
+                break;
+            }
+            io.heartbeat.add_samples_in(late as u64);
+            cycles.extend(node.ready());
+        }
+        for cycle in cycles {
             io.heartbeat.set_time_ns(cycle.status.header.time_ns);
             ports.status.publish(&cycle.status)?;
             if let (Some(port), Some(thrusters)) = (&ports.thruster_command, &cycle.thrusters) {

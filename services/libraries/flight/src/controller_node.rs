@@ -224,6 +224,25 @@ impl ControllerNode {
         self.last_cycle_ns
     }
 
+    /// From which time stamp on actuator telemetry needs to wake the controller, ns (0: all of
+    /// it). While the estimate is healthy and no pending tick has its estimate yet, the
+    /// telemetry of the next tick to run cannot complete anything: that tick waits for its
+    /// estimate, which wakes the controller itself, and an estimate that never comes is
+    /// judged lost only from the telemetry of the tick after ([`LOST_AFTER_PERIODS`]), which
+    /// still wakes it. So the telemetry that usually comes first in a tick costs no
+    /// wake-up of its own, and what runs when is unchanged. Before the first cycle, once an
+    /// estimate is waiting for its telemetry, and once the estimate is lost (safe cycles run
+    /// on the telemetry), every sample wakes.
+    pub fn telemetry_wake_from_ns(&self) -> u64 {
+        let Some(last) = self.last_cycle_ns else {
+            return 0;
+        };
+        if self.estimate_lost() || self.pending.values().any(|p| p.estimate.is_some()) {
+            return 0;
+        }
+        last + 2 * self.period_ns
+    }
+
     /// Safe-mode changes since the last call, with their run times (ns).
     pub fn take_transitions(&mut self) -> Vec<(u64, SafeTransition)> {
         std::mem::take(&mut self.transitions)
@@ -620,6 +639,34 @@ mod tests {
             header: header(k),
             ..CmgTelemetry::default()
         });
+    }
+
+    #[test]
+    fn only_telemetry_that_can_complete_or_judge_a_tick_needs_to_wake_the_controller() {
+        let mut node = node();
+        assert_eq!(node.telemetry_wake_from_ns(), 0, "before the first cycle: all");
+        for k in 0..=5 {
+            node.on_estimate(&estimate(k));
+            telemetry(&mut node, k, 0.0);
+            assert_eq!(node.ready().len(), 1);
+            // Tick k+1 waits for its estimate: its telemetry cannot complete it; tick k+2's
+            // telemetry would judge a missing estimate, and wakes.
+            assert_eq!(node.telemetry_wake_from_ns(), (k + 2) * TICK_NS);
+        }
+        // The estimate of tick 6 is in before its telemetry: the telemetry is awaited.
+        node.on_estimate(&estimate(6));
+        assert!(node.ready().is_empty());
+        assert_eq!(node.telemetry_wake_from_ns(), 0);
+        telemetry(&mut node, 6, 0.0);
+        assert_eq!(node.ready().len(), 1);
+        assert_eq!(node.telemetry_wake_from_ns(), 8 * TICK_NS);
+        // The estimator stops: tick 8's telemetry finds the estimate lost, and from then on
+        // every sample wakes (safe cycles run on the telemetry).
+        telemetry(&mut node, 7, 0.0);
+        assert!(node.ready().is_empty());
+        telemetry(&mut node, 8, 0.0);
+        assert_eq!(node.ready().len(), 1, "a safe cycle at tick 8");
+        assert_eq!(node.telemetry_wake_from_ns(), 0);
     }
 
     #[test]
