@@ -16,8 +16,10 @@
 //! 3. **No explanation of another kind** (torque causes). The torque search is redone without
 //!    the cause and without the candidate functions of its own form. The cause is dropped if
 //!    that search's cross-validated residual sum is more than 1 % below the one with it, or if
-//!    the cause is not significant (the same threshold, likelihood ratio and cluster-robust
-//!    Wald) beside the terms that search finds: the terms of test 2 were found with the cause
+//!    that sum is not above it and the cause is not significant (the same threshold,
+//!    likelihood ratio and cluster-robust Wald) beside the terms that search finds (a search
+//!    that predicts worse may have found a mimic of the cause's form: a true constant torque
+//!    was lost so): the terms of test 2 were found with the cause
 //!    in the model, and a cause that stood in for part of an effect shapes them (a constant
 //!    torque takes the offset of a heading torque, and the search then settles on the wrong
 //!    harmonic, which leaves a trade between the constant torque and a centre-of-mass offset
@@ -400,8 +402,9 @@ pub(super) fn test_causes(
             // Third: no generic form of another kind explains the cause's part as well. The
             // torque search is redone without the cause and its own form (its competitor); the
             // cause is dropped if that search's cross-validated residual sum is more than
-            // `COMPETITOR_MARGIN` below the one with it, or if the cause is not significant
-            // beside the terms it finds (the selection's threshold, by the likelihood ratio and
+            // `COMPETITOR_MARGIN` below the one with it, or, if that sum is not above it, if
+            // the cause is not significant beside the terms it finds (the selection's
+            // threshold, by the likelihood ratio and
             // by the cluster-robust Wald statistic, as in the joint test). The joint test above
             // takes the terms found *with* the cause, whose form the cause has shaped (a
             // constant torque takes an effect's offset, and the search then settles on another
@@ -424,7 +427,9 @@ pub(super) fn test_causes(
                     verdict = format!(
                         "dropped: a form of another kind explains its part better (torque channel's cross-validated residual sum {without:.1} without it, {with:.1} with it); it stood in for that form"
                     );
-                } else {
+                } else if without <= with {
+                    // The explanation without it predicts at least as well out of fold: the
+                    // cause must then add something significant beside its terms.
                     let (_, rival_extra) = joint_columns(named, &rival, candidates, ch);
                     let (with_ne, _) =
                         normal_equations(fit, &cols, &rival_extra, candidates, fit_rows, None);
