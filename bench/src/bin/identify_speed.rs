@@ -6,7 +6,7 @@
 //! and data with one hidden sensor effect (a gyro scale-factor error: the most expensive path,
 //! fitted through the attitude filter), each a median of `repeats` runs.
 //!
-//! `cargo run --release -p testbed-bench --bin identify_speed [-- --duration 3600 --repeats 3 --json]`
+//! `cargo run --release -p testbed-bench --bin identify_speed [-- --duration 3600 --repeats 3 --folds 5 --json]`
 
 use clap::Parser;
 use std::time::{Duration, Instant};
@@ -23,6 +23,9 @@ struct Args {
     /// Timed repeats (the median is reported).
     #[arg(long, default_value_t = 3)]
     repeats: usize,
+    /// Folds of the selection's cross-validation (`Options::folds`; 0: the held-out third).
+    #[arg(long, default_value_t = Options::default().folds)]
+    folds: usize,
     #[arg(long)]
     json: bool,
 }
@@ -45,16 +48,20 @@ fn main() -> anyhow::Result<()> {
     });
     let (clean, _) = experiment::run(&nominal, &options)?;
     let (effect, _) = experiment::run(&hidden, &options)?;
+    let analysis = Options {
+        folds: args.folds,
+        ..Options::default()
+    };
     let mut verdicts = (String::new(), String::new());
     let clean_time = median_time(args.repeats, || {
-        verdicts.0 = identify(&clean, &nominal, &Options::default())
+        verdicts.0 = identify(&clean, &nominal, &analysis)
             .expect("identify runs")
             .report
             .verdict;
     });
     let mut filter_runs = 0;
     let effect_time = median_time(args.repeats, || {
-        let id = identify(&effect, &nominal, &Options::default()).expect("identify runs");
+        let id = identify(&effect, &nominal, &analysis).expect("identify runs");
         verdicts.1 = id.report.verdict;
         filter_runs = id.report.filter_runs;
     });
@@ -71,6 +78,7 @@ fn main() -> anyhow::Result<()> {
         "data_s": args.duration,
         "gyro_rows": rows,
         "repeats": args.repeats,
+        "folds": args.folds,
         "simulate_the_hour_s": s(simulate),
         "identify_clean_s": s(clean_time),
         "identify_clean_verdict": verdicts.0,
@@ -87,8 +95,8 @@ fn main() -> anyhow::Result<()> {
         println!("{}", serde_json::to_string_pretty(&report)?);
     } else {
         println!(
-            "{:.0} s of 10 Hz data ({rows} gyro rows), medians of {} runs",
-            args.duration, args.repeats
+            "{:.0} s of 10 Hz data ({rows} gyro rows), medians of {} runs, folds {}",
+            args.duration, args.repeats, args.folds
         );
         println!("{:<46} {:>10}", "", "wall (s)");
         println!(

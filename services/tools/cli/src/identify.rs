@@ -27,9 +27,10 @@ pub struct IdentifyArgs {
     /// Print the report as one JSON object instead of the tables.
     #[arg(long)]
     json: bool,
-    /// k-fold cross-validation of the selection and the gain over 30-s blocks (the fits then
-    /// use all the data); 0: one third of the blocks held out of the fits instead.
-    #[arg(long, default_value_t = 0)]
+    /// k-fold cross-validation of the selection and the gain over 30-s blocks (block b in fold
+    /// b mod K; the fits use all the data); 0: one third of the blocks held out of the fits
+    /// instead.
+    #[arg(long, default_value_t = 5)]
     folds: usize,
 }
 
@@ -966,7 +967,7 @@ mod tests {
             model: nominal.clone(),
             out: out.clone(),
             json: true,
-            folds: 0,
+            folds: 5,
         })
         .unwrap();
         let extended = ModelConfig::load(&out.join("extended_model.toml")).unwrap();
@@ -993,11 +994,16 @@ mod tests {
         );
         assert!(report["gain"].as_f64().unwrap() > 5.0);
         // The text report: verdict first (the named cause with its rounded parameters), then
-        // the evidence; no whiteness p-value (the wrong null for these residuals).
+        // the evidence; no whiteness p-value (the wrong null for these residuals). With the
+        // held-out third instead of cross-validation (`--folds 0`) the same cause.
+        let held_out = Options {
+            folds: 0,
+            ..Options::default()
+        };
         let again = testbed_ident::identify(
             &load_data(&data).unwrap(),
             &ModelConfig::default(),
-            &Options::default(),
+            &held_out,
         )
         .unwrap();
         let text = render_report(&again.report).unwrap();
@@ -1007,15 +1013,16 @@ mod tests {
         );
         assert!(text.find("VERDICT") < text.find("EVIDENCE"), "{text}");
         assert!(!text.contains("white p"), "{text}");
-        // With 5-fold cross-validation: the same cause, a cross-validated gain above 5 (every
-        // tick after the filter's start predicted out of fold), and the report says so.
-        let folds = Options {
-            folds: 5,
-            ..Options::default()
-        };
-        let cv =
-            testbed_ident::identify(&load_data(&data).unwrap(), &ModelConfig::default(), &folds)
-                .unwrap();
+        assert!(text.contains("held out of the fits"), "{text}");
+        // With 5-fold cross-validation (the default): the same cause, a cross-validated gain
+        // above 5 (every tick after the filter's start predicted out of fold), and the report
+        // says so.
+        let cv = testbed_ident::identify(
+            &load_data(&data).unwrap(),
+            &ModelConfig::default(),
+            &Options::default(),
+        )
+        .unwrap();
         assert_eq!(cv.report.verdict, "wheel_torque_scale");
         assert!(
             cv.report.gain > 5.0,

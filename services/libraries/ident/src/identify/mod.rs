@@ -8,12 +8,12 @@
 //!    sensor models (the attitude filter's innovations). Each residual is described by its RMS,
 //!    bias, trend and lag-1 correlation (no white-noise test: these series are correlated by
 //!    construction).
-//! 2. **Name the cause.** The data are split in time blocks of `block_s`. By default every
-//!    `held_out_every`-th block is held out of the fits. With `folds` ≥ 2 (k-fold
-//!    cross-validation over contiguous blocks, block b in fold `b mod folds`) the fits use all
-//!    the data instead, and a candidate significant at 1 % is also fitted k times, each time
-//!    without one fold; its held-out statistic is then the sum over the folds of the left-out
-//!    fold's log-likelihood ratio against the set chosen so far (fitted the same way).
+//! 2. **Name the cause.** The data are split in time blocks of `block_s`. By default (`folds`
+//!    5: k-fold cross-validation over contiguous blocks, block b in fold `b mod folds`) the
+//!    fits use all the data, and a candidate significant at 1 % is also fitted k times, each
+//!    time without one fold; its held-out statistic is then the sum over the folds of the
+//!    left-out fold's log-likelihood ratio against the set chosen so far (fitted the same
+//!    way). With `folds` 0 every `held_out_every`-th block is held out of the fits instead.
 //!    Forward selection over the candidate library: at each step every remaining cause is fitted
 //!    jointly with those already chosen ([`crate::fit`]); a candidate is significant when its
 //!    likelihood ratio on the fit data beats both the information criterion (BIC, `k ln N`)
@@ -23,12 +23,13 @@
 //! 3. **Extend the model**: the configuration given plus the chosen effects with their fitted
 //!    values (loadable by `ModelConfig::load`).
 //! 4. **Measure the gain**: multi-step prediction error of the nominal and extended model per
-//!    component and overall on the held-out blocks, or with `folds` ≥ 2 on every fold predicted
-//!    by the extended model fitted without it; gain = nominal / extended.
+//!    component and overall on every fold predicted by the extended model fitted without it
+//!    (with `folds` 0: on the held-out blocks); gain = nominal / extended.
 //!
 //! 5. **Falsify the named causes** (`falsify`, wheel causes in `wheel`): each must have the same
 //!    parameters in disjoint time blocks and stay significant beside the other causes and the
-//!    unexplained effects (a wheel cause also needs white residuals of its wheel equation);
+//!    unexplained effects, and a torque cause also beside the best explanation of another
+//!    form found without it (a wheel cause needs white residuals of its wheel equation);
 //!    the worst failure is dropped and the rest refitted and tested again.
 //! 6. **Find the form of what remains** (`unexplained`, [`crate::sparse`]): sparse regression of
 //!    each equation's residual (torque per axis, each innovation component, each wheel's spin
@@ -88,8 +89,8 @@ pub struct Options {
     /// (3: a third of the data).
     pub held_out_every: usize,
     /// Folds of the k-fold cross-validation of the selection and of the gain (block b of
-    /// `block_s` in fold `b mod folds`; the fits then use all the data); 0: off, one held-out
-    /// share (`held_out_every`) instead.
+    /// `block_s` in fold `b mod folds`; the fits then use all the data; 5, the default); 0:
+    /// off, one held-out share (`held_out_every`) instead.
     pub folds: usize,
     /// Most causes named.
     pub max_causes: usize,
@@ -114,7 +115,7 @@ impl Default for Options {
             horizon_s: 10.0,
             block_s: 30.0,
             held_out_every: 3,
-            folds: 0,
+            folds: 5,
             max_causes: 4,
             alpha: 1e-6,
             candidates: Cause::ALL.to_vec(),
@@ -961,9 +962,14 @@ mod tests {
     use super::*;
 
     #[test]
-    fn cross_validation_is_off_by_default_and_needs_two_folds() {
-        assert_eq!(Options::default().folds, 0);
+    fn cross_validation_is_on_by_default_and_needs_two_folds() {
+        assert_eq!(Options::default().folds, 5);
         assert!(Options::default().validate().is_ok());
+        let off = Options {
+            folds: 0,
+            ..Options::default()
+        };
+        assert!(off.validate().is_ok());
         let one = Options {
             folds: 1,
             ..Options::default()

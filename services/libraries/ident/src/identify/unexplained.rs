@@ -264,9 +264,10 @@ pub(super) fn torque_cv_rss(
 /// The competing explanation of a named torque cause: the torque search redone without it
 /// (its fitted part put back into the residual) and without the candidate functions that are
 /// the cause's own form (`1` for a constant torque, the tilt terms for a centre-of-mass offset,
-/// rates for drag, accelerations and rate products for the inertia). Returns its
-/// cross-validated residual sum, to set against [`torque_cv_rss`] with the cause: a cause
-/// whose part a generic form of another kind explains better stood in for that form.
+/// rates for drag, accelerations and rate products for the inertia). Returns the effects it
+/// finds and its cross-validated residual sum, to set against [`torque_cv_rss`] with the
+/// cause: a cause whose part a generic form of another kind explains better stood in for that
+/// form.
 pub(super) fn competing_explanation(
     problem: &Problem,
     fit: &SetFit,
@@ -275,9 +276,9 @@ pub(super) fn competing_explanation(
     candidates: &TorqueCandidates,
     block_s: f64,
     options: &SparseOptions,
-) -> Option<f64> {
+) -> Option<(Vec<UnexplainedEffect>, f64)> {
     let others: Vec<Cause> = named.iter().copied().filter(|c| *c != cause).collect();
-    search_torque(
+    let (effects, cv) = search_torque(
         problem,
         fit,
         &others,
@@ -285,8 +286,8 @@ pub(super) fn competing_explanation(
         block_s,
         options,
         Some(cause),
-    )
-    .1
+    );
+    Some((effects, cv?))
 }
 
 /// The cause's own form among the torque candidates (excluded from its competitor).

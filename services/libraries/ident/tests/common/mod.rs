@@ -33,9 +33,10 @@ pub fn identify_blind(truth: &ModelConfig, seed: u64, duration_s: f64) -> Identi
     identify(&data, &nominal(), &options()).expect("identification runs")
 }
 
-/// The identification's options: the defaults, with `IDENT_FOLDS=K` in the environment k-fold
-/// cross-validation and `IDENT_CONSISTENCY_BLOCKS=B` the falsification's block count (to run a
-/// suite with other settings).
+/// The identification's options: the defaults, with `IDENT_FOLDS=K` in the environment K folds
+/// of the selection's cross-validation (0: the held-out third instead) and
+/// `IDENT_CONSISTENCY_BLOCKS=B` the falsification's block count (to run a suite with other
+/// settings).
 pub fn options() -> Options {
     let mut options = Options::default();
     if let Ok(k) = std::env::var("IDENT_FOLDS") {
