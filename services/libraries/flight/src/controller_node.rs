@@ -644,7 +644,11 @@ mod tests {
     #[test]
     fn only_telemetry_that_can_complete_or_judge_a_tick_needs_to_wake_the_controller() {
         let mut node = node();
-        assert_eq!(node.telemetry_wake_from_ns(), 0, "before the first cycle: all");
+        assert_eq!(
+            node.telemetry_wake_from_ns(),
+            0,
+            "before the first cycle: all"
+        );
         for k in 0..=5 {
             node.on_estimate(&estimate(k));
             telemetry(&mut node, k, 0.0);
