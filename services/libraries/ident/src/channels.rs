@@ -330,6 +330,11 @@ pub struct WheelInterval {
     /// Start and end time, s.
     pub t0: f64,
     pub t1: f64,
+    /// The platform's state over the interval (mean of its ends), as a fitted wheel torque's
+    /// functions take it: `[sin tilt_x, sin tilt_y, cos ψ, sin ψ, w_x, w_y, w_z]` (the
+    /// horizontal components of the unit down vector in body axes, heading harmonics, body
+    /// rates in rad/s).
+    pub platform: [f64; 7],
 }
 
 /// The wheel channel: per wheel its usable intervals.
@@ -343,7 +348,7 @@ pub struct WheelChannel {
 }
 
 /// Gauss–Legendre nodes and weights on [0, 1] (4 points).
-const GL4: [(f64, f64); 4] = [
+pub(crate) const GL4: [(f64, f64); 4] = [
     (0.069_431_844_202_973_71, 0.173_927_422_568_726_9),
     (0.330_009_478_207_571_9, 0.326_072_577_431_273_1),
     (0.669_990_521_792_428_1, 0.326_072_577_431_273_1),
@@ -364,6 +369,8 @@ impl WheelChannel {
                 let regular =
                     (data.t[k + 1] - data.t[k] - data.period_s).abs() < 0.25 * data.period_s;
                 if regular {
+                    let (a, b) = (platform_at(recon, k), platform_at(recon, k + 1));
+                    let platform: [f64; 7] = std::array::from_fn(|j| 0.5 * (a[j] + b[j]));
                     for (i, wheel_rows) in rows.iter_mut().enumerate() {
                         let (n0, n1) = (speeds[k][i], speeds[k + 1][i]);
                         let usable = n0.abs() >= n_min
@@ -379,6 +386,7 @@ impl WheelChannel {
                                 n1,
                                 t0: data.t[k],
                                 t1: data.t[k + 1],
+                                platform,
                             });
                         }
                     }
@@ -401,6 +409,16 @@ impl WheelChannel {
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }
+}
+
+/// The platform's part of a fitted wheel torque's functions at sample `k` of `recon`:
+/// `[G_x, G_y, cos ψ, sin ψ, w_x, w_y, w_z]` (see [`WheelInterval::platform`]).
+pub fn platform_at(recon: &Reconstruction, k: usize) -> [f64; 7] {
+    let q = &recon.q[k];
+    let g = testbed_model::attitude::gravity_b(q);
+    let psi = testbed_model::attitude::heading(q);
+    let w = recon.rate[k];
+    [g.x, g.y, psi.cos(), psi.sin(), w.x, w.y, w.z]
 }
 
 /// `∫ T_f(n(t)) dt` over an interval with n linear from `n0` to `n1` (same sign), Nm s.

@@ -857,3 +857,45 @@ fn soft_iron_with_a_hard_iron_known_limit() {
         1.05,
     );
 }
+
+#[test]
+fn identifying_again_with_the_extended_model_finds_the_wheel_drag_explained() {
+    // The wheel channel's residual takes out the fitted wheel torque a configuration already
+    // carries (as the torque channel takes out a fitted torque): a second identification from
+    // the extended model finds nothing more on that wheel and does not add the term twice.
+    let t = truth(WHEEL_DRAG);
+    let data = experiment_data(&t, 57, 600.0);
+    let first = testbed_ident::identify(&data, &nominal(), &options()).expect("first pass");
+    let (c1, _) = carried_wheel_term(&first, "y", "n·|n|");
+    assert!((c1 + 1.0e-8).abs() <= 0.1e-8, "first pass: {c1}");
+    let second = testbed_ident::identify(&data, &first.extended, &options()).expect("again");
+    let again: Vec<&str> = second
+        .report
+        .unexplained
+        .iter()
+        .filter(|e| e.equation.starts_with("wheel_"))
+        .map(|e| e.proposed.as_str())
+        .collect();
+    assert!(again.is_empty(), "found again: {again:?}");
+    let total: f64 = second
+        .extended
+        .effects
+        .fitted_wheel_torque
+        .as_ref()
+        .map_or(0.0, |f| {
+            f.terms
+                .iter()
+                .filter(|t| t.wheel == "y" && t.function == "n·|n|")
+                .map(|t| t.coefficient)
+                .sum()
+        });
+    assert!(
+        (total + 1.0e-8).abs() <= 0.1e-8,
+        "the extended model's n·|n| on wheel y after two passes: {total} Nm vs −1e-8"
+    );
+    let named: Vec<&str> = second.report.causes.iter().map(|c| c.name).collect();
+    assert!(
+        !named.iter().any(|n| n.starts_with("wheel_")),
+        "no wheel cause for an explained drag: {named:?}"
+    );
+}

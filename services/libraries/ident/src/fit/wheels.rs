@@ -4,13 +4,14 @@
 //! Also [`WheelModel`], the wheels' drive and friction as a configuration has them.
 
 use super::{FittedCause, Problem, State, solve_fixed};
-use crate::channels::{WheelChannel, WheelInterval, friction_integral, friction_regressors};
+use crate::channels::{GL4, WheelChannel, WheelInterval, friction_integral, friction_regressors};
 use crate::data::Aligned;
 use crate::effects::Cause;
 use crate::error::IdentError;
 use crate::stats::{NormalEquations, chi_square_quantile};
 use nalgebra::DVector;
 use testbed_model::ModelConfig;
+use testbed_model::physics::fitted_wheel_torque::FittedWheelTorqueModel;
 use testbed_model::physics::{Wheel, WheelFrictionModel};
 
 impl Problem<'_> {
@@ -307,12 +308,14 @@ struct WheelSolve {
     ns: Option<(f64, f64)>,
 }
 
-/// The wheels' drive and friction as a configuration has them.
+/// The wheels' drive and friction as a configuration has them, with its fitted wheel torque
+/// (`[effects.fitted_wheel_torque]`, the terms an earlier identification carried).
 #[derive(Debug, Clone)]
 pub struct WheelModel {
     pub scale: [f64; 3],
     pub friction: [WheelFrictionModel; 3],
     pub delay_s: f64,
+    pub fitted: FittedWheelTorqueModel,
 }
 
 impl WheelModel {
@@ -329,10 +332,46 @@ impl WheelModel {
                 .actuator_delay
                 .as_ref()
                 .map_or(0.0, |d| d.delay_s),
+            fitted: FittedWheelTorqueModel::from_config(
+                config.effects.fitted_wheel_torque.as_ref(),
+            ),
         }
     }
 
-    /// Wheel-channel residual of a row, Nms.
+    /// `∫ T_fitted dt` over `row` for wheel `w`, Nms: the fitted wheel torque with the speed
+    /// linear over the interval, the platform's state at its mean, the delivered motor torque
+    /// at its mean (`tau_integral`: the clamped command's integral, Nm s) and the terms' time
+    /// from the record's start `record_start_s` (4-point Gauss–Legendre: exact for the
+    /// polynomial terms up to degree 7).
+    fn fitted_integral(
+        &self,
+        record_start_s: f64,
+        w: usize,
+        row: &WheelInterval,
+        tau_integral: f64,
+    ) -> f64 {
+        if !self.fitted.is_active() {
+            return 0.0;
+        }
+        let dt = row.t1 - row.t0;
+        if dt <= 0.0 {
+            return 0.0;
+        }
+        let direction = row.n0.signum();
+        let tau = self.scale[w] * tau_integral / dt;
+        GL4.iter()
+            .map(|(s, weight)| {
+                let mut model = self.fitted;
+                model.set_time(row.t0 + s * dt - record_start_s);
+                let n = row.n0 + s * (row.n1 - row.n0);
+                weight * model.torque(w, n, direction, tau, &row.platform)
+            })
+            .sum::<f64>()
+            * dt
+    }
+
+    /// Wheel-channel residual of a row, Nms: what the drive, the friction and the fitted
+    /// wheel torque leave of the measured change of the wheel's momentum.
     pub fn residual(
         &self,
         data: &Aligned,
@@ -341,7 +380,9 @@ impl WheelModel {
         row: &WheelInterval,
     ) -> f64 {
         let tau = data.wheel_cmd_integral(row.t0, row.t1, self.delay_s, ch.max_torque_nm)[w];
+        let record_start_s = data.t.first().copied().unwrap_or(0.0);
         row.ja - self.scale[w] * tau + friction_integral(&self.friction[w], row)
+            - self.fitted_integral(record_start_s, w, row, tau)
     }
 }
 

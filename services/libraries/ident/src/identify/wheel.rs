@@ -45,7 +45,6 @@ use crate::fit::{Problem, SetFit, WheelModel};
 use crate::sparse::{Design, Rows, SparseOptions, search};
 use crate::stats::{NormalEquations, chi_square_cdf, series_stats};
 use testbed_model::ModelConfig;
-use testbed_model::attitude;
 
 /// Names of the wheel channel's candidate functions (see the module documentation).
 pub(super) const WHEEL_NAMES: [&str; 14] = [
@@ -83,13 +82,6 @@ impl WheelCandidates {
         let model = WheelModel::from_config(&fit.config);
         let t0 = data.t.first().copied().unwrap_or(0.0);
         let span = (data.t.last().copied().unwrap_or(1.0) - t0).max(1e-9);
-        let at = |k: usize| -> [f64; 7] {
-            let q = &s.recon.q[k];
-            let g = attitude::gravity_b(q);
-            let psi = attitude::heading(q);
-            let w = s.recon.rate[k];
-            [g.x, g.y, psi.cos(), psi.sin(), w.x, w.y, w.z]
-        };
         let values = std::array::from_fn(|w| {
             ch.rows[w]
                 .iter()
@@ -98,7 +90,6 @@ impl WheelCandidates {
                     let tm = (0.5 * (row.t0 + row.t1) - t0) / span;
                     let tau =
                         data.wheel_cmd_integral(row.t0, row.t1, model.delay_s, ch.max_torque_nm)[w];
-                    let (a, b) = (at(row.k), at(row.k + 1));
                     let mut v = vec![
                         dt,
                         tm * dt,
@@ -108,7 +99,7 @@ impl WheelCandidates {
                         speed_integral(row, |n| n * n),
                         tau,
                     ];
-                    v.extend((0..7).map(|j| 0.5 * (a[j] + b[j]) * dt));
+                    v.extend(row.platform.iter().map(|p| p * dt));
                     v
                 })
                 .collect()
