@@ -731,14 +731,12 @@ impl ModelConfig {
                         "must be x, y or z",
                     );
                 }
-                if TorqueFunction::from_name(&term.function).is_none() {
-                    let known: Vec<&str> = TorqueFunction::ALL.iter().map(|f| f.name()).collect();
-                    v.fail(
-                        &format!("{key}.function"),
-                        term.function.clone(),
-                        &format!("unknown function; known: {}", known.join(", ")),
-                    );
-                }
+                v.known_function(
+                    &format!("{key}.function"),
+                    &term.function,
+                    TorqueFunction::from_name(&term.function).is_some(),
+                    TorqueFunction::ALL.iter().map(|f| f.name()),
+                );
                 v.finite(&format!("{key}.coefficient"), term.coefficient);
             }
         }
@@ -755,14 +753,12 @@ impl ModelConfig {
                         "must be x, y or z (the wheel's spin axis)",
                     );
                 }
-                if WheelFunction::from_name(&term.function).is_none() {
-                    let known: Vec<&str> = WheelFunction::ALL.iter().map(|f| f.name()).collect();
-                    v.fail(
-                        &format!("{key}.function"),
-                        term.function.clone(),
-                        &format!("unknown function; known: {}", known.join(", ")),
-                    );
-                }
+                v.known_function(
+                    &format!("{key}.function"),
+                    &term.function,
+                    WheelFunction::from_name(&term.function).is_some(),
+                    WheelFunction::ALL.iter().map(|f| f.name()),
+                );
                 v.finite(&format!("{key}.coefficient"), term.coefficient);
             }
         }
@@ -778,14 +774,12 @@ impl ModelConfig {
                         "must be x, y or z",
                     );
                 }
-                if FieldFunction::from_name(&term.function).is_none() {
-                    let known: Vec<&str> = FieldFunction::ALL.iter().map(|f| f.name()).collect();
-                    v.fail(
-                        &format!("{key}.function"),
-                        term.function.clone(),
-                        &format!("unknown function; known: {}", known.join(", ")),
-                    );
-                }
+                v.known_function(
+                    &format!("{key}.function"),
+                    &term.function,
+                    FieldFunction::from_name(&term.function).is_some(),
+                    FieldFunction::ALL.iter().map(|f| f.name()),
+                );
                 v.finite(&format!("{key}.coefficient"), term.coefficient);
             }
         }
@@ -903,6 +897,23 @@ impl Validator {
                 value,
                 reason: reason.to_string(),
             });
+        }
+    }
+    /// A fitted term's function name: `found` says whether it names one of `known`.
+    fn known_function<'a>(
+        &mut self,
+        key: &str,
+        name: &str,
+        found: bool,
+        known: impl Iterator<Item = &'a str>,
+    ) {
+        if !found {
+            let known: Vec<&str> = known.collect();
+            self.fail(
+                key,
+                name.to_string(),
+                &format!("unknown function; known: {}", known.join(", ")),
+            );
         }
     }
     fn finite(&mut self, key: &str, x: f64) {

@@ -359,28 +359,16 @@ pub(super) fn test_causes(
                     .filter(|&j| cols_test[j].0 == Some(cause))
                     .collect();
                 let extra_with = with_offsets(&extra, &cols_test, candidates, ch);
-                let (with1, _) =
-                    normal_equations(fit, &cols_test, &extra_with, candidates, fit_rows, None);
-                let (without, _) = normal_equations(
+                if let Some((lr, threshold, wald)) = significance_beside(
                     fit,
                     &cols_test,
                     &extra_with,
                     candidates,
                     fit_rows,
-                    Some(cause),
-                );
-                if let (Some(f), Some(w_rss)) = (with1.solve(), rss_of(&without)) {
-                    let (lr, threshold) =
-                        levels.joint(with1.rows() as f64, w_rss, f.rss, idx.len());
-                    let wald = cluster_robust_wald(
-                        fit,
-                        &cols_test,
-                        &extra_with,
-                        candidates,
-                        fit_rows,
-                        &f,
-                        &idx_test,
-                    );
+                    cause,
+                    (idx.len(), &idx_test),
+                    levels,
+                ) {
                     joint_lr = Some(lr);
                     joint_threshold = Some(threshold);
                     joint_wald = wald;
@@ -431,28 +419,16 @@ pub(super) fn test_causes(
                     // The explanation without it predicts at least as well out of fold: the
                     // cause must then add something significant beside its terms.
                     let (_, rival_extra) = joint_columns(named, &rival, candidates, ch);
-                    let (with_ne, _) =
-                        normal_equations(fit, &cols, &rival_extra, candidates, fit_rows, None);
-                    let (without_ne, _) = normal_equations(
+                    if let Some((lr, threshold, wald)) = significance_beside(
                         fit,
                         &cols,
                         &rival_extra,
                         candidates,
                         fit_rows,
-                        Some(cause),
-                    );
-                    if let (Some(f), Some(w_rss)) = (with_ne.solve(), rss_of(&without_ne)) {
-                        let (lr, threshold) =
-                            levels.joint(with_ne.rows() as f64, w_rss, f.rss, idx.len());
-                        let wald = cluster_robust_wald(
-                            fit,
-                            &cols,
-                            &rival_extra,
-                            candidates,
-                            fit_rows,
-                            &f,
-                            &idx,
-                        );
+                        cause,
+                        (idx.len(), &idx),
+                        levels,
+                    ) {
                         let form: Vec<&str> = rival.iter().map(|e| e.proposed.as_str()).collect();
                         let form = if form.is_empty() {
                             "none".to_string()
@@ -701,6 +677,30 @@ fn with_offsets(
 /// Cluster-robust Wald statistic ([`crate::stats::LsFit::cluster_robust_wald`]) of the
 /// parameters `idx` of the joint torque fit `f` (of the rows `keep` accepts, the columns `cols`,
 /// then `extra`); the clusters are the torque channel's segments (their three axes together).
+/// How significant `cause` is beside the columns `cols` and the unexplained terms `extra`, on
+/// the rows `keep` takes: `(likelihood ratio, the selection's threshold for `dof` degrees of
+/// freedom, cluster-robust Wald statistic of the cause's columns `idx`)`; `None` when the fit
+/// is not determined.
+#[allow(clippy::too_many_arguments)]
+fn significance_beside(
+    fit: &SetFit,
+    cols: &[(Option<Cause>, usize)],
+    extra: &[(usize, usize)],
+    candidates: &TorqueCandidates,
+    keep: impl Fn(usize) -> bool + Copy,
+    cause: Cause,
+    (dof, idx): (usize, &[usize]),
+    levels: &Levels,
+) -> Option<(f64, f64, Option<f64>)> {
+    let (with, _) = normal_equations(fit, cols, extra, candidates, keep, None);
+    let (without, _) = normal_equations(fit, cols, extra, candidates, keep, Some(cause));
+    let f = with.solve()?;
+    let rss_without = rss_of(&without)?;
+    let (lr, threshold) = levels.joint(with.rows() as f64, rss_without, f.rss, dof);
+    let wald = cluster_robust_wald(fit, cols, extra, candidates, keep, &f, idx);
+    Some((lr, threshold, wald))
+}
+
 fn cluster_robust_wald(
     fit: &SetFit,
     cols: &[(Option<Cause>, usize)],

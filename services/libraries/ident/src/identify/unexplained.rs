@@ -683,6 +683,17 @@ pub(super) enum Coefficients {
     WithoutFold(usize),
 }
 
+impl Coefficients {
+    /// `term`'s coefficient of this kind (NaN for a fold it was not fitted without).
+    fn of(self, term: &Term) -> f64 {
+        match self {
+            Self::All => term.value,
+            Self::FitBlocks => term.value_fit_blocks,
+            Self::WithoutFold(f) => term.value_without_fold.get(f).copied().unwrap_or(f64::NAN),
+        }
+    }
+}
+
 /// The torque-channel unexplained effects as a model extension, `[effects.fitted_torque]`:
 /// each term's function in the plant's form (identification's `t`, 0…1 over the record of
 /// `span_s` seconds, becomes `t_s` in seconds from its start, its coefficient divided by the
@@ -701,13 +712,7 @@ pub(super) fn fitted_torque(
             continue;
         };
         for term in &effect.terms {
-            let value = match which {
-                Coefficients::All => term.value,
-                Coefficients::FitBlocks => term.value_fit_blocks,
-                Coefficients::WithoutFold(f) => {
-                    term.value_without_fold.get(f).copied().unwrap_or(f64::NAN)
-                }
-            };
+            let value = which.of(term);
             let (name, per_unit) = match term.name.strip_prefix('t') {
                 Some(rest) if rest.is_empty() || rest.starts_with('·') => {
                     (format!("t_s{rest}"), 1.0 / span_s)
@@ -751,20 +756,11 @@ pub(super) fn fitted_wheel_torque(
         let Some(wheel) = effect.equation.strip_prefix("wheel_") else {
             continue;
         };
-        let index = match wheel {
-            "x" => 0,
-            "y" => 1,
-            "z" => 2,
-            _ => continue,
+        let Some(index) = testbed_model::physics::fitted_torque::axis_index(wheel) else {
+            continue;
         };
         for term in &effect.terms {
-            let value = match which {
-                Coefficients::All => term.value,
-                Coefficients::FitBlocks => term.value_fit_blocks,
-                Coefficients::WithoutFold(f) => {
-                    term.value_without_fold.get(f).copied().unwrap_or(f64::NAN)
-                }
-            };
+            let value = which.of(term);
             let (name, divisor) = match term.name.as_str() {
                 "t" => ("t_s", span_s),
                 "τ" => ("τ", scale[index]),
