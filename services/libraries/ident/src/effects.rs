@@ -18,6 +18,7 @@
 //! | `wheel_torque_scale` | `scale` — delivered / commanded motor torque per wheel |
 //! | `actuator_delay` | `delay_s` — s |
 //! | `magnetic_disturbance` | `hard_iron_gauss` — body-fixed field, gauss |
+//! | `inclinometer_bias` | `offset_rad` — mounting offset of the tilt angles θ (body X), φ (body Y), rad |
 //! | `thruster_torque_scale` | `scale` — delivered / nominal thrust per thruster 0–5 |
 //! | `propellant_com_shift` | `tank_position_m` — the propellant's centre of mass from the bearing centre, m, body axes (`[thrusters].tank_position_m`) |
 //!
@@ -31,7 +32,7 @@ use serde::Serialize;
 use testbed_model::ModelConfig;
 use testbed_model::config::{
     ActuatorDelay, AeroDrag, ComOffset, ConstantTorque, EarthRate, GyroMisalignment, GyroScale,
-    InertiaError, MagneticDisturbance, WheelFriction, WheelTorqueScale,
+    InclinometerBias, InertiaError, MagneticDisturbance, WheelFriction, WheelTorqueScale,
 };
 use testbed_model::thruster_config::{THRUSTER_COUNT, ThrusterConfig, ThrusterTorqueScale};
 
@@ -50,6 +51,7 @@ pub enum Cause {
     WheelTorqueScale,
     ActuatorDelay,
     MagneticDisturbance,
+    InclinometerBias,
     ThrusterTorqueScale,
     PropellantComShift,
 }
@@ -187,6 +189,14 @@ const P_TANK: &[ParamSpec] = &[spec(
     1.0,
     1e-3,
 )];
+const P_TILT_BIAS: &[ParamSpec] = &[spec(
+    "offset_rad",
+    2,
+    "rad, tilt angles θ (body X) and φ (body Y)",
+    -0.1,
+    0.1,
+    1e-4,
+)];
 const P_DELAY: &[ParamSpec] = &[spec("delay_s", 1, "s", 0.0, 10.0, 0.01)];
 const P_MAG: &[ParamSpec] = &[spec(
     "hard_iron_gauss",
@@ -199,7 +209,7 @@ const P_MAG: &[ParamSpec] = &[spec(
 
 impl Cause {
     /// Every cause, in the library's order.
-    pub const ALL: [Cause; 13] = [
+    pub const ALL: [Cause; 14] = [
         Cause::ComOffset,
         Cause::EarthRate,
         Cause::AeroDrag,
@@ -211,6 +221,7 @@ impl Cause {
         Cause::WheelTorqueScale,
         Cause::ActuatorDelay,
         Cause::MagneticDisturbance,
+        Cause::InclinometerBias,
         Cause::ThrusterTorqueScale,
         Cause::PropellantComShift,
     ];
@@ -229,6 +240,7 @@ impl Cause {
             Cause::WheelTorqueScale => "wheel_torque_scale",
             Cause::ActuatorDelay => "actuator_delay",
             Cause::MagneticDisturbance => "magnetic_disturbance",
+            Cause::InclinometerBias => "inclinometer_bias",
             Cause::ThrusterTorqueScale => "thruster_torque_scale",
             Cause::PropellantComShift => "propellant_com_shift",
         }
@@ -261,6 +273,9 @@ impl Cause {
             Cause::MagneticDisturbance => {
                 "body-fixed (hard-iron) field added to the magnetometer reading"
             }
+            Cause::InclinometerBias => {
+                "inclinometer mounted off level with the body axes: a constant offset of its angles"
+            }
             Cause::ThrusterTorqueScale => {
                 "thrusters deliver a scaled thrust (worn nozzle, regulator set wrong), per thruster"
             }
@@ -276,7 +291,8 @@ impl Cause {
             Cause::EarthRate
             | Cause::GyroScale
             | Cause::GyroMisalignment
-            | Cause::MagneticDisturbance => Kind::Sensor,
+            | Cause::MagneticDisturbance
+            | Cause::InclinometerBias => Kind::Sensor,
             Cause::ComOffset
             | Cause::AeroDrag
             | Cause::ConstantTorque
@@ -301,6 +317,7 @@ impl Cause {
             Cause::WheelTorqueScale => P_TSCALE,
             Cause::ActuatorDelay => P_DELAY,
             Cause::MagneticDisturbance => P_MAG,
+            Cause::InclinometerBias => P_TILT_BIAS,
             Cause::ThrusterTorqueScale => P_THRUSTER_SCALE,
             Cause::PropellantComShift => P_TANK,
         }
@@ -355,6 +372,7 @@ impl Cause {
             Cause::WheelTorqueScale => e.wheel_torque_scale.is_some(),
             Cause::ActuatorDelay => e.actuator_delay.is_some(),
             Cause::MagneticDisturbance => e.magnetic_disturbance.is_some(),
+            Cause::InclinometerBias => e.inclinometer_bias.is_some(),
             Cause::ThrusterTorqueScale => e.thruster_torque_scale.is_some(),
             // The tank position is part of `[thrusters]`: present with the thrusters.
             Cause::PropellantComShift => config.thrusters.is_some(),
@@ -422,6 +440,11 @@ impl Cause {
                 .as_ref()
                 .map_or([0.0; 3], |x| x.hard_iron_gauss)
                 .to_vec(),
+            Cause::InclinometerBias => e
+                .inclinometer_bias
+                .as_ref()
+                .map_or([0.0; 2], |x| x.offset_rad)
+                .to_vec(),
             Cause::ThrusterTorqueScale => e
                 .thruster_torque_scale
                 .as_ref()
@@ -487,6 +510,11 @@ impl Cause {
             Cause::MagneticDisturbance => {
                 e.magnetic_disturbance = Some(MagneticDisturbance {
                     hard_iron_gauss: a3(0),
+                })
+            }
+            Cause::InclinometerBias => {
+                e.inclinometer_bias = Some(InclinometerBias {
+                    offset_rad: [v[0], v[1]],
                 })
             }
             Cause::ThrusterTorqueScale => {

@@ -349,7 +349,7 @@ pub fn predict(
                 continue;
             }
             if let Some(k) = nearest(t) {
-                let predicted = attitude::tilt_angles(&attitudes[k - k0]);
+                let predicted = sensors.tilt_reading(&attitudes[k - k0]);
                 for c in 0..2 {
                     out.residuals[3 + c].push((t, tilt[c] - predicted[c], window));
                 }

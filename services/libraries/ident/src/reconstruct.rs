@@ -32,6 +32,8 @@ pub struct SensorModel {
     pub earth_rate_l: Vector3<f64>,
     /// Hard-iron field, body axes, tesla (zero without `magnetic_disturbance`).
     pub hard_iron_t: Vector3<f64>,
+    /// Inclinometer mounting offset of `[θ, φ]`, rad (zero without `inclinometer_bias`).
+    pub tilt_offset_rad: [f64; 2],
     /// Lab field in the level frame, tesla.
     pub field_l_t: Vector3<f64>,
     /// The fitted field error of `effects.fitted_field` (a function of the attitude), tesla.
@@ -63,6 +65,7 @@ impl SensorModel {
                 .magnetic_disturbance
                 .as_ref()
                 .map_or_else(Vector3::zeros, |d| Vector3::from(d.hard_iron_gauss) * GAUSS),
+            tilt_offset_rad: e.inclinometer_bias.as_ref().map_or([0.0; 2], |b| b.offset_rad),
             field_l_t: config.platform.field_l_t(),
             fitted_field: FittedFieldModel::from_config(
                 e.fitted_field.as_ref(),
@@ -85,6 +88,20 @@ impl SensorModel {
         bias: &Vector3<f64>,
     ) -> Vector3<f64> {
         self.gyro_matrix * (w + q * self.earth_rate_l + bias)
+    }
+
+    /// The tilt reading `[θ, φ]` (rad) with the mounting offset taken out.
+    pub fn correct_tilt(&self, tilt: &[f64; 2]) -> [f64; 2] {
+        [
+            tilt[0] - self.tilt_offset_rad[0],
+            tilt[1] - self.tilt_offset_rad[1],
+        ]
+    }
+
+    /// The noise-free tilt reading at attitude `q`, rad.
+    pub fn tilt_reading(&self, q: &Attitude) -> [f64; 2] {
+        let [x, y] = attitude::tilt_angles(q);
+        [x + self.tilt_offset_rad[0], y + self.tilt_offset_rad[1]]
     }
 
     /// The field reading `m` (tesla, body axes) with the hard iron and the fitted field error
@@ -199,7 +216,7 @@ pub fn reconstruct(data: &Aligned, config: &ModelConfig) -> Result<Reconstructio
             {
                 i_tilt += 1;
                 if tilt[0].abs() < tilt_range && tilt[1].abs() < tilt_range {
-                    meas.tilt_rad = Some(tilt);
+                    meas.tilt_rad = Some(sensors.correct_tilt(&tilt));
                 }
             }
             if let Some(&(_, field)) = data

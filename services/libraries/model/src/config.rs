@@ -259,6 +259,7 @@ pub struct EffectsConfig {
     pub wheel_torque_scale: Option<WheelTorqueScale>,
     pub actuator_delay: Option<ActuatorDelay>,
     pub magnetic_disturbance: Option<MagneticDisturbance>,
+    pub inclinometer_bias: Option<InclinometerBias>,
     /// Effects outside identification's cause library (the simulator can produce them so tests
     /// can check that `testbed identify` reports them as unexplained rather than absorbing
     /// them into library causes). Off unless configured.
@@ -525,6 +526,16 @@ pub struct MagneticDisturbance {
     pub hard_iron_gauss: [f64; 3],
 }
 
+/// The inclinometer reads the tilt with a constant offset: its mounting is not level with the
+/// body axes (a shim, a screw), or its zero has moved. Typical: 0.01–0.1° (a tenth of a
+/// millimetre over a 10-cm base is 0.06°).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct InclinometerBias {
+    /// Offset added to the measured tilt `[θ, φ]` of body X and body Y, rad.
+    pub offset_rad: [f64; 2],
+}
+
 impl ModelConfig {
     /// Parse and validate a TOML document; `origin` names it in errors (a path, or "<inline>").
     pub fn from_toml_str(text: &str, origin: &str) -> Result<Self, ConfigError> {
@@ -682,6 +693,12 @@ impl ModelConfig {
                 "effects.magnetic_disturbance.hard_iron_gauss",
                 &x.hard_iron_gauss,
             );
+        }
+        if let Some(x) = &e.inclinometer_bias {
+            for (i, b) in x.offset_rad.iter().enumerate() {
+                // Beyond a few degrees it is not a mounting offset but a wrong axis convention.
+                v.within(&format!("effects.inclinometer_bias.offset_rad[{i}]"), *b, -0.1, 0.1);
+            }
         }
         if let Some(x) = &e.com_drift {
             v.finite_all("effects.com_drift.rate_m_per_s", &x.rate_m_per_s);

@@ -1,5 +1,6 @@
-//! The two-axis inclinometer (LE-30): `theta_meas = theta + eta_theta`,
-//! `phi_meas = phi + eta_phi`, angles as defined by [`crate::attitude::tilt_angles`].
+//! The two-axis inclinometer (LE-30): `theta_meas = theta + b_theta + eta_theta`,
+//! `phi_meas = phi + b_phi + eta_phi`, angles as defined by [`crate::attitude::tilt_angles`];
+//! `b` is `effects.inclinometer_bias` (zero without it).
 
 use super::{DeviceId, device_rng, saturate};
 use crate::attitude::{Attitude, tilt_angles};
@@ -31,6 +32,8 @@ impl InclinometerReading {
 pub struct Inclinometer {
     period_s: f64,
     noise_rad: [f64; 2],
+    /// Mounting offset added to each angle, rad.
+    offset_rad: [f64; 2],
     range_rad: f64,
     rng: ChaCha8Rng,
 }
@@ -42,6 +45,11 @@ impl Inclinometer {
         Self {
             period_s: 1.0 / c.rate_hz,
             noise_rad: c.noise_rad(),
+            offset_rad: config
+                .effects
+                .inclinometer_bias
+                .as_ref()
+                .map_or([0.0; 2], |b| b.offset_rad),
             range_rad: c.range_deg * DEG,
             rng: device_rng(seed, DeviceId::Inclinometer),
         }
@@ -61,7 +69,10 @@ impl Inclinometer {
         for i in 0..2 {
             let eta: f64 = self.rng.sample(StandardNormal);
             (tilt_rad[i], saturated[i]) =
-                saturate(truth[i] + self.noise_rad[i] * eta, self.range_rad);
+                saturate(
+                truth[i] + self.offset_rad[i] + self.noise_rad[i] * eta,
+                self.range_rad,
+            );
         }
         InclinometerReading {
             tilt_rad,
@@ -89,6 +100,21 @@ mod tests {
             let xs: Vec<f64> = readings.iter().map(|r| r.tilt_rad[axis]).collect();
             let sigma = config.inclinometer.noise_deg[axis] * DEG;
             assert_white(&format!("inclinometer axis {axis}"), &xs, true_tilt, sigma);
+        }
+    }
+
+    #[test]
+    fn a_mounting_offset_shifts_each_angle_by_its_value() {
+        let mut config = ModelConfig::default();
+        config.inclinometer.noise_deg = [0.0; 2];
+        let offset_rad = [8.7e-4, -5.2e-4];
+        config.effects.inclinometer_bias = Some(crate::config::InclinometerBias { offset_rad });
+        let mut inc = Inclinometer::new(&config, 0);
+        let q = from_heading_pitch_roll(0.7, 0.03, -0.02);
+        let truth = tilt_angles(&q);
+        let r = inc.sample(&q);
+        for axis in 0..2 {
+            assert!((r.tilt_rad[axis] - (truth[axis] + offset_rad[axis])).abs() < 1e-15);
         }
     }
 
