@@ -65,7 +65,10 @@ impl SensorModel {
                 .magnetic_disturbance
                 .as_ref()
                 .map_or_else(Vector3::zeros, |d| Vector3::from(d.hard_iron_gauss) * GAUSS),
-            tilt_offset_rad: e.inclinometer_bias.as_ref().map_or([0.0; 2], |b| b.offset_rad),
+            tilt_offset_rad: e
+                .inclinometer_bias
+                .as_ref()
+                .map_or([0.0; 2], |b| b.offset_rad),
             field_l_t: config.platform.field_l_t(),
             fitted_field: FittedFieldModel::from_config(
                 e.fitted_field.as_ref(),

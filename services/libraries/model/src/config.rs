@@ -697,7 +697,12 @@ impl ModelConfig {
         if let Some(x) = &e.inclinometer_bias {
             for (i, b) in x.offset_rad.iter().enumerate() {
                 // Beyond a few degrees it is not a mounting offset but a wrong axis convention.
-                v.within(&format!("effects.inclinometer_bias.offset_rad[{i}]"), *b, -0.1, 0.1);
+                v.within(
+                    &format!("effects.inclinometer_bias.offset_rad[{i}]"),
+                    *b,
+                    -0.1,
+                    0.1,
+                );
             }
         }
         if let Some(x) = &e.com_drift {

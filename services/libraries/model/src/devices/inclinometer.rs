@@ -68,8 +68,7 @@ impl Inclinometer {
         let mut saturated = [false; 2];
         for i in 0..2 {
             let eta: f64 = self.rng.sample(StandardNormal);
-            (tilt_rad[i], saturated[i]) =
-                saturate(
+            (tilt_rad[i], saturated[i]) = saturate(
                 truth[i] + self.offset_rad[i] + self.noise_rad[i] * eta,
                 self.range_rad,
             );
