@@ -65,6 +65,17 @@ fn detection_power_table_for_a_20_minute_experiment() {
             "|B| = 0.14 G × scale",
         ),
         (
+            Cause::InclinometerBias,
+            Box::new(|s| {
+                format!(
+                    "[effects.inclinometer_bias]\noffset_rad = [{}, {}]\n",
+                    8.7e-4 * s,
+                    -5.2e-4 * s
+                )
+            }),
+            "0.05°, −0.03° × scale",
+        ),
+        (
             Cause::WheelTorqueScale,
             Box::new(|s| {
                 format!(
