@@ -172,6 +172,10 @@ pub fn reconstruct(data: &Aligned, config: &ModelConfig) -> Result<Reconstructio
     let field_range = config.magnetometer.range_gauss * GAUSS - 1e-12;
     let has_tilt = !data.tilt.is_empty();
     let has_field = !data.field.is_empty();
+    let pair_window_s = start_pair_window_s(data);
+    // Before the filter starts: the latest usable sample of each vector sensor (time, value).
+    let mut latest_tilt: Option<(f64, [f64; 2])> = None;
+    let mut latest_field: Option<(f64, Vector3<f64>)> = None;
 
     let mut mekf: Option<Mekf> = None;
     let mut q_prior = Attitude::identity();
@@ -258,10 +262,21 @@ pub fn reconstruct(data: &Aligned, config: &ModelConfig) -> Result<Reconstructio
                     }
                 }
                 None => {
+                    latest_tilt = meas.tilt_rad.map(|x| (t_sample, x)).or(latest_tilt);
+                    latest_field = meas.field_b_t.map(|x| (t_sample, x)).or(latest_field);
+                    // Devices with their own clocks do not sample at the same instants: a tilt
+                    // and a field sample close enough in time make the starting pair.
+                    let mut start = meas;
+                    if let (Some((ta, tilt)), Some((tb, field))) = (latest_tilt, latest_field)
+                        && (ta - tb).abs() <= pair_window_s
+                    {
+                        start.tilt_rad = Some(tilt);
+                        start.field_b_t = Some(field);
+                    }
                     if let Some(f) = start_filter(
                         &filter_cfg,
                         t_ns(t_sample),
-                        &meas,
+                        &start,
                         &sensors,
                         has_tilt,
                         has_field,
@@ -299,6 +314,25 @@ pub fn reconstruct(data: &Aligned, config: &ModelConfig) -> Result<Reconstructio
         }
     }
     Ok(out)
+}
+
+/// How far apart in time a tilt and a field sample may be to start the filter as a pair, s: the
+/// longer of the two sensors' median sample intervals (at least 1 µs, the tolerance of
+/// samples taken together). At the start of a record the platform turns at most a few mrad/s,
+/// so the pair's attitude is off by well under a milliradian, which the filter's initial
+/// covariance covers.
+fn start_pair_window_s(data: &Aligned) -> f64 {
+    fn median_spacing<T>(samples: &[(f64, T)]) -> f64 {
+        let mut gaps: Vec<f64> = samples.windows(2).map(|w| w[1].0 - w[0].0).collect();
+        if gaps.is_empty() {
+            return 0.0;
+        }
+        let mid = gaps.len() / 2;
+        *gaps.select_nth_unstable_by(mid, f64::total_cmp).1
+    }
+    median_spacing(&data.tilt)
+        .max(median_spacing(&data.field))
+        .max(1e-6)
 }
 
 /// Start the filter from the first usable vector samples: TRIAD from a tilt and field pair;
