@@ -129,7 +129,10 @@ impl TorqueChannel {
             let regular = (data.t[k + 1] - data.t[k] - data.period_s).abs() < 0.25 * data.period_s
                 && (data.t[k] - data.t[k - 1] - data.period_s).abs() < 0.25 * data.period_s;
             let [x, y] = attitude::tilt_angles(&recon.q[k]);
-            regular && x.abs() < limit && y.abs() < limit
+            regular
+                && x.abs() < limit
+                && y.abs() < limit
+                && data.wheel_record_complete(data.t[k - 1], data.t[k + 1])
         };
         // Per tick: momentum, integrand of the residual, and the regressors' parts. Within a
         // segment the bias is held at its estimate at the segment's start (`b0`): the filter's
@@ -368,7 +371,7 @@ impl WheelChannel {
             while k + 1 < data.len() {
                 let regular =
                     (data.t[k + 1] - data.t[k] - data.period_s).abs() < 0.25 * data.period_s;
-                if regular {
+                if regular && data.wheel_record_complete(data.t[k], data.t[k + 1]) {
                     let (a, b) = (platform_at(recon, k), platform_at(recon, k + 1));
                     let platform: [f64; 7] = std::array::from_fn(|j| 0.5 * (a[j] + b[j]));
                     for (i, wheel_rows) in rows.iter_mut().enumerate() {

@@ -477,6 +477,10 @@ pub struct Aligned {
     pub wheel_speed: Option<Vec<Vector3<f64>>>,
     /// Wheel commands: `(t − t0, command)` in time order, Nm.
     pub wheel_cmd: Vec<(f64, Vector3<f64>)>,
+    /// Gaps in the wheel telemetry, `(t − t0)` of the rows on either side, in time order:
+    /// consecutive rows more than 1.5 median intervals apart (lost rows). Inside a gap the
+    /// command in effect is unknown and the speed only interpolated.
+    pub wheel_gaps: Vec<(f64, f64)>,
     /// Gimbal angles at the ticks, rad (`None` without `cmg.csv`).
     pub gimbal: Option<Vec<Vector4<f64>>>,
     /// Gimbal rate commands `(t − t0, rates)` in time order, rad/s.
@@ -509,8 +513,16 @@ impl Aligned {
                 .map(|&ti| interpolate(&times, &values, ti))
                 .collect()
         });
+        let wheel_times: Vec<f64> = data.wheels.iter().map(|r| r.t_s - t0).collect();
+        let wheel_period = median_period(wheel_times.iter().copied());
+        let wheel_gaps = wheel_times
+            .windows(2)
+            .filter(|w| w[1] - w[0] > 1.5 * wheel_period)
+            .map(|w| (w[0], w[1]))
+            .collect();
         Self {
             period_s: median_period(t.iter().copied()),
+            wheel_gaps,
             gyro: data.gyro.iter().map(|r| r.rate_rad_s).collect(),
             wheel_speed,
             wheel_cmd: data
@@ -570,6 +582,14 @@ impl Aligned {
         self.wheel_speed
             .as_ref()
             .map_or_else(Vector3::zeros, |w| w[k])
+    }
+
+    /// Whether the wheel telemetry is complete over `[a, b]` (s from the record's start): no
+    /// gap of lost rows overlaps it, so the commands held over it and the speeds at its ends
+    /// are the ones the record says. True without wheels.
+    pub fn wheel_record_complete(&self, a: f64, b: f64) -> bool {
+        let i = self.wheel_gaps.partition_point(|g| g.1 <= a + 1e-9);
+        self.wheel_gaps.get(i).is_none_or(|g| g.0 >= b - 1e-9)
     }
 
     /// Gimbal angles at tick k (zero without CMGs), rad.

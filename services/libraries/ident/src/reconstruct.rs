@@ -9,7 +9,7 @@
 //! to tick k with the mean of the two corrected readings (the filter takes a sample as the mean
 //! rate over the interval it closes).
 
-use crate::data::Aligned;
+use crate::data::{Aligned, median_period};
 use crate::error::IdentError;
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 use testbed_flight::mekf::{Mekf, MekfConfig, VectorMeasurements};
@@ -192,10 +192,7 @@ pub fn reconstruct(data: &Aligned, config: &ModelConfig) -> Result<Reconstructio
         let tk = data.t[k];
         let q_now = mekf.as_ref().map_or(q_prior, Mekf::attitude);
         let w = sensors.correct_gyro(&data.gyro[k], &q_now);
-        if let Some(f) = mekf.as_mut() {
-            let mean = previous.map_or(w, |p| 0.5 * (p + w));
-            f.propagate(t_ns(tk), &mean)?;
-        }
+        let mean = previous.map_or(w, |p| 0.5 * (p + w));
         previous = Some(w);
         // Vector samples up to this tick, grouped by time.
         loop {
@@ -215,6 +212,15 @@ pub fn reconstruct(data: &Aligned, config: &ModelConfig) -> Result<Reconstructio
                 (None, Some(b)) => b,
                 (Some(a), Some(b)) => a.min(b),
             };
+            // A vector sample between two gyro ticks (a lost gyro row, jitter in the time
+            // stamps) is applied at its own time: attached to the next tick it could be older
+            // than the filter's state by more than the filter accepts.
+            if let Some(f) = mekf.as_mut() {
+                let at = if tk - t_sample <= 1e-6 { tk } else { t_sample };
+                if t_ns(at) > f.time_ns() {
+                    f.propagate(t_ns(at), &mean)?;
+                }
+            }
             let mut meas = VectorMeasurements::default();
             if let Some(&(_, tilt)) = data
                 .tilt
@@ -290,6 +296,11 @@ pub fn reconstruct(data: &Aligned, config: &ModelConfig) -> Result<Reconstructio
                 }
             }
         }
+        if let Some(f) = mekf.as_mut()
+            && t_ns(tk) > f.time_ns()
+        {
+            f.propagate(t_ns(tk), &mean)?;
+        }
         match mekf.as_ref() {
             Some(f) => {
                 out.q.push(f.attitude());
@@ -322,17 +333,9 @@ pub fn reconstruct(data: &Aligned, config: &ModelConfig) -> Result<Reconstructio
 /// so the pair's attitude is off by well under a milliradian, which the filter's initial
 /// covariance covers.
 fn start_pair_window_s(data: &Aligned) -> f64 {
-    fn median_spacing<T>(samples: &[(f64, T)]) -> f64 {
-        let mut gaps: Vec<f64> = samples.windows(2).map(|w| w[1].0 - w[0].0).collect();
-        if gaps.is_empty() {
-            return 0.0;
-        }
-        let mid = gaps.len() / 2;
-        *gaps.select_nth_unstable_by(mid, f64::total_cmp).1
-    }
-    median_spacing(&data.tilt)
-        .max(median_spacing(&data.field))
-        .max(1e-6)
+    let tilt = median_period(data.tilt.iter().map(|s| s.0));
+    let field = median_period(data.field.iter().map(|s| s.0));
+    tilt.max(field).max(1e-6)
 }
 
 /// Start the filter from the first usable vector samples: TRIAD from a tilt and field pair;
