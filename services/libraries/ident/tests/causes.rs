@@ -302,45 +302,60 @@ fn inclinometer_bias() {
 }
 
 #[test]
-fn an_inclinometer_bias_beside_a_centre_of_mass_offset_names_both() {
-    // The tilt offset is also an error in the attitude the gravity torque is computed from: the
-    // two must be told apart, not traded for each other.
-    let truth = truth(
-        "[effects.com_offset]\nr_m = [2.5e-6, -1.5e-6, -1.0e-6]\n[effects.inclinometer_bias]\noffset_rad = [8.7e-4, -5.2e-4]\n",
-    );
-    let id = identify_blind(&truth, 33, 600.0);
-    let mut found = names(&id);
-    found.sort();
-    assert_eq!(
-        found,
-        vec!["com_offset", "inclinometer_bias"],
-        "{:?}",
-        id.report.steps
-    );
-    for cause in [Cause::ComOffset, Cause::InclinometerBias] {
-        let fitted = cause.values(&id.extended);
-        let hidden = cause.values(&truth);
-        let se = stderr(&id, cause);
-        for i in 0..fitted.len() {
-            let err = fitted[i] - hidden[i];
-            println!(
-                "{}: fitted {:.4e}, hidden {:.4e}, error {:+.1} σ (σ = {:.2e})",
-                cause.value_name(i),
-                fitted[i],
-                hidden[i],
-                err / se[i],
-                se[i]
-            );
-            // Within three of its reported standard errors: the pair's errors are correlated,
-            // so the bound is the one the report itself states.
-            assert!(
-                err.abs() <= 3.0 * se[i],
-                "{}: fitted {:e}, hidden {:e}, {:.1} standard errors off",
-                cause.value_name(i),
-                fitted[i],
-                hidden[i],
-                err / se[i]
-            );
+fn an_inclinometer_bias_beside_another_cause_names_both() {
+    // The tilt offset is also an error in the attitude the gravity torque is computed from and
+    // in the attitude the magnetometer and the gyros are read against: each pair must be told
+    // apart, not traded for each other.
+    const TILT: &str = "[effects.inclinometer_bias]\noffset_rad = [8.7e-4, -5.2e-4]\n";
+    for (other, effect, seed) in [
+        (
+            Cause::ComOffset,
+            "[effects.com_offset]\nr_m = [2.5e-6, -1.5e-6, -1.0e-6]\n",
+            33,
+        ),
+        (
+            Cause::MagneticDisturbance,
+            "[effects.magnetic_disturbance]\nhard_iron_gauss = [0.08, -0.05, 0.1]\n",
+            5,
+        ),
+        (
+            Cause::GyroMisalignment,
+            "[effects.gyro_misalignment]\nangles_rad = [4e-4, -8e-4, 3e-4]\n",
+            5,
+        ),
+    ] {
+        let truth = truth(&format!("{TILT}{effect}"));
+        let id = identify_blind(&truth, seed, 600.0);
+        let mut found = names(&id);
+        found.sort();
+        let mut want = vec!["inclinometer_bias", other.name()];
+        want.sort();
+        assert_eq!(found, want, "{:?}", id.report.steps);
+        for cause in [other, Cause::InclinometerBias] {
+            let fitted = cause.values(&id.extended);
+            let hidden = cause.values(&truth);
+            let se = stderr(&id, cause);
+            for i in 0..fitted.len() {
+                let err = fitted[i] - hidden[i];
+                println!(
+                    "{}: fitted {:.4e}, hidden {:.4e}, error {:+.1} σ (σ = {:.2e})",
+                    cause.value_name(i),
+                    fitted[i],
+                    hidden[i],
+                    err / se[i],
+                    se[i]
+                );
+                // Within three of its reported standard errors: the pair's errors are
+                // correlated, so the bound is the one the report itself states.
+                assert!(
+                    err.abs() <= 3.0 * se[i],
+                    "{}: fitted {:e}, hidden {:e}, {:.1} standard errors off",
+                    cause.value_name(i),
+                    fitted[i],
+                    hidden[i],
+                    err / se[i]
+                );
+            }
         }
     }
 }
