@@ -13,8 +13,9 @@
 //!    effect of another form is dropped. Torque causes must beat it by the likelihood ratio
 //!    (independent residuals) and by the cluster-robust Wald statistic of their parameters
 //!    (residuals correlated within a segment of the torque channel, as the search assumes).
-//! 3. **No explanation of another kind** (torque causes). The torque search is redone without
-//!    the cause and without the candidate functions of its own form. The cause is dropped if
+//! 3. **No explanation of another kind** (torque and wheel causes). The channel's search (the
+//!    torque search, or the wheel search for a wheel cause) is redone without the cause and
+//!    without the candidate functions of its own form. The cause is dropped if
 //!    that search's cross-validated residual sum is more than 1 % below the one with it, or if
 //!    that sum is not above it and the cause is not significant (the same threshold,
 //!    likelihood ratio and cluster-robust Wald) beside the terms that search finds (a search
@@ -28,8 +29,9 @@
 //! Torque causes are linear in the torque channel; sensor causes are linearised through the
 //! attitude filter (forward differences, one filter run per parameter) and tested on the
 //! innovations the same way. Wheel causes are linear (or linearised, the delay) in the wheel
-//! equation and are tested there, with the whiteness of that equation's residuals as a third
-//! test (see `wheel`).
+//! equation and are tested there, with the whiteness of that equation's residuals as a fourth
+//! test (see `wheel`). [`significance_beside`] and [`compete`] are shared by the torque and
+//! wheel channels.
 
 use super::unexplained::{Candidates, INNOVATION_LABELS, TorqueCandidates, UnexplainedEffect};
 use crate::channels::torque_columns;

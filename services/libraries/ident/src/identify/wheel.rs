@@ -36,6 +36,13 @@
 //! selection's threshold on the likelihood ratio (its part put back into the residual), and the
 //! residuals of the extended wheel equation must be white on the wheels the cause acts on
 //! (Ljung–Box over [`WHITENESS_LAGS`] lags, Bonferroni over the wheels, `p ≥ consistency_alpha`).
+//! The competing explanation (the torque causes' third test, `falsify::compete`): the wheel
+//! search is redone without the cause (its values at the base configuration) and without its
+//! own form ([`own_form`]); the cause is dropped if that search predicts more than 1 % better
+//! out of fold, or at least as well while the cause is not significant beside the terms it
+//! finds (likelihood ratio, and the cluster-robust Wald statistic of the cause's change from
+//! the base, clusters a third of a block shared by the wheels). Of the failed tests the
+//! competitor is reported first: it names the form the cause stood in for.
 
 use super::falsify::{
     CauseTest, Levels, RowSink, Whiteness, compete, consistency, falsified_text, rss_of,
