@@ -244,7 +244,7 @@ fn normal_equations(
 /// How much better (relative drop of the cross-validated residual sum) a competing generic
 /// form must explain a named cause's part for the cause to be dropped: ties go to the library
 /// cause, the physical explanation.
-pub(super) const COMPETITOR_MARGIN: f64 = 0.01;
+const COMPETITOR_MARGIN: f64 = 0.01;
 
 /// Settings of the tests.
 pub(super) struct Levels<'a> {
