@@ -196,6 +196,30 @@ fn gyro_misalignment() {
     }
 }
 
+/// A true wheel cause passes its competing-explanation test: the test ran (the wheel search
+/// without the cause and its own form) and the cause was kept.
+fn competitor_kept(label: &str, id: &testbed_ident::identify::Identification, cause: Cause) {
+    let test = id
+        .report
+        .cause_tests
+        .iter()
+        .find(|t| t.name == cause.name())
+        .unwrap_or_else(|| panic!("{label}: {} not tested", cause.name()));
+    let c = test
+        .competitor
+        .as_ref()
+        .unwrap_or_else(|| panic!("{label}: no competitor test: {test:?}"));
+    println!(
+        "{label}: competitor: cv {:.1} without, {:.1} with ({}); LR {:?}, Wald {:?}, threshold {:?}",
+        c.cv_without, c.cv_with, c.form, c.lr, c.wald, c.threshold
+    );
+    assert!(
+        test.kept && test.failed.is_none(),
+        "{label}: {}",
+        test.verdict
+    );
+}
+
 #[test]
 fn wheel_friction() {
     // Per-wheel levels, direction asymmetry on X and Z, a Stribeck spike on X and Z (Y none:
@@ -223,6 +247,7 @@ fn wheel_friction() {
             _ => f64::INFINITY,
         };
         check_single(&label, &truth, Cause::WheelFriction, &id, 10.0, tol);
+        competitor_kept(&label, &id, Cause::WheelFriction);
     }
 }
 
@@ -239,6 +264,11 @@ fn wheel_torque_scale() {
             &id,
             20.0,
             |_, _| 0.003,
+        );
+        competitor_kept(
+            &format!("wheel_torque_scale seed {seed}"),
+            &id,
+            Cause::WheelTorqueScale,
         );
     }
 }
@@ -257,6 +287,11 @@ fn actuator_delay() {
             &id,
             10.0,
             |_, _| 2e-3,
+        );
+        competitor_kept(
+            &format!("actuator_delay seed {seed}"),
+            &id,
+            Cause::ActuatorDelay,
         );
     }
 }

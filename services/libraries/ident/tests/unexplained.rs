@@ -179,6 +179,59 @@ fn carried_wheel_term(id: &Identification, wheel: &str, function: &str) -> (f64,
     (c, id.report.gain / without)
 }
 
+/// `wheel_friction`, named by the selection for an out-of-library wheel effect, must be dropped by
+/// its competing-explanation test: the wheel search without it (and without its own form, the
+/// Coulomb and viscous levels) finds `function` in `equation`, predicts at least as well out of
+/// fold, and beside that term the friction is not significant (likelihood ratio or
+/// cluster-robust Wald statistic at or below the selection's threshold), or the search without
+/// it predicts more than 1 % better.
+fn friction_dropped_by_the_competitor(
+    label: &str,
+    id: &Identification,
+    equation: &str,
+    function: &str,
+) {
+    let test = id
+        .report
+        .cause_tests
+        .iter()
+        .find(|t| t.name == "wheel_friction")
+        .unwrap_or_else(|| {
+            panic!(
+                "{label}: wheel_friction was not named and tested: {:?}",
+                id.report.cause_tests
+            )
+        });
+    let c = test
+        .competitor
+        .as_ref()
+        .unwrap_or_else(|| panic!("{label}: no competitor test: {test:?}"));
+    println!(
+        "    {label}: competitor of wheel_friction: cv {:.1} without, {:.1} with; LR {:?}, Wald {:?}, threshold {:?}; consistency p = {:?}",
+        c.cv_without,
+        c.cv_with,
+        c.lr,
+        c.wald,
+        c.threshold,
+        test.consistency.as_ref().map(|c| c.p)
+    );
+    assert!(!test.kept, "{label}: {}", test.verdict);
+    assert_eq!(test.failed, Some("competitor"), "{label}: {}", test.verdict);
+    assert!(
+        c.form.contains(equation) && c.form.contains(function),
+        "{label}: the search without the friction found {}",
+        c.form
+    );
+    let not_significant = match (c.lr, c.threshold) {
+        (Some(lr), Some(th)) => lr.min(c.wald.unwrap_or(f64::INFINITY)) <= th,
+        _ => false,
+    };
+    assert!(
+        c.cv_without < 0.99 * c.cv_with || (c.cv_without <= c.cv_with && not_significant),
+        "{label}: {c:?}"
+    );
+}
+
 #[test]
 fn com_drift_alone_and_with_a_hard_iron() {
     // (A constant torque beside the drift is not a fair partner: `c + d·t` on an axis does not
@@ -616,6 +669,9 @@ fn wheel_drag_alone_and_with_a_wheel_torque_scale() {
             .map(|e| e.proposed.as_str())
             .collect();
         assert!(others.is_empty(), "{label}: {others:?}");
+        // The selection names `wheel_friction` for the drag first (its viscous level takes part
+        // of it); the search without it finds the drag's `n·|n|` on wheel y.
+        friction_dropped_by_the_competitor(label, &id, "wheel_y", "n·|n|");
         // The extended model carries the drag as the plant's `n·|n|` torque on the Y wheel, and
         // it multiplies the held-out prediction gain (measured 10.6× against 1.00× alone, 58.5×
         // against 6.15× beside the scale).
@@ -704,6 +760,9 @@ fn a_wheel_torque_that_follows_the_tilt_is_unexplained_in_the_wheel_channel() {
         .map(|t| t.value)
         .sum();
     assert!((c - 1.0e-2).abs() <= 1.0e-3, "{}", hit.proposed);
+    // The selection names `wheel_friction` for the tilt torque first; the search without it
+    // finds `sin tilt_x` on wheel x.
+    friction_dropped_by_the_competitor("wheel tilt torque", &id, "wheel_x", "sin tilt_x");
     // Carried into the extended model as the plant's `sin tilt_x` torque on the X wheel; the
     // held-out prediction gain rises from 1.00× (nothing named) to 38.8× (seed 59).
     let (carried, ratio) = carried_wheel_term(&id, "x", "sin tilt_x");

@@ -13,8 +13,9 @@
 //!    effect of another form is dropped. Torque causes must beat it by the likelihood ratio
 //!    (independent residuals) and by the cluster-robust Wald statistic of their parameters
 //!    (residuals correlated within a segment of the torque channel, as the search assumes).
-//! 3. **No explanation of another kind** (torque causes). The torque search is redone without
-//!    the cause and without the candidate functions of its own form. The cause is dropped if
+//! 3. **No explanation of another kind** (torque and wheel causes). The channel's search (the
+//!    torque search, or the wheel search for a wheel cause) is redone without the cause and
+//!    without the candidate functions of its own form. The cause is dropped if
 //!    that search's cross-validated residual sum is more than 1 % below the one with it, or if
 //!    that sum is not above it and the cause is not significant (the same threshold,
 //!    likelihood ratio and cluster-robust Wald) beside the terms that search finds (a search
@@ -28,8 +29,9 @@
 //! Torque causes are linear in the torque channel; sensor causes are linearised through the
 //! attitude filter (forward differences, one filter run per parameter) and tested on the
 //! innovations the same way. Wheel causes are linear (or linearised, the delay) in the wheel
-//! equation and are tested there, with the whiteness of that equation's residuals as a third
-//! test (see `wheel`).
+//! equation and are tested there, with the whiteness of that equation's residuals as a fourth
+//! test (see `wheel`). [`significance_beside`] and [`compete`] are shared by the torque and
+//! wheel channels.
 
 use super::unexplained::{Candidates, INNOVATION_LABELS, TorqueCandidates, UnexplainedEffect};
 use crate::channels::torque_columns;
@@ -58,6 +60,9 @@ pub struct CauseTest {
     /// Whiteness of the extended equation's residuals (wheel causes: the wheel equation with
     /// the named causes and the unexplained wheel terms; `None` for other causes).
     pub whiteness: Option<Whiteness>,
+    /// The competing explanation (torque and wheel causes; `None`: not run, e.g. the cause had
+    /// failed an earlier test, or the channel is too short).
+    pub competitor: Option<Competitor>,
     /// The test that failed: `consistency`, `joint` (significance beside the others and the
     /// unexplained effects), `competitor` (a generic form explains its part better),
     /// `whiteness`; `None` when kept.
@@ -78,6 +83,7 @@ impl CauseTest {
             joint_wald: None,
             joint_threshold: None,
             whiteness: None,
+            competitor: None,
             failed: None,
             verdict: format!("kept (selection test; {why})"),
         }
@@ -96,6 +102,24 @@ pub struct Whiteness {
     pub p: f64,
     /// Wheels tested.
     pub wheels: usize,
+}
+
+/// The competing-explanation test of one cause: its channel's sparse search redone without
+/// the cause and without the candidate functions of its own form.
+#[derive(Debug, Clone, Serialize)]
+pub struct Competitor {
+    /// Cross-validated residual sums of the search with the cause and without it (each
+    /// channel's rows whitened by their noise).
+    pub cv_with: f64,
+    pub cv_without: f64,
+    /// The terms the search without it found (`none`).
+    pub form: String,
+    /// The cause's significance beside those terms: likelihood ratio, cluster-robust Wald
+    /// statistic and the selection's threshold (`None`: not computed, because the search
+    /// without the cause predicts worse out of fold or the joint fit was not determined).
+    pub lr: Option<f64>,
+    pub wald: Option<f64>,
+    pub threshold: Option<f64>,
 }
 
 impl CauseTest {
@@ -190,13 +214,9 @@ fn normal_equations(
     extra: &[(usize, usize)],
     candidates: &TorqueCandidates,
     keep: impl Fn(usize) -> bool,
-    drop: Option<Cause>,
-) -> (NormalEquations, Vec<usize>) {
+) -> NormalEquations {
     let ch = &fit.state.torque;
-    let used: Vec<usize> = (0..cols.len())
-        .filter(|&j| drop.is_none() || cols[j].0 != drop)
-        .collect();
-    let p = used.len() + extra.len();
+    let p = cols.len() + extra.len();
     let mut ne = NormalEquations::new(p);
     let mut row = vec![0.0; p];
     for i in 0..ch.len() {
@@ -205,11 +225,11 @@ fn normal_equations(
         }
         for axis in 0..3 {
             let s = ch.sigma[axis];
-            for (j, &u) in used.iter().enumerate() {
-                row[j] = ch.x[i][cols[u].1][axis] / s;
+            for (j, &(_, col)) in cols.iter().enumerate() {
+                row[j] = ch.x[i][col][axis] / s;
             }
             for (j, &(a, c)) in extra.iter().enumerate() {
-                row[used.len() + j] = if a == axis {
+                row[cols.len() + j] = if a == axis {
                     candidates.values[i][c] / s
                 } else {
                     0.0
@@ -218,7 +238,7 @@ fn normal_equations(
             ne.add(&row, ch.y[i][axis] / s);
         }
     }
-    (ne, used)
+    ne
 }
 
 /// How much better (relative drop of the cross-validated residual sum) a competing generic
@@ -281,15 +301,10 @@ pub(super) fn test_causes(
                 .min(blocks - 1)
         };
         let per_block: Vec<Option<crate::stats::LsFit>> = (0..blocks)
-            .map(|b| {
-                normal_equations(fit, &cols, &extra, candidates, |i| block_of(i) == b, None)
-                    .0
-                    .solve()
-            })
+            .map(|b| normal_equations(fit, &cols, &extra, candidates, |i| block_of(i) == b).solve())
             .collect();
         let fit_rows = |i: usize| !problem.held_out[ch.ticks[i]];
-        let (full_ne, _) = normal_equations(fit, &cols, &extra, candidates, fit_rows, None);
-        let full = full_ne.solve();
+        let full = normal_equations(fit, &cols, &extra, candidates, fit_rows).solve();
         if let Some(f) = &full {
             let se = f.stderr();
             let mut delta = Vec::new();
@@ -359,7 +374,7 @@ pub(super) fn test_causes(
                     .filter(|&j| cols_test[j].0 == Some(cause))
                     .collect();
                 let extra_with = with_offsets(&extra, &cols_test, candidates, ch);
-                if let Some((lr, threshold, wald)) = significance_beside(
+                if let Some((lr, threshold, wald)) = torque_significance(
                     fit,
                     &cols_test,
                     &extra_with,
@@ -397,6 +412,7 @@ pub(super) fn test_causes(
             // takes the terms found *with* the cause, whose form the cause has shaped (a
             // constant torque takes an effect's offset, and the search then settles on another
             // harmonic); here the null model is the best explanation without it.
+            let mut competitor = None;
             if kept
                 && let Some(with) = cv_with
                 && let Some((rival, without)) = super::unexplained::competing_explanation(
@@ -409,17 +425,10 @@ pub(super) fn test_causes(
                     levels.sparse,
                 )
             {
-                if without < with * (1.0 - COMPETITOR_MARGIN) {
-                    kept = false;
-                    failed = Some("competitor");
-                    verdict = format!(
-                        "dropped: a form of another kind explains its part better (torque channel's cross-validated residual sum {without:.1} without it, {with:.1} with it); it stood in for that form"
-                    );
-                } else if without <= with {
-                    // The explanation without it predicts at least as well out of fold: the
-                    // cause must then add something significant beside its terms.
-                    let (_, rival_extra) = joint_columns(named, &rival, candidates, ch);
-                    if let Some((lr, threshold, wald)) = significance_beside(
+                let (rival_cols, rival_extra) = joint_columns(named, &rival, candidates, ch);
+                debug_assert_eq!(rival_cols, cols);
+                let (c, dropped) = compete("torque", with, without, &rival, || {
+                    torque_significance(
                         fit,
                         &cols,
                         &rival_extra,
@@ -428,23 +437,14 @@ pub(super) fn test_causes(
                         cause,
                         (idx.len(), &idx),
                         levels,
-                    ) {
-                        let form: Vec<&str> = rival.iter().map(|e| e.proposed.as_str()).collect();
-                        let form = if form.is_empty() {
-                            "none".to_string()
-                        } else {
-                            form.join("; ")
-                        };
-                        if lr.min(wald.unwrap_or(f64::INFINITY)) <= threshold {
-                            kept = false;
-                            failed = Some("competitor");
-                            verdict = format!(
-                                "dropped: not significant beside the form of another kind found without it ({form}; likelihood ratio {lr:.1}, cluster-robust Wald statistic {}, threshold {threshold:.1}); it stood in for that form",
-                                wald.map_or("not determined".to_string(), |w| format!("{w:.1}"))
-                            );
-                        }
-                    }
+                    )
+                });
+                if let Some(text) = dropped {
+                    kept = false;
+                    failed = Some("competitor");
+                    verdict = text;
                 }
+                competitor = Some(c);
             }
             if kept {
                 verdict = match &consistency {
@@ -463,6 +463,7 @@ pub(super) fn test_causes(
                 joint_wald,
                 joint_threshold,
                 whiteness: None,
+                competitor,
                 failed,
                 verdict,
             });
@@ -637,6 +638,7 @@ fn sensor_tests(
             joint_wald: None,
             joint_threshold,
             whiteness: None,
+            competitor: None,
             failed,
             verdict,
         });
@@ -674,15 +676,72 @@ fn with_offsets(
     out
 }
 
-/// Cluster-robust Wald statistic ([`crate::stats::LsFit::cluster_robust_wald`]) of the
-/// parameters `idx` of the joint torque fit `f` (of the rows `keep` accepts, the columns `cols`,
-/// then `extra`); the clusters are the torque channel's segments (their three axes together).
-/// How significant `cause` is beside the columns `cols` and the unexplained terms `extra`, on
-/// the rows `keep` takes: `(likelihood ratio, the selection's threshold for `dof` degrees of
-/// freedom, cluster-robust Wald statistic of the cause's columns `idx`)`; `None` when the fit
-/// is not determined.
+/// The rows of a linear equation, for [`significance_beside`]: calls `row(x, y, y_without,
+/// cluster)` once per row of the fit data, with `x` the regressors of every column (whitened),
+/// `y` the residual the columns are fitted to, `y_without` the residual with the tested cause's
+/// part put back (its values at the base configuration; `y` itself where the columns carry the
+/// whole cause) and `cluster` the row's cluster (residuals may be correlated within one).
+pub(super) type EquationRows<'a> = dyn Fn(&mut RowSink) + 'a;
+
+/// What [`EquationRows`] calls per row: `(x, y, y_without, cluster)`.
+pub(super) type RowSink<'a> = dyn FnMut(&[f64], f64, f64, usize) + 'a;
+
+/// How significant a cause is beside the other columns of a linear equation (`p` columns,
+/// `rows`): `(likelihood ratio, the selection's threshold for `dof` degrees of freedom,
+/// cluster-robust Wald statistic)`. The likelihood ratio sets the fit of every column to `y`
+/// against the fit without the cause's columns `idx` to `y_without`; the Wald statistic tests
+/// the cause's total change from its base values, `offset + θ_idx` (`offset`: the fitted values'
+/// change from the base, zero where the columns carry the whole cause), with the sandwich
+/// covariance over `rows`' clusters. `None` when a fit is not determined. Shared by the torque
+/// and wheel channels' joint and competitor tests.
+pub(super) fn significance_beside(
+    rows: &EquationRows,
+    p: usize,
+    (dof, idx, offset): (usize, &[usize], &[f64]),
+    levels: &Levels,
+) -> Option<(f64, f64, Option<f64>)> {
+    let others: Vec<usize> = (0..p).filter(|j| !idx.contains(j)).collect();
+    let mut with = NormalEquations::new(p);
+    let mut without = NormalEquations::new(others.len());
+    let mut x_without = vec![0.0; others.len()];
+    rows(&mut |x, y, y_without, _| {
+        with.add(x, y);
+        for (a, &j) in others.iter().enumerate() {
+            x_without[a] = x[j];
+        }
+        without.add(&x_without, y_without);
+    });
+    let f = with.solve()?;
+    let rss_without = rss_of(&without)?;
+    let (lr, threshold) = levels.joint(with.rows() as f64, rss_without, f.rss, dof);
+    // Scores per cluster at the joint solution.
+    let mut scores: std::collections::BTreeMap<usize, DVector<f64>> = Default::default();
+    rows(&mut |x, y, _, cluster| {
+        let e = y - x
+            .iter()
+            .zip(f.theta.iter())
+            .map(|(a, t)| a * t)
+            .sum::<f64>();
+        let s = scores.entry(cluster).or_insert_with(|| DVector::zeros(p));
+        for j in 0..p {
+            s[j] += x[j] * e;
+        }
+    });
+    let scores: Vec<DVector<f64>> = scores.into_values().collect();
+    let mut total = f.clone();
+    for (&j, o) in idx.iter().zip(offset) {
+        total.theta[j] += o;
+    }
+    let wald = total.cluster_robust_wald(&scores, idx);
+    Some((lr, threshold, wald))
+}
+
+/// [`significance_beside`] in the torque channel: the cause beside the columns `cols` and the
+/// unexplained terms `extra`, on the rows `keep` takes (the channel's `y` is the residual of the
+/// base model, so the cause's columns carry all of it); clusters are the channel's segments,
+/// their three axes together.
 #[allow(clippy::too_many_arguments)]
-fn significance_beside(
+fn torque_significance(
     fit: &SetFit,
     cols: &[(Option<Cause>, usize)],
     extra: &[(usize, usize)],
@@ -692,56 +751,88 @@ fn significance_beside(
     (dof, idx): (usize, &[usize]),
     levels: &Levels,
 ) -> Option<(f64, f64, Option<f64>)> {
-    let (with, _) = normal_equations(fit, cols, extra, candidates, keep, None);
-    let (without, _) = normal_equations(fit, cols, extra, candidates, keep, Some(cause));
-    let f = with.solve()?;
-    let rss_without = rss_of(&without)?;
-    let (lr, threshold) = levels.joint(with.rows() as f64, rss_without, f.rss, dof);
-    let wald = cluster_robust_wald(fit, cols, extra, candidates, keep, &f, idx);
-    Some((lr, threshold, wald))
-}
-
-fn cluster_robust_wald(
-    fit: &SetFit,
-    cols: &[(Option<Cause>, usize)],
-    extra: &[(usize, usize)],
-    candidates: &TorqueCandidates,
-    keep: impl Fn(usize) -> bool,
-    f: &crate::stats::LsFit,
-    idx: &[usize],
-) -> Option<f64> {
+    debug_assert!(idx.iter().all(|&j| cols[j].0 == Some(cause)));
     let ch = &fit.state.torque;
     let p = cols.len() + extra.len();
-    if f.theta.len() != p {
-        return None;
-    }
-    let mut row = vec![0.0; p];
-    let mut scores = Vec::with_capacity(ch.segments.len());
-    for seg in &ch.segments {
-        let mut score = DVector::<f64>::zeros(p);
-        for i in seg.clone().filter(|&i| keep(i)) {
-            for axis in 0..3 {
-                let s = ch.sigma[axis];
-                for (j, &(_, col)) in cols.iter().enumerate() {
-                    row[j] = ch.x[i][col][axis] / s;
-                }
-                for (j, &(a, c)) in extra.iter().enumerate() {
-                    row[cols.len() + j] = if a == axis {
-                        candidates.values[i][c] / s
-                    } else {
-                        0.0
-                    };
-                }
-                let fitted: f64 = row.iter().zip(f.theta.iter()).map(|(x, t)| x * t).sum();
-                let e = ch.y[i][axis] / s - fitted;
-                for j in 0..p {
-                    score[j] += row[j] * e;
+    let rows = |row: &mut RowSink| {
+        let mut x = vec![0.0; p];
+        for (s, seg) in ch.segments.iter().enumerate() {
+            for i in seg.clone().filter(|&i| keep(i)) {
+                for axis in 0..3 {
+                    let sigma = ch.sigma[axis];
+                    for (j, &(_, col)) in cols.iter().enumerate() {
+                        x[j] = ch.x[i][col][axis] / sigma;
+                    }
+                    for (j, &(a, c)) in extra.iter().enumerate() {
+                        x[cols.len() + j] = if a == axis {
+                            candidates.values[i][c] / sigma
+                        } else {
+                            0.0
+                        };
+                    }
+                    let y = ch.y[i][axis] / sigma;
+                    row(&x, y, y, s);
                 }
             }
         }
-        scores.push(score);
+    };
+    significance_beside(&rows, p, (dof, idx, &vec![0.0; idx.len()]), levels)
+}
+
+/// The competing explanation's verdict, the same in every channel: the cause is dropped if the
+/// search without it (cross-validated residual sum `without`, terms `rival`) predicts more than
+/// [`COMPETITOR_MARGIN`] better out of fold than the search with it (`with`), or if it predicts
+/// at least as well and the cause is not significant beside its terms (`significance`, see
+/// [`significance_beside`]: the likelihood ratio or the cluster-robust Wald statistic at or
+/// below the selection's threshold). A search that predicts worse may have found a mimic of the
+/// cause's form, so the cause is not tested beside it. Returns the test's outcome and, when the
+/// cause is dropped, the verdict.
+pub(super) fn compete(
+    channel: &str,
+    with: f64,
+    without: f64,
+    rival: &[UnexplainedEffect],
+    significance: impl FnOnce() -> Option<(f64, f64, Option<f64>)>,
+) -> (Competitor, Option<String>) {
+    let form: Vec<&str> = rival.iter().map(|e| e.proposed.as_str()).collect();
+    let form = if form.is_empty() {
+        "none".to_string()
+    } else {
+        form.join("; ")
+    };
+    let mut out = Competitor {
+        cv_with: with,
+        cv_without: without,
+        form,
+        lr: None,
+        wald: None,
+        threshold: None,
+    };
+    if without < with * (1.0 - COMPETITOR_MARGIN) {
+        let text = format!(
+            "dropped: a form of another kind explains its part better ({channel} channel's cross-validated residual sum {without:.1} without it, {with:.1} with it: {}); it stood in for that form",
+            out.form
+        );
+        return (out, Some(text));
     }
-    f.cluster_robust_wald(&scores, idx)
+    if without > with {
+        return (out, None);
+    }
+    // The explanation without it predicts at least as well out of fold: the cause must then
+    // add something significant beside its terms.
+    let Some((lr, threshold, wald)) = significance() else {
+        return (out, None);
+    };
+    (out.lr, out.wald, out.threshold) = (Some(lr), wald, Some(threshold));
+    if lr.min(wald.unwrap_or(f64::INFINITY)) > threshold {
+        return (out, None);
+    }
+    let text = format!(
+        "dropped: not significant beside the form of another kind found without it ({}; likelihood ratio {lr:.1}, cluster-robust Wald statistic {}, threshold {threshold:.1}); it stood in for that form",
+        out.form,
+        wald.map_or("not determined".to_string(), |w| format!("{w:.1}"))
+    );
+    (out, Some(text))
 }
 
 /// Residual sum at the least-squares solution (`Σ y²` with no unknowns).

@@ -36,13 +36,23 @@
 //! selection's threshold on the likelihood ratio (its part put back into the residual), and the
 //! residuals of the extended wheel equation must be white on the wheels the cause acts on
 //! (Ljung–Box over [`WHITENESS_LAGS`] lags, Bonferroni over the wheels, `p ≥ consistency_alpha`).
+//! The competing explanation (the torque causes' third test, `falsify::compete`): the wheel
+//! search is redone without the cause (its values at the base configuration) and without its
+//! own form ([`own_form`]); the cause is dropped if that search predicts more than 1 % better
+//! out of fold, or at least as well while the cause is not significant beside the terms it
+//! finds (likelihood ratio, and the cluster-robust Wald statistic of the cause's change from
+//! the base, clusters a third of a block shared by the wheels). Of the failed tests the
+//! competitor is reported first: it names the form the cause stood in for.
 
-use super::falsify::{CauseTest, Levels, Whiteness, consistency, falsified_text, rss_of};
+use super::falsify::{
+    CauseTest, Levels, RowSink, Whiteness, compete, consistency, falsified_text, rss_of,
+    significance_beside,
+};
 use super::unexplained::{UnexplainedEffect, effect, fold_of};
 use crate::channels::{WheelChannel, WheelInterval, friction_regressors, speed_integral};
 use crate::effects::{Cause, Kind};
 use crate::fit::{Problem, SetFit, WheelModel};
-use crate::sparse::{Design, Rows, SparseOptions, search};
+use crate::sparse::{Design, Rows, SparseOptions, search as sparse_search};
 use crate::stats::{NormalEquations, chi_square_cdf, series_stats};
 use testbed_model::ModelConfig;
 
@@ -166,9 +176,86 @@ pub(super) fn search_wheels(
     block_s: f64,
     options: &SparseOptions,
 ) -> Vec<UnexplainedEffect> {
+    search(problem, fit, named, candidates, block_s, options, None).0
+}
+
+/// The competing explanation of a named wheel cause: the wheel search redone without it (its
+/// fitted part put back into the residual: its values at the base configuration) and without
+/// the candidate functions of its own form ([`own_form`]). Returns the effects it finds and its
+/// cross-validated residual sum, to set against [`wheel_cv_rss`] with the cause.
+pub(super) fn competing_explanation(
+    problem: &Problem,
+    fit: &SetFit,
+    named: &[Cause],
+    cause: Cause,
+    candidates: &WheelCandidates,
+    block_s: f64,
+    options: &SparseOptions,
+) -> Option<(Vec<UnexplainedEffect>, f64)> {
+    let others: Vec<Cause> = named.iter().copied().filter(|c| *c != cause).collect();
+    let (effects, cv) = search(
+        problem,
+        fit,
+        &others,
+        candidates,
+        block_s,
+        options,
+        Some(cause),
+    );
+    Some((effects, cv?))
+}
+
+/// The wheel search's cross-validated residual sum (whitened by the channel's noise, summed
+/// over the wheels searched) with the named causes `named`.
+pub(super) fn wheel_cv_rss(
+    problem: &Problem,
+    fit: &SetFit,
+    named: &[Cause],
+    candidates: &WheelCandidates,
+    block_s: f64,
+    options: &SparseOptions,
+) -> Option<f64> {
+    search(problem, fit, named, candidates, block_s, options, None).1
+}
+
+/// A wheel cause's own form among the wheel candidates (excluded from its competitor): the
+/// friction's Coulomb levels (`1` and `sign n` span the levels of the two directions) and its
+/// viscous level `n`, the torque scale's `τ`. The delay's own form (the change of the command
+/// over the delay) is not a candidate.
+fn own_form(cause: Cause) -> &'static [&'static str] {
+    match cause {
+        Cause::WheelFriction => &["1", "sign n", "n"],
+        Cause::WheelTorqueScale => &["τ"],
+        _ => &[],
+    }
+}
+
+/// The wheel search; with `removed` the residual has that cause at its base values (its fitted
+/// part put back) and its own form is not a candidate. Also the cross-validated residual sum
+/// over the wheels searched, whitened by the channel's noise (`None` if no wheel has enough
+/// rows).
+fn search(
+    problem: &Problem,
+    fit: &SetFit,
+    named: &[Cause],
+    candidates: &WheelCandidates,
+    block_s: f64,
+    options: &SparseOptions,
+    removed: Option<Cause>,
+) -> (Vec<UnexplainedEffect>, Option<f64>) {
     let data = problem.data;
     let ch = &fit.state.wheel;
-    let model = WheelModel::from_config(&fit.config);
+    let mut config = fit.config.clone();
+    if let Some(cause) = removed {
+        cause.apply(&mut config, &cause.values(&problem.base));
+    }
+    let model = WheelModel::from_config(&config);
+    let excluded: &[&str] = removed.map_or(&[], own_form);
+    let kept_candidates: Vec<usize> = (0..candidates.names.len())
+        .filter(|&j| !excluded.contains(&candidates.names[j]))
+        .collect();
+    let sigma2 = ch.sigma.max(1e-300).powi(2);
+    let mut cv_total = None;
     let mut out = Vec::new();
     for w in 0..3 {
         let rows = &ch.rows[w];
@@ -191,11 +278,15 @@ pub(super) fn search_wheels(
             .iter()
             .filter_map(|&j| forced_rows.first().map(|r| r[j].0.value_name(r[j].1)))
             .collect();
-        names.extend(candidates.names.iter().map(|n| n.to_string()));
+        names.extend(
+            kept_candidates
+                .iter()
+                .map(|&j| candidates.names[j].to_string()),
+        );
         let x: Vec<Vec<f64>> = (0..rows.len())
             .map(|r| {
                 let mut v: Vec<f64> = forced.iter().map(|&j| forced_rows[r][j].2).collect();
-                v.extend(&candidates.values[w][r]);
+                v.extend(kept_candidates.iter().map(|&j| candidates.values[w][r][j]));
                 v
             })
             .collect();
@@ -220,12 +311,13 @@ pub(super) fn search_wheels(
             },
             options.folds,
         );
-        let result = search(&design, options);
+        let result = sparse_search(&design, options);
+        *cv_total.get_or_insert(0.0) += result.cv_rss / sigma2;
         if let Some(e) = effect(wheel_equation(w), "Nm", result, &design) {
             out.push(e);
         }
     }
-    out
+    (out, cv_total)
 }
 
 /// Name of wheel `w`'s equation: `wheel_x`, `wheel_y`, `wheel_z`.
@@ -303,17 +395,7 @@ pub(super) fn wheel_tests(
             }
         }
     }
-    let mut extra: Vec<(usize, usize)> = Vec::new();
-    for e in effects {
-        let Some(w) = (0..3).find(|&w| e.equation == wheel_equation(w)) else {
-            continue;
-        };
-        for t in &e.terms {
-            if let Some(j) = candidates.names.iter().position(|n| *n == t.name) {
-                extra.push((w, j));
-            }
-        }
-    }
+    let extra = extra_terms(effects, candidates);
     let x_of = |r: &LinRow, used: &[usize], extra: &[(usize, usize)]| -> Vec<f64> {
         let mut x: Vec<f64> = used
             .iter()
@@ -375,6 +457,9 @@ pub(super) fn wheel_tests(
     let all: Vec<usize> = (0..cols.len()).collect();
     // The extended wheel equation on the fit data: its residuals per wheel, in time order.
     let extended = build(&all, &extra, &fit_rows, &|r| r.y).solve();
+    let position = |r: &LinRow| (0..r.wheel).map(|w| ch.rows[w].len()).sum::<usize>() + r.index;
+    // The wheel search with every named cause, run once for all the competitions.
+    let mut cv_with: Option<Option<f64>> = None;
     let mut out = Vec::new();
     for cause in wheel_causes {
         let idx: Vec<usize> = (0..determined.len())
@@ -385,16 +470,15 @@ pub(super) fn wheel_tests(
         } else {
             consistency(&per_block, &idx)
         };
-        let mut kept = true;
-        let mut failed = None;
-        let mut verdict = String::new();
-        if let Some(c) = &consistency
-            && c.p < levels.consistency
-        {
-            kept = false;
-            failed = Some("consistency");
-            verdict = falsified_text(c, levels.consistency);
-        }
+        // The residual with the cause at its base values (its part put back), per row in the
+        // order of `rows`.
+        let mut base_config: ModelConfig = fit.config.clone();
+        cause.apply(&mut base_config, &cause.values(&problem.base));
+        let base_model = WheelModel::from_config(&base_config);
+        let y_base: Vec<f64> = (0..3)
+            .flat_map(|w| ch.rows[w].iter().map(move |row| (w, row)))
+            .map(|(w, row)| base_model.residual(data, ch, w, row) / sigma)
+            .collect();
         // Significance beside the unexplained wheel terms: the residual with the cause at its
         // base values, fitted without its columns, against the fitted residual with them.
         let (mut joint_lr, mut joint_threshold) = (None, None);
@@ -404,28 +488,12 @@ pub(super) fn wheel_tests(
             .filter(|&j| cols[j].0 == cause)
             .collect();
         if !extra.is_empty() && !own.is_empty() {
-            let mut base_config: ModelConfig = fit.config.clone();
-            cause.apply(&mut base_config, &cause.values(&problem.base));
-            let base_model = WheelModel::from_config(&base_config);
-            let y_base: Vec<f64> = (0..3)
-                .flat_map(|w| ch.rows[w].iter().map(move |row| (w, row)))
-                .map(|(w, row)| base_model.residual(data, ch, w, row) / sigma)
-                .collect();
             let others: Vec<usize> = all.iter().copied().filter(|j| !own.contains(j)).collect();
-            let position =
-                |r: &LinRow| (0..r.wheel).map(|w| ch.rows[w].len()).sum::<usize>() + r.index;
             let without = rss_of(&build(&others, &extra, &fit_rows, &|r| y_base[position(r)]));
             if let (Some(with), Some(without)) = (&extended, without) {
                 let (lr, threshold) = levels.joint(with.n as f64, without, with.rss, own.len());
                 joint_lr = Some(lr);
                 joint_threshold = Some(threshold);
-                if lr <= threshold && kept {
-                    kept = false;
-                    failed = Some("joint");
-                    verdict = format!(
-                        "dropped: not significant beside the unexplained wheel effects (likelihood ratio {lr:.1} ≤ threshold {threshold:.1}); it stood in for an effect of another form"
-                    );
-                }
             }
         }
         // Whiteness of the extended equation's residuals on the wheels the cause acts on.
@@ -438,24 +506,118 @@ pub(super) fn wheel_tests(
                 .collect();
             whiteness(&rows, f, &all, &extra, &x_of, &fit_rows, &wheels)
         });
+        // The competing explanation (the torque causes' third test, `falsify::compete`): the
+        // wheel search without the cause and its own form. Its significance beside the terms
+        // that search finds is tested on the columns the fit data determine, the cause's Wald
+        // statistic on its total change from the base values (its columns are changes from the
+        // fitted values).
+        let with = *cv_with.get_or_insert_with(|| {
+            wheel_cv_rss(
+                problem,
+                fit,
+                named,
+                candidates,
+                levels.block_s,
+                levels.sparse,
+            )
+        });
+        let mut competitor = None;
+        let mut competitor_failed = None;
+        if let Some(with) = with
+            && !own.is_empty()
+            && let Some((rival, without)) = competing_explanation(
+                problem,
+                fit,
+                named,
+                cause,
+                candidates,
+                levels.block_s,
+                levels.sparse,
+            )
+        {
+            let rival_extra = extra_terms(&rival, candidates);
+            let present: Vec<usize> = all
+                .iter()
+                .copied()
+                .filter(|&j| ssq(j, &fit_rows) > 0.0)
+                .collect();
+            let idx_present: Vec<usize> = (0..present.len())
+                .filter(|&j| cols[present[j]].0 == cause)
+                .collect();
+            let (fitted, base) = (cause.values(&fit.config), cause.values(&problem.base));
+            let offset: Vec<f64> = idx_present
+                .iter()
+                .map(|&j| {
+                    let i = cols[present[j]].1;
+                    fitted.get(i).zip(base.get(i)).map_or(0.0, |(f, b)| f - b)
+                })
+                .collect();
+            let cluster_s = levels.block_s / 3.0;
+            let equation = |row: &mut RowSink| {
+                for r in rows.iter().filter(|r| fit_rows(r)) {
+                    let x = x_of(r, &present, &rival_extra);
+                    row(&x, r.y, y_base[position(r)], fold_of(r.t, cluster_s));
+                }
+            };
+            let (c, dropped) = compete("wheel", with, without, &rival, || {
+                significance_beside(
+                    &equation,
+                    present.len() + rival_extra.len(),
+                    (own.len(), &idx_present, &offset),
+                    levels,
+                )
+            });
+            competitor = Some(c);
+            competitor_failed = dropped;
+        }
+        // The failed tests, the competitor first: it says what the cause stood in for (the
+        // form the report then carries), where a failed consistency, joint or whiteness test
+        // says only that the cause does not describe the wheel.
+        let mut failures: Vec<(&'static str, String)> = Vec::new();
+        if let Some(text) = competitor_failed {
+            failures.push(("competitor", text));
+        }
+        if let Some(c) = &consistency
+            && c.p < levels.consistency
+        {
+            failures.push(("consistency", falsified_text(c, levels.consistency)));
+        }
+        if let (Some(lr), Some(threshold)) = (joint_lr, joint_threshold)
+            && lr <= threshold
+        {
+            failures.push((
+                "joint",
+                format!(
+                    "dropped: not significant beside the unexplained wheel effects (likelihood ratio {lr:.1} ≤ threshold {threshold:.1}); it stood in for an effect of another form"
+                ),
+            ));
+        }
         if let Some(wt) = &whiteness
             && wt.p < levels.consistency
-            && kept
         {
-            kept = false;
-            failed = Some("whiteness");
-            verdict = format!(
-                "falsified: the residuals of the extended wheel equation are not white (wheel {}: Ljung–Box {:.1} on {} lags, p = {:.1e} < {:.0e} after Bonferroni over {} wheels); the cause and the unexplained terms do not describe the wheel",
-                "XYZ".as_bytes()[wt.wheel.min(2)] as char,
-                wt.ljung_box,
-                wt.lags,
-                wt.p,
-                levels.consistency,
-                wt.wheels
-            );
+            failures.push((
+                "whiteness",
+                format!(
+                    "falsified: the residuals of the extended wheel equation are not white (wheel {}: Ljung–Box {:.1} on {} lags, p = {:.1e} < {:.0e} after Bonferroni over {} wheels); the cause and the unexplained terms do not describe the wheel",
+                    "XYZ".as_bytes()[wt.wheel.min(2)] as char,
+                    wt.ljung_box,
+                    wt.lags,
+                    wt.p,
+                    levels.consistency,
+                    wt.wheels
+                ),
+            ));
         }
-        if kept {
-            verdict = match &consistency {
+        let kept = failures.is_empty();
+        let failed = failures.first().map(|f| f.0);
+        let verdict = match failures.split_first() {
+            Some(((_, text), [])) => text.clone(),
+            Some(((_, text), more)) => format!(
+                "{text}; it also fails its {} test{}",
+                more.iter().map(|f| f.0).collect::<Vec<_>>().join(" and "),
+                if more.len() > 1 { "s" } else { "" }
+            ),
+            None => match &consistency {
                 Some(c) => format!(
                     "kept: consistent across {} time blocks (p = {:.2}), residuals of the wheel equation white{}",
                     c.blocks,
@@ -468,8 +630,8 @@ pub(super) fn wheel_tests(
                         ))
                 ),
                 None => "kept (block consistency not determined)".into(),
-            };
-        }
+            },
+        };
         out.push(CauseTest {
             name: cause.name(),
             kept,
@@ -478,11 +640,28 @@ pub(super) fn wheel_tests(
             joint_wald: None,
             joint_threshold,
             whiteness,
+            competitor,
             failed,
             verdict,
         });
     }
     out
+}
+
+/// The unexplained wheel terms of `effects` as (wheel, candidate index).
+fn extra_terms(effects: &[UnexplainedEffect], candidates: &WheelCandidates) -> Vec<(usize, usize)> {
+    let mut extra = Vec::new();
+    for e in effects {
+        let Some(w) = (0..3).find(|&w| e.equation == wheel_equation(w)) else {
+            continue;
+        };
+        for t in &e.terms {
+            if let Some(j) = candidates.names.iter().position(|n| *n == t.name) {
+                extra.push((w, j));
+            }
+        }
+    }
+    extra
 }
 
 /// The regressors of a row for the named causes' columns `used` and the unexplained terms
