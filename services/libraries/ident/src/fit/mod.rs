@@ -3,7 +3,7 @@
 //! fit of a set; each kind of cause has its own module.
 //!
 //! Each cause acts on one channel directly ([`Kind`]):
-//! * **sensor** causes (gyro scale and misalignment, Earth rate, hard iron) change the readings
+//! * **sensor** causes (gyro scale and misalignment, Earth rate, hard iron, inclinometer offset) change the readings
 //!   the attitude filter sees; they are fitted by Gauss–Newton on the filter's whitened
 //!   innovations (the prediction-error method), with Jacobians by finite differences through
 //!   the filter, started for the hard iron from a sphere fit of the field readings;

@@ -1,4 +1,4 @@
-//! Sensor causes (gyro scale and misalignment, Earth rate, hard iron): Gauss–Newton on the
+//! Sensor causes (gyro scale and misalignment, Earth rate, hard iron, inclinometer offset): Gauss–Newton on the
 //! filter's whitened innovations (the prediction-error method), with the Jacobian by finite
 //! differences through the filter ([`super::jacobian`]), an optional first-order screen, and
 //! damped steps within the causes' bounds.
