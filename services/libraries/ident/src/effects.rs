@@ -19,6 +19,7 @@
 //! | `actuator_delay` | `delay_s` — s |
 //! | `magnetic_disturbance` | `hard_iron_gauss` — body-fixed field, gauss |
 //! | `inclinometer_bias` | `offset_rad` — mounting offset of the tilt angles θ (body X), φ (body Y), rad |
+//! | `inclinometer_scale` | `ppm` — scale error of the tilt angles θ, φ, parts per million |
 //! | `thruster_torque_scale` | `scale` — delivered / nominal thrust per thruster 0–5 |
 //! | `propellant_com_shift` | `tank_position_m` — the propellant's centre of mass from the bearing centre, m, body axes (`[thrusters].tank_position_m`) |
 //!
@@ -32,7 +33,8 @@ use serde::Serialize;
 use testbed_model::ModelConfig;
 use testbed_model::config::{
     ActuatorDelay, AeroDrag, ComOffset, ConstantTorque, EarthRate, GyroMisalignment, GyroScale,
-    InclinometerBias, InertiaError, MagneticDisturbance, WheelFriction, WheelTorqueScale,
+    InclinometerBias, InclinometerScale, InertiaError, MagneticDisturbance, WheelFriction,
+    WheelTorqueScale,
 };
 use testbed_model::thruster_config::{THRUSTER_COUNT, ThrusterConfig, ThrusterTorqueScale};
 
@@ -52,6 +54,7 @@ pub enum Cause {
     ActuatorDelay,
     MagneticDisturbance,
     InclinometerBias,
+    InclinometerScale,
     ThrusterTorqueScale,
     PropellantComShift,
 }
@@ -197,6 +200,14 @@ const P_TILT_BIAS: &[ParamSpec] = &[spec(
     0.1,
     1e-4,
 )];
+const P_TILT_SCALE: &[ParamSpec] = &[spec(
+    "ppm",
+    2,
+    "parts per million, tilt angles θ (body X) and φ (body Y)",
+    -1e5,
+    1e5,
+    100.0,
+)];
 const P_DELAY: &[ParamSpec] = &[spec("delay_s", 1, "s", 0.0, 10.0, 0.01)];
 const P_MAG: &[ParamSpec] = &[spec(
     "hard_iron_gauss",
@@ -209,7 +220,7 @@ const P_MAG: &[ParamSpec] = &[spec(
 
 impl Cause {
     /// Every cause, in the library's order.
-    pub const ALL: [Cause; 14] = [
+    pub const ALL: [Cause; 15] = [
         Cause::ComOffset,
         Cause::EarthRate,
         Cause::AeroDrag,
@@ -222,6 +233,7 @@ impl Cause {
         Cause::ActuatorDelay,
         Cause::MagneticDisturbance,
         Cause::InclinometerBias,
+        Cause::InclinometerScale,
         Cause::ThrusterTorqueScale,
         Cause::PropellantComShift,
     ];
@@ -241,6 +253,7 @@ impl Cause {
             Cause::ActuatorDelay => "actuator_delay",
             Cause::MagneticDisturbance => "magnetic_disturbance",
             Cause::InclinometerBias => "inclinometer_bias",
+            Cause::InclinometerScale => "inclinometer_scale",
             Cause::ThrusterTorqueScale => "thruster_torque_scale",
             Cause::PropellantComShift => "propellant_com_shift",
         }
@@ -276,6 +289,7 @@ impl Cause {
             Cause::InclinometerBias => {
                 "inclinometer mounted off level with the body axes: a constant offset of its angles"
             }
+            Cause::InclinometerScale => "inclinometer scale-factor error per angle",
             Cause::ThrusterTorqueScale => {
                 "thrusters deliver a scaled thrust (worn nozzle, regulator set wrong), per thruster"
             }
@@ -292,7 +306,8 @@ impl Cause {
             | Cause::GyroScale
             | Cause::GyroMisalignment
             | Cause::MagneticDisturbance
-            | Cause::InclinometerBias => Kind::Sensor,
+            | Cause::InclinometerBias
+            | Cause::InclinometerScale => Kind::Sensor,
             Cause::ComOffset
             | Cause::AeroDrag
             | Cause::ConstantTorque
@@ -318,6 +333,7 @@ impl Cause {
             Cause::ActuatorDelay => P_DELAY,
             Cause::MagneticDisturbance => P_MAG,
             Cause::InclinometerBias => P_TILT_BIAS,
+            Cause::InclinometerScale => P_TILT_SCALE,
             Cause::ThrusterTorqueScale => P_THRUSTER_SCALE,
             Cause::PropellantComShift => P_TANK,
         }
@@ -373,6 +389,7 @@ impl Cause {
             Cause::ActuatorDelay => e.actuator_delay.is_some(),
             Cause::MagneticDisturbance => e.magnetic_disturbance.is_some(),
             Cause::InclinometerBias => e.inclinometer_bias.is_some(),
+            Cause::InclinometerScale => e.inclinometer_scale.is_some(),
             Cause::ThrusterTorqueScale => e.thruster_torque_scale.is_some(),
             // The tank position is part of `[thrusters]`: present with the thrusters.
             Cause::PropellantComShift => config.thrusters.is_some(),
@@ -445,6 +462,11 @@ impl Cause {
                 .as_ref()
                 .map_or([0.0; 2], |x| x.offset_rad)
                 .to_vec(),
+            Cause::InclinometerScale => e
+                .inclinometer_scale
+                .as_ref()
+                .map_or([0.0; 2], |x| x.ppm)
+                .to_vec(),
             Cause::ThrusterTorqueScale => e
                 .thruster_torque_scale
                 .as_ref()
@@ -516,6 +538,9 @@ impl Cause {
                 e.inclinometer_bias = Some(InclinometerBias {
                     offset_rad: [v[0], v[1]],
                 })
+            }
+            Cause::InclinometerScale => {
+                e.inclinometer_scale = Some(InclinometerScale { ppm: [v[0], v[1]] })
             }
             Cause::ThrusterTorqueScale => {
                 e.thruster_torque_scale = Some(ThrusterTorqueScale {

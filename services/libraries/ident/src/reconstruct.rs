@@ -34,6 +34,8 @@ pub struct SensorModel {
     pub hard_iron_t: Vector3<f64>,
     /// Inclinometer mounting offset of `[θ, φ]`, rad (zero without `inclinometer_bias`).
     pub tilt_offset_rad: [f64; 2],
+    /// Inclinometer gain of `[θ, φ]`, `1 + s` (one without `inclinometer_scale`).
+    pub tilt_gain: [f64; 2],
     /// Lab field in the level frame, tesla.
     pub field_l_t: Vector3<f64>,
     /// The fitted field error of `effects.fitted_field` (a function of the attitude), tesla.
@@ -69,6 +71,10 @@ impl SensorModel {
                 .inclinometer_bias
                 .as_ref()
                 .map_or([0.0; 2], |b| b.offset_rad),
+            tilt_gain: e
+                .inclinometer_scale
+                .as_ref()
+                .map_or([1.0; 2], |s| s.ppm.map(|p| 1.0 + p * 1e-6)),
             field_l_t: config.platform.field_l_t(),
             fitted_field: FittedFieldModel::from_config(
                 e.fitted_field.as_ref(),
@@ -93,18 +99,15 @@ impl SensorModel {
         self.gyro_matrix * (w + q * self.earth_rate_l + bias)
     }
 
-    /// The tilt reading `[θ, φ]` (rad) with the mounting offset taken out.
+    /// The tilt reading `[θ, φ]` (rad) with the mounting offset and the scale error taken out.
     pub fn correct_tilt(&self, tilt: &[f64; 2]) -> [f64; 2] {
-        [
-            tilt[0] - self.tilt_offset_rad[0],
-            tilt[1] - self.tilt_offset_rad[1],
-        ]
+        std::array::from_fn(|i| (tilt[i] - self.tilt_offset_rad[i]) / self.tilt_gain[i])
     }
 
     /// The noise-free tilt reading at attitude `q`, rad.
     pub fn tilt_reading(&self, q: &Attitude) -> [f64; 2] {
-        let [x, y] = attitude::tilt_angles(q);
-        [x + self.tilt_offset_rad[0], y + self.tilt_offset_rad[1]]
+        let tilt = attitude::tilt_angles(q);
+        std::array::from_fn(|i| self.tilt_gain[i] * tilt[i] + self.tilt_offset_rad[i])
     }
 
     /// The field reading `m` (tesla, body axes) with the hard iron and the fitted field error

@@ -76,6 +76,17 @@ fn detection_power_table_for_a_20_minute_experiment() {
             "0.05°, −0.03° × scale",
         ),
         (
+            Cause::InclinometerScale,
+            Box::new(|s| {
+                format!(
+                    "[effects.inclinometer_scale]\nppm = [{}, {}]\n",
+                    2.0e4 * s,
+                    -1.0e4 * s
+                )
+            }),
+            "2 %, −1 % × scale",
+        ),
+        (
             Cause::WheelTorqueScale,
             Box::new(|s| {
                 format!(

@@ -260,6 +260,7 @@ pub struct EffectsConfig {
     pub actuator_delay: Option<ActuatorDelay>,
     pub magnetic_disturbance: Option<MagneticDisturbance>,
     pub inclinometer_bias: Option<InclinometerBias>,
+    pub inclinometer_scale: Option<InclinometerScale>,
     /// Effects outside identification's cause library (the simulator can produce them so tests
     /// can check that `testbed identify` reports them as unexplained rather than absorbing
     /// them into library causes). Off unless configured.
@@ -536,6 +537,15 @@ pub struct InclinometerBias {
     pub offset_rad: [f64; 2],
 }
 
+/// The inclinometer's angles read scaled: `(1 + s) θ` (its gain calibration is off).
+/// Typical: a few thousand ppm (0.1–2 %) for electrolytic and MEMS tilt sensors.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct InclinometerScale {
+    /// Scale error of `[θ, φ]`, parts per million.
+    pub ppm: [f64; 2],
+}
+
 impl ModelConfig {
     /// Parse and validate a TOML document; `origin` names it in errors (a path, or "<inline>").
     pub fn from_toml_str(text: &str, origin: &str) -> Result<Self, ConfigError> {
@@ -702,6 +712,16 @@ impl ModelConfig {
                     *b,
                     -0.1,
                     0.1,
+                );
+            }
+        }
+        if let Some(x) = &e.inclinometer_scale {
+            for (i, s) in x.ppm.iter().enumerate() {
+                v.within(
+                    &format!("effects.inclinometer_scale.ppm[{i}]"),
+                    *s,
+                    -1e5,
+                    1e5,
                 );
             }
         }

@@ -1,6 +1,7 @@
-//! The two-axis inclinometer (LE-30): `theta_meas = theta + b_theta + eta_theta`,
-//! `phi_meas = phi + b_phi + eta_phi`, angles as defined by [`crate::attitude::tilt_angles`];
-//! `b` is `effects.inclinometer_bias` (zero without it).
+//! The two-axis inclinometer (LE-30): `theta_meas = (1 + s_theta) theta + b_theta + eta_theta`,
+//! `phi_meas = (1 + s_phi) phi + b_phi + eta_phi`, angles as defined by
+//! [`crate::attitude::tilt_angles`]; `b` is `effects.inclinometer_bias` and `s`
+//! `effects.inclinometer_scale` (zero without them).
 
 use super::{DeviceId, device_rng, saturate};
 use crate::attitude::{Attitude, tilt_angles};
@@ -34,6 +35,8 @@ pub struct Inclinometer {
     noise_rad: [f64; 2],
     /// Mounting offset added to each angle, rad.
     offset_rad: [f64; 2],
+    /// Gain of each angle, `1 + s`.
+    gain: [f64; 2],
     range_rad: f64,
     rng: ChaCha8Rng,
 }
@@ -50,6 +53,11 @@ impl Inclinometer {
                 .inclinometer_bias
                 .as_ref()
                 .map_or([0.0; 2], |b| b.offset_rad),
+            gain: config
+                .effects
+                .inclinometer_scale
+                .as_ref()
+                .map_or([1.0; 2], |s| s.ppm.map(|p| 1.0 + p * 1e-6)),
             range_rad: c.range_deg * DEG,
             rng: device_rng(seed, DeviceId::Inclinometer),
         }
@@ -69,7 +77,7 @@ impl Inclinometer {
         for i in 0..2 {
             let eta: f64 = self.rng.sample(StandardNormal);
             (tilt_rad[i], saturated[i]) = saturate(
-                truth[i] + self.offset_rad[i] + self.noise_rad[i] * eta,
+                self.gain[i] * truth[i] + self.offset_rad[i] + self.noise_rad[i] * eta,
                 self.range_rad,
             );
         }
@@ -114,6 +122,24 @@ mod tests {
         let r = inc.sample(&q);
         for axis in 0..2 {
             assert!((r.tilt_rad[axis] - (truth[axis] + offset_rad[axis])).abs() < 1e-15);
+        }
+    }
+
+    #[test]
+    fn a_scale_error_and_an_offset_read_as_gain_times_tilt_plus_offset() {
+        let mut config = ModelConfig::default();
+        config.inclinometer.noise_deg = [0.0; 2];
+        let offset_rad = [8.7e-4, -5.2e-4];
+        config.effects.inclinometer_bias = Some(crate::config::InclinometerBias { offset_rad });
+        config.effects.inclinometer_scale =
+            Some(crate::config::InclinometerScale { ppm: [2e4, -1e4] });
+        let mut inc = Inclinometer::new(&config, 0);
+        let q = from_heading_pitch_roll(0.7, 0.03, -0.02);
+        let truth = tilt_angles(&q);
+        let r = inc.sample(&q);
+        for (axis, gain) in [1.02, 0.99].into_iter().enumerate() {
+            let expected = gain * truth[axis] + offset_rad[axis];
+            assert!((r.tilt_rad[axis] - expected).abs() < 1e-15);
         }
     }
 
