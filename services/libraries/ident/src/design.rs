@@ -45,8 +45,9 @@
 //! Covered causes ([`information_supported`]): the torque causes (centre-of-mass offset,
 //! constant torque, drag, inertia error), `wheel_torque_scale` and the linear levels of
 //! `wheel_friction` (from the fits' normal equations), and the sensor causes (gyro scale and
-//! misalignment, Earth rate, hard iron, inclinometer offset: from the Jacobian of the filter's
-//! innovations by forward differences, one more filter run per parameter and candidate).
+//! misalignment, Earth rate, hard iron, inclinometer offset and scale: from the Jacobian of the
+//! filter's innovations by forward differences, one more filter run per parameter and
+//! candidate).
 
 use crate::data::Aligned;
 use crate::effects::Cause;

@@ -3,10 +3,11 @@
 //! fit of a set; each kind of cause has its own module.
 //!
 //! Each cause acts on one channel directly ([`Kind`]):
-//! * **sensor** causes (gyro scale and misalignment, Earth rate, hard iron, inclinometer offset) change the readings
-//!   the attitude filter sees; they are fitted by Gauss–Newton on the filter's whitened
-//!   innovations (the prediction-error method), with Jacobians by finite differences through
-//!   the filter, started for the hard iron from a sphere fit of the field readings;
+//! * **sensor** causes (gyro scale and misalignment, Earth rate, hard iron, inclinometer offset
+//!   and scale) change the readings the attitude filter sees; they are fitted by Gauss–Newton
+//!   on the filter's whitened innovations (the prediction-error method), with Jacobians by
+//!   finite differences through the filter, started for the hard iron from a sphere fit of the
+//!   field readings;
 //! * **torque** causes (centre-of-mass offset, constant torque, drag, inertia error) are linear
 //!   in the torque channel: weighted least squares, with `aero_drag`'s coefficients kept ≥ 0;
 //! * **wheel** causes are linear in the wheel channel for a given delay and Stribeck speed
