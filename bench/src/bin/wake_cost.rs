@@ -15,6 +15,7 @@ use anyhow::Context as _;
 use clap::Parser;
 use std::sync::atomic::{AtomicU32, Ordering};
 use std::time::Duration;
+use testbed_bench::median;
 
 #[derive(Parser)]
 struct Args {
@@ -36,14 +37,7 @@ struct Args {
 
 /// CPU time (user + system) this process has used so far, µs.
 fn cpu_us() -> f64 {
-    // SAFETY: getrusage writes the rusage struct it is given and nothing else.
-    let usage = unsafe {
-        let mut usage = std::mem::zeroed::<libc::rusage>();
-        libc::getrusage(libc::RUSAGE_SELF, &mut usage);
-        usage
-    };
-    let us = |t: libc::timeval| t.tv_sec as f64 * 1e6 + t.tv_usec as f64;
-    us(usage.ru_utime) + us(usage.ru_stime)
+    testbed_bench::self_cpu().as_secs_f64() * 1e6
 }
 
 /// A futex word in a shared file mapping (both processes map the same file).
@@ -168,11 +162,6 @@ fn futex_case(wakes: u32, period: Duration) -> anyhow::Result<(f64, f64)> {
         .parse()
         .context("the waiter's report")?;
     Ok((waiter, ringer))
-}
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
 }
 
 fn main() -> anyhow::Result<()> {
