@@ -207,6 +207,32 @@ fn joint_columns(
     (cols, extra)
 }
 
+/// One whitened row of the joint torque model, interval `i`, body axis `axis`: the columns
+/// `cols` of the causes, then the unexplained terms `extra` (each on its own axis), written
+/// into `x`; returns the whitened residual `y`.
+fn torque_row(
+    fit: &SetFit,
+    cols: &[(Option<Cause>, usize)],
+    extra: &[(usize, usize)],
+    candidates: &TorqueCandidates,
+    (i, axis): (usize, usize),
+    x: &mut [f64],
+) -> f64 {
+    let ch = &fit.state.torque;
+    let sigma = ch.sigma[axis];
+    for (j, &(_, col)) in cols.iter().enumerate() {
+        x[j] = ch.x[i][col][axis] / sigma;
+    }
+    for (j, &(a, c)) in extra.iter().enumerate() {
+        x[cols.len() + j] = if a == axis {
+            candidates.values[i][c] / sigma
+        } else {
+            0.0
+        };
+    }
+    ch.y[i][axis] / sigma
+}
+
 /// Normal equations of the joint torque model over the rows `keep` accepts.
 fn normal_equations(
     fit: &SetFit,
@@ -224,18 +250,8 @@ fn normal_equations(
             continue;
         }
         for axis in 0..3 {
-            let s = ch.sigma[axis];
-            for (j, &(_, col)) in cols.iter().enumerate() {
-                row[j] = ch.x[i][col][axis] / s;
-            }
-            for (j, &(a, c)) in extra.iter().enumerate() {
-                row[cols.len() + j] = if a == axis {
-                    candidates.values[i][c] / s
-                } else {
-                    0.0
-                };
-            }
-            ne.add(&row, ch.y[i][axis] / s);
+            let y = torque_row(fit, cols, extra, candidates, (i, axis), &mut row);
+            ne.add(&row, y);
         }
     }
     ne
@@ -759,18 +775,7 @@ fn torque_significance(
         for (s, seg) in ch.segments.iter().enumerate() {
             for i in seg.clone().filter(|&i| keep(i)) {
                 for axis in 0..3 {
-                    let sigma = ch.sigma[axis];
-                    for (j, &(_, col)) in cols.iter().enumerate() {
-                        x[j] = ch.x[i][col][axis] / sigma;
-                    }
-                    for (j, &(a, c)) in extra.iter().enumerate() {
-                        x[cols.len() + j] = if a == axis {
-                            candidates.values[i][c] / sigma
-                        } else {
-                            0.0
-                        };
-                    }
-                    let y = ch.y[i][axis] / sigma;
+                    let y = torque_row(fit, cols, extra, candidates, (i, axis), &mut x);
                     row(&x, y, y, s);
                 }
             }
