@@ -6,6 +6,7 @@ use std::process::ExitCode;
 use anyhow::{Context as _, bail};
 use clap::Parser;
 use testbed_bus::BusConfig;
+use testbed_launch::placement::CpuLatencyRequest;
 use testbed_launch::profile::{ClockMode, Profile};
 use testbed_launch::sys::{self, SignalSet};
 use testbed_launch::{Plan, ProfileError, Supervisor};
@@ -39,6 +40,10 @@ struct Args {
     /// Override [run] max_wall_s.
     #[arg(long)]
     max_wall_s: Option<f64>,
+    /// Override [platform] cpu_latency_us: hold a PM QoS CPU latency request of this many µs
+    /// for the run (0: idle CPUs poll; needs root).
+    #[arg(long, value_name = "US")]
+    cpu_latency_us: Option<u32>,
     /// Override [supervision] stop_timeout_s (SIGINT → SIGTERM).
     #[arg(long)]
     stop_timeout_s: Option<f64>,
@@ -64,7 +69,7 @@ struct Args {
 }
 
 fn plan(args: &Args) -> anyhow::Result<Result<Plan, ProfileError>> {
-    let profile = match Profile::load(&args.profile) {
+    let mut profile = match Profile::load(&args.profile) {
         Ok(p) => p,
         Err(e) => return Ok(Err(e)),
     };
@@ -99,6 +104,11 @@ fn plan(args: &Args) -> anyhow::Result<Result<Plan, ProfileError>> {
         let cwd = std::env::current_dir().context("reading the working directory")?;
         run.config = Some(cwd.join(config));
     }
+    if let Some(us) = args.cpu_latency_us
+        && let Err(e) = profile.check_cpu_latency("--cpu-latency-us", us)
+    {
+        return Ok(Err(e));
+    }
     supervision.stop_timeout_s = args.stop_timeout_s.unwrap_or(supervision.stop_timeout_s);
     supervision.term_timeout_s = args.term_timeout_s.unwrap_or(supervision.term_timeout_s);
 
@@ -121,6 +131,7 @@ fn plan(args: &Args) -> anyhow::Result<Result<Plan, ProfileError>> {
             .context("the launcher's executable has no directory")?
             .to_path_buf(),
     };
+    profile.platform.cpu_latency_us = args.cpu_latency_us.or(profile.platform.cpu_latency_us);
     let plan = Plan {
         profile,
         run,
@@ -200,6 +211,30 @@ fn main() -> ExitCode {
     if args.check {
         return ExitCode::SUCCESS;
     }
+    // Held until the launcher exits: the kernel ends the request with the file.
+    let _cpu_latency = match plan
+        .profile
+        .platform
+        .cpu_latency_us
+        .map(CpuLatencyRequest::hold)
+    {
+        None => None,
+        Some(Ok(request)) => {
+            tracing::info!(
+                "holding CPU latency {} µs for the run ({})",
+                request.latency_us(),
+                testbed_launch::placement::CPU_LATENCY_DEVICE
+            );
+            Some(request)
+        }
+        Some(Err(e)) => {
+            tracing::error!(
+                "{}: platform.cpu_latency_us: {e}",
+                plan.profile.file.display()
+            );
+            return ExitCode::from(EXIT_CONFIG);
+        }
+    };
     tracing::info!(
         "profile {}: mode {}, bus prefix {:?} root {:?} ({} delivery), {} processes",
         plan.profile.file.display(),

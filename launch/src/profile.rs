@@ -9,6 +9,11 @@
 //! config = "sim-run.toml"    # optional: run configuration file (relative: to this profile)
 //! max_wall_s = 3600.0        # optional: the launcher stops everything after this wall time
 //!
+//! [platform]                 # optional
+//! cpu_latency_us = 0         # optional: held for the run as a PM QoS request on
+//!                            # /dev/cpu_dma_latency (needs root): idle CPUs use no idle state
+//!                            # slower to leave than this; 0 = they poll (see `placement`)
+//!
 //! [devices]                  # optional; each listed device must be served by one process
 //! gyro = "simulated"         # "real" | "simulated"; also inclinometer, magnetometer, wheels, cmg
 //!
@@ -156,6 +161,16 @@ pub struct RunSettings {
     pub max_wall_s: Option<f64>,
 }
 
+/// `[platform]`: settings of the machine the launcher holds for the run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Platform {
+    /// Wake-up latency the CPUs' idle states may add, µs: a PM QoS request the launcher holds
+    /// on `/dev/cpu_dma_latency` from start to end of the run (`placement::CpuLatencyRequest`).
+    /// `0` keeps idle CPUs polling instead of halting. None: the system's default.
+    pub cpu_latency_us: Option<u32>,
+}
+
 /// `[supervision]`.
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -241,6 +256,8 @@ pub struct ProcessSpec {
 struct RawProfile {
     run: RunSettings,
     #[serde(default)]
+    platform: Platform,
+    #[serde(default)]
     devices: BTreeMap<Device, Source>,
     #[serde(default)]
     supervision: Supervision,
@@ -255,6 +272,8 @@ pub struct Profile {
     pub file: PathBuf,
     /// `[run]`.
     pub run: RunSettings,
+    /// `[platform]`.
+    pub platform: Platform,
     /// `[devices]`.
     pub devices: BTreeMap<Device, Source>,
     /// `[supervision]`.
@@ -285,6 +304,7 @@ impl Profile {
         let mut profile = Self {
             file: file.to_path_buf(),
             run: raw.run,
+            platform: raw.platform,
             devices: raw.devices,
             supervision: raw.supervision,
             processes: raw.processes,
@@ -333,6 +353,22 @@ impl Profile {
         }
     }
 
+    /// Checks a PM QoS CPU latency request, µs (also used for the command-line override).
+    pub fn check_cpu_latency(&self, key: &str, us: u32) -> Result<(), ProfileError> {
+        if us <= crate::placement::MAX_CPU_LATENCY_US {
+            Ok(())
+        } else {
+            Err(self.invalid(
+                key,
+                us,
+                format!(
+                    "at most {} µs (the kernel's default, no constraint)",
+                    crate::placement::MAX_CPU_LATENCY_US
+                ),
+            ))
+        }
+    }
+
     fn validate(&self) -> Result<(), ProfileError> {
         if let Some(d) = self.run.duration_s {
             self.check_seconds("run.duration_s", d, false)?;
@@ -344,6 +380,9 @@ impl Profile {
             if path.as_ref().is_some_and(|p| p.as_os_str().is_empty()) {
                 return Err(self.invalid(key, "", "must not be empty"));
             }
+        }
+        if let Some(us) = self.platform.cpu_latency_us {
+            self.check_cpu_latency("platform.cpu_latency_us", us)?;
         }
         let s = self.supervision;
         self.check_seconds("supervision.stop_timeout_s", s.stop_timeout_s, true)?;

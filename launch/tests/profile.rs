@@ -138,6 +138,26 @@ fn defaults_are_applied() {
     assert_eq!(profile.supervision.stop_timeout_s, 2.0);
     assert_eq!(profile.supervision.term_timeout_s, 2.0);
     assert_eq!(profile.run.seed, 0);
+    assert_eq!(profile.platform.cpu_latency_us, None);
+}
+
+#[test]
+fn a_cpu_latency_request_is_read_and_checked() {
+    let body = "[[process]]\nname = \"a\"\ncommand = \"x\"\n";
+    let profile = parse(&format!("{RUN}[platform]\ncpu_latency_us = 0\n{body}")).expect("valid");
+    assert_eq!(profile.platform.cpu_latency_us, Some(0));
+    error(
+        &format!("{RUN}[platform]\ncpu_latency_us = 2000000001\n{body}"),
+        &["platform.cpu_latency_us", "2000000001", "at most"],
+    );
+    error(
+        &format!("{RUN}[platform]\ncpu_latency_us = -1\n{body}"),
+        &["cpu_latency_us", "-1"],
+    );
+    error(
+        &format!("{RUN}[platform]\ncpu_latency = 0\n{body}"),
+        &["cpu_latency"],
+    );
 }
 
 #[test]

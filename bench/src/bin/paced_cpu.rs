@@ -13,13 +13,18 @@
 //!   reading the log); this column is the running pipeline alone;
 //! - with `--baseline-bin-dir DIR` (the binaries of another build, e.g. the commit before),
 //!   the same runs of that build interleaved with this one's, and the ratio of the two;
+//! - with `--cpu-latency-us N` instead, this build with the launcher holding a PM QoS CPU
+//!   latency request of N µs (`testbed run --cpu-latency-us`; 0 keeps idle CPUs polling)
+//!   interleaved with this build without it (the "baseline" columns), and for both the share
+//!   of the steady-state window the CPUs spent idle polling and idle halted
+//!   (`/sys/devices/system/cpu/cpu*/cpuidle`): what the request costs in power;
 //! - the logger's per-record cost, side by side in one process: the log writer on records as
 //!   it has them (the transform taken from the record) against the same records already
 //!   encoded (the transform decoded back from the JSON message, as every record was before),
 //!   records per second, medians.
 //!
 //! `cargo build --release --workspace --bins && target/release/paced_cpu [--repeats 3]
-//!  [--short 5 --long 60] [--baseline-bin-dir DIR] [--json]`
+//!  [--short 5 --long 60] [--baseline-bin-dir DIR | --cpu-latency-us N] [--json]`
 
 use anyhow::{Context, Result, bail};
 use clap::Parser;
@@ -46,6 +51,10 @@ struct Args {
     /// CPU report, `TESTBED_CPU_REPORT`, as builds since 2026-11-25 do), else this build's.
     #[arg(long)]
     baseline_bin_dir: Option<PathBuf>,
+    /// Compare this build run with a PM QoS CPU latency request of this many µs (held by the
+    /// launcher; needs root) against this build without it (the baseline).
+    #[arg(long, value_name = "US", conflicts_with = "baseline_bin_dir")]
+    cpu_latency_us: Option<u32>,
     #[arg(long)]
     json: bool,
 }
@@ -56,6 +65,44 @@ struct PacedRun {
     per_process: BTreeMap<String, f64>,
     /// Steady state (long runs): fraction of one core per process, from schedstat.
     steady: BTreeMap<String, f64>,
+    /// Steady state (long runs): time the CPUs spent in idle states, fraction of one CPU
+    /// summed over CPUs, by kind.
+    idle: IdleShare,
+}
+
+/// Time in the CPUs' idle states over a window, fraction of one CPU summed over the CPUs.
+#[derive(Clone, Copy, Default)]
+struct IdleShare {
+    /// In the polling state (`POLL`): the CPU spins, awake, until there is work.
+    polling: f64,
+    /// In every other state (halted: woken by an interrupt).
+    halted: f64,
+}
+
+/// Microseconds every CPU has spent in its idle states so far: (polling, halted), summed over
+/// CPUs. Zero where the kernel has no cpuidle driver.
+fn idle_state_us() -> (u64, u64) {
+    let (mut polling, mut halted) = (0, 0);
+    let Ok(cpus) = std::fs::read_dir("/sys/devices/system/cpu") else {
+        return (0, 0);
+    };
+    for cpu in cpus.flatten() {
+        let Ok(states) = std::fs::read_dir(cpu.path().join("cpuidle")) else {
+            continue;
+        };
+        for state in states.flatten() {
+            let read = |f: &str| std::fs::read_to_string(state.path().join(f)).unwrap_or_default();
+            let Ok(us) = read("time").trim().parse::<u64>() else {
+                continue;
+            };
+            if read("name").trim() == "POLL" {
+                polling += us;
+            } else {
+                halted += us;
+            }
+        }
+    }
+    (polling, halted)
 }
 
 /// Where the steady-state window of a paced run of `seconds` lies: from 5 s after its start
@@ -132,9 +179,12 @@ impl PacedRun {
 struct Build {
     name: &'static str,
     bin_dir: PathBuf,
+    /// Extra arguments of `testbed run`.
+    extra_args: Vec<String>,
 }
 
 fn paced_run(build: &Build, scratch: &Path, seconds: f64) -> Result<PacedRun> {
+    let mut idle = IdleShare::default();
     let log = scratch.join(format!("{}.mcap", build.name));
     let report = scratch.join(format!("{}.cpu.tsv", build.name));
     let _ = std::fs::remove_file(&report);
@@ -151,6 +201,7 @@ fn paced_run(build: &Build, scratch: &Path, seconds: f64) -> Result<PacedRun> {
             "--log",
         ])
         .arg(&log)
+        .args(&build.extra_args)
         .env("RUST_LOG", "warn")
         .env("TESTBED_CPU_REPORT", &report)
         .stdout(std::process::Stdio::null())
@@ -161,10 +212,16 @@ fn paced_run(build: &Build, scratch: &Path, seconds: f64) -> Result<PacedRun> {
     if let Some((from, to)) = steady_window(seconds) {
         std::thread::sleep(from.saturating_sub(start.elapsed()));
         let first = schedstat_tree(child.id());
+        let first_idle = idle_state_us();
         let first_at = Instant::now();
         std::thread::sleep(to.saturating_sub(start.elapsed()));
         let last = schedstat_tree(child.id());
+        let last_idle = idle_state_us();
         let window_s = first_at.elapsed().as_secs_f64();
+        idle = IdleShare {
+            polling: last_idle.0.saturating_sub(first_idle.0) as f64 * 1e-6 / window_s,
+            halted: last_idle.1.saturating_sub(first_idle.1) as f64 * 1e-6 / window_s,
+        };
         for (name, ns) in &last {
             // A process that (re)started inside the window counts from zero.
             let used = ns.saturating_sub(first.get(name).copied().unwrap_or(0));
@@ -199,6 +256,7 @@ fn paced_run(build: &Build, scratch: &Path, seconds: f64) -> Result<PacedRun> {
         wall_s,
         per_process,
         steady,
+        idle,
     })
 }
 
@@ -212,6 +270,8 @@ struct BuildResult {
     /// Steady state of the long runs (schedstat), fraction of one core.
     steady: BTreeMap<String, f64>,
     steady_all: f64,
+    /// Idle states over the long runs' steady state, medians.
+    idle: IdleShare,
 }
 
 fn summarise(pairs: &[(PacedRun, PacedRun)]) -> BuildResult {
@@ -264,6 +324,10 @@ fn summarise(pairs: &[(PacedRun, PacedRun)]) -> BuildResult {
                 .map(|(_, l)| l.steady.values().sum::<f64>())
                 .collect(),
         ),
+        idle: IdleShare {
+            polling: median(pairs.iter().map(|(_, l)| l.idle.polling).collect()),
+            halted: median(pairs.iter().map(|(_, l)| l.idle.halted).collect()),
+        },
     }
 }
 
@@ -342,14 +406,28 @@ fn main() -> Result<()> {
     }
     let scratch = std::env::temp_dir().join(format!("paced-cpu-{}", std::process::id()));
     std::fs::create_dir_all(&scratch)?;
+    let request: Vec<String> = args
+        .cpu_latency_us
+        .map(|us| vec!["--cpu-latency-us".to_owned(), us.to_string()])
+        .unwrap_or_default();
     let mut builds = vec![Build {
         name: "this build",
-        bin_dir,
+        bin_dir: bin_dir.clone(),
+        extra_args: request,
     }];
     if let Some(dir) = &args.baseline_bin_dir {
         builds.push(Build {
             name: "baseline",
             bin_dir: baseline_bins(dir, &launcher, &scratch)?,
+            extra_args: Vec::new(),
+        });
+    }
+    if let Some(us) = args.cpu_latency_us {
+        eprintln!("this build with a CPU latency request of {us} µs; baseline: without it");
+        builds.push(Build {
+            name: "baseline",
+            bin_dir,
+            extra_args: Vec::new(),
         });
     }
     let mut pairs: Vec<Vec<(PacedRun, PacedRun)>> = builds.iter().map(|_| Vec::new()).collect();
@@ -389,12 +467,15 @@ fn main() -> Result<()> {
                 "per_process_over_wall": r.total_over_wall,
                 "steady_cpu_fraction_of_one_core": r.steady_all,
                 "per_process_steady": r.steady,
+                "steady_idle_polling_fraction_of_one_cpu": r.idle.polling,
+                "steady_idle_halted_fraction_of_one_cpu": r.idle.halted,
             })
         };
         let report = serde_json::json!({
             "short_s": args.short,
             "long_s": args.long,
             "repeats": args.repeats,
+            "cpu_latency_us": args.cpu_latency_us,
             "this_build": table(this),
             "baseline": base.map(table),
             "log_writer": {
@@ -460,7 +541,16 @@ fn main() -> Result<()> {
         "steady state without `testbed run` (the launcher and its processes): {:.3} %",
         100.0 * pipeline(this)
     );
+    let idle = |r: &BuildResult| {
+        format!(
+            "CPUs idle polling {:.1} %, idle halted {:.1} % (of one CPU, summed over CPUs)",
+            100.0 * r.idle.polling,
+            100.0 * r.idle.halted
+        )
+    };
+    println!("steady state, this build: {}", idle(this));
     if let Some(b) = base {
+        println!("steady state, baseline:   {}", idle(b));
         println!(
             "baseline / this build: {:.2}× (marginal), {:.2}× (over wall), {:.2}× (steady), \
              {:.2}× (steady, launcher and its processes: {:.3} % vs {:.3} %)",

@@ -60,6 +60,11 @@ struct Args {
         default_value = "block;block+fifo;anticipate@sim-gyro,estimator,controller"
     )]
     paced_waits: Vec<String>,
+    /// Hold a PM QoS CPU latency request of this many µs for the whole measurement
+    /// (`/dev/cpu_dma_latency`, needs root): 0 keeps idle CPUs polling instead of halting, as
+    /// a launch profile's `[platform] cpu_latency_us = 0` does for a run [default: none].
+    #[arg(long, value_name = "US")]
+    cpu_latency_us: Option<u32>,
     /// Parts to leave out: hop, chain, sweep, paced, binaries.
     #[arg(long, value_delimiter = ',')]
     skip: Vec<String>,
@@ -141,6 +146,12 @@ fn run(args: &Args, command: String) -> Result<()> {
         WaitStrategy::from_lookup(|_| Some(strategy.clone()))
             .with_context(|| format!("--paced-waits: {w}"))?;
     }
+    // Held until this function returns: every row of the run measures under the same request.
+    let _cpu_latency = args
+        .cpu_latency_us
+        .map(testbed_launch::placement::CpuLatencyRequest::hold)
+        .transpose()
+        .context("--cpu-latency-us")?;
     let rounds = if quick { 2 } else { 4 };
     let hog_cpu = system::cpu_count() - 1;
     let scratch = PathBuf::from(format!("/tmp/latency-{}", std::process::id()));
@@ -155,6 +166,7 @@ fn run(args: &Args, command: String) -> Result<()> {
             "gap_us": args.gap_us, "period_us": args.period_us, "sizes": sizes,
             "waits": waits.iter().map(ToString::to_string).collect::<Vec<_>>(),
             "paced_duration_s": paced_duration, "paced_waits": args.paced_waits, "hog_cpu": hog_cpu,
+            "cpu_latency_us": args.cpu_latency_us,
         }),
         ..Report::default()
     };

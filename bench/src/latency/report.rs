@@ -21,6 +21,14 @@ pub fn machine_table(out: &mut String, r: &Report) {
         ("kernel", m.kernel.clone()),
         ("clock source", m.clocksource.clone()),
         ("idle states", m.cpuidle.clone()),
+        (
+            "CPU latency request",
+            match r.settings["cpu_latency_us"].as_u64() {
+                Some(0) => "0 µs, held for the whole measurement (`--cpu-latency-us 0`): idle CPUs poll instead of halting".to_string(),
+                Some(us) => format!("{us} µs, held for the whole measurement (`--cpu-latency-us`)"),
+                None => "none (the system's default: idle CPUs may halt)".to_string(),
+            },
+        ),
         ("memory", format!("{:.1} GiB", m.memory_gib)),
         (
             "load average 1/5/15 min, start → end",

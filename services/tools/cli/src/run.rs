@@ -44,6 +44,11 @@ pub struct RunArgs {
     /// profile's, else none].
     #[arg(long, value_name = "S", allow_negative_numbers = true, value_parser = positive_seconds)]
     pub max_wall: Option<f64>,
+    /// Hold a PM QoS CPU latency request of this many µs for the run (the profile's `[platform]
+    /// cpu_latency_us`): 0 keeps idle CPUs polling, so a sleeping process wakes faster, at
+    /// the idle CPUs' power; needs root [default: the profile's, else none].
+    #[arg(long, value_name = "US")]
+    pub cpu_latency_us: Option<u32>,
     /// Dry run: check the profile, the run configuration and the binaries, print the run's
     /// settings and the processes in start order, and start nothing (writes no file).
     #[arg(long)]
@@ -167,6 +172,10 @@ pub fn run(args: &RunArgs) -> Result<()> {
     config.validate("command line")?;
     let ends_by_duration = recorded_log.is_none() && profile.processes.iter().any(|p| p.ends_run);
     let max_wall = args.max_wall.or(profile.run.max_wall_s);
+    let overrides = LauncherOverrides {
+        max_wall_s: max_wall,
+        cpu_latency_us: args.cpu_latency_us,
+    };
 
     let log = config.run.log.clone();
     let config_path = log.with_extension("run.toml");
@@ -186,7 +195,7 @@ pub fn run(args: &RunArgs) -> Result<()> {
             config_path.display(),
             max_wall.map_or_else(String::new, |s| format!(", at most {s} s wall time")),
         );
-        return launch(&profile_path, &config, None, max_wall, true, None, None);
+        return launch(&profile_path, &config, None, &overrides, true, None, None);
     }
     if let Some(dir) = log.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
@@ -214,7 +223,7 @@ pub fn run(args: &RunArgs) -> Result<()> {
         &profile_path,
         &config,
         Some(&config_path),
-        max_wall,
+        &overrides,
         false,
         follow,
         Some(&run_lock),
@@ -366,11 +375,19 @@ fn recorded_config(log: &Path) -> Result<RunConfig> {
 /// as on SIGTERM if this process dies (`--exit-with-parent`), and its own children get SIGTERM
 /// when it dies (PR_SET_PDEATHSIG), so the pipeline never outlives `testbed`. This process is the pipeline's subreaper: it waits for
 /// every process of the run, even those a killed launcher orphaned, before removing the bus.
+/// Settings of `testbed run` passed on to the launcher over the profile's.
+struct LauncherOverrides {
+    /// `--max-wall-s`, s.
+    max_wall_s: Option<f64>,
+    /// `--cpu-latency-us`, µs.
+    cpu_latency_us: Option<u32>,
+}
+
 fn launch(
     profile: &Path,
     config: &RunConfig,
     config_path: Option<&Path>,
-    max_wall: Option<f64>,
+    overrides: &LauncherOverrides,
     check: bool,
     follow: Option<progress::Follow>,
     run_lock: Option<&RunLock>,
@@ -403,8 +420,11 @@ fn launch(
     if let Some(path) = config_path {
         command.arg("--config").arg(path);
     }
-    if let Some(s) = max_wall {
+    if let Some(s) = overrides.max_wall_s {
         command.args(["--max-wall-s", &s.to_string()]);
+    }
+    if let Some(us) = overrides.cpu_latency_us {
+        command.args(["--cpu-latency-us", &us.to_string()]);
     }
     if check {
         command.arg("--check");
