@@ -6,10 +6,14 @@ use std::process::ExitCode;
 use anyhow::{Context as _, bail};
 use clap::Parser;
 use testbed_bus::BusConfig;
-use testbed_launch::placement::CpuLatencyRequest;
+use testbed_launch::placement::{CPU_LATENCY_DEVICE, CpuLatencyRequest};
 use testbed_launch::profile::{ClockMode, Profile};
 use testbed_launch::sys::{self, SignalSet};
 use testbed_launch::{Plan, ProfileError, Supervisor};
+
+/// Environment variable naming the PM QoS device instead of `/dev/cpu_dma_latency` (tests; a
+/// system with the interface elsewhere).
+const CPU_LATENCY_DEVICE_ENV: &str = "TESTBED_CPU_LATENCY_DEVICE";
 
 /// Exit status for an unusable profile or command line.
 const EXIT_CONFIG: u8 = 2;
@@ -212,18 +216,21 @@ fn main() -> ExitCode {
         return ExitCode::SUCCESS;
     }
     // Held until the launcher exits: the kernel ends the request with the file.
-    let _cpu_latency = match plan
+    let device = std::env::var_os(CPU_LATENCY_DEVICE_ENV)
+        .filter(|d| !d.is_empty())
+        .map_or_else(|| PathBuf::from(CPU_LATENCY_DEVICE), PathBuf::from);
+    let request = plan
         .profile
         .platform
         .cpu_latency_us
-        .map(CpuLatencyRequest::hold)
-    {
+        .map(|us| CpuLatencyRequest::hold_at(&device, us));
+    let _cpu_latency = match request {
         None => None,
         Some(Ok(request)) => {
             tracing::info!(
                 "holding CPU latency {} µs for the run ({})",
                 request.latency_us(),
-                testbed_launch::placement::CPU_LATENCY_DEVICE
+                device.display()
             );
             Some(request)
         }

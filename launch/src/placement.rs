@@ -34,7 +34,9 @@ impl CpuLatencyRequest {
         Self::hold_at(Path::new(CPU_LATENCY_DEVICE), latency_us)
     }
 
-    fn hold_at(device: &Path, latency_us: u32) -> io::Result<Self> {
+    /// As [`hold`](Self::hold), on `device` instead of [`CPU_LATENCY_DEVICE`] (tests; a
+    /// system with the interface elsewhere).
+    pub fn hold_at(device: &Path, latency_us: u32) -> io::Result<Self> {
         let context = |e: io::Error| {
             io::Error::new(
                 e.kind(),

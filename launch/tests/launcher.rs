@@ -29,6 +29,15 @@ struct Launch {
 impl Launch {
     /// Writes `profile` (with `{child}` and `{dir}` substituted) and starts the launcher.
     fn start(profile: &str, extra_args: &[&str]) -> Self {
+        Self::start_with_env(profile, extra_args, &[])
+    }
+
+    /// As [`start`](Self::start), with extra environment variables for the launcher.
+    fn start_with_env(
+        profile: &str,
+        extra_args: &[&str],
+        env: &[(&str, &std::ffi::OsStr)],
+    ) -> Self {
         static COUNTER: AtomicU32 = AtomicU32::new(0);
         let n = COUNTER.fetch_add(1, Ordering::Relaxed);
         let dir = PathBuf::from(format!("/tmp/lt-{}-{n}", std::process::id()));
@@ -49,6 +58,7 @@ impl Launch {
             .env("TESTBED_BUS_PREFIX", &bus.prefix)
             .env("TESTBED_BUS_ROOT", bus.root_string())
             .env("RUST_LOG", "info")
+            .envs(env.iter().copied())
             .stdin(Stdio::null())
             .stdout(Stdio::null())
             .stderr(Stdio::piped())
@@ -655,4 +665,51 @@ cpus = [1023]
     assert_eq!(code, 2, "{}", log.join("\n"));
     position(&log, &["process.probe.cpus names CPU 1023"]);
     assert!(!log.iter().any(|l| l.contains("started \"probe\"")));
+}
+
+/// `[platform] cpu_latency_us`: the launcher writes the request before any process starts and
+/// holds it for the run; a device it cannot open stops the run before anything starts, named.
+/// On a stand-in file (`TESTBED_CPU_LATENCY_DEVICE`), so that the test neither needs root nor
+/// changes the machine's idle states under the other tests.
+#[test]
+fn a_cpu_latency_request_is_written_before_the_processes_start() {
+    let dir = PathBuf::from(format!("/tmp/lt-qos-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("dir");
+    let device = dir.join("device");
+    std::fs::write(&device, b"").expect("stand-in device");
+    let seen = dir.join("seen");
+    let profile = format!(
+        "[run]\nmode = \"lockstep\"\nseed = 1\n[platform]\ncpu_latency_us = 25\n{}
+[[process]]
+name = \"probe\"
+command = \"/bin/sh\"
+args = [\"-c\", \"od -An -tu4 {} > {}\"]
+ends_run = true
+",
+        supervision(5.0, 5.0),
+        device.display(),
+        seen.display()
+    );
+    let mut launch = Launch::start_with_env(
+        &profile,
+        &[],
+        &[("TESTBED_CPU_LATENCY_DEVICE", device.as_os_str())],
+    );
+    let (code, log) = launch.finish();
+    assert_eq!(code, 0, "{}", log.join("\n"));
+    position(&log, &["holding CPU latency 25 µs", "device"]);
+    let text = std::fs::read_to_string(&seen).expect("the probe read the device");
+    assert_eq!(text.trim(), "25", "the request as a native s32: {text:?}");
+
+    let missing = dir.join("no-such-device");
+    let mut launch = Launch::start_with_env(
+        &profile,
+        &[],
+        &[("TESTBED_CPU_LATENCY_DEVICE", missing.as_os_str())],
+    );
+    let (code, log) = launch.finish();
+    assert_eq!(code, 2, "{}", log.join("\n"));
+    position(&log, &["platform.cpu_latency_us", "no-such-device"]);
+    assert!(!log.iter().any(|l| l.contains("started \"probe\"")));
+    let _ = std::fs::remove_dir_all(&dir);
 }
