@@ -46,19 +46,20 @@ impl CpuLatencyRequest {
                 ),
             )
         };
-        if latency_us > MAX_CPU_LATENCY_US {
-            return Err(context(io::Error::new(
-                io::ErrorKind::InvalidInput,
-                format!("at most {MAX_CPU_LATENCY_US} µs"),
-            )));
-        }
+        // The kernel reads a native-endian s32 (the bound fits one).
+        let value = i32::try_from(latency_us)
+            .ok()
+            .filter(|_| latency_us <= MAX_CPU_LATENCY_US)
+            .ok_or_else(|| {
+                context(io::Error::new(
+                    io::ErrorKind::InvalidInput,
+                    format!("at most {MAX_CPU_LATENCY_US} µs"),
+                ))
+            })?;
         let mut file = std::fs::OpenOptions::new()
             .write(true)
             .open(device)
             .map_err(context)?;
-        // The kernel reads a native-endian s32.
-        let value = i32::try_from(latency_us)
-            .map_err(|e| context(io::Error::new(io::ErrorKind::InvalidInput, e.to_string())))?;
         file.write_all(&value.to_ne_bytes()).map_err(context)?;
         Ok(Self {
             _file: file,

@@ -690,24 +690,21 @@ ends_run = true
         device.display(),
         seen.display()
     );
-    let mut launch = Launch::start_with_env(
-        &profile,
-        &[],
-        &[("TESTBED_CPU_LATENCY_DEVICE", device.as_os_str())],
-    );
-    let (code, log) = launch.finish();
+    let run_on = |device: &std::path::Path| {
+        Launch::start_with_env(
+            &profile,
+            &[],
+            &[("TESTBED_CPU_LATENCY_DEVICE", device.as_os_str())],
+        )
+        .finish()
+    };
+    let (code, log) = run_on(&device);
     assert_eq!(code, 0, "{}", log.join("\n"));
     position(&log, &["holding CPU latency 25 µs", "device"]);
     let text = std::fs::read_to_string(&seen).expect("the probe read the device");
     assert_eq!(text.trim(), "25", "the request as a native s32: {text:?}");
 
-    let missing = dir.join("no-such-device");
-    let mut launch = Launch::start_with_env(
-        &profile,
-        &[],
-        &[("TESTBED_CPU_LATENCY_DEVICE", missing.as_os_str())],
-    );
-    let (code, log) = launch.finish();
+    let (code, log) = run_on(&dir.join("no-such-device"));
     assert_eq!(code, 2, "{}", log.join("\n"));
     position(&log, &["platform.cpu_latency_us", "no-such-device"]);
     assert!(!log.iter().any(|l| l.contains("started \"probe\"")));
