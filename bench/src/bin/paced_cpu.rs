@@ -18,6 +18,11 @@
 //!   interleaved with this build without it (the "baseline" columns), and for both the share
 //!   of the steady-state window the CPUs spent idle polling and idle halted
 //!   (`/sys/devices/system/cpu/cpu*/cpuidle`): what the request costs in power;
+//! - what following the run costs `testbed run`'s progress display, side by side: one look at
+//!   a log being written, reading the whole log again (before) against a [`LogTail`] reading
+//!   what was appended since its last look (after), on a `--progress-run-s` log made of the
+//!   paced run's records repeated, with a look every [`PROGRESS_LOOK_S`] of simulated time (a
+//!   terminal's refresh), medians;
 //! - the logger's per-record cost, side by side in one process: the log writer on records as
 //!   it has them (the transform taken from the record) against the same records already
 //!   encoded (the transform decoded back from the JSON message, as every record was before),
@@ -28,12 +33,19 @@
 
 use anyhow::{Context, Result, bail};
 use clap::Parser;
+use ipc_types::SimTruth;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::{Duration, Instant};
 use testbed_bench::{binary_dir, children_cpu, median, median_time};
-use testbed_log::{EncodedRecord, LogRecord, RunInfo, RunLog, RunLogWriter, WriterOptions};
+use testbed_log::{
+    EncodedRecord, LogRecord, LogTail, RunInfo, RunLog, RunLogWriter, WriterOptions,
+};
+
+/// Simulated time between two looks of the progress display at its log, s (what a terminal
+/// shows: `testbed run` looks every 0.5 s of wall time).
+const PROGRESS_LOOK_S: f64 = 0.5;
 
 #[derive(Parser)]
 struct Args {
@@ -55,6 +67,9 @@ struct Args {
     /// launcher; needs root) against this build without it (the baseline).
     #[arg(long, value_name = "US", conflicts_with = "baseline_bin_dir")]
     cpu_latency_us: Option<u32>,
+    /// Simulated length of the log on which the progress display's look is measured, s.
+    #[arg(long, default_value_t = 600.0)]
+    progress_run_s: f64,
     #[arg(long)]
     json: bool,
 }
@@ -368,6 +383,86 @@ fn writer_speed(records: &[LogRecord], repeats: usize) -> Result<(f64, f64)> {
     Ok((n / new_time.as_secs_f64(), n / old_time.as_secs_f64()))
 }
 
+/// One look of the progress display at a log being written, as it was and as it is.
+struct ProgressLook {
+    /// Simulated length of the log, s.
+    run_s: f64,
+    /// Reading the whole log for its newest truth sample, at the end of the run, s (median).
+    whole_at_end_s: f64,
+    /// The tail reading what was appended since its last look, s (median over the run).
+    tail_s: f64,
+    looks: usize,
+}
+
+/// Writes a `run_s` log of `records` repeated (shifted in time) as the logger does during a
+/// run (unchunked), timing a [`LogTail`] look every [`PROGRESS_LOOK_S`] of it, then the whole
+/// read the progress display did before at the end.
+fn progress_look(records: &[LogRecord], run_s: f64, scratch: &Path) -> Result<ProgressLook> {
+    let span_ns = records
+        .iter()
+        .map(|r| r.header().time_ns)
+        .max()
+        .context("the paced run logged nothing")?
+        + 100_000_000;
+    let path = scratch.join("progress.mcap");
+    let info = RunInfo {
+        profile: "bench".to_owned(),
+        seed: 1,
+        mode: "paced".to_owned(),
+        config_toml: String::new(),
+        start_time_ns: 0,
+        extra: Default::default(),
+    };
+    let options = WriterOptions {
+        indexed: false,
+        ..WriterOptions::default()
+    };
+    let mut writer = RunLogWriter::create_with(&path, &info, options)?;
+    let mut tail = LogTail::new(&path);
+    let look_ns = (PROGRESS_LOOK_S * 1e9) as u64;
+    let end_ns = (run_s * 1e9) as u64;
+    let mut next_look_ns = look_ns;
+    let mut tail_times = Vec::new();
+    'run: for repeat in 0.. {
+        for record in records {
+            let mut record = *record;
+            let t = record.header().time_ns + repeat * span_ns;
+            if t >= end_ns {
+                break 'run;
+            }
+            record.header_mut().time_ns = t;
+            if t >= next_look_ns {
+                writer.flush()?;
+                let started = Instant::now();
+                let newest = tail.latest::<SimTruth>()?;
+                tail_times.push(started.elapsed());
+                std::hint::black_box(newest);
+                next_look_ns += look_ns;
+            }
+            writer.write_record(&record)?;
+        }
+    }
+    writer.flush()?;
+    let whole = median_time(5, || {
+        let log = RunLog::open(&path).expect("the log being written opens");
+        let newest = log
+            .samples::<SimTruth>()
+            .expect("its samples")
+            .filter_map(Result::ok)
+            .last();
+        std::hint::black_box(newest);
+    });
+    drop(writer);
+    let _ = std::fs::remove_file(&path);
+    let looks = tail_times.len();
+    Ok(ProgressLook {
+        run_s,
+        whole_at_end_s: whole.as_secs_f64(),
+        tail_s: median(tail_times.iter().map(Duration::as_secs_f64).collect()),
+        looks,
+    })
+}
+
 /// A directory with the baseline's executables, and this build's launcher (the one that writes
 /// the CPU report) if the baseline has none: `testbed` and the launcher find their programs
 /// beside themselves. A baseline's own launcher is kept: it opens the bus its processes
@@ -453,6 +548,7 @@ fn main() -> Result<()> {
     let log = RunLog::open(scratch.join("this build.mcap"))?;
     let records: Vec<LogRecord> = log.records()?.collect::<Result<_, _>>()?;
     let (new_rate, old_rate) = writer_speed(&records, 5)?;
+    let look = progress_look(&records, args.progress_run_s, &scratch)?;
     let _ = std::fs::remove_dir_all(&scratch);
 
     let this = &results[0];
@@ -483,6 +579,13 @@ fn main() -> Result<()> {
                 "records_per_s": new_rate,
                 "records_per_s_decoding_transforms": old_rate,
                 "speed_ratio": new_rate / old_rate,
+            },
+            "progress_look": {
+                "run_s": look.run_s,
+                "looks": look.looks,
+                "look_every_s": PROGRESS_LOOK_S,
+                "whole_log_at_end_s": look.whole_at_end_s,
+                "tail_median_s": look.tail_s,
             },
         });
         println!("{}", serde_json::to_string_pretty(&report)?);
@@ -569,6 +672,16 @@ fn main() -> Result<()> {
         new_rate,
         old_rate,
         new_rate / old_rate
+    );
+    println!(
+        "progress display, one look every {PROGRESS_LOOK_S} s at a {:.0} s log being written: \
+         whole log read again at its end (before) {:.2} ms, tail of what was appended (after) \
+         {:.1} µs (median of {} looks): {:.0}×",
+        look.run_s,
+        1e3 * look.whole_at_end_s,
+        1e6 * look.tail_s,
+        look.looks,
+        look.whole_at_end_s / look.tail_s
     );
     Ok(())
 }

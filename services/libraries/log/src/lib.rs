@@ -43,6 +43,7 @@ mod reader;
 mod record;
 mod repair;
 mod sorter;
+mod tail;
 mod writer;
 
 pub use json::DecodeError;
@@ -50,6 +51,7 @@ pub use reader::{LogEnd, Records, RunLog, Samples};
 pub use record::{LogEncode, LogRecord};
 pub use repair::{INDEXED_CHUNK_BYTES, RepairReport, index, repair};
 pub use sorter::{EncodedRecord, TickSorter};
+pub use tail::LogTail;
 pub use writer::{LogStats, RecordOrder, RunLogWriter, WriterOptions};
 
 use std::collections::BTreeMap;

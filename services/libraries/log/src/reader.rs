@@ -43,9 +43,9 @@ impl std::fmt::Display for LogEnd {
 
 /// What a channel of the file decodes to.
 #[derive(Debug, Clone)]
-struct ChannelEntry {
-    topic: String,
-    kind: Result<TopicKind, String>,
+pub(crate) struct ChannelEntry {
+    pub(crate) topic: String,
+    pub(crate) kind: Result<TopicKind, String>,
 }
 
 impl ChannelEntry {
@@ -125,6 +125,30 @@ impl Framing {
         Ok(Ok(Self {
             reader,
             pos: magic_len,
+            file_len,
+            chunk: None,
+        }))
+    }
+
+    /// Opens `path` to read records from `pos`, the start of a record found by an earlier
+    /// reading (0: the start of the file, whose magic is checked as by [`open`](Self::open)).
+    /// `Err(file_len)`: the file is shorter than `pos` (or than the magic).
+    pub(crate) fn open_at(path: &Path, pos: u64) -> Result<Result<Self, u64>, LogError> {
+        if pos == 0 {
+            return Self::open(path);
+        }
+        let file = File::open(path).map_err(|e| LogError::io(path, e))?;
+        let file_len = file.metadata().map_err(|e| LogError::io(path, e))?.len();
+        if file_len < pos {
+            return Ok(Err(file_len));
+        }
+        let mut reader = BufReader::with_capacity(64 * 1024, file);
+        reader
+            .seek(SeekFrom::Start(pos))
+            .map_err(|e| LogError::io(path, e))?;
+        Ok(Ok(Self {
+            reader,
+            pos,
             file_len,
             chunk: None,
         }))
@@ -277,7 +301,7 @@ impl Framing {
     }
 }
 
-fn parse(opcode: u8, offset: u64, body: &[u8]) -> Result<Record<'_>, LogError> {
+pub(crate) fn parse(opcode: u8, offset: u64, body: &[u8]) -> Result<Record<'_>, LogError> {
     mcap::parse_record(opcode, body).map_err(|source| LogError::Corrupt { offset, source })
 }
 
@@ -496,7 +520,7 @@ impl RunLog {
 }
 
 /// The topic kind a channel decodes to, or why it cannot be decoded.
-fn channel_kind(
+pub(crate) fn channel_kind(
     channel: &mcap::records::Channel,
     schemas: &BTreeMap<u16, (String, String)>,
 ) -> Result<TopicKind, String> {

@@ -1,9 +1,11 @@
 //! Progress of a running pipeline, read from its growing MCAP log (the logger writes records
-//! unchunked and in time order, so a log being written opens like a cut one): simulated time,
+//! unchunked and in time order, so a log being written reads like a cut one): simulated time,
 //! real-time factor and the current true attitude error. A bar on a terminal (`indicatif`),
 //! otherwise a plain line every [`PLAIN_EVERY`] of wall time. Reading the log is passive: the
 //! pipeline is not slowed or changed by it (a bus subscriber would be one more participant of a
-//! lossless lockstep bus).
+//! lossless lockstep bus). The log is followed with a [`LogTail`]: each look reads only what
+//! was appended since the one before, so following a long paced run costs what the run writes,
+//! not its whole log again every half second.
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use ipc_types::SimTruth;
@@ -14,7 +16,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant, SystemTime};
 use testbed_flight::convert::{quaternion_from_array, seconds};
-use testbed_log::RunLog;
+use testbed_log::LogTail;
 use testbed_model::attitude::{self, Attitude};
 use testbed_model::config::DEG;
 
@@ -43,21 +45,19 @@ pub struct State {
     pub error_deg: [f64; 3],
 }
 
-/// Reads the latest truth sample of the log, if it has one yet.
-pub fn latest(follow: &Follow) -> Option<State> {
-    let log = RunLog::open(&follow.log).ok()?;
-    let last = log
-        .samples::<SimTruth>()
-        .ok()?
-        .filter_map(Result::ok)
-        .last()?;
+/// The newest truth sample appended to the log since the tail's last look, if any.
+pub fn latest(tail: &mut LogTail, target: &Attitude) -> Option<State> {
+    let last = tail.latest::<SimTruth>().ok()??;
     let q = quaternion_from_array(&last.quaternion)?;
-    let e = attitude::attitude_error(&q, &follow.target) / DEG;
+    let e = attitude::attitude_error(&q, target) / DEG;
     Some(State {
         t_s: seconds(last.header.time_ns),
         error_deg: [e.x, e.y, e.z],
     })
 }
+
+/// Interval between two looks at the log.
+pub const LOOK_EVERY: Duration = Duration::from_millis(500);
 
 /// One line of progress.
 pub fn describe(state: &State, duration_s: Option<f64>, wall: Duration) -> String {
@@ -104,9 +104,9 @@ fn show(follow: &Follow, stop: &AtomicBool) {
     let terminal = std::io::stderr().is_terminal();
     let mut bar: Option<ProgressBar> = None;
     let mut last_line = started;
-    let mut interval = Duration::from_millis(500);
+    let mut tail = LogTail::new(&follow.log);
     loop {
-        std::thread::park_timeout(interval);
+        std::thread::park_timeout(LOOK_EVERY);
         if stop.load(Ordering::Relaxed) {
             break;
         }
@@ -118,12 +118,9 @@ fn show(follow: &Follow, stop: &AtomicBool) {
         let fresh = std::fs::metadata(&follow.log)
             .and_then(|m| m.modified())
             .is_ok_and(|t| t >= started_at);
-        let read_started = Instant::now();
-        let Some(state) = fresh.then(|| latest(follow)).flatten() else {
+        let Some(state) = fresh.then(|| latest(&mut tail, &follow.target)).flatten() else {
             continue;
         };
-        // Reading the whole log each time: keep it a small part of one core.
-        interval = (read_started.elapsed() * 10).max(Duration::from_millis(500));
         let message = describe(&state, follow.duration_s, wall);
         if terminal {
             let bar = bar.get_or_insert_with(|| new_bar(follow.duration_s));
@@ -163,6 +160,67 @@ fn new_bar(duration_s: Option<f64>) -> ProgressBar {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use ipc_types::SampleHeader;
+    use testbed_log::{RunInfo, RunLogWriter, WriterOptions};
+
+    /// A truth sample at `i` × 0.1 s, the platform turned 10° about body z.
+    fn truth(i: u64) -> SimTruth {
+        let half = 5.0 * DEG;
+        SimTruth {
+            header: SampleHeader {
+                time_ns: i * 100_000_000,
+                ..SampleHeader::default()
+            },
+            quaternion: [0.0, 0.0, half.sin(), half.cos()],
+            ..SimTruth::default()
+        }
+    }
+
+    #[test]
+    fn each_look_gives_the_newest_truth_appended_since_the_last() {
+        let path =
+            std::env::temp_dir().join(format!("testbed-progress-{}.mcap", std::process::id()));
+        let target = Attitude::identity();
+        let mut tail = LogTail::new(&path);
+        assert_eq!(latest(&mut tail, &target), None, "no log yet");
+
+        // As the logger writes during a run: unchunked, handed to the OS as it goes.
+        let info = RunInfo {
+            profile: "test".into(),
+            seed: 1,
+            mode: "paced".into(),
+            config_toml: String::new(),
+            start_time_ns: 0,
+            extra: Default::default(),
+        };
+        let options = WriterOptions {
+            buffer_bytes: 0,
+            indexed: false,
+            ..WriterOptions::default()
+        };
+        let mut writer = RunLogWriter::create_with(&path, &info, options).unwrap();
+        for i in 0..20 {
+            writer.write(&truth(i)).unwrap();
+        }
+        writer.flush().unwrap();
+        let state = latest(&mut tail, &target).unwrap();
+        assert!((state.t_s - 1.9).abs() < 1e-12, "{state:?}");
+        let [x, y, z] = state.error_deg;
+        assert!(
+            x.abs() < 1e-9 && y.abs() < 1e-9 && (z.abs() - 10.0).abs() < 1e-9,
+            "{state:?}"
+        );
+        assert_eq!(latest(&mut tail, &target), None, "nothing appended");
+
+        for i in 20..35 {
+            writer.write(&truth(i)).unwrap();
+        }
+        writer.flush().unwrap();
+        let state = latest(&mut tail, &target).unwrap();
+        assert!((state.t_s - 3.4).abs() < 1e-12, "{state:?}");
+        drop(writer);
+        let _ = std::fs::remove_file(&path);
+    }
 
     #[test]
     fn a_line_gives_time_factor_and_error() {
