@@ -2,7 +2,8 @@
 //! the schemas of their messages and the run's full configuration.
 //!
 //! - [`RunLogWriter`] writes a log; [`RunLog`] reads one back into `ipc-types` samples
-//!   ([`LogRecord`]) for replay and identification.
+//!   ([`LogRecord`]) for replay and identification; [`LogTail`] follows one while it is
+//!   written, reading only what was appended since its last look (a progress display).
 //! - [`TickSorter`] (or [`RecordOrder::Sorted`]) makes the record order of a lockstep run
 //!   independent of how its processes interleave, so two runs with the same seed give
 //!   byte-identical files.
