@@ -346,16 +346,21 @@ fn summarise(pairs: &[(PacedRun, PacedRun)]) -> BuildResult {
     }
 }
 
-/// Records/s of the log writer, new path against old, on `records` (medians of `repeats`).
-fn writer_speed(records: &[LogRecord], repeats: usize) -> Result<(f64, f64)> {
-    let info = RunInfo {
+/// The run information of the logs this bench writes.
+fn bench_run_info() -> RunInfo {
+    RunInfo {
         profile: "bench".to_owned(),
         seed: 1,
         mode: "paced".to_owned(),
         config_toml: String::new(),
         start_time_ns: 0,
         extra: Default::default(),
-    };
+    }
+}
+
+/// Records/s of the log writer, new path against old, on `records` (medians of `repeats`).
+fn writer_speed(records: &[LogRecord], repeats: usize) -> Result<(f64, f64)> {
+    let info = bench_run_info();
     let options = WriterOptions::default();
     let mut check = RunLogWriter::new(std::io::Cursor::new(Vec::new()), &info, options)?;
     for r in records {
@@ -405,14 +410,7 @@ fn progress_look(records: &[LogRecord], run_s: f64, scratch: &Path) -> Result<Pr
         .context("the paced run logged nothing")?
         + 100_000_000;
     let path = scratch.join("progress.mcap");
-    let info = RunInfo {
-        profile: "bench".to_owned(),
-        seed: 1,
-        mode: "paced".to_owned(),
-        config_toml: String::new(),
-        start_time_ns: 0,
-        extra: Default::default(),
-    };
+    let info = bench_run_info();
     let options = WriterOptions {
         indexed: false,
         ..WriterOptions::default()

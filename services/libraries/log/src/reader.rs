@@ -48,6 +48,43 @@ pub(crate) struct ChannelEntry {
     pub(crate) kind: Result<TopicKind, String>,
 }
 
+/// The schemas and channels a file's records define. The first definition of an id is kept.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct Definitions {
+    schemas: BTreeMap<u16, (String, String)>,
+    pub(crate) channels: BTreeMap<u16, ChannelEntry>,
+}
+
+impl Definitions {
+    /// Takes in a schema or channel record: `None` (it is kept), or the record given back if
+    /// it is neither.
+    pub(crate) fn define<'a>(&mut self, record: Record<'a>) -> Option<Record<'a>> {
+        match record {
+            Record::Schema { header, .. } => {
+                self.schemas
+                    .entry(header.id)
+                    .or_insert((header.name, header.encoding));
+                None
+            }
+            Record::Channel(c) => {
+                let kind = channel_kind(&c, &self.schemas);
+                self.channels.entry(c.id).or_insert(ChannelEntry {
+                    topic: c.topic,
+                    kind,
+                });
+                None
+            }
+            other => Some(other),
+        }
+    }
+
+    /// The channel a message record's body (its first two bytes: the channel id) is on.
+    pub(crate) fn channel_of(&self, message_body: &[u8]) -> Option<&ChannelEntry> {
+        let id = message_body.get(..2)?;
+        self.channels.get(&u16::from_le_bytes([id[0], id[1]]))
+    }
+}
+
 impl ChannelEntry {
     /// A channel the writer derives from the samples ([`foxglove`](crate::foxglove)).
     fn is_derived(&self) -> bool {
@@ -324,8 +361,7 @@ impl RunLog {
             }
         };
         let file_len = framing.file_len;
-        let mut schemas: BTreeMap<u16, (String, String)> = BTreeMap::new();
-        let mut channels = BTreeMap::new();
+        let mut definitions = Definitions::default();
         let mut library = String::new();
         let mut config = None;
         let mut metadata = None;
@@ -351,9 +387,8 @@ impl RunLog {
                 op::MESSAGE if in_data => {
                     // Samples only: the derived transforms are not counted.
                     framing.body(len, &mut body)?;
-                    let channel = body.get(..2).map(|id| u16::from_le_bytes([id[0], id[1]]));
-                    let derived = channel
-                        .and_then(|id| channels.get(&id))
+                    let derived = definitions
+                        .channel_of(&body)
                         .is_some_and(ChannelEntry::is_derived);
                     if !derived {
                         message_count += 1;
@@ -366,21 +401,9 @@ impl RunLog {
                     if in_data || matches!(opcode, op::SCHEMA | op::CHANNEL) =>
                 {
                     framing.body(len, &mut body)?;
-                    match parse(opcode, offset, &body)? {
-                        Record::Header(h) => library = h.library,
-                        Record::Schema { header, .. } => {
-                            schemas
-                                .entry(header.id)
-                                .or_insert((header.name, header.encoding));
-                        }
-                        Record::Channel(c) => {
-                            let kind = channel_kind(&c, &schemas);
-                            channels.entry(c.id).or_insert(ChannelEntry {
-                                topic: c.topic,
-                                kind,
-                            });
-                        }
-                        Record::Attachment { header, data, .. }
+                    match definitions.define(parse(opcode, offset, &body)?) {
+                        Some(Record::Header(h)) => library = h.library,
+                        Some(Record::Attachment { header, data, .. })
                             if header.name == CONFIG_ATTACHMENT =>
                         {
                             let text = String::from_utf8(data.into_owned()).map_err(|_| {
@@ -391,7 +414,7 @@ impl RunLog {
                             })?;
                             config = Some(text);
                         }
-                        Record::Metadata(m) if m.name == RUN_METADATA => {
+                        Some(Record::Metadata(m)) if m.name == RUN_METADATA => {
                             metadata = Some(m.metadata);
                         }
                         _ => {}
@@ -431,7 +454,7 @@ impl RunLog {
             path: path.to_owned(),
             info,
             library,
-            channels,
+            channels: definitions.channels,
             data_end,
             end,
             message_count,
@@ -520,7 +543,7 @@ impl RunLog {
 }
 
 /// The topic kind a channel decodes to, or why it cannot be decoded.
-pub(crate) fn channel_kind(
+fn channel_kind(
     channel: &mcap::records::Channel,
     schemas: &BTreeMap<u16, (String, String)>,
 ) -> Result<TopicKind, String> {

@@ -10,10 +10,9 @@
 //! [`RunLog`]: crate::RunLog
 
 use crate::LogError;
-use crate::reader::{ChannelEntry, Framing, Next, channel_kind, parse};
+use crate::reader::{Definitions, Framing, Next, parse};
 use crate::record::{LogEncode, TopicKind};
 use mcap::records::{Record, op};
-use std::collections::BTreeMap;
 use std::os::unix::fs::{FileExt, MetadataExt};
 use std::path::{Path, PathBuf};
 
@@ -33,8 +32,7 @@ pub struct LogTail {
     anchor: Vec<u8>,
     /// Start of the first record not read yet (0: nothing read, not even the magic).
     pos: u64,
-    schemas: BTreeMap<u16, (String, String)>,
-    channels: BTreeMap<u16, ChannelEntry>,
+    definitions: Definitions,
     /// The last look ended at a data-end or footer record: the writer had finished the data
     /// section. (Each look still reads from there: a file written again with the same first
     /// bytes goes on differently.)
@@ -49,8 +47,7 @@ impl LogTail {
             file: None,
             anchor: Vec::new(),
             pos: 0,
-            schemas: BTreeMap::new(),
-            channels: BTreeMap::new(),
+            definitions: Definitions::default(),
             finished: false,
         }
     }
@@ -105,27 +102,13 @@ impl LogTail {
             match opcode {
                 op::SCHEMA | op::CHANNEL => {
                     framing.body(len, &mut body)?;
-                    match parse(opcode, offset, &body)? {
-                        Record::Schema { header, .. } => {
-                            self.schemas
-                                .entry(header.id)
-                                .or_insert((header.name, header.encoding));
-                        }
-                        Record::Channel(c) => {
-                            let kind = channel_kind(&c, &self.schemas);
-                            self.channels.entry(c.id).or_insert(ChannelEntry {
-                                topic: c.topic,
-                                kind,
-                            });
-                        }
-                        _ => {}
-                    }
+                    self.definitions.define(parse(opcode, offset, &body)?);
                 }
                 op::MESSAGE => {
                     framing.body(len, &mut body)?;
-                    let channel = body.get(..2).map(|id| u16::from_le_bytes([id[0], id[1]]));
-                    let kind = channel
-                        .and_then(|id| self.channels.get(&id))
+                    let kind = self
+                        .definitions
+                        .channel_of(&body)
                         .and_then(|c| c.kind.as_ref().ok().copied());
                     if kind.is_some() && kind == wanted {
                         // Keep the body's buffer for the next message rather than copying it.
@@ -199,6 +182,7 @@ mod tests {
     use super::*;
     use crate::{RunInfo, RunLog, RunLogWriter, WriterOptions};
     use ipc_types::{SampleHeader, SimTruth};
+    use std::collections::BTreeMap;
     use std::io::Write;
 
     /// A directory of its own for one test, removed when dropped.
