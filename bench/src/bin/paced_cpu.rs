@@ -33,7 +33,7 @@
 
 use anyhow::{Context, Result, bail};
 use clap::Parser;
-use ipc_types::SimTruth;
+use ipc_types::{AttitudeEstimate, SimTruth, Topic};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -432,7 +432,8 @@ fn progress_look(records: &[LogRecord], run_s: f64, scratch: &Path) -> Result<Pr
             if t >= next_look_ns {
                 writer.flush()?;
                 let started = Instant::now();
-                let newest = tail.latest::<SimTruth>()?;
+                // What the display asks for (the truth, and the estimate for runs without).
+                let newest = tail.newest(&[SimTruth::NAME, AttitudeEstimate::NAME])?;
                 tail_times.push(started.elapsed());
                 std::hint::black_box(newest);
                 next_look_ns += look_ns;

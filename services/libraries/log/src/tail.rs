@@ -11,7 +11,7 @@
 
 use crate::LogError;
 use crate::reader::{Definitions, Framing, Next, parse};
-use crate::record::{LogEncode, TopicKind};
+use crate::record::{LogEncode, LogRecord, TopicKind};
 use mcap::records::{Record, op};
 use std::os::unix::fs::{FileExt, MetadataExt};
 use std::path::{Path, PathBuf};
@@ -66,9 +66,20 @@ impl LogTail {
     /// type `T` in it (`None`: no new sample of `T`, or no file yet). Only that sample's message
     /// is decoded; the other records' bodies are skipped.
     pub fn latest<T: LogEncode>(&mut self) -> Result<Option<T>, LogError> {
+        Ok(self
+            .newest(&[T::NAME])?
+            .first()
+            .and_then(|record| T::from_record(record)))
+    }
+
+    /// Reads what was appended since the last call and returns, for each of `topics` (their
+    /// `ipc_types::topic` names) that has one in it, its newest complete record, in the order
+    /// of `topics`. Only those records' messages are decoded; names of topics the log cannot
+    /// have are ignored.
+    pub fn newest(&mut self, topics: &[&str]) -> Result<Vec<LogRecord>, LogError> {
         let meta = match std::fs::metadata(&self.path) {
             Ok(meta) => meta,
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Vec::new()),
             Err(e) => return Err(LogError::io(&self.path, e)),
         };
         let id = FileId {
@@ -81,11 +92,15 @@ impl LogTail {
             self.file = Some(id);
         }
         let Ok(mut framing) = Framing::open_at(&self.path, self.pos)? else {
-            return Ok(None);
+            return Ok(Vec::new());
         };
-        let wanted = TopicKind::from_topic(T::NAME);
+        let wanted: Vec<TopicKind> = topics
+            .iter()
+            .filter_map(|t| TopicKind::from_topic(t))
+            .collect();
         let mut body = Vec::new();
-        let mut newest: Option<(u64, Vec<u8>)> = None;
+        // Per wanted topic, the newest message so far: its offset and body.
+        let mut newest: Vec<Option<(u64, Vec<u8>)>> = vec![None; wanted.len()];
         loop {
             let (opcode, offset, len) = match framing.next()? {
                 Next::Record {
@@ -110,9 +125,12 @@ impl LogTail {
                         .definitions
                         .channel_of(&body)
                         .and_then(|c| c.kind.as_ref().ok().copied());
-                    if kind.is_some() && kind == wanted {
+                    if let Some(slot) = kind
+                        .and_then(|k| wanted.iter().position(|w| *w == k))
+                        .and_then(|i| newest.get_mut(i))
+                    {
                         // Keep the body's buffer for the next message rather than copying it.
-                        let kept = newest.get_or_insert_with(|| (offset, Vec::new()));
+                        let kept = slot.get_or_insert_with(|| (offset, Vec::new()));
                         kept.0 = offset;
                         std::mem::swap(&mut kept.1, &mut body);
                     }
@@ -126,19 +144,22 @@ impl LogTail {
             }
         }
         self.anchor = self.read_before_pos()?;
-        let Some((offset, body)) = newest else {
-            return Ok(None);
-        };
-        let Record::Message { data, .. } = parse(op::MESSAGE, offset, &body)? else {
-            return Ok(None);
-        };
-        T::decode_json(&data)
-            .map(Some)
-            .map_err(|source| LogError::Decode {
+        let mut records = Vec::new();
+        for (kind, message) in wanted.iter().zip(newest) {
+            let Some((offset, body)) = message else {
+                continue;
+            };
+            let Record::Message { data, .. } = parse(op::MESSAGE, offset, &body)? else {
+                continue;
+            };
+            let record = kind.decode(&data).map_err(|source| LogError::Decode {
                 offset,
-                topic: T::NAME,
+                topic: kind.name(),
                 source,
-            })
+            })?;
+            records.push(record);
+        }
+        Ok(records)
     }
 }
 
@@ -285,6 +306,60 @@ mod tests {
         assert_eq!(last_seen, times.last().copied());
         assert!(tail.is_finished());
         assert_eq!(tail.latest::<SimTruth>().unwrap(), None, "nothing new");
+    }
+
+    #[test]
+    fn newest_gives_the_last_record_of_each_topic_asked_for_in_their_order() {
+        use ipc_types::{AttitudeEstimate, GyroSample, Topic};
+        let dir = Scratch::new("topics");
+        let path = dir.path().join("run.mcap");
+        let info = RunInfo {
+            profile: "test".into(),
+            seed: 1,
+            mode: "paced".into(),
+            config_toml: String::new(),
+            start_time_ns: 0,
+            extra: BTreeMap::new(),
+        };
+        let options = WriterOptions {
+            buffer_bytes: 0,
+            indexed: false,
+            ..WriterOptions::default()
+        };
+        let mut writer = RunLogWriter::create_with(&path, &info, options).unwrap();
+        let estimate = |time_ns| AttitudeEstimate {
+            header: SampleHeader {
+                time_ns,
+                ..SampleHeader::default()
+            },
+            ..AttitudeEstimate::default()
+        };
+        for i in 0..10 {
+            writer.write(&truth(i * STEP_NS)).unwrap();
+            writer.write(&estimate(i * STEP_NS + 1)).unwrap();
+        }
+        writer.flush().unwrap();
+        let mut tail = LogTail::new(&path);
+        let asked = [AttitudeEstimate::NAME, GyroSample::NAME, SimTruth::NAME];
+        let records = tail.newest(&asked).unwrap();
+        let got: Vec<(&str, u64)> = records
+            .iter()
+            .map(|r| (r.topic(), r.header().time_ns))
+            .collect();
+        assert_eq!(
+            got,
+            [
+                (AttitudeEstimate::NAME, 9 * STEP_NS + 1),
+                (SimTruth::NAME, 9 * STEP_NS)
+            ],
+            "no gyro sample was written"
+        );
+
+        writer.write(&estimate(10 * STEP_NS + 1)).unwrap();
+        writer.flush().unwrap();
+        let records = tail.newest(&asked).unwrap();
+        assert_eq!(records.len(), 1, "only an estimate was appended");
+        assert_eq!(records[0].header().time_ns, 10 * STEP_NS + 1);
     }
 
     #[test]

@@ -1,6 +1,7 @@
 //! Progress of a running pipeline, read from its growing MCAP log (the logger writes records
-//! unchunked and in time order, so a log being written reads like a cut one): simulated time,
-//! real-time factor and the current true attitude error. A bar on a terminal (`indicatif`),
+//! unchunked and in time order, so a log being written reads like a cut one): the run's time,
+//! real-time factor and the current attitude error, true where the run has a truth (a
+//! simulation), estimated otherwise (the platform, a replay). A bar on a terminal (`indicatif`),
 //! otherwise a plain line every [`PLAIN_EVERY`] of wall time. Reading the log is passive: the
 //! pipeline is not slowed or changed by it (a bus subscriber would be one more participant of a
 //! lossless lockstep bus). The log is followed with a [`LogTail`]: each look reads only what
@@ -8,7 +9,7 @@
 //! not its whole log again every half second.
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use ipc_types::SimTruth;
+use ipc_types::{AttitudeEstimate, SimTruth, Topic};
 use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -16,7 +17,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant, SystemTime};
 use testbed_flight::convert::{quaternion_from_array, seconds};
-use testbed_log::LogTail;
+use testbed_log::{LogEncode, LogTail};
 use testbed_model::attitude::{self, Attitude};
 use testbed_model::config::DEG;
 
@@ -36,24 +37,65 @@ pub struct Follow {
     pub target: Attitude,
 }
 
+/// Which attitude the error shown is of.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Attitudes {
+    /// The simulation's truth (`SimTruth`).
+    True,
+    /// The estimator's (`AttitudeEstimate`): runs without a truth.
+    Estimated,
+}
+
 /// The latest state read from the log.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct State {
-    /// Simulated time, s.
+    /// The run's time, s (simulated time in a simulation).
     pub t_s: f64,
-    /// True attitude error, rotation vector target → truth, body axes, degrees.
+    /// Attitude error, rotation vector target → attitude, body axes, degrees.
     pub error_deg: [f64; 3],
+    /// Whose attitude.
+    pub of: Attitudes,
 }
 
-/// The newest truth sample appended to the log since the tail's last look, if any.
-pub fn latest(tail: &mut LogTail, target: &Attitude) -> Option<State> {
-    let last = tail.latest::<SimTruth>().ok()??;
-    let q = quaternion_from_array(&last.quaternion)?;
-    let e = attitude::attitude_error(&q, target) / DEG;
-    Some(State {
-        t_s: seconds(last.header.time_ns),
-        error_deg: [e.x, e.y, e.z],
-    })
+/// Follows a run's log for its attitude: the truth where the run has one, else the estimate.
+pub struct Watch {
+    tail: LogTail,
+    /// A truth sample was seen: this run is a simulation, its estimates are not shown.
+    truth_seen: bool,
+}
+
+impl Watch {
+    pub fn new(log: &std::path::Path) -> Self {
+        Self {
+            tail: LogTail::new(log),
+            truth_seen: false,
+        }
+    }
+
+    /// The state of the newest truth (or estimate) sample appended since the last look, if any.
+    pub fn latest(&mut self, target: &Attitude) -> Option<State> {
+        let records = self
+            .tail
+            .newest(&[SimTruth::NAME, AttitudeEstimate::NAME])
+            .ok()?;
+        let truth = records.iter().find_map(SimTruth::from_record);
+        let estimate = records.iter().find_map(AttitudeEstimate::from_record);
+        self.truth_seen |= truth.is_some();
+        let (time_ns, quaternion, of) = match (truth, estimate) {
+            (Some(t), _) => (t.header.time_ns, t.quaternion, Attitudes::True),
+            (None, Some(e)) if !self.truth_seen => {
+                (e.header.time_ns, e.quaternion, Attitudes::Estimated)
+            }
+            _ => return None,
+        };
+        let q = quaternion_from_array(&quaternion)?;
+        let e = attitude::attitude_error(&q, target) / DEG;
+        Some(State {
+            t_s: seconds(time_ns),
+            error_deg: [e.x, e.y, e.z],
+            of,
+        })
+    }
 }
 
 /// Interval between two looks at the log.
@@ -64,8 +106,12 @@ pub fn describe(state: &State, duration_s: Option<f64>, wall: Duration) -> Strin
     let of = duration_s.map_or_else(String::new, |d| format!(" of {d:.0}"));
     let factor = state.t_s / wall.as_secs_f64().max(1e-3);
     let [x, y, z] = state.error_deg;
+    let (time, whose) = match state.of {
+        Attitudes::True => ("simulated s", "true"),
+        Attitudes::Estimated => ("s", "estimated"),
+    };
     format!(
-        "{:.1}{of} simulated s, {factor:.1}× real time, attitude error X {x:+.3}° Y {y:+.3}° Z {z:+.3}°",
+        "{:.1}{of} {time}, {factor:.1}× real time, {whose} attitude error X {x:+.3}° Y {y:+.3}° Z {z:+.3}°",
         state.t_s
     )
 }
@@ -104,7 +150,7 @@ fn show(follow: &Follow, stop: &AtomicBool) {
     let terminal = std::io::stderr().is_terminal();
     let mut bar: Option<ProgressBar> = None;
     let mut last_line = started;
-    let mut tail = LogTail::new(&follow.log);
+    let mut watch = Watch::new(&follow.log);
     loop {
         std::thread::park_timeout(LOOK_EVERY);
         if stop.load(Ordering::Relaxed) {
@@ -118,7 +164,7 @@ fn show(follow: &Follow, stop: &AtomicBool) {
         let fresh = std::fs::metadata(&follow.log)
             .and_then(|m| m.modified())
             .is_ok_and(|t| t >= started_at);
-        let Some(state) = fresh.then(|| latest(&mut tail, &follow.target)).flatten() else {
+        let Some(state) = fresh.then(|| watch.latest(&follow.target)).flatten() else {
             continue;
         };
         let message = describe(&state, follow.duration_s, wall);
@@ -163,28 +209,39 @@ mod tests {
     use ipc_types::SampleHeader;
     use testbed_log::{RunInfo, RunLogWriter, WriterOptions};
 
+    /// The platform turned 10° about body z, `[x, y, z, w]`.
+    fn turned() -> [f64; 4] {
+        let half = 5.0 * DEG;
+        [0.0, 0.0, half.sin(), half.cos()]
+    }
+
+    fn header(i: u64) -> SampleHeader {
+        SampleHeader {
+            time_ns: i * 100_000_000,
+            ..SampleHeader::default()
+        }
+    }
+
     /// A truth sample at `i` × 0.1 s, the platform turned 10° about body z.
     fn truth(i: u64) -> SimTruth {
-        let half = 5.0 * DEG;
         SimTruth {
-            header: SampleHeader {
-                time_ns: i * 100_000_000,
-                ..SampleHeader::default()
-            },
-            quaternion: [0.0, 0.0, half.sin(), half.cos()],
+            header: header(i),
+            quaternion: turned(),
             ..SimTruth::default()
         }
     }
 
-    #[test]
-    fn each_look_gives_the_newest_truth_appended_since_the_last() {
-        let path =
-            std::env::temp_dir().join(format!("testbed-progress-{}.mcap", std::process::id()));
-        let target = Attitude::identity();
-        let mut tail = LogTail::new(&path);
-        assert_eq!(latest(&mut tail, &target), None, "no log yet");
+    /// An estimate at `i` × 0.1 s: level (the error shown must be the truth's, if any).
+    fn estimate(i: u64) -> AttitudeEstimate {
+        AttitudeEstimate {
+            header: header(i),
+            quaternion: [0.0, 0.0, 0.0, 1.0],
+            ..AttitudeEstimate::default()
+        }
+    }
 
-        // As the logger writes during a run: unchunked, handed to the OS as it goes.
+    /// A log written as the logger writes during a run: unchunked, handed to the OS as it goes.
+    fn log_writer(path: &std::path::Path) -> RunLogWriter {
         let info = RunInfo {
             profile: "test".into(),
             seed: 1,
@@ -198,40 +255,99 @@ mod tests {
             indexed: false,
             ..WriterOptions::default()
         };
-        let mut writer = RunLogWriter::create_with(&path, &info, options).unwrap();
+        RunLogWriter::create_with(path, &info, options).unwrap()
+    }
+
+    fn temp_log(name: &str) -> std::path::PathBuf {
+        std::env::temp_dir().join(format!(
+            "testbed-progress-{}-{name}.mcap",
+            std::process::id()
+        ))
+    }
+
+    #[test]
+    fn each_look_gives_the_newest_truth_appended_since_the_last() {
+        let path = temp_log("truth");
+        let target = Attitude::identity();
+        let mut watch = Watch::new(&path);
+        assert_eq!(watch.latest(&target), None, "no log yet");
+
+        let mut writer = log_writer(&path);
         for i in 0..20 {
             writer.write(&truth(i)).unwrap();
+            writer.write(&estimate(i)).unwrap();
         }
         writer.flush().unwrap();
-        let state = latest(&mut tail, &target).unwrap();
+        let state = watch.latest(&target).unwrap();
         assert!((state.t_s - 1.9).abs() < 1e-12, "{state:?}");
+        assert_eq!(state.of, Attitudes::True);
         let [x, y, z] = state.error_deg;
         assert!(
             x.abs() < 1e-9 && y.abs() < 1e-9 && (z.abs() - 10.0).abs() < 1e-9,
             "{state:?}"
         );
-        assert_eq!(latest(&mut tail, &target), None, "nothing appended");
+        assert_eq!(watch.latest(&target), None, "nothing appended");
 
         for i in 20..35 {
             writer.write(&truth(i)).unwrap();
         }
+        writer.write(&estimate(35)).unwrap();
         writer.flush().unwrap();
-        let state = latest(&mut tail, &target).unwrap();
+        let state = watch.latest(&target).unwrap();
         assert!((state.t_s - 3.4).abs() < 1e-12, "{state:?}");
+        writer.write(&estimate(36)).unwrap();
+        writer.flush().unwrap();
+        assert_eq!(
+            watch.latest(&target),
+            None,
+            "a run with a truth shows only the truth"
+        );
         drop(writer);
         let _ = std::fs::remove_file(&path);
     }
 
     #[test]
-    fn a_line_gives_time_factor_and_error() {
+    fn a_run_without_a_truth_shows_the_estimate() {
+        let path = temp_log("estimate");
+        let target = Attitude::identity();
+        let mut watch = Watch::new(&path);
+        let mut writer = log_writer(&path);
+        for i in 0..12 {
+            writer
+                .write(&AttitudeEstimate {
+                    quaternion: turned(),
+                    ..estimate(i)
+                })
+                .unwrap();
+        }
+        writer.flush().unwrap();
+        let state = watch.latest(&target).unwrap();
+        assert_eq!(state.of, Attitudes::Estimated);
+        assert!((state.t_s - 1.1).abs() < 1e-12, "{state:?}");
+        assert!((state.error_deg[2].abs() - 10.0).abs() < 1e-9, "{state:?}");
+        drop(writer);
+        let _ = std::fs::remove_file(&path);
+    }
+
+    #[test]
+    fn a_line_gives_time_factor_and_whose_error() {
         let state = State {
             t_s: 30.0,
             error_deg: [0.5, -0.25, 1.0],
+            of: Attitudes::True,
         };
         let line = describe(&state, Some(150.0), Duration::from_secs(10));
         assert_eq!(
             line,
-            "30.0 of 150 simulated s, 3.0× real time, attitude error X +0.500° Y -0.250° Z +1.000°"
+            "30.0 of 150 simulated s, 3.0× real time, true attitude error X +0.500° Y -0.250° Z +1.000°"
+        );
+        let estimated = State {
+            of: Attitudes::Estimated,
+            ..state
+        };
+        assert_eq!(
+            describe(&estimated, None, Duration::from_secs(30)),
+            "30.0 s, 1.0× real time, estimated attitude error X +0.500° Y -0.250° Z +1.000°"
         );
     }
 }
