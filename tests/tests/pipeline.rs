@@ -184,6 +184,53 @@ fn sigint_stops_every_process_removes_the_bus_and_finalises_the_log() {
 }
 
 #[test]
+fn a_paced_run_shows_its_progress_read_from_the_growing_log() {
+    let scratch = Scratch::new("progress");
+    let log = scratch.path().join("paced.mcap");
+    let sim = profile("simulation");
+    // stderr is not a terminal here: a plain line every 10 s of wall time.
+    let out = Command::new(binary("testbed"))
+        .args([
+            "run",
+            "--paced",
+            "--duration",
+            "14",
+            "--json",
+            "--profile",
+            sim.to_str().unwrap(),
+            "--log",
+            log.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    let line = stderr
+        .lines()
+        .find_map(|l| l.strip_prefix("testbed run: "))
+        .unwrap_or_else(|| panic!("no progress line in {stderr}"));
+    // "9.8 of 14 simulated s, 1.0× real time, true attitude error X +3.4° Y +4.9° Z +16.9°"
+    let (time, rest) = line
+        .split_once(" of 14 simulated s, ")
+        .unwrap_or_else(|| panic!("{line}"));
+    let t_s: f64 = time.parse().unwrap_or_else(|_| panic!("{line}"));
+    // Ten seconds of wall time into a paced run that started ticking after its processes came
+    // up: some simulated seconds, not the end.
+    assert!((1.0..14.0).contains(&t_s), "{line}");
+    let error = rest
+        .split_once("true attitude error ")
+        .unwrap_or_else(|| panic!("{line}"))
+        .1;
+    let degrees: Vec<f64> = error
+        .split_whitespace()
+        .filter_map(|w| w.trim_end_matches('°').parse().ok())
+        .collect();
+    assert_eq!(degrees.len(), 3, "{line}");
+    // The run starts 20° off in heading and 5° in pitch and roll, and is still turning.
+    assert!(degrees.iter().any(|d| d.abs() > 1.0), "{line}");
+}
+
+#[test]
 fn replaying_a_log_reproduces_its_estimates_and_commands() {
     let scratch = Scratch::new("replay");
     let original = scratch.path().join("original.mcap");
