@@ -146,8 +146,29 @@ impl Framing {
     /// the magic but a prefix of it.
     pub(crate) fn open(path: &Path) -> Result<Result<Self, u64>, LogError> {
         let file = File::open(path).map_err(|e| LogError::io(path, e))?;
+        Self::on(path, file, 0)
+    }
+
+    /// Reads `file` (opened from `path`, named in errors) from `pos`, the start of a record
+    /// found by an earlier reading; from 0 the magic is checked as by [`open`](Self::open).
+    /// `Err(file_len)`: the file is shorter than `pos` (or than the magic).
+    pub(crate) fn on(path: &Path, file: File, pos: u64) -> Result<Result<Self, u64>, LogError> {
         let file_len = file.metadata().map_err(|e| LogError::io(path, e))?.len();
         let mut reader = BufReader::with_capacity(64 * 1024, file);
+        if pos > 0 {
+            if file_len < pos {
+                return Ok(Err(file_len));
+            }
+            reader
+                .seek(SeekFrom::Start(pos))
+                .map_err(|e| LogError::io(path, e))?;
+            return Ok(Ok(Self {
+                reader,
+                pos,
+                file_len,
+                chunk: None,
+            }));
+        }
         let magic_len = mcap::MAGIC.len() as u64;
         let head_len = file_len.min(magic_len) as usize;
         let mut head = [0u8; 8];
@@ -167,28 +188,9 @@ impl Framing {
         }))
     }
 
-    /// Opens `path` to read records from `pos`, the start of a record found by an earlier
-    /// reading (0: the start of the file, whose magic is checked as by [`open`](Self::open)).
-    /// `Err(file_len)`: the file is shorter than `pos` (or than the magic).
-    pub(crate) fn open_at(path: &Path, pos: u64) -> Result<Result<Self, u64>, LogError> {
-        if pos == 0 {
-            return Self::open(path);
-        }
-        let file = File::open(path).map_err(|e| LogError::io(path, e))?;
-        let file_len = file.metadata().map_err(|e| LogError::io(path, e))?.len();
-        if file_len < pos {
-            return Ok(Err(file_len));
-        }
-        let mut reader = BufReader::with_capacity(64 * 1024, file);
-        reader
-            .seek(SeekFrom::Start(pos))
-            .map_err(|e| LogError::io(path, e))?;
-        Ok(Ok(Self {
-            reader,
-            pos,
-            file_len,
-            chunk: None,
-        }))
+    /// The file read.
+    pub(crate) fn file(&self) -> &File {
+        self.reader.get_ref()
     }
 
     /// Length of the file.

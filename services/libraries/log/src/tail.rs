@@ -13,6 +13,7 @@ use crate::LogError;
 use crate::reader::{Definitions, Framing, Next, parse};
 use crate::record::{LogEncode, LogRecord, TopicKind};
 use mcap::records::{Record, op};
+use std::fs::File;
 use std::os::unix::fs::{FileExt, MetadataExt};
 use std::path::{Path, PathBuf};
 
@@ -77,21 +78,26 @@ impl LogTail {
     /// of `topics`. Only those records' messages are decoded; names of topics the log cannot
     /// have are ignored.
     pub fn newest(&mut self, topics: &[&str]) -> Result<Vec<LogRecord>, LogError> {
-        let meta = match std::fs::metadata(&self.path) {
-            Ok(meta) => meta,
+        // One open per look: identity, the anchor and the records all come from this file.
+        let file = match File::open(&self.path) {
+            Ok(file) => file,
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Vec::new()),
             Err(e) => return Err(LogError::io(&self.path, e)),
         };
+        let meta = file.metadata().map_err(|e| LogError::io(&self.path, e))?;
         let id = FileId {
             device: meta.dev(),
             inode: meta.ino(),
             created: meta.created().ok(),
         };
-        if self.file != Some(id) || meta.len() < self.pos || !self.anchor_holds()? {
+        if self.file != Some(id)
+            || meta.len() < self.pos
+            || self.bytes_before_pos(&file)? != self.anchor
+        {
             *self = Self::new(&self.path);
             self.file = Some(id);
         }
-        let Ok(mut framing) = Framing::open_at(&self.path, self.pos)? else {
+        let Ok(mut framing) = Framing::on(&self.path, file, self.pos)? else {
             return Ok(Vec::new());
         };
         let wanted: Vec<TopicKind> = topics
@@ -143,7 +149,7 @@ impl LogTail {
                 _ => framing.skip(len)?,
             }
         }
-        self.anchor = self.read_before_pos()?;
+        self.anchor = self.bytes_before_pos(framing.file())?;
         let mut records = Vec::new();
         for (kind, message) in wanted.iter().zip(newest) {
             let Some((offset, body)) = message else {
@@ -176,25 +182,16 @@ struct FileId {
 const ANCHOR_BYTES: u64 = 16;
 
 impl LogTail {
-    /// The up to [`ANCHOR_BYTES`] bytes before the read position (empty if the file is gone).
-    fn read_before_pos(&self) -> Result<Vec<u8>, LogError> {
+    /// The up to [`ANCHOR_BYTES`] bytes of `file` before the read position (empty if the file
+    /// is shorter).
+    fn bytes_before_pos(&self, file: &File) -> Result<Vec<u8>, LogError> {
         let start = self.pos.saturating_sub(ANCHOR_BYTES);
         let mut bytes = vec![0; (self.pos - start) as usize];
-        let file = match std::fs::File::open(&self.path) {
-            Ok(file) => file,
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Vec::new()),
-            Err(e) => return Err(LogError::io(&self.path, e)),
-        };
         match file.read_exact_at(&mut bytes, start) {
             Ok(()) => Ok(bytes),
             Err(e) if e.kind() == std::io::ErrorKind::UnexpectedEof => Ok(Vec::new()),
             Err(e) => Err(LogError::io(&self.path, e)),
         }
-    }
-
-    /// Whether the bytes before the read position are still those read.
-    fn anchor_holds(&self) -> Result<bool, LogError> {
-        Ok(self.read_before_pos()? == self.anchor)
     }
 }
 
