@@ -30,9 +30,11 @@ fn publisher_thread(
 ) -> (mpsc::Sender<()>, thread::JoinHandle<Result<(), BusError>>) {
     let config = config.clone();
     let (start_tx, start_rx) = mpsc::channel::<()>();
+    let (ready_tx, ready_rx) = mpsc::channel::<()>();
     let handle = thread::spawn(move || {
         let bus = Bus::open("publisher", &config)?;
         let publisher = bus.publisher::<GyroSample>()?;
+        let _ = ready_tx.send(());
         if start_rx.recv_timeout(HANG_GUARD).is_ok() {
             publish(&publisher);
             // Keep the ports until the receiver has read everything.
@@ -40,6 +42,10 @@ fn publisher_thread(
         }
         Ok(())
     });
+    // Return once the publisher exists and has rung its start-up ring, however slowly a loaded
+    // host runs the thread: a caller's next look then sees that ring as already rung. (A thread
+    // that failed drops the sender; its error comes with `join`.)
+    let _ = ready_rx.recv_timeout(HANG_GUARD);
     (start_tx, handle)
 }
 
@@ -585,14 +591,15 @@ fn a_subscriber_woken_from_a_time_on_sleeps_through_earlier_samples_and_takes_th
         truth.wake_from(gyro(4).header.time_ns);
         let (start, publisher) = publisher_thread(&config, |publisher| {
             for i in 1..=4 {
+                // Late enough that the consumer has had its look and is asleep for each: a
+                // sample already there at a loop's look before it sleeps is taken at once.
+                thread::sleep(Duration::from_millis(50));
                 publisher.publish(&gyro(i)).expect("publish");
-                // Apart enough that the consumer is asleep for each.
-                thread::sleep(Duration::from_millis(5));
             }
         });
-        // The publisher's own start-up ring (subscribers connect to a new publisher) comes
-        // before the loop's first look: wait for its port, then drain that round.
-        thread::sleep(Duration::from_millis(200));
+        // The publisher's own start-up ring (subscribers connect to a new publisher) came
+        // before `publisher_thread` returned: this first look attaches to the publisher and
+        // leaves that ring behind.
         events
             .run_once(Duration::ZERO, |_| Flow::Continue)
             .expect("first look");
