@@ -65,7 +65,7 @@ fn quick_mode_writes_a_well_formed_report() {
     let out = std::env::temp_dir().join(format!("latency-quick-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&out);
     let status = Command::new(env!("CARGO_BIN_EXE_latency"))
-        .args(["--quick", "--out"])
+        .args(["--quick", "--chain-cpus", "0", "--out"])
         .arg(&out)
         .status()
         .expect("running latency --quick");
@@ -129,6 +129,25 @@ fn quick_mode_writes_a_well_formed_report() {
             }
         }
     }
+    // `--chain-cpus 0`: the chains that sleep, placed on CPU 0; never the busy-poll floor.
+    let placed = |transport: &str| {
+        measurements
+            .iter()
+            .filter(|m| m["kind"] == "chain" && m["transport"] == transport && m["chain_cpu"] == 0)
+            .count()
+    };
+    for transport in ["iox-event-block", "uds", "udp"] {
+        assert_eq!(
+            placed(transport),
+            2,
+            "placed {transport} chain rows, idle and load"
+        );
+    }
+    assert_eq!(placed("iox-poll"), 0, "the floor is never placed");
+    assert!(
+        markdown.contains("— chain on CPU 0"),
+        "placed rows are named"
+    );
     for m in measurements {
         assert!(m["error"].is_null(), "failed: {m}");
         let l = &m["latency"];

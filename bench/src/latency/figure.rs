@@ -38,6 +38,11 @@ fn ladder(m: &Measurement) -> Vec<(f64, f64)> {
         .collect()
 }
 
+/// One colour per transport, binaries and placement, the same in every panel.
+fn colour_key(transport: Transport, binaries: bool, chain_cpu: Option<usize>) -> String {
+    format!("{transport}{binaries}{chain_cpu:?}")
+}
+
 fn colour_of(transports: &mut Vec<String>, key: &str) -> RGBColor {
     let i = transports.iter().position(|t| t == key).unwrap_or_else(|| {
         transports.push(key.to_string());
@@ -87,14 +92,16 @@ pub fn write(path: &Path, report: &Report) -> Result<()> {
             .filter(|m| m.kind == kind && m.error.is_none() && m.latency.n > 0)
             .map(|m| Curve {
                 label: format!(
-                    "{}{} {}",
+                    "{}{}{} {}",
                     m.transport.label(),
                     if m.real_binaries { " [bin]" } else { "" },
+                    m.chain_cpu
+                        .map_or(String::new(), |cpu| format!(" [CPU {cpu}]")),
                     if m.load { "load" } else { "idle" }
                 ),
                 colour: colour_of(
                     &mut transports,
-                    &format!("{}{}", m.transport, m.real_binaries),
+                    &colour_key(m.transport, m.real_binaries, m.chain_cpu),
                 ),
                 faint: m.load,
                 points: ladder(m),
@@ -135,7 +142,7 @@ pub fn write(path: &Path, report: &Report) -> Result<()> {
                         rows[0].transport.label(),
                         if *load { "load" } else { "idle" }
                     ),
-                    colour: colour_of(&mut transports, &format!("{t}false")),
+                    colour: colour_of(&mut transports, &colour_key(*t, false, None)),
                     faint: *load,
                     points: rows
                         .iter()

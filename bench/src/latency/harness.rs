@@ -65,6 +65,12 @@ struct Args {
     /// a launch profile's `[platform] cpu_latency_us = 0` does for a run [default: none].
     #[arg(long, value_name = "US")]
     cpu_latency_us: Option<u32>,
+    /// Also measure the chain with its four processes placed on one CPU, once per CPU listed
+    /// (`,`-separated): the bus's wait strategies that sleep and the socket chains, next to the
+    /// same chains placed by the scheduler. Under load the hog runs on the last CPU. The
+    /// busy-poll floor is never placed (four pollers on one CPU would take turns).
+    #[arg(long, value_delimiter = ',', value_name = "CPU")]
+    chain_cpus: Vec<usize>,
     /// Parts to leave out: hop, chain, sweep, paced, binaries.
     #[arg(long, value_delimiter = ',')]
     skip: Vec<String>,
@@ -154,6 +160,9 @@ fn run(args: &Args, command: String) -> Result<()> {
         .context("--cpu-latency-us")?;
     let rounds = if quick { 2 } else { 4 };
     let hog_cpu = system::cpu_count() - 1;
+    if let Some(cpu) = args.chain_cpus.iter().find(|&&c| c > hog_cpu) {
+        bail!("--chain-cpus: CPU {cpu} does not exist (this machine has CPUs 0 to {hog_cpu})");
+    }
     let scratch = PathBuf::from(format!("/tmp/latency-{}", std::process::id()));
     std::fs::create_dir_all(&scratch)?;
     let mut report = Report {
@@ -166,7 +175,7 @@ fn run(args: &Args, command: String) -> Result<()> {
             "gap_us": args.gap_us, "period_us": args.period_us, "sizes": sizes,
             "waits": waits.iter().map(ToString::to_string).collect::<Vec<_>>(),
             "paced_duration_s": paced_duration, "paced_waits": args.paced_waits, "hog_cpu": hog_cpu,
-            "cpu_latency_us": args.cpu_latency_us,
+            "cpu_latency_us": args.cpu_latency_us, "chain_cpus": args.chain_cpus,
         }),
         ..Report::default()
     };
@@ -186,7 +195,13 @@ fn run(args: &Args, command: String) -> Result<()> {
     // Every configuration runs in `rounds` interleaved rounds (transports and loads taking
     // turns), so that slow changes in the shared machine's background load hit all alike.
     let mut plan: Vec<Plan> = Vec::new();
-    let mut add = |kind, transports: &[Transport], size, count, interval_us, binaries| {
+    let mut add = |kind,
+                   transports: &[Transport],
+                   size,
+                   count,
+                   interval_us,
+                   binaries,
+                   chain_cpu: Option<usize>| {
         for &transport in transports {
             for load in [false, true] {
                 plan.push(Plan {
@@ -197,21 +212,38 @@ fn run(args: &Args, command: String) -> Result<()> {
                     interval_us,
                     load,
                     binaries,
+                    chain_cpu,
                 });
             }
         }
     };
     if !skip("hop") {
-        add(Kind::Hop, &all, 48, hops, args.gap_us, false);
+        add(Kind::Hop, &all, 48, hops, args.gap_us, false, None);
     }
     if !skip("chain") {
         let total = warmup(cycles / rounds) + cycles / rounds + 8;
         eprintln!("recording a {total}-tick closed-loop run for the gateways to replay ...");
         Recording::record(&ctx.recording, total)?;
-        add(Kind::Chain, &all, 0, cycles, args.period_us, false);
+        add(Kind::Chain, &all, 0, cycles, args.period_us, false, None);
         if !skip("binaries") && pipeline_binary("estimator").is_some() {
             // Every bus wait strategy: the decision on the pipeline's default weighs these rows.
-            add(Kind::Chain, &bus, 0, cycles, args.period_us, true);
+            add(Kind::Chain, &bus, 0, cycles, args.period_us, true, None);
+        }
+        let sleepers: Vec<Transport> = all
+            .iter()
+            .copied()
+            .filter(|t| *t != Transport::IoxPoll && !t.polls())
+            .collect();
+        for &cpu in &args.chain_cpus {
+            add(
+                Kind::Chain,
+                &sleepers,
+                0,
+                cycles,
+                args.period_us,
+                false,
+                Some(cpu),
+            );
         }
     }
     if !skip("sweep") {
@@ -228,6 +260,7 @@ fn run(args: &Args, command: String) -> Result<()> {
                 sweep_hops,
                 0,
                 false,
+                None,
             );
         }
     }

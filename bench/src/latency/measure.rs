@@ -6,7 +6,7 @@ use crate::latency::protocol::{Addr, Role, STARTUP, Signal, Transport, WorkerRes
 use crate::latency::recording::run_config;
 use crate::latency::runner::{Group, Who};
 use crate::latency::stats::differences;
-use crate::latency::system::{Hog, MachineCpu};
+use crate::latency::system::{Hog, MachineCpu, pin_process};
 use anyhow::{Context, Result, bail};
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -225,6 +225,14 @@ impl Ctx {
             .map(|&(_, w)| w)
             .chain([wheels, gyro])
             .collect();
+        if let Some(cpu) = p.chain_cpu {
+            // Placed before any sample flows (they start on `go`); the iceoryx2 threads a
+            // process may have started by then are not on the chain's path.
+            for &who in workers.iter().chain(&programs) {
+                let pid = group.pid(who);
+                pin_process(pid, cpu).with_context(|| format!("placing pid {pid} on CPU {cpu}"))?;
+            }
+        }
         group.start(&workers, &[wheels, gyro], STARTUP)?;
         group.expect(
             gyro,

@@ -30,6 +30,9 @@ pub struct Measurement {
     pub size: usize,
     /// The chain ran the real `estimator` and `controller` binaries.
     pub real_binaries: bool,
+    /// The chain's four processes were placed on this CPU (`--chain-cpus`); `None`: wherever
+    /// the scheduler put them.
+    pub chain_cpu: Option<usize>,
     pub latency: Percentiles,
     /// Messages measured (hops or cycles).
     pub messages: usize,
@@ -50,14 +53,16 @@ pub struct Measurement {
 }
 
 impl Measurement {
-    /// The transport's name, and the binaries if they ran.
+    /// The transport's name, the binaries if they ran and the chain's CPU if it was placed.
     pub fn label(&self) -> String {
-        let label = self.transport.label();
+        let mut label = self.transport.label();
         if self.real_binaries {
-            format!("{label} — real `estimator` + `controller` binaries")
-        } else {
-            label
+            label.push_str(" — real `estimator` + `controller` binaries");
         }
+        if let Some(cpu) = self.chain_cpu {
+            label.push_str(&format!(" — chain on CPU {cpu}"));
+        }
+        label
     }
 }
 
@@ -118,7 +123,7 @@ pub struct Report {
 }
 
 impl Report {
-    /// The successful row of this configuration.
+    /// The successful row of this configuration, its processes placed by the scheduler.
     pub fn find(
         &self,
         kind: Kind,
@@ -127,12 +132,27 @@ impl Report {
         size: usize,
         binaries: bool,
     ) -> Option<&Measurement> {
+        self.find_placed(kind, transport, load, size, binaries, None)
+    }
+
+    /// The successful row of this configuration with the chain on `chain_cpu` (`None`: not
+    /// placed).
+    pub fn find_placed(
+        &self,
+        kind: Kind,
+        transport: Transport,
+        load: bool,
+        size: usize,
+        binaries: bool,
+        chain_cpu: Option<usize>,
+    ) -> Option<&Measurement> {
         self.measurements.iter().find(|m| {
             m.kind == kind
                 && m.transport == transport
                 && m.load == load
                 && m.size == size
                 && m.real_binaries == binaries
+                && m.chain_cpu == chain_cpu
                 && m.error.is_none()
         })
     }
@@ -155,6 +175,8 @@ pub struct Plan {
     pub interval_us: u64,
     pub load: bool,
     pub binaries: bool,
+    /// Chain: place its four processes on this CPU.
+    pub chain_cpu: Option<usize>,
 }
 
 /// What one round of one configuration measured.
@@ -179,6 +201,7 @@ impl Plan {
             load: self.load,
             size: self.size,
             real_binaries: self.binaries,
+            chain_cpu: self.chain_cpu,
             ..Measurement::default()
         };
         let (mut all, mut stages) = (Vec::new(), Vec::<(String, Vec<u64>)>::new());

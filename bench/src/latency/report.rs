@@ -61,12 +61,14 @@ pub fn headline(r: &Report) -> String {
     for (kind, size, name) in [(Kind::Chain, 0, "chain"), (Kind::Hop, 48, "hop (48 B)")] {
         let mut seen = Vec::new();
         for m in r.rows(kind).filter(|m| m.size == size && m.error.is_none()) {
-            if seen.contains(&(m.transport, m.real_binaries)) {
+            let key = (m.transport, m.real_binaries, m.chain_cpu);
+            if seen.contains(&key) {
                 continue;
             }
-            seen.push((m.transport, m.real_binaries));
-            let idle = r.find(kind, m.transport, false, size, m.real_binaries);
-            let load = r.find(kind, m.transport, true, size, m.real_binaries);
+            seen.push(key);
+            let find =
+                |load| r.find_placed(kind, m.transport, load, size, m.real_binaries, m.chain_cpu);
+            let (idle, load) = (find(false), find(true));
             let cell = |m: Option<&Measurement>, f: fn(&Measurement) -> f64| {
                 m.map_or("–".to_string(), |m| us(f(m)))
             };
@@ -337,6 +339,41 @@ mod tests {
         assert!(
             !out.contains("0.04×"),
             "never a ratio to a floor above the socket: {out}"
+        );
+    }
+
+    #[test]
+    fn a_placed_chain_is_checked_against_the_socket_placed_alike_and_the_free_floor() {
+        let mut r = report();
+        let placed = |transport, p50, p99| Measurement {
+            chain_cpu: Some(0),
+            ..row(Kind::Chain, transport, false, p50, p99, 50.0)
+        };
+        r.measurements.extend([
+            placed(Transport::BUS, 24.0, 90.0),
+            placed(Transport::Uds, 30.0, 80.0),
+        ]);
+        let mut out = String::new();
+        checks_table(&mut out, &r);
+        // p99 90 against the placed socket's 80 (not the free socket's 100), p50 against the
+        // free floor's 15.
+        assert!(
+            out.contains(
+                "| iceoryx2 + doorbell (block) — chain on CPU 0 | idle | 90.00 | 80.00 | **no** | 24.00 | 15.00 | 1.60× | **yes** |"
+            ),
+            "{out}"
+        );
+        // The free rows keep their own baselines.
+        assert!(
+            out.contains("| iceoryx2 + doorbell (block) | idle | 200.0 | 100.0 | **no** |"),
+            "{out}"
+        );
+        let headline = headline(&r);
+        assert!(
+            headline.contains(
+                "| chain | iceoryx2 + doorbell (block) — chain on CPU 0 | 24.00 | 90.00 | – | – |"
+            ),
+            "{headline}"
         );
     }
 

@@ -188,11 +188,27 @@ impl Drop for Hog {
 
 /// Pins the calling thread to `cpu` (best effort).
 pub fn pin_current_thread(cpu: usize) {
+    let _ = pin(0, cpu);
+}
+
+/// Pins the process (its main thread; threads it starts later inherit the CPU) `pid` to `cpu`.
+pub fn pin_process(pid: u32, cpu: usize) -> std::io::Result<()> {
+    let pid = libc::pid_t::try_from(pid).map_err(std::io::Error::other)?;
+    pin(pid, cpu)
+}
+
+/// `sched_setaffinity(pid, {cpu})`; pid 0 is the calling thread.
+fn pin(pid: libc::pid_t, cpu: usize) -> std::io::Result<()> {
     // SAFETY: a zeroed cpu_set_t is a valid empty set; sched_setaffinity reads it.
-    unsafe {
+    let status = unsafe {
         let mut set: libc::cpu_set_t = std::mem::zeroed();
         libc::CPU_SET(cpu, &mut set);
-        libc::sched_setaffinity(0, std::mem::size_of::<libc::cpu_set_t>(), &set);
+        libc::sched_setaffinity(pid, std::mem::size_of::<libc::cpu_set_t>(), &set)
+    };
+    if status == 0 {
+        Ok(())
+    } else {
+        Err(std::io::Error::last_os_error())
     }
 }
 
@@ -389,5 +405,30 @@ pub fn set_fifo(pid: u32, priority: i32) {
         };
         // SAFETY: sched_setscheduler reads the parameter struct.
         unsafe { libc::sched_setscheduler(tid, libc::SCHED_FIFO, &param) };
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_process_pinned_by_pid_may_run_on_that_cpu_only() {
+        let cpu = cpu_count() - 1;
+        let mut child = std::process::Command::new("sleep")
+            .arg("5")
+            .spawn()
+            .expect("sleep");
+        let pinned = pin_process(child.id(), cpu);
+        let status = std::fs::read_to_string(format!("/proc/{}/status", child.id()));
+        let _ = child.kill();
+        let _ = child.wait();
+        pinned.expect("pin");
+        let allowed = status.expect("status").lines().find_map(|l| {
+            l.strip_prefix("Cpus_allowed_list:")
+                .map(|v| v.trim().to_string())
+        });
+        assert_eq!(allowed, Some(cpu.to_string()));
+        assert!(pin_process(u32::MAX, 0).is_err(), "no such process");
     }
 }

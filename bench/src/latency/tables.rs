@@ -107,7 +107,7 @@ pub fn distribution_table(out: &mut String, r: &Report, kind: Kind, size: usize)
             return failed(names, e);
         }
         let uds = r
-            .find(kind, Transport::Uds, m.load, size, false)
+            .find_placed(kind, Transport::Uds, m.load, size, false, m.chain_cpu)
             .map_or(0.0, |u| u.latency.p99);
         let l = &m.latency;
         let numbers = [l.p50, l.p90, l.p99, l.p999, l.max].map(us);
@@ -153,7 +153,8 @@ pub fn checks_table(out: &mut String, r: &Report) {
             matches!(m.transport, Transport::IoxEvent(_)) && !m.real_binaries && m.error.is_none()
         })
         .filter_map(|m| {
-            let uds = r.find(Kind::Chain, Transport::Uds, m.load, 0, false)?;
+            // A placed chain against the Unix-socket chain placed the same way.
+            let uds = r.find_placed(Kind::Chain, Transport::Uds, m.load, 0, false, m.chain_cpu)?;
             let (floor, within) = match floor_of(r, Kind::Chain, m.load, 0) {
                 Some((f, idle)) => (
                     format!("{}{}", us(f), if idle { " (idle)" } else { "" }),
@@ -213,11 +214,12 @@ pub fn checks_table(out: &mut String, r: &Report) {
     }
 }
 
-/// Polling wait strategies (measured rows other than `block` on the bus), by key.
+/// Polling wait strategies (measured rows other than `block` on the bus, placed by the
+/// scheduler), by key.
 fn polling(r: &Report) -> impl Iterator<Item = &Measurement> {
-    r.measurements
-        .iter()
-        .filter(|m| m.transport.polls() && m.kind != Kind::Sweep && m.error.is_none())
+    r.measurements.iter().filter(|m| {
+        m.transport.polls() && m.kind != Kind::Sweep && m.chain_cpu.is_none() && m.error.is_none()
+    })
 }
 
 /// Each polling wait strategy against `block`, same run, same load, same processes.
