@@ -408,11 +408,15 @@ impl<'w, 'a> EventLoop<'w, 'a> {
                 return Ok(Some(LoopExit::TerminationRequested));
             }
             let seen = self.rings();
+            // Whether this round follows a sleep that a ring ended: only then is a round that
+            // finds nothing a stale notification (not the look before the next sleep that
+            // follows a round that handled something).
+            let after_ring = self.was_rung.replace(false);
             match self.dispatch(seen, on_wake)? {
                 Round::Exit(exit) => return Ok(Some(exit)),
                 Round::Handled => return Ok(None),
                 Round::Nothing => {
-                    if self.was_rung.replace(false) {
+                    if after_ring {
                         self.count(|s| s.stale_notifications += 1);
                     }
                 }

@@ -637,3 +637,88 @@ fn a_subscriber_woken_from_a_time_on_sleeps_through_earlier_samples_and_takes_th
     }
     remove_all(&config).expect("remove_all");
 }
+
+#[test]
+fn only_a_ring_that_finds_nothing_counts_as_a_stale_notification() {
+    // The look a loop takes before it sleeps again, after a round that handled a sample, is
+    // not a wake-up; a ring that wakes the loop to nothing (here a new publisher's start-up
+    // ring) is.
+    let config = BusConfig::isolated();
+    {
+        let bus = Bus::open("consumer", &config).expect("bus");
+        let sub = bus.subscriber::<GyroSample>().expect("subscriber");
+        let waiter = Waiter::new().expect("waiter");
+        let mut events = EventLoop::with_wait_strategy(&waiter, WaitStrategy::Block);
+        events.on_data(&sub).expect("attach");
+        let (start, publisher) = publisher_thread(&config, |publisher| {
+            thread::sleep(Duration::from_millis(50));
+            publisher.publish(&gyro(1)).expect("publish");
+        });
+        events
+            .run_once(Duration::ZERO, |_| Flow::Continue)
+            .expect("first look");
+        start.send(()).expect("start");
+        let mut taken = 0;
+        let begin = Instant::now();
+        while taken == 0 {
+            assert!(
+                begin.elapsed() < HANG_GUARD,
+                "the sample never woke the loop"
+            );
+            events
+                .run_once(Duration::from_secs(1), |_| {
+                    taken += sub.drain(|_| {}).expect("drain");
+                    Flow::Continue
+                })
+                .expect("event loop");
+        }
+        events
+            .run_once(Duration::from_millis(20), |wake| {
+                panic!("nothing was published: {wake:?}")
+            })
+            .expect("event loop");
+        let stats = events.wait_stats();
+        assert_eq!(
+            (stats.woken, stats.stale_notifications),
+            (1, 0),
+            "one wake-up, no stale notification: {stats:?}"
+        );
+
+        // A second publisher appears while the loop sleeps (its ring finds nothing), and a
+        // while later publishes (that ring ends the round). Both delays are long against the
+        // loop's way to sleep and back.
+        let second_config = config.clone();
+        let second = thread::spawn(move || -> Result<(), BusError> {
+            thread::sleep(Duration::from_millis(100));
+            let bus = Bus::open("second", &second_config)?;
+            let publisher = bus.publisher::<GyroSample>()?;
+            thread::sleep(Duration::from_millis(200));
+            publisher.publish(&gyro(2))?;
+            Ok(())
+        });
+        let mut taken = 0;
+        events
+            .run_once(HANG_GUARD, |_| {
+                taken += sub.drain(|_| {}).expect("drain");
+                Flow::Continue
+            })
+            .expect("event loop");
+        second
+            .join()
+            .expect("second thread")
+            .expect("second publisher");
+        assert_eq!(taken, 1, "the second publisher's sample");
+        let stats = events.wait_stats();
+        assert_eq!(
+            (stats.woken, stats.stale_notifications),
+            (2, 1),
+            "the new publisher's ring woke the loop to nothing: {stats:?}"
+        );
+        let _ = start.send(());
+        publisher
+            .join()
+            .expect("publisher thread")
+            .expect("publisher");
+    }
+    remove_all(&config).expect("remove_all");
+}
