@@ -8,8 +8,9 @@
 # or a path to a TOML file; default: simulation. Options go to `testbed run` (see
 # `testbed run --help`), e.g. --duration 60, --seed 7, --log out/run.mcap, --paced (or
 # --mode paced), --max-wall 600, --check, --config FILE, --json. The build is only what a run
-# needs (the `testbed` CLI, the pipeline processes, the launcher), with cargo's progress shown;
-# set TESTBED_NO_BUILD=1 to skip it. `testbed run` writes the run configuration beside the log and starts
+# needs (the `testbed` CLI, the pipeline processes, the launcher) in the `deploy` profile (the
+# release build optimised as a whole, into target/deploy/; see Cargo.toml), with cargo's progress
+# shown; set TESTBED_NO_BUILD=1 to skip it. `testbed run` writes the run configuration beside the log and starts
 # `testbed-launch`, which starts, supervises and stops the processes; Ctrl-C stops the run and
 # the summary of what was recorded is still printed.
 set -euo pipefail
@@ -24,10 +25,10 @@ if [[ $# -ge 1 && "$1" != -* ]]; then
 fi
 
 if [[ "${TESTBED_NO_BUILD:-0}" != "1" ]]; then
-    (cd "$root" && cargo build --release -p testbed-cli -p testbed-processes -p testbed-launch)
+    (cd "$root" && cargo build --profile deploy -p testbed-cli -p testbed-processes -p testbed-launch)
 fi
 
-testbed="${CARGO_TARGET_DIR:-$root/target}/release/testbed"
+testbed="${CARGO_TARGET_DIR:-$root/target}/deploy/testbed"
 if [[ ! -x "$testbed" ]]; then
     echo "launch.sh: $testbed not found (build failed?)" >&2
     exit 2

@@ -18,8 +18,12 @@ fn build_workspace_binaries() {
     let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
     let mut cmd = Command::new(cargo);
     cmd.args(["build", "--workspace", "--bins", "--quiet"]);
-    if profile_dir().file_name().is_some_and(|n| n == "release") {
-        cmd.arg("--release");
+    // `target/debug` is the `dev` profile; any other directory the profile of its name.
+    match profile_dir().file_name().and_then(|n| n.to_str()) {
+        None | Some("debug") => {}
+        Some(name) => {
+            cmd.args(["--profile", name]);
+        }
     }
     let status = cmd.status().expect("running cargo build");
     assert!(

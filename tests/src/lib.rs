@@ -5,14 +5,23 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::sync::OnceLock;
 
-/// Directory of the running test's profile (`target/release` or `target/debug`).
-fn profile_dir() -> PathBuf {
+/// Directory of the running test's profile (`target/release`, `target/debug`, `target/deploy`).
+pub fn profile_dir() -> PathBuf {
     let exe = std::env::current_exe().expect("the test knows its own path");
     // target/<profile>/deps/<test binary>
     exe.parent()
         .and_then(Path::parent)
         .expect("test binary lives in target/<profile>/deps")
         .to_path_buf()
+}
+
+/// The `cargo build` arguments that build into `profile_dir` (`target/debug` is the `dev`
+/// profile, any other directory the profile of its name).
+pub fn cargo_profile_args(profile_dir: &Path) -> Vec<String> {
+    match profile_dir.file_name().and_then(|n| n.to_str()) {
+        None | Some("debug") => Vec::new(),
+        Some(name) => vec!["--profile".into(), name.into()],
+    }
 }
 
 /// Path of a workspace binary, built once per test process with `cargo build --bins` in the
@@ -23,10 +32,8 @@ pub fn binary(name: &str) -> PathBuf {
     let built = BUILT.get_or_init(|| {
         let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
         let mut cmd = Command::new(cargo);
-        cmd.args(["build", "--workspace", "--bins", "--quiet"]);
-        if dir.file_name().is_some_and(|n| n == "release") {
-            cmd.arg("--release");
-        }
+        cmd.args(["build", "--workspace", "--bins", "--quiet"])
+            .args(cargo_profile_args(&dir));
         let status = cmd
             .status()
             .map_err(|e| format!("running cargo build: {e}"))?;

@@ -7,17 +7,12 @@ use std::io::Read;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 use testbed_bus::{Bus, BusConfig, Delivery, SubscriberOptions, remove_all};
-use testbed_e2e::{Scratch, workspace_root};
+use testbed_e2e::{Scratch, cargo_profile_args, profile_dir, workspace_root};
 use testbed_runtime::RunConfig;
 
 /// The example binary, built in the test's own profile.
 fn example_binary() -> std::path::PathBuf {
-    let exe = std::env::current_exe().expect("the test knows its own path");
-    let profile_dir = exe
-        .parent()
-        .and_then(|p| p.parent())
-        .expect("target/<profile>/deps/<test>");
-    let release = profile_dir.file_name().is_some_and(|n| n == "release");
+    let profile_dir = profile_dir();
     let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
     let mut build = Command::new(cargo);
     build.current_dir(workspace_root()).args([
@@ -28,9 +23,7 @@ fn example_binary() -> std::path::PathBuf {
         "--example",
         "estimate_watch",
     ]);
-    if release {
-        build.arg("--release");
-    }
+    build.args(cargo_profile_args(&profile_dir));
     assert!(
         build.status().expect("running cargo build").success(),
         "building the example failed"

@@ -28,8 +28,10 @@
 //!   encoded (the transform decoded back from the JSON message, as every record was before),
 //!   records per second, medians.
 //!
-//! `cargo build --release --workspace --bins && target/release/paced_cpu [--repeats 3]
+//! `cargo build --profile deploy --workspace --bins && target/deploy/paced_cpu [--repeats 3]
 //!  [--short 5 --long 60] [--baseline-bin-dir DIR | --cpu-latency-us N] [--json]`
+//! (the pipeline as `launch/launch.sh` builds it; `--release` works alike, and
+//! `--baseline-bin-dir target/release` compares the two builds)
 
 use anyhow::{Context, Result, bail};
 use clap::Parser;
@@ -493,7 +495,7 @@ fn main() -> Result<()> {
     for needed in ["testbed", "testbed-launch", "logger"] {
         if !bin_dir.join(needed).exists() {
             bail!(
-                "{} not found: cargo build --release --workspace --bins first",
+                "{} not found: cargo build --profile deploy --workspace --bins first",
                 bin_dir.join(needed).display()
             );
         }

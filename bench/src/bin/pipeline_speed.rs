@@ -13,7 +13,8 @@
 //!   second (the slope) and the fixed cost of starting and stopping nine processes (the
 //!   intercept), and the long run's total over its wall time.
 //!
-//! `cargo build --release --workspace --bins && cargo run --release -p testbed-bench --bin pipeline_speed [-- --json] [--no-paced]`
+//! `cargo build --profile deploy --workspace --bins && target/deploy/pipeline_speed [--json] [--no-paced]`
+//! (the pipeline as `launch/launch.sh` builds it; `--release` works alike)
 
 use anyhow::{Context, Result, bail};
 use clap::Parser;
@@ -158,7 +159,7 @@ fn main() -> Result<()> {
     let testbed = bin_dir.join("testbed");
     if !testbed.exists() {
         bail!(
-            "{} not found: cargo build --release --workspace --bins first",
+            "{} not found: cargo build --profile deploy --workspace --bins first",
             testbed.display()
         );
     }

@@ -6,10 +6,13 @@
 //! period jitter and deadline misses in a paced `testbed run`.
 //!
 //! ```sh
-//! cargo build --release --workspace --bins      # the paced run needs `testbed` and the pipeline
-//! cargo run --release -p testbed-bench --bin latency -- --out bench/report
-//! cargo run --release -p testbed-bench --bin latency -- --quick --out /tmp/latency-smoke
+//! cargo build --profile deploy --workspace --bins  # the paced run needs `testbed` and the pipeline
+//! target/deploy/latency --out bench/report
+//! target/deploy/latency --quick --out /tmp/latency-smoke
 //! ```
+//!
+//! The `deploy` profile is what `launch/launch.sh` runs (the whole program optimised as one);
+//! `--release` measures the tests' build.
 //!
 //! Writes `report.md` (tables, and the conclusions in `conclusions.md`), `latency.svg` (figure)
 //! and `report.json` (every number) to `--out`. Never use these numbers without their

@@ -65,7 +65,7 @@ impl Ctx {
 
     fn paced_run(&mut self, run: &mut PacedRun) -> Result<()> {
         let testbed = pipeline_binary("testbed").context(
-            "`testbed` not found next to this binary: cargo build --release --workspace --bins",
+            "`testbed` not found next to this binary: cargo build --profile deploy --workspace --bins",
         )?;
         let log = self.scratch.join(format!("paced-{}.mcap", self.n));
         self.n += 1;

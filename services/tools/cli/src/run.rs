@@ -399,7 +399,7 @@ fn launch(
     let launcher = bin_dir.join("testbed-launch");
     if !launcher.exists() {
         bail!(
-            "{} not found: build the pipeline first (launch/launch.sh does; or cargo build --release -p testbed-cli -p testbed-processes -p testbed-launch)",
+            "{} not found: build the pipeline first (launch/launch.sh does; or cargo build --profile deploy -p testbed-cli -p testbed-processes -p testbed-launch, or --release)",
             launcher.display()
         );
     }

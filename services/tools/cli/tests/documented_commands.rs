@@ -69,7 +69,9 @@ fn as_testbed_args(line: &str) -> Option<Vec<String>> {
     let rest: Vec<String> = rest.iter().map(|w| placeholder(w)).collect();
     let mut args = vec!["testbed".to_string()];
     match *first {
-        "testbed" | "target/release/testbed" | "target/debug/testbed" => args.extend(rest),
+        "testbed" | "target/deploy/testbed" | "target/release/testbed" | "target/debug/testbed" => {
+            args.extend(rest)
+        }
         "launch/launch.sh" => {
             args.push("run".into());
             let mut rest = rest.into_iter().peekable();
