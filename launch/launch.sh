@@ -10,9 +10,9 @@
 # --mode paced), --max-wall 600, --check, --config FILE, --json. The build is only what a run
 # needs (the `testbed` CLI, the pipeline processes, the launcher) in the `deploy` profile (the
 # release build optimised as a whole, into target/deploy/; see Cargo.toml), with cargo's progress
-# shown; set TESTBED_NO_BUILD=1 to skip it. `testbed run` writes the run configuration beside the log and starts
-# `testbed-launch`, which starts, supervises and stops the processes; Ctrl-C stops the run and
-# the summary of what was recorded is still printed.
+# shown; set TESTBED_NO_BUILD=1 to skip it. `testbed run` writes the run configuration beside
+# the log and starts `testbed-launch`, which starts, supervises and stops the processes; Ctrl-C
+# stops the run and the summary of what was recorded is still printed.
 set -euo pipefail
 
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
