@@ -28,24 +28,38 @@ use testbed_log::{LogEncode, LogRecord, RunInfo, RunLogWriter, WriterOptions};
 use testbed_runtime::run_config::CanLink;
 use testbed_runtime::{ClockMode, Context, Io, Node, WakeOn};
 
-/// How often a paced logger drains its subscribers while every topic is slow. Paced, it wakes
-/// on an interval rather than on every sample: each wake-up costs a look at all 22
-/// subscribers and a `write` of the log whatever it carries, and one per sample (some 150 per
-/// second, most alone) was the largest CPU cost of the paced pipeline (issue 18); at 100 ms
-/// it was still the largest process (0.25 % of a core). A period holds under three samples
-/// of a 10 Hz topic. A logger killed outright loses at most the records of the last period;
-/// a stopped one loses nothing (it drains everything before it closes the log).
-pub const PACED_DRAIN_PERIOD: std::time::Duration = std::time::Duration::from_millis(250);
+/// The longest a paced logger waits between two drains: while every topic is slow (the
+/// simulation's fastest topics are 10 Hz, its heartbeats some 20 a second in all). Paced, it
+/// wakes on an interval rather than on every sample: each wake-up costs a timer wake-up, a look
+/// at all 22 subscribers and a `write` of the log whatever it carries, and one per sample (some
+/// 150 per second, most alone) was the largest CPU cost of the paced pipeline (issue 18); at
+/// 250 ms its wake-ups were still half of its CPU (measured: `bench/README.md`, "The paced
+/// logger drains once a second"). A logger killed outright loses at most the records of the last
+/// period; a stopped one loses nothing (it drains everything before it closes the log). A second
+/// is within what a crash of the machine loses anyway: the log is written, not synced, and the
+/// kernel writes dirty pages back after 5–30 s.
+pub const PACED_DRAIN_PERIOD: std::time::Duration = std::time::Duration::from_secs(1);
 
-/// How often a paced logger drains while some topic is fast (a software CAN bus): 256
-/// samples a period is 2560 a second. The logger starts at this period and relaxes to
-/// [`PACED_DRAIN_PERIOD`] once a drain takes at most [`RELAX_BELOW`] samples of every topic
-/// (under 250 a second), and comes back when a relaxed drain takes more than [`TIGHTEN_ABOVE`]
-/// of one (over 256 a second), a quarter of its buffer: a topic never fills its buffer
-/// between two drains unless its rate jumps fourfold at once.
+/// The shortest a paced logger waits between two drains, for a fast topic (a software CAN bus):
+/// [`DRAIN_TARGET`] samples a period is 640 a second; a topic four times faster fills its
+/// buffer.
 pub const BUSY_DRAIN_PERIOD: std::time::Duration = std::time::Duration::from_millis(100);
-const RELAX_BELOW: usize = 25;
-const TIGHTEN_ABOVE: usize = LOGGED_BUFFER / 4;
+
+/// How many samples of its fastest topic a paced drain should take: a quarter of a buffer, so a
+/// topic fills its buffer between two drains only if its rate jumps fourfold at once.
+const DRAIN_TARGET: usize = LOGGED_BUFFER / 4;
+
+/// The paced drain period after a drain that took `most` samples of its fastest topic in
+/// `elapsed` since the drain before: the period in which that rate brings [`DRAIN_TARGET`]
+/// samples, within [[`BUSY_DRAIN_PERIOD`], [`PACED_DRAIN_PERIOD`]].
+pub fn paced_drain_period(most: usize, elapsed: std::time::Duration) -> std::time::Duration {
+    if most == 0 {
+        return PACED_DRAIN_PERIOD;
+    }
+    elapsed
+        .mul_f64(DRAIN_TARGET as f64 / most as f64)
+        .clamp(BUSY_DRAIN_PERIOD, PACED_DRAIN_PERIOD)
+}
 
 /// Samples each logged topic's subscriber holds.
 const LOGGED_BUFFER: usize = 256;
@@ -74,7 +88,7 @@ impl<T: Topic + LogEncode> LoggedTopic for Logged<T> {
     }
 }
 
-/// A logged topic, drained on [`LOCKSTEP_DRAIN_PERIOD`] or [`PACED_DRAIN_PERIOD`] ([`BUSY_DRAIN_PERIOD`]) and never
+/// A logged topic, drained on [`LOCKSTEP_DRAIN_PERIOD`] or [`paced_drain_period`] and never
 /// woken for: it rings no doorbell, so a publish to the logger costs its publisher no system
 /// call.
 fn logged<T: Topic + LogEncode + 'static>(bus: &Bus) -> anyhow::Result<Box<dyn LoggedTopic>> {
@@ -87,7 +101,8 @@ fn logged<T: Topic + LogEncode + 'static>(bus: &Bus) -> anyhow::Result<Box<dyn L
 /// The logger's ports: one subscriber per logged topic.
 pub struct LoggerPorts {
     topics: Vec<Box<dyn LoggedTopic>>,
-    /// The paced drain interval's period ([`PACED_DRAIN_PERIOD`] or [`BUSY_DRAIN_PERIOD`]).
+    /// The paced drain interval's period ([`paced_drain_period`]; [`BUSY_DRAIN_PERIOD`] until the
+    /// first drain).
     drain_period: std::cell::Cell<std::time::Duration>,
 }
 
@@ -101,6 +116,8 @@ pub struct LoggerProcess {
     previous_tick_ns: Option<u64>,
     /// The SocketCAN recording (`can.link = "socketcan"` with `can.record_candump`).
     interface: Option<InterfaceRecording>,
+    /// When the last paced drain was (the rate of the fastest topic since then sets the next).
+    last_drain: Option<std::time::Instant>,
 }
 
 impl LoggerProcess {
@@ -185,6 +202,7 @@ impl LoggerProcess {
                 candump,
                 previous_tick_ns: None,
                 interface,
+                last_drain: None,
             },
             LoggerPorts {
                 topics,
@@ -248,11 +266,12 @@ impl Node for LoggerProcess {
         }
         let (newest_tick, most) = self.write_pass(ports, io)?;
         if !self.lockstep {
-            let period = &ports.drain_period;
-            if period.get() == BUSY_DRAIN_PERIOD && most <= RELAX_BELOW {
-                period.set(PACED_DRAIN_PERIOD);
-            } else if period.get() == PACED_DRAIN_PERIOD && most > TIGHTEN_ABOVE {
-                period.set(BUSY_DRAIN_PERIOD);
+            let now = std::time::Instant::now();
+            let elapsed =
+                now.saturating_duration_since(self.last_drain.replace(now).unwrap_or(now));
+            // The first drain has no rate to go by: it keeps the busy period.
+            if !elapsed.is_zero() {
+                ports.drain_period.set(paced_drain_period(most, elapsed));
             }
         }
         match newest_tick {
@@ -467,8 +486,38 @@ impl InterfaceRecording {
 
 #[cfg(test)]
 mod tests {
-    use super::segment_path;
+    use super::*;
     use std::path::Path;
+    use std::time::Duration;
+
+    #[test]
+    fn the_paced_drain_period_takes_a_quarter_buffer_of_the_fastest_topic() {
+        // The simulation: 10 Hz topics and ~20 heartbeats a second, drained after 1 s.
+        assert_eq!(
+            paced_drain_period(22, Duration::from_secs(1)),
+            PACED_DRAIN_PERIOD
+        );
+        // Nothing came: the longest period.
+        assert_eq!(
+            paced_drain_period(0, Duration::from_millis(100)),
+            PACED_DRAIN_PERIOD
+        );
+        // 128 samples a second: a quarter buffer (64) every half second.
+        assert_eq!(
+            paced_drain_period(128, Duration::from_secs(1)),
+            Duration::from_millis(500)
+        );
+        // A software CAN bus, 2000 frames a second: the shortest period, 200 a drain, under the
+        // 256 of the buffer.
+        let busy = paced_drain_period(200, Duration::from_millis(100));
+        assert_eq!(busy, BUSY_DRAIN_PERIOD);
+        assert!(2000.0 * busy.as_secs_f64() < LOGGED_BUFFER as f64);
+        // Slowing down, the period lengthens with the rate.
+        assert_eq!(
+            paced_drain_period(16, Duration::from_millis(100)),
+            Duration::from_millis(400)
+        );
+    }
 
     #[test]
     fn a_restarted_logger_writes_a_new_segment_beside_the_log() {

@@ -575,9 +575,11 @@ fn supervise_launcher(
             .spawn(move || print_ground_info(&info));
     }
     let status = loop {
-        // SIGCHLD ends the wait as soon as the launcher exits; the timeout is only a fallback
-        // (each wake-up of this loop is CPU of the run, five a second at 200 ms).
-        match signals.wait(Some(std::time::Duration::from_secs(1))) {
+        // SIGCHLD ends the wait as soon as the launcher exits: every thread of this process
+        // blocks it (the mask is set before any thread starts), so it stays pending until this
+        // wait takes it. The timeout is only a fallback, and long: each wake-up of this loop is
+        // CPU of the run (a paced run's whole pipeline is some 0.6 % of a core).
+        match signals.wait(Some(std::time::Duration::from_secs(10))) {
             Ok(Some(signal)) if signal != sys::SIGCHLD => {
                 // SAFETY: kill(2) on our own child, not yet reaped (its pid cannot be reused).
                 unsafe { libc::kill(launcher_pid, signal) };
