@@ -1,5 +1,6 @@
 #!/bin/bash
-cd /work/main
+cd "$(dirname "$0")/../../.."  # the repository root
+mkdir -p /tmp/haltpoll
 for i in 1 2 3 4 5 6; do
   echo "=== run $i $(date -u +%H:%M:%S)"
   target/deploy/latency --out /tmp/haltpoll/chain-$i --skip hop,sweep,paced,binaries --cycles 20000 --waits block > /tmp/haltpoll/chain-$i.log 2>&1

@@ -1,6 +1,7 @@
 #!/bin/bash
 P=/sys/module/haltpoll/parameters/guest_halt_poll_ns
-cd /work/main
+cd "$(dirname "$0")/../../.."  # the repository root
+mkdir -p /tmp/haltpoll
 for i in 1 2; do
   for ns in 0 200000; do
     echo $ns > $P
