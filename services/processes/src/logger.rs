@@ -51,7 +51,7 @@ const DRAIN_TARGET: usize = LOGGED_BUFFER / 4;
 
 /// The paced drain period after a drain that took `most` samples of its fastest topic in
 /// `elapsed` since the drain before: the period in which that rate brings [`DRAIN_TARGET`]
-/// samples, within [[`BUSY_DRAIN_PERIOD`], [`PACED_DRAIN_PERIOD`]].
+/// samples, from [`BUSY_DRAIN_PERIOD`] to [`PACED_DRAIN_PERIOD`].
 pub fn paced_drain_period(most: usize, elapsed: std::time::Duration) -> std::time::Duration {
     if most == 0 {
         return PACED_DRAIN_PERIOD;
