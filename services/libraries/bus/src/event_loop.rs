@@ -88,17 +88,28 @@ pub enum LoopExit {
     TerminationRequested,
 }
 
-/// Longest the loop sleeps without looking at the termination flag: the pipeline's heartbeat
-/// period, so that a pipeline process, which wakes for its heartbeat anyway, has no extra
-/// wake-up. A signal normally interrupts the sleep at once; this bounds the one case where it
-/// lands between the check and the sleep.
-pub const MAX_SLEEP: Duration = Duration::from_millis(500);
+/// Longest the loop sleeps without looking at the termination flag: the longest a pipeline
+/// process sleeps anyway, its heartbeat going out at most 1.5 periods of 500 ms apart
+/// ([`HEARTBEAT_SLACK`]), so that no process has an extra wake-up for it (at 500 ms, a process
+/// on a 700-ms interval woke twice a tick). A signal normally interrupts the sleep at once;
+/// this bounds the one case where it lands between the check and the sleep.
+pub const MAX_SLEEP: Duration = Duration::from_millis(750);
 
 /// How late, in heartbeat periods, a heartbeat may go out while it waits for a wake-up the
 /// process has anyway: at most 1.5 periods between heartbeats (750 ms with the pipeline's
 /// 500 ms), well within the launcher's 1.5-s hang timeout. Waking for the heartbeat alone
 /// cost every pipeline process two wake-ups a second of its paced CPU.
 pub const HEARTBEAT_SLACK: f64 = 0.5;
+
+/// How early, in heartbeat periods, a heartbeat may go out with a wake-up the process has
+/// anyway. The next heartbeat is due a period after the last one went out; with this and
+/// [`HEARTBEAT_SLACK`] it rides on any wake-up 0.75 to 1.5 periods after the last, so a process
+/// woken every 0.8 periods (a 2.5-Hz sensor model against the pipeline's 500 ms) or every 1.4
+/// (a quiet interval, 700 ms) sends one with every wake-up and never wakes for it alone, where
+/// a heartbeat due on a fixed grid, or only from its due time on, woke such a process alone
+/// every second or third wake-up. A process woken more often sends one every 0.75 to 1
+/// period (every 400 ms at 10 Hz).
+pub const HEARTBEAT_EARLY: f64 = 0.25;
 
 /// How soon a loop looks again at a timer that was due but had nothing to fire.
 const OVERDUE_RECHECK: Duration = Duration::from_millis(1);
@@ -153,9 +164,10 @@ impl<'a> Attachment<'a> {
     }
 
     /// The next time this attachment has something to do without a ring. A heartbeat is due
-    /// at `next_due` but goes out with the first wake-up after it, whatever its reason; the
-    /// loop wakes for it alone only [`HEARTBEAT_SLACK`] of a period later. A process woken
-    /// by its data more often than that never wakes for its heartbeat.
+    /// at `next_due` but goes out with the first wake-up from [`HEARTBEAT_EARLY`] of a period
+    /// before it, whatever its reason; the loop wakes for it alone only [`HEARTBEAT_SLACK`] of
+    /// a period after it. A process woken by its data more often than that never wakes for its
+    /// heartbeat.
     fn next_timer(&self) -> Option<Instant> {
         match self.kind {
             Kind::Data(port) => self.deadline_due(port),
@@ -482,7 +494,21 @@ impl<'w, 'a> EventLoop<'w, 'a> {
         for (index, attachment) in self.attachments.iter().enumerate() {
             let source = SourceId(index);
             let wake = match attachment.kind {
-                Kind::Interval | Kind::Heartbeat(_) => {
+                Kind::Heartbeat(heartbeat) => {
+                    let (Some(due), Some(period)) = (attachment.next_due.get(), attachment.period)
+                    else {
+                        continue;
+                    };
+                    if due > now + period.mul_f64(HEARTBEAT_EARLY) {
+                        continue;
+                    }
+                    // The next is due a period after this one went out, not after this one was
+                    // due: a heartbeat that rode on a later wake-up is not due again sooner.
+                    attachment.next_due.set(Some(now + period));
+                    heartbeat.publish_or_count();
+                    continue;
+                }
+                Kind::Interval => {
                     let (Some(due), Some(period)) = (attachment.next_due.get(), attachment.period)
                     else {
                         continue;
@@ -494,13 +520,7 @@ impl<'w, 'a> EventLoop<'w, 'a> {
                     attachment
                         .next_due
                         .set(Some(if next > now { next } else { now + period }));
-                    match attachment.kind {
-                        Kind::Heartbeat(heartbeat) => {
-                            heartbeat.publish_or_count();
-                            continue;
-                        }
-                        _ => Wake::Tick(source),
-                    }
+                    Wake::Tick(source)
                 }
                 Kind::Data(port) => {
                     let pending = port.attach()?;

@@ -62,8 +62,9 @@
 //!   [`WaitStrategy`]: sleep until rung (default), or also poll the subscribers in short windows
 //!   where a sample is expected (`TESTBED_BUS_WAIT`, [`ENV_WAIT`]).
 //! - [`HeartbeatPublisher`]: the periodic [`ipc_types::Heartbeat`] of a process. An event loop
-//!   sends it with the first wake-up after it is due, and wakes for it alone only
-//!   [`HEARTBEAT_SLACK`] of a period later.
+//!   sends it with the first wake-up from [`HEARTBEAT_EARLY`] of a period before it is due,
+//!   and wakes for it alone only [`HEARTBEAT_SLACK`] of a period after; the next is due a
+//!   period after it went out.
 //! - [`cleanup_dead_nodes`] (launcher, before a run) and [`remove_all`] (tests, after a run).
 //!
 //! # Threads
@@ -102,7 +103,7 @@ pub use config::{
 };
 pub use doorbell::{MAX_CONSUMERS, MAX_TOPICS};
 pub use event_loop::{
-    EventLoop, Flow, HEARTBEAT_SLACK, LoopExit, MAX_SLEEP, SourceId, Waiter, Wake,
+    EventLoop, Flow, HEARTBEAT_EARLY, HEARTBEAT_SLACK, LoopExit, MAX_SLEEP, SourceId, Waiter, Wake,
 };
 pub use heartbeat::HeartbeatPublisher;
 pub use ports::{SubscriberOptions, TopicPublisher, TopicSubscriber};

@@ -576,6 +576,119 @@ fn heartbeats_ride_on_other_wake_ups_and_still_come_when_nothing_else_does() {
     remove_all(&config).expect("remove_all");
 }
 
+/// Voluntary context switches of the calling thread so far (each sleep of the loop is one).
+fn own_sleeps() -> u64 {
+    let status = std::fs::read_to_string("/proc/thread-self/status").expect("thread status");
+    status
+        .lines()
+        .find_map(|l| l.strip_prefix("voluntary_ctxt_switches:"))
+        .and_then(|v| v.trim().parse().ok())
+        .expect("voluntary_ctxt_switches in /proc/thread-self/status")
+}
+
+#[test]
+fn a_heartbeat_rides_on_every_tick_of_an_interval_a_little_under_one_and_a_half_periods() {
+    // The runtime's QUIET_PERIOD (a paced logger, an unwatched ground link) against its
+    // heartbeat period. With the heartbeat due on a fixed grid, as before, the loop slept 19
+    // times for 11 ticks.
+    heartbeat_rides_on_every_tick(1.4);
+}
+
+#[test]
+fn a_heartbeat_rides_on_every_wake_up_four_fifths_of_a_period_apart() {
+    // A 2.5-Hz sensor model against the pipeline's 500 ms heartbeat. With the heartbeat due a
+    // period after it went out and sent only from then on, the loop woke for it alone every
+    // other tick.
+    heartbeat_rides_on_every_tick(0.8);
+}
+
+#[test]
+fn a_quiet_interval_of_the_pipeline_wakes_its_loop_once_per_tick() {
+    // The pipeline's own numbers: heartbeats every 500 ms, the logger's and the unwatched ground
+    // link's 700-ms interval (1.4 periods), over 3.5 s. The loop also caps each sleep
+    // (MAX_SLEEP, once 500 ms): that cap must not wake it between two ticks either.
+    heartbeat_rides_on_every_tick_of(Duration::from_millis(500), 1.4, 7);
+}
+
+/// A loop with nothing but an interval of `periods` heartbeat periods sends its heartbeat with
+/// every tick and never wakes for it alone. Checked: the loop's thread sleeps at most twice
+/// more than it ticks, and heartbeats still come at most 1.5 periods apart, plus 40 ms of
+/// scheduling allowance.
+fn heartbeat_rides_on_every_tick(periods: f64) {
+    heartbeat_rides_on_every_tick_of(Duration::from_millis(100), periods, 15);
+}
+
+/// [`heartbeat_rides_on_every_tick`] with a heartbeat `period`, for `run_periods` periods.
+fn heartbeat_rides_on_every_tick_of(period: Duration, periods: f64, run_periods: u32) {
+    let run = period * run_periods;
+    let config = BusConfig::isolated();
+    {
+        let bus = Bus::open("quiet", &config).expect("bus");
+        let heartbeat = bus.heartbeat(period).expect("heartbeat");
+        let interval = std::cell::Cell::new(period.mul_f64(periods));
+        let waiter = Waiter::new().expect("waiter");
+        let mut events = EventLoop::with_wait_strategy(&waiter, WaitStrategy::Block);
+        events.on_variable_interval(&interval).expect("interval");
+        events.with_heartbeat(&heartbeat).expect("heartbeat");
+
+        let watcher_config = config.clone();
+        let (done_tx, done_rx) = mpsc::channel::<()>();
+        let watcher = thread::spawn(move || -> Result<Vec<Instant>, BusError> {
+            let bus = Bus::open("watcher", &watcher_config)?;
+            let heartbeats = bus.subscriber_with::<ipc_types::Heartbeat>(
+                testbed_bus::SubscriberOptions::buffer(64).polled(),
+            )?;
+            let begin = Instant::now();
+            let mut seen = Vec::new();
+            while done_rx.try_recv().is_err() && begin.elapsed() < HANG_GUARD {
+                if heartbeats.drain(|_| {})? > 0 {
+                    seen.push(Instant::now());
+                }
+                thread::sleep(Duration::from_millis(2));
+            }
+            Ok(seen)
+        });
+        let begin = Instant::now();
+        let sleeps_before = own_sleeps();
+        let mut ticks = 0u64;
+        while begin.elapsed() < run {
+            events
+                .run_once(run, |wake| {
+                    if matches!(wake, Wake::Tick(_)) {
+                        ticks += 1;
+                    }
+                    Flow::Continue
+                })
+                .expect("event loop");
+        }
+        let sleeps = own_sleeps() - sleeps_before;
+        done_tx.send(()).expect("stop the watcher");
+        let seen = watcher.join().expect("watcher thread").expect("watcher");
+        let expected = run.as_secs_f64() / period.mul_f64(periods).as_secs_f64();
+        assert!(ticks as f64 >= expected - 2.0, "{ticks} ticks in {run:?}");
+        assert!(
+            sleeps <= ticks + 2,
+            "{sleeps} sleeps for {ticks} ticks: the loop woke between ticks (its heartbeat alone, its sleep cap)"
+        );
+        assert!(
+            seen.len() as u64 >= ticks - 1,
+            "{} heartbeats, {ticks} ticks",
+            seen.len()
+        );
+        let longest = seen
+            .windows(2)
+            .map(|w| w[1] - w[0])
+            .max()
+            .expect("two heartbeats");
+        assert!(
+            longest
+                <= period.mul_f64(1.0 + testbed_bus::HEARTBEAT_SLACK) + Duration::from_millis(40),
+            "longest gap between heartbeats {longest:?} (period {period:?})"
+        );
+    }
+    remove_all(&config).expect("remove_all");
+}
+
 #[test]
 fn a_subscriber_woken_from_a_time_on_sleeps_through_earlier_samples_and_takes_them_all() {
     // A 2.5-Hz sensor model on a 10-Hz stream asks to be woken only for the sample of its own

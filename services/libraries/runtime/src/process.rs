@@ -17,6 +17,14 @@ pub const START_TIMEOUT: Duration = Duration::from_secs(60);
 /// Heartbeat period of every process.
 pub const HEARTBEAT_PERIOD: Duration = Duration::from_millis(500);
 
+/// The period of a process's own interval while it has nothing frequent to do (a paced logger
+/// between drains, a ground link nobody watches): a little under 1.5 heartbeat periods, so its
+/// heartbeat goes out with every tick ([`testbed_bus::HEARTBEAT_SLACK`]) and the process wakes
+/// 1.4 times a second, where a 1-s interval woke it twice (once more for the heartbeat alone).
+/// The 50 ms short of 750 ms cover the tick's own work: a variable interval's next tick counts
+/// from the end of its callback, the heartbeat's from the start of the wake-up that sent it.
+pub const QUIET_PERIOD: Duration = Duration::from_millis(700);
+
 /// Command line shared by the pipeline's processes.
 #[derive(Debug, clap::Parser)]
 pub struct ProcessArgs {
@@ -106,6 +114,7 @@ pub fn wait_for_participants(bus: &Bus, participants: &[String]) -> anyhow::Resu
 #[cfg(test)]
 mod tests {
     use super::*;
+
     use std::sync::Arc;
     use std::sync::atomic::{AtomicBool, Ordering};
     use testbed_bus::HeartbeatPublisher;
@@ -164,5 +173,22 @@ mod tests {
         }
         drop(bus);
         testbed_bus::remove_all(&config).expect("removing the test's bus files");
+    }
+
+    #[test]
+    fn a_quiet_interval_carries_every_heartbeat() {
+        // A heartbeat rides on a wake-up from HEARTBEAT_EARLY of a period before it is due to
+        // HEARTBEAT_SLACK after: a quiet interval must tick inside that window, with room for
+        // a tick's work (20 ms here, some 0.2 ms measured), or it goes out every other tick.
+        let earliest = HEARTBEAT_PERIOD.mul_f64(1.0 - testbed_bus::HEARTBEAT_EARLY);
+        let latest = HEARTBEAT_PERIOD.mul_f64(1.0 + testbed_bus::HEARTBEAT_SLACK);
+        assert!(
+            QUIET_PERIOD >= earliest,
+            "{QUIET_PERIOD:?} against {earliest:?}"
+        );
+        assert!(
+            QUIET_PERIOD + Duration::from_millis(20) <= latest,
+            "{QUIET_PERIOD:?} against {latest:?}"
+        );
     }
 }

@@ -39,8 +39,10 @@ const LOCKSTEP_DRAIN: Duration = Duration::from_millis(5);
 /// the link keeps only what it tracks for the next viewer (the controller's mode, the
 /// simulated time) and its buffers from overflowing (256 samples: 25 s of a 10 Hz topic). A
 /// viewer that connects is served within this period, then every [`SERVICE_PERIOD`] (issue
-/// 18: waking ten times a second to drain 20 subscribers for nobody was 0.1 % of a core).
-const UNWATCHED_PERIOD: Duration = Duration::from_secs(1);
+/// 18: waking ten times a second to drain 20 subscribers for nobody was 0.1 % of a core). The
+/// runtime's [`QUIET_PERIOD`](testbed_runtime::process::QUIET_PERIOD) (700 ms), with which the
+/// link's heartbeat goes out (a 1-s period woke it once more a second for the heartbeat alone).
+const UNWATCHED_PERIOD: Duration = testbed_runtime::process::QUIET_PERIOD;
 /// Period of `testbed/ground/link`.
 const STATUS_PERIOD: Duration = Duration::from_secs(1);
 

@@ -98,8 +98,23 @@ impl Watch {
     }
 }
 
-/// Interval between two looks at the log.
+/// Interval between two looks at the log on a terminal, and between two tries while the log
+/// has nothing to show yet.
 pub const LOOK_EVERY: Duration = Duration::from_millis(500);
+
+/// How long to sleep before the next look: [`LOOK_EVERY`] on a terminal (the bar moves), else
+/// until the next plain line is due, `since_line` after the last one and `wall` into the run
+/// (never less than [`LOOK_EVERY`]). Looking twice a second to print a line every ten was two
+/// of `testbed run`'s 2.3 wake-ups a second in a paced run (issue 18).
+fn next_look(terminal: bool, wall: Duration, since_line: Duration) -> Duration {
+    if terminal {
+        return LOOK_EVERY;
+    }
+    let line_due = QUIET_FOR
+        .saturating_sub(wall)
+        .max(PLAIN_EVERY.saturating_sub(since_line));
+    line_due.max(LOOK_EVERY)
+}
 
 /// One line of progress.
 pub fn describe(state: &State, duration_s: Option<f64>, wall: Duration) -> String {
@@ -152,7 +167,7 @@ fn show(follow: &Follow, stop: &AtomicBool) {
     let mut last_line = started;
     let mut watch = Watch::new(&follow.log);
     loop {
-        std::thread::park_timeout(LOOK_EVERY);
+        std::thread::park_timeout(next_look(terminal, started.elapsed(), last_line.elapsed()));
         if stop.load(Ordering::Relaxed) {
             break;
         }
@@ -206,6 +221,22 @@ fn new_bar(duration_s: Option<f64>) -> ProgressBar {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn without_a_terminal_the_thread_sleeps_until_the_next_line() {
+        let s = Duration::from_secs;
+        // On a terminal the bar is fed every look.
+        assert_eq!(next_look(true, s(30), s(3)), LOOK_EVERY);
+        // A plain line every ten seconds: the first ten seconds after the start, then the rest
+        // of the ten after each line.
+        assert_eq!(
+            next_look(false, Duration::ZERO, Duration::ZERO),
+            PLAIN_EVERY
+        );
+        assert_eq!(next_look(false, s(34), s(4)), s(6));
+        // A line overdue (the log had nothing fresh): tried again a look later, not at once.
+        assert_eq!(next_look(false, s(40), s(12)), LOOK_EVERY);
+    }
     use ipc_types::SampleHeader;
     use testbed_log::{RunInfo, RunLogWriter, WriterOptions};
 
