@@ -1,6 +1,10 @@
 #!/bin/bash
-# wake-ups and CPU per process over 15 s of a paced run (8 s in); BIN = binary directory
-BIN=${BIN:-target/deploy}
+# Wake-ups and CPU per process over 15 s of a paced 30-s simulation run (from 8 s in), read from
+# /proc/<pid>/task/*/status (voluntary_ctxt_switches) and schedstat. BIN: the directory of the
+# binaries, absolute (the processes are found by the path the launcher starts them from);
+# default this clone's target/deploy.
+cd "$(dirname "$0")/../../.." || exit 1
+BIN=${BIN:-$PWD/target/deploy}
 $BIN/testbed run --profile simulation --mode paced --duration 30 > /tmp/wakes-run.log 2>&1 &
 sleep 8
 snap() { for p in $(pgrep -f "^$BIN/"); do c=$(cat /proc/$p/comm); v=0; r=0; for t in /proc/$p/task/*; do v=$((v+$(awk '/^voluntary_ctxt/{print $2}' $t/status))); r=$((r+$(awk '{print $1}' $t/schedstat))); done; echo "$p $c $v $r"; done; }
