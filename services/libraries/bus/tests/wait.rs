@@ -506,6 +506,59 @@ fn only_a_subscriber_a_loop_waits_for_wakes_the_process() {
     remove_all(&config).expect("remove_all");
 }
 
+/// Watches heartbeats from its own thread and bus node (a polled subscriber looked at every
+/// 2 ms) until told to stop, and publishes a gyro sample every 20 ms for its first
+/// `samples_for`. Returns when it saw heartbeats.
+fn heartbeat_watcher(
+    config: &BusConfig,
+    samples_for: Duration,
+) -> (
+    mpsc::Sender<()>,
+    thread::JoinHandle<Result<Vec<Instant>, BusError>>,
+) {
+    let config = config.clone();
+    let (done_tx, done_rx) = mpsc::channel::<()>();
+    let watcher = thread::spawn(move || -> Result<Vec<Instant>, BusError> {
+        let bus = Bus::open("watcher", &config)?;
+        let heartbeats = bus.subscriber_with::<ipc_types::Heartbeat>(
+            testbed_bus::SubscriberOptions::buffer(64).polled(),
+        )?;
+        let publisher = bus.publisher::<GyroSample>()?;
+        let mut seen = Vec::new();
+        let begin = Instant::now();
+        let mut next_sample = begin;
+        let mut i = 0;
+        while done_rx.try_recv().is_err() && begin.elapsed() < HANG_GUARD {
+            let now = Instant::now();
+            if now < begin + samples_for && now >= next_sample {
+                i += 1;
+                publisher.publish(&gyro(i))?;
+                next_sample += Duration::from_millis(20);
+            }
+            if heartbeats.drain(|_| {})? > 0 {
+                seen.push(now);
+            }
+            thread::sleep(Duration::from_millis(2));
+        }
+        Ok(seen)
+    });
+    (done_tx, watcher)
+}
+
+/// No gap between the heartbeats `seen` longer than 1.5 `period`s plus 40 ms of scheduling
+/// allowance.
+fn assert_at_most_one_and_a_half_periods_apart(seen: &[Instant], period: Duration) {
+    let longest = seen
+        .windows(2)
+        .map(|w| w[1] - w[0])
+        .max()
+        .expect("two heartbeats");
+    assert!(
+        longest <= period.mul_f64(1.0 + testbed_bus::HEARTBEAT_SLACK) + Duration::from_millis(40),
+        "longest gap between heartbeats {longest:?} (period {period:?})"
+    );
+}
+
 #[test]
 fn heartbeats_ride_on_other_wake_ups_and_still_come_when_nothing_else_does() {
     // A heartbeat goes out with the first wake-up after it is due, and on its own
@@ -524,32 +577,7 @@ fn heartbeats_ride_on_other_wake_ups_and_still_come_when_nothing_else_does() {
         events.on_data(&sub).expect("attach");
         events.with_heartbeat(&heartbeat).expect("heartbeat");
 
-        let watcher_config = config.clone();
-        let (done_tx, done_rx) = mpsc::channel::<()>();
-        let watcher = thread::spawn(move || -> Result<Vec<Instant>, BusError> {
-            let bus = Bus::open("watcher", &watcher_config)?;
-            let heartbeats = bus.subscriber_with::<ipc_types::Heartbeat>(
-                testbed_bus::SubscriberOptions::buffer(64).polled(),
-            )?;
-            let publisher = bus.publisher::<GyroSample>()?;
-            let mut seen = Vec::new();
-            let begin = Instant::now();
-            let mut next_sample = begin;
-            let mut i = 0;
-            while done_rx.try_recv().is_err() && begin.elapsed() < HANG_GUARD {
-                let now = Instant::now();
-                if now < begin + RUN / 2 && now >= next_sample {
-                    i += 1;
-                    publisher.publish(&gyro(i))?;
-                    next_sample += Duration::from_millis(20);
-                }
-                if heartbeats.drain(|_| {})? > 0 {
-                    seen.push(now);
-                }
-                thread::sleep(Duration::from_millis(2));
-            }
-            Ok(seen)
-        });
+        let (done_tx, watcher) = heartbeat_watcher(&config, RUN / 2);
         let begin = Instant::now();
         while begin.elapsed() < RUN {
             events
@@ -562,16 +590,7 @@ fn heartbeats_ride_on_other_wake_ups_and_still_come_when_nothing_else_does() {
         done_tx.send(()).expect("stop the watcher");
         let seen = watcher.join().expect("watcher thread").expect("watcher");
         assert!(seen.len() >= 8, "{} heartbeats in {RUN:?}", seen.len());
-        let longest = seen
-            .windows(2)
-            .map(|w| w[1] - w[0])
-            .max()
-            .expect("two heartbeats");
-        assert!(
-            longest
-                <= PERIOD.mul_f64(1.0 + testbed_bus::HEARTBEAT_SLACK) + Duration::from_millis(40),
-            "longest gap between heartbeats {longest:?} (period {PERIOD:?})"
-        );
+        assert_at_most_one_and_a_half_periods_apart(&seen, PERIOD);
     }
     remove_all(&config).expect("remove_all");
 }
@@ -631,23 +650,7 @@ fn heartbeat_rides_on_every_tick_of(period: Duration, periods: f64, run_periods:
         events.on_variable_interval(&interval).expect("interval");
         events.with_heartbeat(&heartbeat).expect("heartbeat");
 
-        let watcher_config = config.clone();
-        let (done_tx, done_rx) = mpsc::channel::<()>();
-        let watcher = thread::spawn(move || -> Result<Vec<Instant>, BusError> {
-            let bus = Bus::open("watcher", &watcher_config)?;
-            let heartbeats = bus.subscriber_with::<ipc_types::Heartbeat>(
-                testbed_bus::SubscriberOptions::buffer(64).polled(),
-            )?;
-            let begin = Instant::now();
-            let mut seen = Vec::new();
-            while done_rx.try_recv().is_err() && begin.elapsed() < HANG_GUARD {
-                if heartbeats.drain(|_| {})? > 0 {
-                    seen.push(Instant::now());
-                }
-                thread::sleep(Duration::from_millis(2));
-            }
-            Ok(seen)
-        });
+        let (done_tx, watcher) = heartbeat_watcher(&config, Duration::ZERO);
         let begin = Instant::now();
         let sleeps_before = own_sleeps();
         let mut ticks = 0u64;
@@ -675,16 +678,7 @@ fn heartbeat_rides_on_every_tick_of(period: Duration, periods: f64, run_periods:
             "{} heartbeats, {ticks} ticks",
             seen.len()
         );
-        let longest = seen
-            .windows(2)
-            .map(|w| w[1] - w[0])
-            .max()
-            .expect("two heartbeats");
-        assert!(
-            longest
-                <= period.mul_f64(1.0 + testbed_bus::HEARTBEAT_SLACK) + Duration::from_millis(40),
-            "longest gap between heartbeats {longest:?} (period {period:?})"
-        );
+        assert_at_most_one_and_a_half_periods_apart(&seen, period);
     }
     remove_all(&config).expect("remove_all");
 }
