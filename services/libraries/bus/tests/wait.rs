@@ -508,7 +508,7 @@ fn only_a_subscriber_a_loop_waits_for_wakes_the_process() {
 
 /// Watches heartbeats from its own thread and bus node (a polled subscriber looked at every
 /// 2 ms) until told to stop, and publishes a gyro sample every 20 ms for its first
-/// `samples_for`. Returns when it saw heartbeats.
+/// `samples_for`. The thread returns the times it found new heartbeats.
 fn heartbeat_watcher(
     config: &BusConfig,
     samples_for: Duration,
@@ -561,8 +561,9 @@ fn assert_at_most_one_and_a_half_periods_apart(seen: &[Instant], period: Duratio
 
 #[test]
 fn heartbeats_ride_on_other_wake_ups_and_still_come_when_nothing_else_does() {
-    // A heartbeat goes out with the first wake-up after it is due, and on its own
-    // HEARTBEAT_SLACK of a period later when nothing wakes the loop. Bound checked: no gap
+    // A heartbeat goes out with the first wake-up from HEARTBEAT_EARLY of a period before it
+    // is due, and on its own HEARTBEAT_SLACK of a period after when nothing wakes the loop (the
+    // next is due a period after it went out). Bound checked: no gap
     // between heartbeats longer than 1.5 periods plus 40 ms of scheduling allowance, with
     // data every 20 ms (first half) and with none (second half).
     const PERIOD: Duration = Duration::from_millis(100);
