@@ -34,9 +34,10 @@ use testbed_runtime::{ClockMode, Context, Io, Node, WakeOn};
 /// at all 22 subscribers and a `write` of the log whatever it carries, and one per sample (some
 /// 150 per second, most alone) was the largest CPU cost of the paced pipeline (issue 18); at
 /// 250 ms its wake-ups were still half of its CPU (measured: `bench/README.md`, "The paced
-/// logger drains once a second"). The runtime's [`QUIET_PERIOD`](testbed_runtime::process::QUIET_PERIOD)
-/// (700 ms): the logger's heartbeat goes out with every drain, where a 1-s drain woke it once
-/// more a second for the heartbeat alone. A logger killed outright loses at most the records of
+/// logger drains once a second"). It is the runtime's
+/// [`QUIET_PERIOD`](testbed_runtime::process::QUIET_PERIOD) (700 ms): the logger's heartbeat
+/// goes out with every drain, where a 1-s drain woke it once more a second for the heartbeat
+/// alone. A logger killed outright loses at most the records of
 /// the last period; a stopped one loses nothing (it drains everything before it closes the log).
 /// That is within what a crash of the machine loses anyway: the log is written, not synced, and
 /// the kernel writes dirty pages back after 5–30 s.

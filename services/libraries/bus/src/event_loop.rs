@@ -163,6 +163,11 @@ impl<'a> Attachment<'a> {
         anchor.checked_add(deadline)
     }
 
+    /// When an interval or the heartbeat is next due, and its period.
+    fn schedule(&self) -> Option<(Instant, Duration)> {
+        Some((self.next_due.get()?, self.period?))
+    }
+
     /// The next time this attachment has something to do without a ring. A heartbeat is due
     /// at `next_due` but goes out with the first wake-up from [`HEARTBEAT_EARLY`] of a period
     /// before it, whatever its reason; the loop wakes for it alone only [`HEARTBEAT_SLACK`] of
@@ -495,8 +500,7 @@ impl<'w, 'a> EventLoop<'w, 'a> {
             let source = SourceId(index);
             let wake = match attachment.kind {
                 Kind::Heartbeat(heartbeat) => {
-                    let (Some(due), Some(period)) = (attachment.next_due.get(), attachment.period)
-                    else {
+                    let Some((due, period)) = attachment.schedule() else {
                         continue;
                     };
                     if due > now + period.mul_f64(HEARTBEAT_EARLY) {
@@ -509,8 +513,7 @@ impl<'w, 'a> EventLoop<'w, 'a> {
                     continue;
                 }
                 Kind::Interval => {
-                    let (Some(due), Some(period)) = (attachment.next_due.get(), attachment.period)
-                    else {
+                    let Some((due, period)) = attachment.schedule() else {
                         continue;
                     };
                     if due > now {

@@ -114,7 +114,6 @@ pub fn wait_for_participants(bus: &Bus, participants: &[String]) -> anyhow::Resu
 #[cfg(test)]
 mod tests {
     use super::*;
-
     use std::sync::Arc;
     use std::sync::atomic::{AtomicBool, Ordering};
     use testbed_bus::HeartbeatPublisher;
