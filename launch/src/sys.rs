@@ -150,6 +150,30 @@ pub fn has_exited(pid: libc::pid_t) -> io::Result<bool> {
     }
 }
 
+/// Whether any child of this process has ended and waits to be reaped (without reaping it):
+/// one system call where asking each child is one per child. `Ok(false)` also when there are
+/// no children at all.
+pub fn any_exited() -> io::Result<bool> {
+    // SAFETY: waitid writes the siginfo it is given.
+    unsafe {
+        let mut info: libc::siginfo_t = std::mem::zeroed();
+        let rc = libc::waitid(
+            libc::P_ALL,
+            0,
+            &mut info,
+            libc::WEXITED | libc::WNOHANG | libc::WNOWAIT,
+        );
+        if rc != 0 {
+            let e = io::Error::last_os_error();
+            return match e.raw_os_error() {
+                Some(libc::ECHILD) => Ok(false),
+                _ => Err(e),
+            };
+        }
+        Ok(info.si_pid() != 0)
+    }
+}
+
 /// CPU time a reaped child used over its life (its own threads plus the descendants it
 /// waited for), as `wait4` reports it.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
