@@ -10,8 +10,11 @@
 #include <linux/futex.h>
 #include <stdatomic.h>
 #include <sys/wait.h>
-// N processes in a ring on one CPU: process 0 sleeps 10 ms (timer), then rings 1, which rings 2, ... ; 
-// each touches `pages` pages of its own memory per wake. Reports CPU per hop (all processes, schedstat).
+// ring_chain N ROUNDS PAGES: N processes in a chain (run it under `taskset -c 1` for one CPU):
+// process 0 sleeps 10 ms (a timer wake-up), then rings process 1 (FUTEX_WAKE), which rings 2, and
+// so on; the last rings process 0 too, which is asleep on its timer, so that ring finds no waiter.
+// Each process reads one byte in each of PAGES pages of its own memory per wake-up. Prints the CPU
+// per hop: every process's own CPU clock over ROUNDS rounds, summed, / (ROUNDS * N).
 static double cpu(){struct timespec t;clock_gettime(CLOCK_PROCESS_CPUTIME_ID,&t);return t.tv_sec*1e9+t.tv_nsec;}
 int main(int argc,char**argv){
   int n=atoi(argv[1]), rounds=atoi(argv[2]), pages=atoi(argv[3]);
@@ -25,7 +28,7 @@ int main(int argc,char**argv){
       for(int r=0;r<rounds;r++){
         if(i==0){ struct timespec t={0,10000000}; nanosleep(&t,0);} else { while(*mine==seen) syscall(SYS_futex,mine,FUTEX_WAIT,seen,0,0,0); seen=*mine; }
         for(int k=0;k<pages;k++) s+=mem[k*4096];
-        if(i<n-1||1){ atomic_fetch_add(next,1); syscall(SYS_futex,next,FUTEX_WAKE,1,0,0,0);} 
+        { atomic_fetch_add(next,1); syscall(SYS_futex,next,FUTEX_WAKE,1,0,0,0); }
       }
       res[i]=cpu()-c0; _exit(0);
     }
