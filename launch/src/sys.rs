@@ -134,41 +134,27 @@ fn decode(status: libc::c_int) -> Option<ExitHow> {
 /// Whether child `pid` has ended, without reaping it (it stays a zombie, so its pid and process
 /// group id cannot be reused until [`reap`]).
 pub fn has_exited(pid: libc::pid_t) -> io::Result<bool> {
-    // SAFETY: waitid writes the siginfo it is given.
-    unsafe {
-        let mut info: libc::siginfo_t = std::mem::zeroed();
-        let rc = libc::waitid(
-            libc::P_PID,
-            pid as libc::id_t,
-            &mut info,
-            libc::WEXITED | libc::WNOHANG | libc::WNOWAIT,
-        );
-        if rc != 0 {
-            return Err(io::Error::last_os_error());
-        }
-        Ok(info.si_pid() != 0)
-    }
+    peek_ended(libc::P_PID, pid as libc::id_t)
 }
 
 /// Whether any child of this process has ended and waits to be reaped (without reaping it):
 /// one system call where asking each child is one per child. `Ok(false)` also when there are
 /// no children at all.
 pub fn any_exited() -> io::Result<bool> {
+    match peek_ended(libc::P_ALL, 0) {
+        Err(e) if e.raw_os_error() == Some(libc::ECHILD) => Ok(false),
+        other => other,
+    }
+}
+
+/// `waitid(idtype, id)` for an ended child without reaping it: whether one is there.
+fn peek_ended(idtype: libc::idtype_t, id: libc::id_t) -> io::Result<bool> {
     // SAFETY: waitid writes the siginfo it is given.
     unsafe {
         let mut info: libc::siginfo_t = std::mem::zeroed();
-        let rc = libc::waitid(
-            libc::P_ALL,
-            0,
-            &mut info,
-            libc::WEXITED | libc::WNOHANG | libc::WNOWAIT,
-        );
-        if rc != 0 {
-            let e = io::Error::last_os_error();
-            return match e.raw_os_error() {
-                Some(libc::ECHILD) => Ok(false),
-                _ => Err(e),
-            };
+        let flags = libc::WEXITED | libc::WNOHANG | libc::WNOWAIT;
+        if libc::waitid(idtype, id, &mut info, flags) != 0 {
+            return Err(io::Error::last_os_error());
         }
         Ok(info.si_pid() != 0)
     }

@@ -37,8 +37,8 @@ use testbed_runtime::{ClockMode, Context, Io, Node, WakeOn};
 /// logger drains once a second"). It is the runtime's
 /// [`QUIET_PERIOD`](testbed_runtime::process::QUIET_PERIOD) (700 ms): the logger's heartbeat
 /// goes out with every drain, where a 1-s drain woke it once more a second for the heartbeat
-/// alone. A logger killed outright loses at most the records of
-/// the last period; a stopped one loses nothing (it drains everything before it closes the log).
+/// alone. A logger killed outright loses at most the records of the last period; a stopped one
+/// loses nothing (it drains everything before it closes the log).
 /// That is within what a crash of the machine loses anyway: the log is written, not synced, and
 /// the kernel writes dirty pages back after 5–30 s.
 pub const PACED_DRAIN_PERIOD: std::time::Duration = testbed_runtime::process::QUIET_PERIOD;

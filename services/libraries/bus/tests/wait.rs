@@ -563,9 +563,9 @@ fn assert_at_most_one_and_a_half_periods_apart(seen: &[Instant], period: Duratio
 fn heartbeats_ride_on_other_wake_ups_and_still_come_when_nothing_else_does() {
     // A heartbeat goes out with the first wake-up from HEARTBEAT_EARLY of a period before it
     // is due, and on its own HEARTBEAT_SLACK of a period after when nothing wakes the loop (the
-    // next is due a period after it went out). Bound checked: no gap
-    // between heartbeats longer than 1.5 periods plus 40 ms of scheduling allowance, with
-    // data every 20 ms (first half) and with none (second half).
+    // next is due a period after it went out). Bound checked: no gap between heartbeats
+    // longer than 1.5 periods plus 40 ms of scheduling allowance, with data every 20 ms (first
+    // half) and with none (second half).
     const PERIOD: Duration = Duration::from_millis(100);
     const RUN: Duration = Duration::from_millis(1600);
     let config = BusConfig::isolated();
