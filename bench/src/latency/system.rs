@@ -251,11 +251,18 @@ impl Machine {
         };
         let flags = field("flags");
         let hypervisor = if flags.split_whitespace().any(|f| f == "hypervisor") {
+            // The DMI vendor names the machine's maker where there is one; a microVM such as
+            // Firecracker has no DMI tables, and the hypervisor's CPUID signature names it.
             let vendor = read("/sys/class/dmi/id/sys_vendor").trim().to_string();
-            if vendor.is_empty() {
+            let signature = hypervisor_signature().unwrap_or_default();
+            let names: Vec<&str> = [vendor.as_str(), signature.as_str()]
+                .into_iter()
+                .filter(|name| !name.is_empty())
+                .collect();
+            if names.is_empty() {
                 "virtual machine".to_string()
             } else {
-                format!("virtual machine ({vendor})")
+                format!("virtual machine ({})", names.join(", "))
             }
         } else {
             "none detected".to_string()
@@ -408,9 +415,61 @@ pub fn set_fifo(pid: u32, priority: i32) {
     }
 }
 
+/// The hypervisor's CPUID signature (leaf 0x4000_0000), by name. `None` off x86-64 or when
+/// the leaf names nothing.
+fn hypervisor_signature() -> Option<String> {
+    #[cfg(target_arch = "x86_64")]
+    {
+        // CPUID exists on every x86-64 CPU; leaf 0x4000_0000 is reserved for hypervisors and
+        // reads as zeros (or as another leaf's values, refused by the name check) without one.
+        let leaf = std::arch::x86_64::__cpuid(0x4000_0000);
+        let mut bytes = [0u8; 12];
+        for (chunk, word) in bytes.chunks_mut(4).zip([leaf.ebx, leaf.ecx, leaf.edx]) {
+            chunk.copy_from_slice(&word.to_le_bytes());
+        }
+        signature_name(&bytes)
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    None
+}
+
+/// The twelve signature bytes of CPUID leaf 0x4000_0000 (EBX, ECX, EDX) read as a name: `KVM`,
+/// `Hyper-V`, `VMware`, `Xen`, `QEMU (TCG)`, another printable signature as it is, or `None`.
+fn signature_name(bytes: &[u8; 12]) -> Option<String> {
+    let raw = std::str::from_utf8(bytes).ok()?.trim_end_matches('\0');
+    let name = match raw {
+        "KVMKVMKVM" => "KVM",
+        "Microsoft Hv" => "Hyper-V",
+        "VMwareVMware" => "VMware",
+        "XenVMMXenVMM" => "Xen",
+        "TCGTCGTCGTCG" => "QEMU (TCG)",
+        other if !other.is_empty() && other.chars().all(|c| c.is_ascii_graphic() || c == ' ') => {
+            other
+        }
+        _ => return None,
+    };
+    Some(name.to_string())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_hypervisor_signature_reads_as_its_name_and_garbage_as_none() {
+        assert_eq!(signature_name(b"KVMKVMKVM\0\0\0").as_deref(), Some("KVM"));
+        assert_eq!(signature_name(b"Microsoft Hv").as_deref(), Some("Hyper-V"));
+        assert_eq!(
+            signature_name(b"ACRNACRNACRN").as_deref(),
+            Some("ACRNACRNACRN")
+        );
+        assert_eq!(signature_name(&[0; 12]), None);
+        // Another leaf's values where no hypervisor answers: not a name.
+        assert_eq!(
+            signature_name(&[0x01, 0x02, 0xff, 7, 0, 0, 0, 0, 0, 0, 0, 0]),
+            None
+        );
+    }
 
     #[test]
     fn a_process_pinned_by_pid_may_run_on_that_cpu_only() {

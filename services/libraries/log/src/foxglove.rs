@@ -6,7 +6,7 @@
 //! `body_truth` the simulated true body frame. A transform gives the child frame's pose in the
 //! parent frame; the air bearing is the origin of both, so the translation is zero.
 
-use crate::record::{LogRecord, TopicKind};
+use crate::record::LogRecord;
 use serde_json::json;
 
 /// Schema name of a frame transform.
@@ -45,20 +45,51 @@ pub fn frame_transform_schema() -> String {
 /// uses) for the attitude quaternion `q` = `[x, y, z, w]` that maps level-frame components to
 /// body components (the estimator's convention); the body's pose in the level frame is its
 /// conjugate.
+///
+/// Written field by field, keys in sorted order, numbers as serde_json writes them (shortest
+/// round-trip; a non-finite component as `null`): the text a `serde_json::json!` object of the
+/// same fields gives, without building one (building and printing it was most of the cost of
+/// logging a truth sample or an estimate).
 pub fn frame_transform_json(time_ns: u64, child: &str, q: &[f64; 4]) -> String {
-    json!({
-        "timestamp": {"sec": time_ns / 1_000_000_000, "nsec": time_ns % 1_000_000_000},
-        "parent_frame_id": "level",
-        "child_frame_id": child,
-        "translation": {"x": 0.0, "y": 0.0, "z": 0.0},
-        "rotation": {"x": -q[0], "y": -q[1], "z": -q[2], "w": q[3]},
-    })
-    .to_string()
+    let mut out = Vec::with_capacity(256);
+    out.extend_from_slice(b"{\"child_frame_id\":");
+    // Serialising a string into a Vec<u8> cannot fail.
+    let _ = serde_json::to_writer(&mut out, child);
+    out.extend_from_slice(b",\"parent_frame_id\":\"level\",\"rotation\":{\"w\":");
+    number(&mut out, q[3]);
+    for (key, component) in [
+        (&b",\"x\":"[..], q[0]),
+        (b",\"y\":", q[1]),
+        (b",\"z\":", q[2]),
+    ] {
+        out.extend_from_slice(key);
+        number(&mut out, -component);
+    }
+    out.extend_from_slice(b"},\"timestamp\":{\"nsec\":");
+    out.extend_from_slice((time_ns % 1_000_000_000).to_string().as_bytes());
+    out.extend_from_slice(b",\"sec\":");
+    out.extend_from_slice((time_ns / 1_000_000_000).to_string().as_bytes());
+    out.extend_from_slice(b"},\"translation\":{\"x\":0.0,\"y\":0.0,\"z\":0.0}}");
+    // Only ASCII and serde_json's valid UTF-8 were written.
+    String::from_utf8(out).unwrap_or_default()
 }
 
-/// The derived transform of a record, if it has one: `(topic, child frame, quaternion)`.
-/// Invalid estimates (not converged or reset) have none.
-pub fn transform_of(record: &LogRecord) -> Option<(&'static str, &'static str, [f64; 4])> {
+/// `x` as a JSON number the way serde_json writes an `f64` value (`null` if not finite).
+fn number(out: &mut Vec<u8>, x: f64) {
+    if x.is_finite() {
+        // Serialising a number into a Vec<u8> cannot fail.
+        let _ = serde_json::to_writer(&mut *out, &x);
+    } else {
+        out.extend_from_slice(b"null");
+    }
+}
+
+/// A record's derived transform: `(topic, child frame, quaternion [x, y, z, w])`.
+pub type Transform = (&'static str, &'static str, [f64; 4]);
+
+/// The derived transform of a record, if it has one. Invalid estimates (not converged or
+/// reset) have none.
+pub fn transform_of(record: &LogRecord) -> Option<Transform> {
     match record {
         LogRecord::AttitudeEstimate(e) if e.header.is_valid() => {
             Some((TF_ESTIMATE_TOPIC, "body", e.quaternion))
@@ -68,14 +99,63 @@ pub fn transform_of(record: &LogRecord) -> Option<(&'static str, &'static str, [
     }
 }
 
-/// Whether records of `kind` can have a derived transform.
-pub(crate) fn has_transform(kind: TopicKind) -> bool {
-    matches!(kind, TopicKind::AttitudeEstimate | TopicKind::SimTruth)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// What `frame_transform_json` wrote before it was written field by field: the reference
+    /// its text must equal.
+    fn reference(time_ns: u64, child: &str, q: &[f64; 4]) -> String {
+        json!({
+            "timestamp": {"sec": time_ns / 1_000_000_000, "nsec": time_ns % 1_000_000_000},
+            "parent_frame_id": "level",
+            "child_frame_id": child,
+            "translation": {"x": 0.0, "y": 0.0, "z": 0.0},
+            "rotation": {"x": -q[0], "y": -q[1], "z": -q[2], "w": q[3]},
+        })
+        .to_string()
+    }
+
+    #[test]
+    fn the_transform_text_is_that_of_the_json_object_byte_for_byte() {
+        let s = std::f64::consts::FRAC_1_SQRT_2;
+        let cases: [(u64, &str, [f64; 4]); 6] = [
+            (0, "body", [0.0, 0.0, 0.0, 1.0]),
+            (1_500_000_000, "body_truth", [0.0, 0.0, s, s]),
+            (
+                u64::MAX,
+                "body",
+                [-0.0, 1e-300, -1.2345678901234567e-5, 0.9999999999999999],
+            ),
+            (999_999_999, "a \"quoted\" frame", [0.1, 0.2, 0.3, 0.927]),
+            (7, "body", [f64::NAN, f64::INFINITY, f64::NEG_INFINITY, 1.0]),
+            (
+                1_795_824_824_447_349_051,
+                "body",
+                [0.035363, 0.050483, 0.171071, 0.983329],
+            ),
+        ];
+        for (time_ns, child, q) in cases {
+            assert_eq!(
+                frame_transform_json(time_ns, child, &q),
+                reference(time_ns, child, &q),
+                "{time_ns} {child} {q:?}"
+            );
+        }
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn any_transform_text_is_that_of_the_json_object(
+            time_ns in proptest::prelude::any::<u64>(),
+            q in proptest::prelude::any::<[f64; 4]>(),
+        ) {
+            proptest::prop_assert_eq!(
+                frame_transform_json(time_ns, "body", &q),
+                reference(time_ns, "body", &q)
+            );
+        }
+    }
 
     #[test]
     fn the_transform_is_the_bodys_pose_in_the_level_frame() {

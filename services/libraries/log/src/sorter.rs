@@ -1,6 +1,7 @@
 //! Deterministic record order for lockstep runs: [`EncodedRecord`] and [`TickSorter`].
 
 use crate::LogError;
+use crate::foxglove::{self, Transform};
 use crate::record::{LogRecord, TopicKind};
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
@@ -12,13 +13,17 @@ use std::collections::BinaryHeap;
 /// The topic order is that of [`ipc_types::topic::ALL`]. The message bytes break the remaining
 /// ties (e.g. two processes' heartbeats with equal time, sequence and source); records equal in
 /// all of these are byte-identical, so their relative order does not matter.
-#[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord)]
+#[derive(Debug, Clone)]
 pub struct EncodedRecord {
     time_ns: u64,
     kind: TopicKind,
     sequence: u64,
     source_id: u32,
     data: Vec<u8>,
+    /// The record's derived frame transform, taken when it was encoded: the writer needs it
+    /// when the record leaves the sorter, and decoding the message back for it was most of a
+    /// lockstep logger's CPU. A function of the record, as `data` is, so not part of the order.
+    transform: Option<Transform>,
 }
 
 impl EncodedRecord {
@@ -33,7 +38,19 @@ impl EncodedRecord {
             sequence: header.sequence,
             source_id: header.source_id,
             data,
+            transform: foxglove::transform_of(record),
         }
+    }
+
+    /// What orders records (see the type's documentation).
+    fn order_key(&self) -> (u64, TopicKind, u64, u32, &[u8]) {
+        (
+            self.time_ns,
+            self.kind,
+            self.sequence,
+            self.source_id,
+            &self.data,
+        )
     }
 
     /// The sample's `header.time_ns`.
@@ -58,6 +75,31 @@ impl EncodedRecord {
 
     pub(crate) fn kind(&self) -> TopicKind {
         self.kind
+    }
+
+    /// The derived frame transform, if the record has one ([`foxglove::transform_of`]).
+    pub(crate) fn transform(&self) -> Option<Transform> {
+        self.transform
+    }
+}
+
+impl PartialEq for EncodedRecord {
+    fn eq(&self, other: &Self) -> bool {
+        self.order_key() == other.order_key()
+    }
+}
+
+impl Eq for EncodedRecord {}
+
+impl PartialOrd for EncodedRecord {
+    fn partial_cmp(&self, other: &Self) -> Option<std::cmp::Ordering> {
+        Some(self.cmp(other))
+    }
+}
+
+impl Ord for EncodedRecord {
+    fn cmp(&self, other: &Self) -> std::cmp::Ordering {
+        self.order_key().cmp(&other.order_key())
     }
 }
 

@@ -263,7 +263,7 @@ impl<W: Write + Seek> RunLogWriter<W> {
             header.time_ns,
             header.sequence,
             &data,
-            Some(record),
+            foxglove::transform_of(record),
         );
         self.scratch = data;
         result
@@ -277,20 +277,20 @@ impl<W: Write + Seek> RunLogWriter<W> {
             record.time_ns(),
             record.sequence(),
             record.data(),
-            None,
+            record.transform(),
         )
     }
 
-    /// Writes one message, and its derived transform if it has one: taken from `record` when
-    /// the caller has it (decoding the message back, as an already encoded record needs, was
-    /// most of the cost of logging an estimate or a truth sample), else from `data`.
+    /// Writes one message, and `transform`, the record's derived transform, if it has one
+    /// (taken from the record, never decoded back from `data`: that was most of the cost of
+    /// logging an estimate or a truth sample).
     fn put(
         &mut self,
         kind: TopicKind,
         time_ns: u64,
         sequence: u64,
         data: &[u8],
-        record: Option<&LogRecord>,
+        transform: Option<foxglove::Transform>,
     ) -> Result<(), LogError> {
         let index = kind as usize;
         let (Some(mcap), Some(&channel_id)) = (&mut self.mcap, self.channel_ids.get(index)) else {
@@ -308,33 +308,20 @@ impl<W: Write + Seek> RunLogWriter<W> {
         if let Some(count) = self.counts.get_mut(index) {
             *count += 1;
         }
-        if foxglove::has_transform(kind) {
-            // A record that does not decode has no transform; its sample is logged all the same.
-            // The message round-trips exactly (shortest round-trip floats, NaN as "NaN"), so
-            // the record gives the same transform as its decoded message.
-            let transform = match record {
-                Some(record) => foxglove::transform_of(record),
-                None => kind
-                    .decode(data)
-                    .ok()
-                    .as_ref()
-                    .and_then(foxglove::transform_of),
+        if let Some((topic, child, q)) = transform {
+            let channel_id = if topic == foxglove::TF_ESTIMATE_TOPIC {
+                self.tf_channel_ids[0]
+            } else {
+                self.tf_channel_ids[1]
             };
-            if let Some((topic, child, q)) = transform {
-                let channel_id = if topic == foxglove::TF_ESTIMATE_TOPIC {
-                    self.tf_channel_ids[0]
-                } else {
-                    self.tf_channel_ids[1]
-                };
-                let text = foxglove::frame_transform_json(log_time, child, &q);
-                mcap.write_to_known_channel(
-                    &MessageHeader {
-                        channel_id,
-                        ..header
-                    },
-                    text.as_bytes(),
-                )?;
-            }
+            let text = foxglove::frame_transform_json(log_time, child, &q);
+            mcap.write_to_known_channel(
+                &MessageHeader {
+                    channel_id,
+                    ..header
+                },
+                text.as_bytes(),
+            )?;
         }
         Ok(())
     }
