@@ -24,9 +24,9 @@
 //!   paced run's records repeated, with a look every [`PROGRESS_LOOK_S`] of simulated time (a
 //!   terminal's refresh), medians;
 //! - the logger's per-record cost, side by side in one process: the log writer on records as
-//!   it has them (the transform taken from the record) against the same records already
-//!   encoded (the transform decoded back from the JSON message, as every record was before),
-//!   records per second, medians.
+//!   it has them (the transform taken from the record) against the same records encoded first
+//!   and decoded back for their transform (what every record paid before session 18, and a
+//!   lockstep run's sorted records until session 21), records per second, medians.
 //!
 //! `cargo build --profile deploy --workspace --bins && target/deploy/paced_cpu [--repeats 3]
 //!  [--short 5 --long 60] [--baseline-bin-dir DIR | --cpu-latency-us N] [--json]`
