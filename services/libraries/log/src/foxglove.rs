@@ -8,6 +8,7 @@
 
 use crate::record::LogRecord;
 use serde_json::json;
+use std::io::Write as _;
 
 /// Schema name of a frame transform.
 pub const FRAME_TRANSFORM: &str = "foxglove.FrameTransform";
@@ -65,11 +66,13 @@ pub fn frame_transform_json(time_ns: u64, child: &str, q: &[f64; 4]) -> String {
         out.extend_from_slice(key);
         number(&mut out, -component);
     }
-    out.extend_from_slice(b"},\"timestamp\":{\"nsec\":");
-    out.extend_from_slice((time_ns % 1_000_000_000).to_string().as_bytes());
-    out.extend_from_slice(b",\"sec\":");
-    out.extend_from_slice((time_ns / 1_000_000_000).to_string().as_bytes());
-    out.extend_from_slice(b"},\"translation\":{\"x\":0.0,\"y\":0.0,\"z\":0.0}}");
+    // Writing into a Vec<u8> cannot fail.
+    let _ = write!(
+        out,
+        "}},\"timestamp\":{{\"nsec\":{},\"sec\":{}}},\"translation\":{{\"x\":0.0,\"y\":0.0,\"z\":0.0}}}}",
+        time_ns % 1_000_000_000,
+        time_ns / 1_000_000_000
+    );
     // Only ASCII and serde_json's valid UTF-8 were written.
     String::from_utf8(out).unwrap_or_default()
 }
