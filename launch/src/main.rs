@@ -6,7 +6,7 @@ use std::process::ExitCode;
 use anyhow::{Context as _, bail};
 use clap::Parser;
 use testbed_bus::BusConfig;
-use testbed_launch::placement::{CPU_LATENCY_DEVICE, CpuLatencyRequest};
+use testbed_launch::placement::{CPU_LATENCY_DEVICE, CpuLatencyRequest, CpuRoles, available_cpus};
 use testbed_launch::profile::{ClockMode, Profile};
 use testbed_launch::sys::{self, SignalSet};
 use testbed_launch::{Plan, ProfileError, Supervisor};
@@ -63,6 +63,10 @@ struct Args {
     /// Directory of the pipeline binaries [default: $TESTBED_BIN_DIR or the launcher's own].
     #[arg(long)]
     bin_dir: Option<PathBuf>,
+    /// Run every process wherever the scheduler puts it: ignore the profile's `cpus` (to
+    /// measure what the placement gives, or on a machine shared with other work).
+    #[arg(long)]
+    unplaced: bool,
     /// Validate the profile, print the start order and exit.
     #[arg(long)]
     check: bool,
@@ -136,12 +140,29 @@ fn plan(args: &Args) -> anyhow::Result<Result<Plan, ProfileError>> {
             .to_path_buf(),
     };
     profile.platform.cpu_latency_us = args.cpu_latency_us.or(profile.platform.cpu_latency_us);
+    let cpu_roles = if args.unplaced {
+        None
+    } else {
+        let available = available_cpus().context("reading this launcher's CPU affinity")?;
+        match CpuRoles::new(&available, profile.platform.hot_path_cpu) {
+            Ok(roles) => Some(roles),
+            Err(reason) => {
+                return Ok(Err(ProfileError::Invalid {
+                    file: profile.file.display().to_string(),
+                    key: "platform.hot_path_cpu".into(),
+                    value: format!("{:?}", profile.platform.hot_path_cpu),
+                    reason,
+                }));
+            }
+        }
+    };
     let plan = Plan {
         profile,
         run,
         supervision,
         bus,
         bin_dir,
+        cpu_roles,
     };
     if plan.run.mode == ClockMode::Lockstep && plan.has_real_devices() {
         bail!("--mode lockstep: the profile has real devices, which cannot run in lockstep");
@@ -181,8 +202,12 @@ fn main() -> ExitCode {
     let missing = plan.missing_programs();
     if args.check {
         for (i, spec) in plan.profile.ordered().enumerate() {
+            let cpus = plan
+                .affinity(spec)
+                .map(|cpus| format!("  (CPUs {cpus:?})"))
+                .unwrap_or_default();
             println!(
-                "{:>2}. {:<24} {} {}",
+                "{:>2}. {:<24} {} {}{cpus}",
                 i + 1,
                 spec.name,
                 plan.program(spec).display(),
@@ -214,6 +239,15 @@ fn main() -> ExitCode {
     }
     if args.check {
         return ExitCode::SUCCESS;
+    }
+    if let Some(roles) = &plan.cpu_roles
+        && plan.profile.processes.iter().any(|p| p.cpus.is_some())
+    {
+        tracing::info!(
+            "placement: the hot path on CPU {}, the background on CPUs {:?}",
+            roles.hot_path,
+            roles.background
+        );
     }
     // Held until the launcher exits: the kernel ends the request with the file.
     let device = std::env::var_os(CPU_LATENCY_DEVICE_ENV)

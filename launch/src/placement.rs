@@ -7,6 +7,7 @@
 //! creates later inherit both settings.
 
 use serde::Deserialize;
+use std::fmt;
 use std::io::{self, Read as _, Write as _};
 use std::path::Path;
 
@@ -88,6 +89,117 @@ pub fn cpu_latency_in_force_us() -> io::Result<u32> {
 
 /// Largest CPU index a `cpus` list may name (the kernel's `CPU_SETSIZE` minus one).
 pub const MAX_CPU: usize = 1023;
+
+/// Where a process may run: `cpus` of a `[[process]]`, either CPU indices or a role that the
+/// launcher turns into CPUs when the run starts ([`CpuRoles`]), so that one profile places
+/// its processes on any machine.
+#[derive(Debug, Clone, PartialEq, Eq, Deserialize)]
+#[serde(try_from = "RawCpus")]
+pub enum Cpus {
+    /// These CPUs (`cpus = [0, 1]`).
+    List(Vec<usize>),
+    /// The run's hot-path CPU (`cpus = "hot-path"`): the processes of a tick, which wake one
+    /// another in turn, share one CPU, so each wake-up lands on a CPU that is already awake.
+    HotPath,
+    /// Every CPU the launcher may use but the hot path's (`cpus = "background"`; the hot
+    /// path's too on a machine with one CPU): the logger and the ground link, which work beside
+    /// the ticks rather than in them.
+    Background,
+}
+
+impl Cpus {
+    /// The names a role may be written with.
+    pub const ROLES: [&str; 2] = ["hot-path", "background"];
+
+    /// The CPUs this means on a machine whose CPUs are shared out as `roles`.
+    pub fn resolve(&self, roles: &CpuRoles) -> Vec<usize> {
+        match self {
+            Cpus::List(cpus) => cpus.clone(),
+            Cpus::HotPath => vec![roles.hot_path],
+            Cpus::Background => roles.background.clone(),
+        }
+    }
+}
+
+impl fmt::Display for Cpus {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Cpus::List(cpus) => write!(f, "{cpus:?}"),
+            Cpus::HotPath => f.write_str("\"hot-path\""),
+            Cpus::Background => f.write_str("\"background\""),
+        }
+    }
+}
+
+/// `cpus` as written: a list of indices or a role's name.
+#[derive(Deserialize)]
+#[serde(untagged)]
+enum RawCpus {
+    List(Vec<usize>),
+    Role(String),
+}
+
+impl TryFrom<RawCpus> for Cpus {
+    type Error = String;
+
+    fn try_from(raw: RawCpus) -> Result<Self, String> {
+        match raw {
+            RawCpus::List(cpus) => Ok(Cpus::List(cpus)),
+            RawCpus::Role(role) => match role.as_str() {
+                "hot-path" => Ok(Cpus::HotPath),
+                "background" => Ok(Cpus::Background),
+                other => Err(format!(
+                    "cpus = {other:?}: expected a list of CPU indices or one of {:?}",
+                    Cpus::ROLES
+                )),
+            },
+        }
+    }
+}
+
+/// How a run shares out the CPUs the launcher may use: one for the hot path, the others for
+/// the background.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct CpuRoles {
+    /// The hot path's CPU.
+    pub hot_path: usize,
+    /// The background's CPUs: every available CPU but the hot path's, or the hot path's alone
+    /// when it is the only one.
+    pub background: Vec<usize>,
+}
+
+impl CpuRoles {
+    /// Shares out `available` (ascending, as [`available_cpus`] gives them): the hot path on
+    /// `hot_path` (`[platform] hot_path_cpu`), by default the first available CPU. `Err` names
+    /// a `hot_path` that is not available.
+    pub fn new(available: &[usize], hot_path: Option<usize>) -> Result<Self, String> {
+        let hot_path = match hot_path {
+            Some(cpu) if available.contains(&cpu) => cpu,
+            Some(cpu) => {
+                return Err(format!(
+                    "CPU {cpu} is not one this launcher may use (CPUs {available:?})"
+                ));
+            }
+            None => *available
+                .first()
+                .ok_or_else(|| "this launcher may use no CPU".to_string())?,
+        };
+        let others: Vec<usize> = available
+            .iter()
+            .copied()
+            .filter(|&c| c != hot_path)
+            .collect();
+        let background = if others.is_empty() {
+            vec![hot_path]
+        } else {
+            others
+        };
+        Ok(Self {
+            hot_path,
+            background,
+        })
+    }
+}
 
 /// Scheduling policy of a process (`scheduling = { policy = "fifo", priority = 10 }`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
@@ -241,6 +353,40 @@ mod tests {
         );
         let e = CpuLatencyRequest::hold_at(missing, MAX_CPU_LATENCY_US + 1).unwrap_err();
         assert_eq!(e.kind(), io::ErrorKind::InvalidInput, "{e}");
+    }
+
+    #[test]
+    fn roles_share_out_the_available_cpus() {
+        let roles = CpuRoles::new(&[0, 1, 2, 3], None).unwrap();
+        assert_eq!(roles.hot_path, 0);
+        assert_eq!(roles.background, vec![1, 2, 3]);
+        assert_eq!(Cpus::HotPath.resolve(&roles), vec![0]);
+        assert_eq!(Cpus::Background.resolve(&roles), vec![1, 2, 3]);
+        assert_eq!(Cpus::List(vec![3]).resolve(&roles), vec![3]);
+        // A launcher confined to some CPUs (a cpuset, taskset) shares out those.
+        let roles = CpuRoles::new(&[2, 5], Some(5)).unwrap();
+        assert_eq!((roles.hot_path, roles.background), (5, vec![2]));
+        // One CPU: the background shares it.
+        let roles = CpuRoles::new(&[3], None).unwrap();
+        assert_eq!((roles.hot_path, roles.background), (3, vec![3]));
+        let e = CpuRoles::new(&[0, 1], Some(4)).unwrap_err();
+        assert!(e.contains("CPU 4") && e.contains("[0, 1]"), "{e}");
+        assert!(CpuRoles::new(&[], None).is_err());
+    }
+
+    #[test]
+    fn cpus_parse_as_a_list_or_a_role() {
+        #[derive(Debug, Deserialize)]
+        struct T {
+            cpus: Cpus,
+        }
+        let parse = |text: &str| toml::from_str::<T>(text).map(|t| t.cpus);
+        assert_eq!(parse("cpus = [0, 2]").unwrap(), Cpus::List(vec![0, 2]));
+        assert_eq!(parse("cpus = \"hot-path\"").unwrap(), Cpus::HotPath);
+        assert_eq!(parse("cpus = \"background\"").unwrap(), Cpus::Background);
+        let e = parse("cpus = \"hotpath\"").unwrap_err().to_string();
+        assert!(e.contains("\"hotpath\"") && e.contains("hot-path"), "{e}");
+        assert!(parse("cpus = 1").is_err());
     }
 
     #[test]

@@ -13,6 +13,8 @@
 //! cpu_latency_us = 0         # optional: held for the run as a PM QoS request on
 //!                            # /dev/cpu_dma_latency (needs root): idle CPUs use no idle state
 //!                            # slower to leave than this; 0 = they poll (see `placement`)
+//! hot_path_cpu = 0           # optional: the CPU of the `cpus = "hot-path"` processes
+//!                            # (default: the first CPU the launcher may use)
 //!
 //! [devices]                  # optional; each listed device must be served by one process
 //! gyro = "simulated"         # "real" | "simulated"; also inclinometer, magnetometer, wheels, cmg
@@ -37,7 +39,9 @@
 //! observer = false           # takes no part in lockstep ticks (the ground link)
 //! device = "gyro"            # optional, with `source`: the device this process serves
 //! source = "simulated"
-//! cpus = [0]                 # optional: CPU affinity (every CPU when absent)
+//! cpus = [0]                 # optional: CPU affinity (every CPU when absent), or a role:
+//!                            # "hot-path" (one CPU, [platform] hot_path_cpu or the first)
+//!                            # or "background" (every other CPU)
 //! scheduling = { policy = "fifo", priority = 10 }   # optional: "other" (with `nice`),
 //!                            # "fifo" or "rr" (with `priority` 1..=99; needs CAP_SYS_NICE)
 //! ```
@@ -169,6 +173,10 @@ pub struct Platform {
     /// on `/dev/cpu_dma_latency` from start to end of the run (`placement::CpuLatencyRequest`).
     /// `0` keeps idle CPUs polling instead of halting. None: the system's default.
     pub cpu_latency_us: Option<u32>,
+    /// The CPU of the processes placed on the hot path (`cpus = "hot-path"`); the
+    /// `"background"` ones get every other CPU the launcher may use. None: the first CPU the
+    /// launcher may use.
+    pub hot_path_cpu: Option<usize>,
 }
 
 /// `[supervision]`.
@@ -243,9 +251,10 @@ pub struct ProcessSpec {
     pub device: Option<Device>,
     /// Whether that device is real or simulated.
     pub source: Option<Source>,
-    /// CPUs the process may run on (its affinity), e.g. `[0]`; every CPU when absent.
+    /// CPUs the process may run on (its affinity): indices, e.g. `[0]`, or a role,
+    /// `"hot-path"` or `"background"` ([`crate::placement::Cpus`]); every CPU when absent.
     #[serde(default)]
-    pub cpus: Option<Vec<usize>>,
+    pub cpus: Option<crate::placement::Cpus>,
     /// Scheduling policy, e.g. `{ policy = "fifo", priority = 10 }`; inherited when absent.
     #[serde(default)]
     pub scheduling: Option<crate::placement::Scheduling>,
@@ -384,6 +393,15 @@ impl Profile {
         if let Some(us) = self.platform.cpu_latency_us {
             self.check_cpu_latency("platform.cpu_latency_us", us)?;
         }
+        if let Some(cpu) = self.platform.hot_path_cpu
+            && cpu > crate::placement::MAX_CPU
+        {
+            return Err(self.invalid(
+                "platform.hot_path_cpu",
+                cpu,
+                format!("beyond {}", crate::placement::MAX_CPU),
+            ));
+        }
         let s = self.supervision;
         self.check_seconds("supervision.stop_timeout_s", s.stop_timeout_s, true)?;
         self.check_seconds("supervision.term_timeout_s", s.term_timeout_s, true)?;
@@ -495,7 +513,7 @@ impl Profile {
                 ),
             ));
         }
-        if let Some(cpus) = &p.cpus {
+        if let Some(crate::placement::Cpus::List(cpus)) = &p.cpus {
             let mut seen = std::collections::BTreeSet::new();
             if cpus.is_empty() {
                 return Err(self.invalid(key("cpus"), cpus, "names no CPU (leave it out for all)"));

@@ -56,9 +56,19 @@ pub struct Plan {
     pub bus: BusConfig,
     /// Where binaries named without a path are found.
     pub bin_dir: PathBuf,
+    /// How the CPUs are shared out for the profile's `cpus` roles; None: every process runs
+    /// wherever the scheduler puts it, whatever its `cpus` (`--unplaced`).
+    pub cpu_roles: Option<placement::CpuRoles>,
 }
 
 impl Plan {
+    /// The CPUs `spec` is pinned to in this run: its `cpus` with the roles shared out; None
+    /// when it may run anywhere (no `cpus`, or the run is unplaced).
+    pub fn affinity(&self, spec: &ProcessSpec) -> Option<Vec<usize>> {
+        let roles = self.cpu_roles.as_ref()?;
+        spec.cpus.as_ref().map(|cpus| cpus.resolve(roles))
+    }
+
     /// CPUs named by a process's `cpus` that this launcher may not run on (so nor may its
     /// children): `(process, CPU, the CPUs available)`.
     pub fn unavailable_cpus(&self) -> std::io::Result<Vec<(String, usize, Vec<usize>)>> {
@@ -68,11 +78,12 @@ impl Plan {
             .processes
             .iter()
             .flat_map(|spec| {
-                spec.cpus
-                    .iter()
+                self.affinity(spec)
+                    .into_iter()
                     .flatten()
                     .filter(|cpu| !available.contains(cpu))
-                    .map(|&cpu| (spec.name.clone(), cpu, available.clone()))
+                    .map(|cpu| (spec.name.clone(), cpu, available.clone()))
+                    .collect::<Vec<_>>()
             })
             .collect())
     }
@@ -407,7 +418,7 @@ impl<'p> Supervisor<'p> {
             .process_group(0);
         // SAFETY: getpid is async-signal-safe and called here in the parent.
         let parent = unsafe { libc::getpid() };
-        let affinity = spec.cpus.as_deref().map(placement::cpu_set);
+        let affinity = self.plan.affinity(spec).as_deref().map(placement::cpu_set);
         let scheduling = spec.scheduling;
         // SAFETY: prepare_child and the placement calls are async-signal-safe system calls.
         unsafe {

@@ -647,6 +647,83 @@ scheduling = {scheduling}
     }
 }
 
+/// `cpus = "hot-path"` and `"background"` are shared out from the CPUs the launcher may use
+/// (`[platform] hot_path_cpu`, else the first); `--unplaced` leaves both processes on every
+/// CPU; a hot-path CPU the launcher may not use refuses the run before anything starts.
+#[test]
+fn cpu_roles_are_shared_out_from_the_launchers_cpus() {
+    let available = testbed_launch::placement::available_cpus().expect("affinity");
+    // Each writes its affinity; the hot one then waits to be stopped, the background one ends
+    // the run once both are written.
+    let probe = |name: &str, role: &str, then: &str| {
+        format!(
+            "[[process]]
+name = \"{name}\"
+command = \"/bin/sh\"
+args = [\"-c\", \"grep Cpus_allowed_list /proc/$$/status | cut -f2 > {{dir}}/{name}.tmp; \
+             mv {{dir}}/{name}.tmp {{dir}}/{name}; {then}\"]
+cpus = \"{role}\"
+"
+        )
+    };
+    let profile = |platform: &str| {
+        format!(
+            "[run]\nmode = \"lockstep\"\nseed = 1\n{platform}{}\n{}{}ends_run = true\n",
+            supervision(5.0, 5.0),
+            probe("hot", "hot-path", "exec sleep 1000"),
+            probe(
+                "background",
+                "background",
+                "while [ ! -e {dir}/hot ]; do sleep 0.01; done"
+            ),
+        )
+    };
+    let allowed = |text: &str| -> Vec<usize> {
+        // The kernel's list: "0-3,5".
+        text.trim()
+            .split(',')
+            .flat_map(|range| {
+                let (a, b) = range.split_once('-').unwrap_or((range, range));
+                a.parse::<usize>().unwrap()..=b.parse::<usize>().unwrap()
+            })
+            .collect()
+    };
+    let run = |platform: &str, args: &[&str]| {
+        let mut launch = Launch::start(&profile(platform), args);
+        let (hot, background) = (launch.path("hot"), launch.path("background"));
+        let (code, log) = launch.finish();
+        assert_eq!(code, 0, "{}", log.join("\n"));
+        (
+            allowed(&std::fs::read_to_string(hot).expect("hot")),
+            allowed(&std::fs::read_to_string(background).expect("background")),
+        )
+    };
+    let others: Vec<usize> = available[1..].to_vec();
+    let expected_background = if others.is_empty() {
+        vec![available[0]]
+    } else {
+        others
+    };
+    assert_eq!(run("", &[]), (vec![available[0]], expected_background));
+    let last = *available.last().unwrap();
+    let (hot, background) = run(&format!("[platform]\nhot_path_cpu = {last}\n"), &[]);
+    assert_eq!(hot, vec![last]);
+    assert!(
+        available.len() == 1 || !background.contains(&last),
+        "{background:?}"
+    );
+    assert_eq!(
+        run("", &["--unplaced"]),
+        (available.clone(), available.clone())
+    );
+
+    let mut launch = Launch::start(&profile("[platform]\nhot_path_cpu = 1023\n"), &[]);
+    let (code, log) = launch.finish();
+    assert_eq!(code, 2, "{}", log.join("\n"));
+    position(&log, &["platform.hot_path_cpu", "CPU 1023"]);
+    assert!(!log.iter().any(|l| l.contains("started \"hot\"")));
+}
+
 #[test]
 fn a_cpu_the_launcher_may_not_use_is_refused_before_anything_starts() {
     let profile = format!(

@@ -221,6 +221,17 @@ fn bad_values_name_key_and_value() {
         &["process.a.cpus", "CPU 0 is repeated"],
     );
     error(
+        &format!("{process}cpus = \"hot\"\n"),
+        &["cpus = \"hot\"", "hot-path", "background"],
+    );
+    error(
+        &format!(
+            "{RUN}[platform]\nhot_path_cpu = 5000\n{}",
+            &process[RUN.len()..]
+        ),
+        &["platform.hot_path_cpu", "5000"],
+    );
+    error(
         &format!("{process}scheduling = {{ policy = \"fifo\", priority = 0 }}\n"),
         &["process.a.scheduling", "priority = 0", "1 ..= 99"],
     );

@@ -4,7 +4,10 @@
 //!   in-process closed loop running the same scenario (target: ≥ 1000× real time while
 //!   ticking), and beside itself with every process polling for 500 µs after each data
 //!   wake-up (`run.lockstep_wait = "spin:500"`) instead of sleeping on its doorbell (the
-//!   default, `block`), with the CPU time each costs per simulated second;
+//!   default, `block`), and beside itself with every process left where the scheduler puts it
+//!   (`testbed run --unplaced`, instead of the profile's placement: the processes of a tick on
+//!   one CPU, the logger and ground link on the others), with the CPU time each costs per
+//!   simulated second;
 //! - both against Basilisk's dynamics alone on the same scenario, measured in the same run
 //!   (`bench/basilisk_speed.py`: Basilisk's hub + three reaction wheels with friction at
 //!   0.01 s; needs `python3` with `bsk` installed, else the report says "not installed");
@@ -174,6 +177,8 @@ fn main() -> Result<()> {
     let mut cpu_per_simulated_s = Vec::new();
     let mut ticking_spinning = Vec::new();
     let mut spinning_cpu_per_simulated_s = Vec::new();
+    let mut ticking_unplaced = Vec::new();
+    let mut unplaced_cpu_per_simulated_s = Vec::new();
     let mut bsk = Vec::new();
     let mut bsk_missing = None;
     let mut bsk_version = String::new();
@@ -185,6 +190,14 @@ fn main() -> Result<()> {
         let spinning = testbed_run(&testbed, &log, &["--duration", &duration], Some(SPIN))?;
         ticking_spinning.extend(spinning.plant_x_real_time);
         spinning_cpu_per_simulated_s.push(spinning.cpu.as_secs_f64() / args.duration);
+        let unplaced = testbed_run(
+            &testbed,
+            &log,
+            &["--duration", &duration, "--unplaced"],
+            None,
+        )?;
+        ticking_unplaced.extend(unplaced.plant_x_real_time);
+        unplaced_cpu_per_simulated_s.push(unplaced.cpu.as_secs_f64() / args.duration);
         if bsk_missing.is_none() {
             match basilisk(&args.python, args.duration) {
                 Basilisk::Measured {
@@ -230,6 +243,8 @@ fn main() -> Result<()> {
     let spinning_x = median_or_nan(ticking_spinning);
     let cpu_ms = 1e3 * median_or_nan(cpu_per_simulated_s);
     let spinning_cpu_ms = 1e3 * median_or_nan(spinning_cpu_per_simulated_s);
+    let unplaced_x = median_or_nan(ticking_unplaced);
+    let unplaced_cpu_ms = 1e3 * median_or_nan(unplaced_cpu_per_simulated_s);
     let bsk_x = (!bsk.is_empty()).then(|| median(bsk));
     let report = serde_json::json!({
         "simulated_s": args.duration,
@@ -241,6 +256,10 @@ fn main() -> Result<()> {
             "waiting_with_spin_500": {
                 "x_real_time_ticking": spinning_x,
                 "cpu_ms_per_simulated_s": spinning_cpu_ms,
+            },
+            "unplaced": {
+                "x_real_time_ticking": unplaced_x,
+                "cpu_ms_per_simulated_s": unplaced_cpu_ms,
             },
         },
         "in_process_loop": { "x_real_time": in_process_x },
@@ -278,6 +297,10 @@ fn main() -> Result<()> {
     );
     println!(
         "{:<58} {:>12.0}",
+        "  the same, processes placed by the scheduler (--unplaced)", unplaced_x
+    );
+    println!(
+        "{:<58} {:>12.0}",
         "lockstep pipeline, whole `testbed run` incl. start-up", whole_x
     );
     println!(
@@ -305,6 +328,13 @@ fn main() -> Result<()> {
         spinning_x / ticking_x,
         spinning_cpu_ms,
         cpu_ms
+    );
+    println!(
+        "placement (the tick's processes on one CPU): {:.2}× the speed of the scheduler's \
+         placement, at {:.1} ms CPU per simulated second against {:.1} ms",
+        ticking_x / unplaced_x,
+        cpu_ms,
+        unplaced_cpu_ms
     );
     match bsk_x {
         Some(x) => println!(

@@ -49,6 +49,11 @@ pub struct RunArgs {
     /// the idle CPUs' power; needs root [default: the profile's, else none].
     #[arg(long, value_name = "US")]
     pub cpu_latency_us: Option<u32>,
+    /// Run every process wherever the scheduler puts it, ignoring the profile's `cpus` (by
+    /// default the processes of a tick share one CPU and the logger and ground link use the
+    /// others: `cpus = "hot-path"` / `"background"`).
+    #[arg(long)]
+    pub unplaced: bool,
     /// Dry run: check the profile, the run configuration and the binaries, print the run's
     /// settings and the processes in start order, and start nothing (writes no file).
     #[arg(long)]
@@ -175,6 +180,7 @@ pub fn run(args: &RunArgs) -> Result<()> {
     let overrides = LauncherOverrides {
         max_wall_s: max_wall,
         cpu_latency_us: args.cpu_latency_us,
+        unplaced: args.unplaced,
     };
 
     let log = config.run.log.clone();
@@ -381,6 +387,8 @@ struct LauncherOverrides {
     max_wall_s: Option<f64>,
     /// `--cpu-latency-us`, µs.
     cpu_latency_us: Option<u32>,
+    /// `--unplaced`.
+    unplaced: bool,
 }
 
 fn launch(
@@ -425,6 +433,9 @@ fn launch(
     }
     if let Some(us) = overrides.cpu_latency_us {
         command.args(["--cpu-latency-us", &us.to_string()]);
+    }
+    if overrides.unplaced {
+        command.arg("--unplaced");
     }
     if check {
         command.arg("--check");
