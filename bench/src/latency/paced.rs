@@ -30,7 +30,8 @@ fn placed_profile(path: &std::path::Path, other_cpu: usize) -> Result<()> {
     let text = std::fs::read_to_string(&source)
         .with_context(|| format!("reading {}", source.display()))?;
     let mut out = String::new();
-    for line in text.lines() {
+    // The profile's own placement (`cpus = "hot-path"` …) gives way to this one.
+    for line in text.lines().filter(|l| !l.starts_with("cpus = ")) {
         out.push_str(line);
         out.push('\n');
         let Some(name) = line
@@ -244,5 +245,31 @@ fn run_bus_name(pid: u32) -> Result<String> {
             "testbed run (pid {pid}) created no bus directory /tmp/{start}…"
         );
         std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use testbed_launch::placement::Cpus;
+    use testbed_launch::profile::Profile;
+
+    /// The `+placed` profile replaces the shipped profile's own placement (a second `cpus`
+    /// key would make it invalid TOML) and is a valid profile.
+    #[test]
+    fn the_placed_profile_replaces_the_shipped_placement() {
+        let path = std::env::temp_dir().join(format!("placed-{}.toml", std::process::id()));
+        placed_profile(&path, 1).unwrap();
+        let profile = Profile::load(&path);
+        let _ = std::fs::remove_file(&path);
+        let profile = profile.expect("a valid profile");
+        for p in &profile.processes {
+            let expected = if PLACED_CHAIN.contains(&p.name.as_str()) {
+                vec![0]
+            } else {
+                vec![1]
+            };
+            assert_eq!(p.cpus, Some(Cpus::List(expected)), "{}", p.name);
+        }
     }
 }
