@@ -150,7 +150,10 @@ fn plan(args: &Args) -> anyhow::Result<Result<Plan, ProfileError>> {
                 return Ok(Err(ProfileError::Invalid {
                     file: profile.file.display().to_string(),
                     key: "platform.hot_path_cpu".into(),
-                    value: format!("{:?}", profile.platform.hot_path_cpu),
+                    value: profile
+                        .platform
+                        .hot_path_cpu
+                        .map_or_else(|| "(none)".to_string(), |cpu| cpu.to_string()),
                     reason,
                 }));
             }

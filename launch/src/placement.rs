@@ -7,7 +7,6 @@
 //! creates later inherit both settings.
 
 use serde::Deserialize;
-use std::fmt;
 use std::io::{self, Read as _, Write as _};
 use std::path::Path;
 
@@ -117,16 +116,6 @@ impl Cpus {
             Cpus::List(cpus) => cpus.clone(),
             Cpus::HotPath => vec![roles.hot_path],
             Cpus::Background => roles.background.clone(),
-        }
-    }
-}
-
-impl fmt::Display for Cpus {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            Cpus::List(cpus) => write!(f, "{cpus:?}"),
-            Cpus::HotPath => f.write_str("\"hot-path\""),
-            Cpus::Background => f.write_str("\"background\""),
         }
     }
 }
