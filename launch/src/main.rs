@@ -144,7 +144,7 @@ fn plan(args: &Args) -> anyhow::Result<Result<Plan, ProfileError>> {
         None
     } else {
         let available = available_cpus().context("reading this launcher's CPU affinity")?;
-        match CpuRoles::new(&available, profile.platform.hot_path_cpu) {
+        match CpuRoles::new(available, profile.platform.hot_path_cpu) {
             Ok(roles) => Some(roles),
             Err(reason) => {
                 return Ok(Err(ProfileError::Invalid {
@@ -224,21 +224,15 @@ fn main() -> ExitCode {
         }
         return ExitCode::from(EXIT_CONFIG);
     }
-    match plan.unavailable_cpus() {
-        Ok(unavailable) if unavailable.is_empty() => {}
-        Ok(unavailable) => {
-            for (name, cpu, available) in &unavailable {
-                tracing::error!(
-                    "{}: process.{name}.cpus names CPU {cpu}, which this launcher may not use (CPUs {available:?})",
-                    plan.profile.file.display()
-                );
-            }
-            return ExitCode::from(EXIT_CONFIG);
+    let unavailable = plan.unavailable_cpus();
+    if !unavailable.is_empty() {
+        for (name, cpu, available) in &unavailable {
+            tracing::error!(
+                "{}: process.{name}.cpus names CPU {cpu}, which this launcher may not use (CPUs {available:?})",
+                plan.profile.file.display()
+            );
         }
-        Err(e) => {
-            tracing::error!("reading this launcher's CPU affinity: {e}");
-            return ExitCode::from(EXIT_CONFIG);
-        }
+        return ExitCode::from(EXIT_CONFIG);
     }
     if args.check {
         return ExitCode::SUCCESS;
@@ -248,8 +242,8 @@ fn main() -> ExitCode {
     {
         tracing::info!(
             "placement: the hot path on CPU {}, the background on CPUs {:?}",
-            roles.hot_path,
-            roles.background
+            roles.hot_path(),
+            roles.background()
         );
     }
     // Held until the launcher exits: the kernel ends the request with the file.

@@ -114,8 +114,8 @@ impl Cpus {
     pub fn resolve(&self, roles: &CpuRoles) -> Vec<usize> {
         match self {
             Cpus::List(cpus) => cpus.clone(),
-            Cpus::HotPath => vec![roles.hot_path],
-            Cpus::Background => roles.background.clone(),
+            Cpus::HotPath => vec![roles.hot_path()],
+            Cpus::Background => roles.background(),
         }
     }
 }
@@ -150,18 +150,17 @@ impl TryFrom<RawCpus> for Cpus {
 /// the background.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct CpuRoles {
-    /// The hot path's CPU.
-    pub hot_path: usize,
-    /// The background's CPUs: every available CPU but the hot path's, or the hot path's alone
-    /// when it is the only one.
-    pub background: Vec<usize>,
+    /// The CPUs the launcher may use, ascending.
+    available: Vec<usize>,
+    /// The hot path's CPU, one of `available`.
+    hot_path: usize,
 }
 
 impl CpuRoles {
     /// Shares out `available` (ascending, as [`available_cpus`] gives them): the hot path on
     /// `hot_path` (`[platform] hot_path_cpu`), by default the first available CPU. `Err` names
     /// a `hot_path` that is not available.
-    pub fn new(available: &[usize], hot_path: Option<usize>) -> Result<Self, String> {
+    pub fn new(available: Vec<usize>, hot_path: Option<usize>) -> Result<Self, String> {
         let hot_path = match hot_path {
             Some(cpu) if available.contains(&cpu) => cpu,
             Some(cpu) => {
@@ -173,20 +172,33 @@ impl CpuRoles {
                 .first()
                 .ok_or_else(|| "this launcher may use no CPU".to_string())?,
         };
-        let others: Vec<usize> = available
-            .iter()
-            .copied()
-            .filter(|&c| c != hot_path)
-            .collect();
-        let background = if others.is_empty() {
-            vec![hot_path]
-        } else {
-            others
-        };
         Ok(Self {
+            available,
             hot_path,
-            background,
         })
+    }
+
+    /// The CPUs the launcher may use.
+    pub fn available(&self) -> &[usize] {
+        &self.available
+    }
+
+    /// The hot path's CPU.
+    pub fn hot_path(&self) -> usize {
+        self.hot_path
+    }
+
+    /// The background's CPUs: every available CPU but the hot path's, or the hot path's alone
+    /// when it is the only one.
+    pub fn background(&self) -> Vec<usize> {
+        match self.available.as_slice() {
+            [only] => vec![*only],
+            all => all
+                .iter()
+                .copied()
+                .filter(|&c| c != self.hot_path)
+                .collect(),
+        }
     }
 }
 
@@ -346,21 +358,21 @@ mod tests {
 
     #[test]
     fn roles_share_out_the_available_cpus() {
-        let roles = CpuRoles::new(&[0, 1, 2, 3], None).unwrap();
-        assert_eq!(roles.hot_path, 0);
-        assert_eq!(roles.background, vec![1, 2, 3]);
+        let roles = CpuRoles::new(vec![0, 1, 2, 3], None).unwrap();
+        assert_eq!(roles.hot_path(), 0);
+        assert_eq!(roles.background(), vec![1, 2, 3]);
         assert_eq!(Cpus::HotPath.resolve(&roles), vec![0]);
         assert_eq!(Cpus::Background.resolve(&roles), vec![1, 2, 3]);
         assert_eq!(Cpus::List(vec![3]).resolve(&roles), vec![3]);
         // A launcher confined to some CPUs (a cpuset, taskset) shares out those.
-        let roles = CpuRoles::new(&[2, 5], Some(5)).unwrap();
-        assert_eq!((roles.hot_path, roles.background), (5, vec![2]));
+        let roles = CpuRoles::new(vec![2, 5], Some(5)).unwrap();
+        assert_eq!((roles.hot_path(), roles.background()), (5, vec![2]));
         // One CPU: the background shares it.
-        let roles = CpuRoles::new(&[3], None).unwrap();
-        assert_eq!((roles.hot_path, roles.background), (3, vec![3]));
-        let e = CpuRoles::new(&[0, 1], Some(4)).unwrap_err();
+        let roles = CpuRoles::new(vec![3], None).unwrap();
+        assert_eq!((roles.hot_path(), roles.background()), (3, vec![3]));
+        let e = CpuRoles::new(vec![0, 1], Some(4)).unwrap_err();
         assert!(e.contains("CPU 4") && e.contains("[0, 1]"), "{e}");
-        assert!(CpuRoles::new(&[], None).is_err());
+        assert!(CpuRoles::new(vec![], None).is_err());
     }
 
     #[test]

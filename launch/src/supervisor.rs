@@ -70,11 +70,13 @@ impl Plan {
     }
 
     /// CPUs named by a process's `cpus` that this launcher may not run on (so nor may its
-    /// children): `(process, CPU, the CPUs available)`.
-    pub fn unavailable_cpus(&self) -> std::io::Result<Vec<(String, usize, Vec<usize>)>> {
-        let available = placement::available_cpus()?;
-        Ok(self
-            .profile
+    /// children): `(process, CPU, the CPUs available)`. None in an unplaced run.
+    pub fn unavailable_cpus(&self) -> Vec<(String, usize, Vec<usize>)> {
+        let Some(roles) = &self.cpu_roles else {
+            return Vec::new();
+        };
+        let available = roles.available();
+        self.profile
             .processes
             .iter()
             .flat_map(|spec| {
@@ -82,10 +84,10 @@ impl Plan {
                     .into_iter()
                     .flatten()
                     .filter(|cpu| !available.contains(cpu))
-                    .map(|cpu| (spec.name.clone(), cpu, available.clone()))
+                    .map(|cpu| (spec.name.clone(), cpu, available.to_vec()))
                     .collect::<Vec<_>>()
             })
-            .collect())
+            .collect()
     }
 
     /// The executable of `spec`: absolute commands as written, others in [`Plan::bin_dir`].
