@@ -52,7 +52,10 @@ pub use can::{AppliedCmgCommand, AppliedWheelCommand, CanBusFrame, CanLinkStatus
 pub use gnc::{AttitudeEstimate, ControllerMode, ControllerStatus};
 pub use ground::{GroundAckStatus, GroundCommand, GroundCommandAck, GroundCommandKind};
 pub use header::SampleHeader;
-pub use run::{ClockMode, Device, ENV_RESTART_COUNT, restart_count};
+pub use run::{
+    ClockMode, Device, ENV_RESTART_COUNT, ENV_SERVED_DEVICES, parse_devices, restart_count,
+    served_devices,
+};
 pub use sensors::{GyroSample, InclinometerSample, MagnetometerSample};
 pub use sim::{SimClockTick, SimTruth};
 pub use system::{HealthEvent, HealthEventKind, Heartbeat, ProcessState};

@@ -16,6 +16,36 @@ pub fn restart_count() -> u32 {
         .unwrap_or(0)
 }
 
+/// Environment variable the launcher sets for a process that serves devices (the profile's
+/// `device`): their names, comma-separated (`gyro,inclinometer`).
+pub const ENV_SERVED_DEVICES: &str = "TESTBED_SERVED_DEVICES";
+
+/// The devices this process serves ([`ENV_SERVED_DEVICES`]), in the order listed. An error
+/// names the variable and the value when it is unset, empty or names an unknown device.
+pub fn served_devices() -> Result<Vec<Device>, String> {
+    let value = std::env::var(ENV_SERVED_DEVICES).map_err(|_| {
+        format!("{ENV_SERVED_DEVICES} is not set (the profile's `device` of this process)")
+    })?;
+    parse_devices(&value).map_err(|e| format!("{ENV_SERVED_DEVICES}={value:?}: {e}"))
+}
+
+/// Devices named in a comma-separated list (`"gyro,inclinometer"`).
+pub fn parse_devices(list: &str) -> Result<Vec<Device>, String> {
+    let devices = list
+        .split(',')
+        .map(|name| {
+            Device::from_name(name.trim()).ok_or_else(|| {
+                let known: Vec<&str> = Device::ALL.iter().map(|d| d.name()).collect();
+                format!("unknown device {name:?} (known: {})", known.join(", "))
+            })
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    if devices.is_empty() {
+        return Err("no device".to_owned());
+    }
+    Ok(devices)
+}
+
 /// A device of the platform, as configurations and profiles name it (`"gyro"`, …, `"cmg"`).
 #[derive(
     Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize, serde::Deserialize,
@@ -107,5 +137,24 @@ impl core::str::FromStr for ClockMode {
 impl fmt::Display for ClockMode {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(self.as_str())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn served_devices_parse_in_order_and_unknown_ones_are_named() {
+        assert_eq!(
+            parse_devices("cmg, gyro"),
+            Ok(vec![Device::Cmg, Device::Gyro])
+        );
+        let err = parse_devices("gyro,compass").unwrap_err();
+        assert!(
+            err.contains("\"compass\"") && err.contains("known: gyro"),
+            "{err}"
+        );
+        assert!(parse_devices("").is_err());
     }
 }

@@ -37,7 +37,8 @@
 //! depends_on = ["plant"]     # started after these
 //! ends_run = false           # its successful exit ends the run
 //! observer = false           # takes no part in lockstep ticks (the ground link)
-//! device = "gyro"            # optional, with `source`: the device this process serves
+//! device = "gyro"            # optional, with `source`: the device this process serves, or a
+//!                            # list of them served by one process (`["gyro", "cmg"]`)
 //! source = "simulated"
 //! cpus = [0]                 # optional: CPU affinity (every CPU when absent), or a role:
 //!                            # "hot-path" (one CPU, [platform] hot_path_cpu or the first)
@@ -61,6 +62,7 @@ pub const RESERVED_ENV_PREFIXES: &[&str] = &[
     "TESTBED_RUN_",
     "TESTBED_DEVICE_",
     "TESTBED_RESTART_",
+    ipc_types::ENV_SERVED_DEVICES,
 ];
 /// Longest process name (fits `ipc_types::Heartbeat::name` and an iceoryx2 node name).
 pub const MAX_NAME_LEN: usize = 31;
@@ -99,6 +101,38 @@ pub enum ProfileError {
         /// What is wrong.
         reason: String,
     },
+}
+
+/// `device = "gyro"` or `device = ["gyro", "inclinometer"]` (not an empty list; an unknown
+/// name is refused with the known ones).
+fn one_or_more_devices<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Vec<Device>, D::Error> {
+    #[derive(Deserialize)]
+    #[serde(untagged, expecting = "a device name or a list of device names")]
+    enum OneOrMore {
+        One(String),
+        More(Vec<String>),
+    }
+    let names = match OneOrMore::deserialize(d)? {
+        OneOrMore::One(name) => vec![name],
+        OneOrMore::More(names) => names,
+    };
+    if names.is_empty() {
+        return Err(serde::de::Error::custom(
+            "an empty list: name the devices this process serves, or leave `device` out",
+        ));
+    }
+    names
+        .iter()
+        .map(|name| {
+            Device::from_name(name).ok_or_else(|| {
+                let known: Vec<&str> = Device::ALL.iter().map(|d| d.name()).collect();
+                serde::de::Error::custom(format!(
+                    "unknown device {name:?} (known: {})",
+                    known.join(", ")
+                ))
+            })
+        })
+        .collect()
 }
 
 /// Whether a device is the real one (gateway) or simulated.
@@ -247,8 +281,11 @@ pub struct ProcessSpec {
     /// of any tick, so in lockstep its exit does not end the run (its `on_exit` applies).
     #[serde(default)]
     pub observer: bool,
-    /// The device this process serves.
-    pub device: Option<Device>,
+    /// The devices this process serves: one (`device = "gyro"`) or several sharing a process
+    /// (`device = ["gyro", "inclinometer"]`, the `sim-devices` process); empty when it serves
+    /// none. The launcher passes them in `TESTBED_SERVED_DEVICES`.
+    #[serde(default, deserialize_with = "one_or_more_devices")]
+    pub device: Vec<Device>,
     /// Whether that device is real or simulated.
     pub source: Option<Source>,
     /// CPUs the process may run on (its affinity): indices, e.g. `[0]`, or a role,
@@ -537,7 +574,7 @@ impl Profile {
         {
             return Err(self.invalid(key("scheduling"), scheduling, reason));
         }
-        match (p.device, p.source) {
+        match (p.device.first(), p.source) {
             (Some(_), None) => {
                 return Err(self.invalid(key("source"), "(missing)", "`device` needs `source`"));
             }
@@ -556,30 +593,36 @@ impl Profile {
     fn validate_devices(&self) -> Result<(), ProfileError> {
         let mut served: BTreeMap<Device, &str> = BTreeMap::new();
         for p in &self.processes {
-            let (Some(device), Some(source)) = (p.device, p.source) else {
+            let Some(source) = p.source else {
                 continue;
             };
             let key = format!("process.{}.device", p.name);
-            let Some(chosen) = self.devices.get(&device) else {
-                return Err(self.invalid(
-                    key,
-                    device.name(),
-                    format!("[devices] does not list {}", device.name()),
-                ));
-            };
-            if *chosen != source {
-                return Err(self.invalid(
-                    format!("process.{}.source", p.name),
-                    source.as_str(),
-                    format!("devices.{} = \"{}\"", device.name(), chosen.as_str()),
-                ));
-            }
-            if let Some(other) = served.insert(device, &p.name) {
-                return Err(self.invalid(
-                    key,
-                    device.name(),
-                    format!("process {other:?} already serves this device"),
-                ));
+            for &device in &p.device {
+                let Some(chosen) = self.devices.get(&device) else {
+                    return Err(self.invalid(
+                        key,
+                        device.name(),
+                        format!("[devices] does not list {}", device.name()),
+                    ));
+                };
+                if *chosen != source {
+                    return Err(self.invalid(
+                        format!("process.{}.source", p.name),
+                        source.as_str(),
+                        format!("devices.{} = \"{}\"", device.name(), chosen.as_str()),
+                    ));
+                }
+                if let Some(other) = served.insert(device, &p.name) {
+                    return Err(self.invalid(
+                        key,
+                        device.name(),
+                        if other == p.name {
+                            "listed twice".to_owned()
+                        } else {
+                            format!("process {other:?} already serves this device")
+                        },
+                    ));
+                }
             }
         }
         for device in self.devices.keys() {

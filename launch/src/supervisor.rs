@@ -418,6 +418,10 @@ impl<'p> Supervisor<'p> {
             // Own process group: a Ctrl-C in the terminal reaches only the launcher, which
             // then stops the children in order; signals to the group reach helpers too.
             .process_group(0);
+        if !spec.device.is_empty() {
+            let names: Vec<&str> = spec.device.iter().map(|d| d.name()).collect();
+            command.env(ipc_types::ENV_SERVED_DEVICES, names.join(","));
+        }
         // SAFETY: getpid is async-signal-safe and called here in the parent.
         let parent = unsafe { libc::getpid() };
         let affinity = self.plan.affinity(spec).as_deref().map(placement::cpu_set);

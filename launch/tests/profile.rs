@@ -38,6 +38,7 @@ const RUN: &str = "[run]\nmode = \"paced\"\n";
 fn shipped_profiles_are_valid() {
     for name in [
         "simulation",
+        "simulation-grouped",
         "platform",
         "mixed",
         "replay",
@@ -60,7 +61,7 @@ fn shipped_profiles_are_valid() {
         }
         // A profile that serves devices lists and serves every one (replay serves none: its
         // inputs come from a log).
-        let serves_devices = profile.processes.iter().any(|p| p.device.is_some());
+        let serves_devices = profile.processes.iter().any(|p| !p.device.is_empty());
         for device in Device::ALL.into_iter().filter(|_| serves_devices) {
             assert!(
                 profile.devices.contains_key(&device),
@@ -81,6 +82,16 @@ fn shipped_profiles_are_valid() {
             .iter()
             .any(|p| p.name == "plant" && p.ends_run)
     );
+    // The grouped simulation: one process serves the five simulated devices.
+    let grouped = Profile::load(&profiles_dir().join("simulation-grouped.toml")).expect("valid");
+    let serving: Vec<_> = grouped
+        .processes
+        .iter()
+        .filter(|p| !p.device.is_empty())
+        .collect();
+    assert_eq!(serving.len(), 1);
+    assert_eq!(serving[0].device, Device::ALL);
+    assert_eq!(grouped.devices, sim.devices);
     let platform = Profile::load(&profiles_dir().join("platform.toml")).expect("valid");
     assert!(platform.devices.values().all(|s| *s == Source::Real));
     assert!(
@@ -331,6 +342,47 @@ fn devices_must_match_their_processes() {
         &["process.g.source", "needs `source`"],
     );
     parse(&format!("{RUN}[devices]\ngyro = \"real\"\n{base}")).expect("consistent");
+}
+
+#[test]
+fn a_process_may_serve_several_devices() {
+    let two = "[[process]]\nname = \"g\"\ncommand = \"x\"\ndevice = [\"gyro\", \"cmg\"]\nsource = \"simulated\"\n";
+    let devices = "[devices]\ngyro = \"simulated\"\ncmg = \"simulated\"\n";
+    let profile = parse(&format!("{RUN}{devices}{two}")).expect("one process serves both");
+    assert_eq!(profile.processes[0].device, [Device::Gyro, Device::Cmg]);
+    // Each device of the list is checked as a single one is.
+    error(
+        &format!("{RUN}[devices]\ngyro = \"simulated\"\ncmg = \"real\"\n{two}"),
+        &["process.g.source", "simulated", "devices.cmg = \"real\""],
+    );
+    error(
+        &format!("{RUN}[devices]\ngyro = \"simulated\"\n{two}"),
+        &["process.g.device", "cmg", "[devices] does not list cmg"],
+    );
+    error(
+        &format!(
+            "{RUN}{devices}{two}[[process]]\nname = \"h\"\ncommand = \"x\"\ndevice = \"cmg\"\nsource = \"simulated\"\n"
+        ),
+        &["process.h.device", "cmg", "process \"g\" already serves"],
+    );
+    error(
+        &format!(
+            "{RUN}{devices}[[process]]\nname = \"g\"\ncommand = \"x\"\ndevice = [\"gyro\", \"cmg\", \"gyro\"]\nsource = \"simulated\"\n"
+        ),
+        &["process.g.device", "gyro", "listed twice"],
+    );
+    error(
+        &format!(
+            "{RUN}[[process]]\nname = \"g\"\ncommand = \"x\"\ndevice = []\nsource = \"simulated\"\n"
+        ),
+        &["device", "an empty list"],
+    );
+    error(
+        &format!(
+            "{RUN}[[process]]\nname = \"g\"\ncommand = \"x\"\ndevice = [\"gyro\", \"lidar\"]\nsource = \"simulated\"\n"
+        ),
+        &["device", "unknown device \"lidar\"", "known: gyro"],
+    );
 }
 
 #[test]

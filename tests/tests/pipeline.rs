@@ -2,13 +2,14 @@
 //! as separate processes over iceoryx2 and the tests read back what they logged.
 
 use ipc_types::AttitudeEstimate;
+use ipc_types::Topic as _;
 use std::os::unix::process::CommandExt;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 use testbed_e2e::{
     Scratch, assert_estimates_equal_the_in_process_loop, binary, profile, testbed_run,
 };
-use testbed_log::RunLog;
+use testbed_log::{LogRecord, RunLog};
 use testbed_runtime::RunConfig;
 use testbed_sim::closed_loop;
 
@@ -89,6 +90,52 @@ fn two_lockstep_runs_with_the_same_seed_give_byte_identical_logs() {
         bytes[0].len(),
         bytes[1].len()
     );
+}
+
+#[test]
+fn the_simulated_gateways_in_one_process_publish_what_five_processes_do() {
+    let scratch = Scratch::new("grouped");
+    let mut runs = Vec::new();
+    for name in ["simulation", "simulation-grouped"] {
+        let log = scratch.path().join(format!("{name}.mcap"));
+        testbed_run(&[
+            "--profile",
+            profile(name).to_str().unwrap(),
+            "--duration",
+            "40",
+            "--seed",
+            "11",
+            "--start-time-ns",
+            "1795503600000000000",
+            "--log",
+            log.to_str().unwrap(),
+        ]);
+        let opened = RunLog::open(&log).unwrap();
+        assert!(opened.is_complete(), "{name}");
+        // Heartbeats and health events name their process: the only records that may differ.
+        let records: Vec<LogRecord> = opened
+            .records()
+            .unwrap()
+            .map(Result::unwrap)
+            .filter(|r| !matches!(r, LogRecord::Heartbeat(_) | LogRecord::Health(_)))
+            .collect();
+        runs.push(records);
+    }
+    let count =
+        |records: &[LogRecord], topic: &str| records.iter().filter(|r| r.topic() == topic).count();
+    // 40 s at 10 Hz: 400 gyro samples and 100 of each 2.5-Hz vector sensor, in both runs.
+    for records in &runs {
+        assert!(count(records, ipc_types::GyroSample::NAME) >= 400);
+        assert!(count(records, ipc_types::MagnetometerSample::NAME) >= 100);
+        assert!(count(records, ipc_types::CmgTelemetry::NAME) >= 400);
+    }
+    if let Some(i) = (0..runs[0].len().min(runs[1].len())).find(|&i| runs[0][i] != runs[1][i]) {
+        panic!(
+            "record {i} differs:\n  five processes: {:?}\n  one process:    {:?}",
+            runs[0][i], runs[1][i]
+        );
+    }
+    assert_eq!(runs[0].len(), runs[1].len(), "record counts");
 }
 
 /// Processes whose environment names a bus prefix starting with `prefix` (`tb<pid>_`: a run's

@@ -18,6 +18,9 @@
 //!   interleaved with this build without it (the "baseline" columns), and for both the share
 //!   of the steady-state window the CPUs spent idle polling and idle halted
 //!   (`/sys/devices/system/cpu/cpu*/cpuidle`): what the request costs in power;
+//! - with `--baseline-profile P`, this build's runs (on `--profile`, default `simulation`)
+//!   interleaved with this build's runs on launch profile `P` (e.g. the simulated gateways in
+//!   one process against five: `--profile simulation-grouped --baseline-profile simulation`);
 //! - what following the run costs `testbed run`'s progress display, side by side: one look at
 //!   a log being written, reading the whole log again (before) against a [`LogTail`] reading
 //!   what was appended since its last look (after), on a `--progress-run-s` log made of the
@@ -29,7 +32,8 @@
 //!   lockstep run's sorted records until session 21), records per second, medians.
 //!
 //! `cargo build --profile deploy --workspace --bins && target/deploy/paced_cpu [--repeats 3]
-//!  [--short 5 --long 60] [--baseline-bin-dir DIR | --cpu-latency-us N] [--json]`
+//!  [--short 5 --long 60] [--profile P] [--baseline-bin-dir DIR | --cpu-latency-us N |
+//!  --baseline-profile P] [--json]`
 //! (the pipeline as `launch/launch.sh` builds it; `--release` works alike, and
 //! `--baseline-bin-dir target/release` compares the two builds)
 
@@ -69,6 +73,13 @@ struct Args {
     /// launcher; needs root) against this build without it (the baseline).
     #[arg(long, value_name = "US", conflicts_with = "baseline_bin_dir")]
     cpu_latency_us: Option<u32>,
+    /// Launch profile of this build's runs (`testbed run --profile`; default: `simulation`).
+    #[arg(long)]
+    profile: Option<String>,
+    /// Compare this build's runs with runs of this build on another launch profile (the
+    /// baseline), e.g. `--profile simulation-grouped --baseline-profile simulation`.
+    #[arg(long, value_name = "PROFILE", conflicts_with_all = ["baseline_bin_dir", "cpu_latency_us"])]
+    baseline_profile: Option<String>,
     /// Simulated length of the log on which the progress display's look is measured, s.
     #[arg(long, default_value_t = 600.0)]
     progress_run_s: f64,
@@ -506,20 +517,37 @@ fn main() -> Result<()> {
     }
     let scratch = std::env::temp_dir().join(format!("paced-cpu-{}", std::process::id()));
     std::fs::create_dir_all(&scratch)?;
-    let request: Vec<String> = args
-        .cpu_latency_us
-        .map(|us| vec!["--cpu-latency-us".to_owned(), us.to_string()])
-        .unwrap_or_default();
+    let profile_args = |profile: &Option<String>| -> Vec<String> {
+        profile
+            .iter()
+            .flat_map(|p| ["--profile".to_owned(), p.clone()])
+            .collect()
+    };
+    let mut this_args = profile_args(&args.profile);
+    if let Some(us) = args.cpu_latency_us {
+        this_args.extend(["--cpu-latency-us".to_owned(), us.to_string()]);
+    }
     let mut builds = vec![Build {
         name: "this build",
         bin_dir: bin_dir.clone(),
-        extra_args: request,
+        extra_args: this_args,
     }];
+    if let Some(profile) = &args.baseline_profile {
+        eprintln!(
+            "this build on profile {}; baseline: this build on profile {profile}",
+            args.profile.as_deref().unwrap_or("simulation")
+        );
+        builds.push(Build {
+            name: "baseline",
+            bin_dir: bin_dir.clone(),
+            extra_args: profile_args(&args.baseline_profile),
+        });
+    }
     if let Some(dir) = &args.baseline_bin_dir {
         builds.push(Build {
             name: "baseline",
             bin_dir: baseline_bins(dir, &launcher, &scratch)?,
-            extra_args: Vec::new(),
+            extra_args: profile_args(&args.profile),
         });
     }
     if let Some(us) = args.cpu_latency_us {
@@ -527,7 +555,7 @@ fn main() -> Result<()> {
         builds.push(Build {
             name: "baseline",
             bin_dir,
-            extra_args: Vec::new(),
+            extra_args: profile_args(&args.profile),
         });
     }
     let mut pairs: Vec<Vec<(PacedRun, PacedRun)>> = builds.iter().map(|_| Vec::new()).collect();
@@ -577,6 +605,8 @@ fn main() -> Result<()> {
             "long_s": args.long,
             "repeats": args.repeats,
             "cpu_latency_us": args.cpu_latency_us,
+            "profile": args.profile.as_deref().unwrap_or("simulation"),
+            "baseline_profile": args.baseline_profile,
             "this_build": table(this),
             "baseline": base.map(table),
             "log_writer": {
@@ -611,11 +641,18 @@ fn main() -> Result<()> {
         );
     }
     println!();
-    for (name, m) in &this.marginal {
+    // Every process of either run (two profiles may run different processes).
+    let names: std::collections::BTreeSet<&String> = this
+        .marginal
+        .keys()
+        .chain(base.iter().flat_map(|b| b.marginal.keys()))
+        .collect();
+    for name in names {
+        let m = this.marginal.get(name).unwrap_or(&f64::NAN);
         print!(
             "{name:<20} {:>12.3} {:>12.3} {:>8.3}",
             100.0 * m,
-            100.0 * this.total_over_wall[name],
+            100.0 * this.total_over_wall.get(name).copied().unwrap_or(f64::NAN),
             100.0 * this.steady.get(name).copied().unwrap_or(f64::NAN)
         );
         if let Some(b) = base {

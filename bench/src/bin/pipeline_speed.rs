@@ -6,7 +6,8 @@
 //!   wake-up (`run.lockstep_wait = "spin:500"`) instead of sleeping on its doorbell (the
 //!   default, `block`), and beside itself with every process left where the scheduler puts it
 //!   (`testbed run --unplaced`, instead of the profile's placement: the processes of a tick on
-//!   one CPU, the logger and ground link on the others), with the CPU time each costs per
+//!   one CPU, the logger and ground link on the others), and beside the `simulation-grouped`
+//!   profile (the five simulated gateways in one process), with the CPU time each costs per
 //!   simulated second;
 //! - both against Basilisk's dynamics alone on the same scenario, measured in the same run
 //!   (`bench/basilisk_speed.py`: Basilisk's hub + three reaction wheels with friction at
@@ -51,6 +52,8 @@ struct Args {
 
 /// The wait strategy measured beside the default (`block`).
 const SPIN: &str = "spin:500";
+/// The profile with the five simulated gateways in one process (`sim-devices`).
+const GROUPED_PROFILE: &str = "simulation-grouped";
 
 /// The tracing filter of the benchmarked runs: warnings, and the plant's "plant done" line
 /// (target `testbed_processes::plant`) that carries `x_real_time`.
@@ -179,6 +182,8 @@ fn main() -> Result<()> {
     let mut spinning_cpu_per_simulated_s = Vec::new();
     let mut ticking_unplaced = Vec::new();
     let mut unplaced_cpu_per_simulated_s = Vec::new();
+    let mut ticking_grouped = Vec::new();
+    let mut grouped_cpu_per_simulated_s = Vec::new();
     let mut bsk = Vec::new();
     let mut bsk_missing = None;
     let mut bsk_version = String::new();
@@ -198,6 +203,14 @@ fn main() -> Result<()> {
         )?;
         ticking_unplaced.extend(unplaced.plant_x_real_time);
         unplaced_cpu_per_simulated_s.push(unplaced.cpu.as_secs_f64() / args.duration);
+        let grouped = testbed_run(
+            &testbed,
+            &log,
+            &["--duration", &duration, "--profile", GROUPED_PROFILE],
+            None,
+        )?;
+        ticking_grouped.extend(grouped.plant_x_real_time);
+        grouped_cpu_per_simulated_s.push(grouped.cpu.as_secs_f64() / args.duration);
         if bsk_missing.is_none() {
             match basilisk(&args.python, args.duration) {
                 Basilisk::Measured {
@@ -245,6 +258,8 @@ fn main() -> Result<()> {
     let spinning_cpu_ms = 1e3 * median_or_nan(spinning_cpu_per_simulated_s);
     let unplaced_x = median_or_nan(ticking_unplaced);
     let unplaced_cpu_ms = 1e3 * median_or_nan(unplaced_cpu_per_simulated_s);
+    let grouped_x = median_or_nan(ticking_grouped);
+    let grouped_cpu_ms = 1e3 * median_or_nan(grouped_cpu_per_simulated_s);
     let bsk_x = (!bsk.is_empty()).then(|| median(bsk));
     let report = serde_json::json!({
         "simulated_s": args.duration,
@@ -260,6 +275,11 @@ fn main() -> Result<()> {
             "unplaced": {
                 "x_real_time_ticking": unplaced_x,
                 "cpu_ms_per_simulated_s": unplaced_cpu_ms,
+            },
+            "grouped_simulated_gateways": {
+                "profile": GROUPED_PROFILE,
+                "x_real_time_ticking": grouped_x,
+                "cpu_ms_per_simulated_s": grouped_cpu_ms,
             },
         },
         "in_process_loop": { "x_real_time": in_process_x },
@@ -301,6 +321,10 @@ fn main() -> Result<()> {
     );
     println!(
         "{:<58} {:>12.0}",
+        "  the simulated gateways in one process (simulation-grouped)", grouped_x
+    );
+    println!(
+        "{:<58} {:>12.0}",
         "lockstep pipeline, whole `testbed run` incl. start-up", whole_x
     );
     println!(
@@ -335,6 +359,13 @@ fn main() -> Result<()> {
         ticking_x / unplaced_x,
         cpu_ms,
         unplaced_cpu_ms
+    );
+    println!(
+        "the simulated gateways in one process: {:.2}× the speed of five, at {:.1} ms CPU per \
+         simulated second against {:.1} ms",
+        grouped_x / ticking_x,
+        grouped_cpu_ms,
+        cpu_ms
     );
     match bsk_x {
         Some(x) => println!(

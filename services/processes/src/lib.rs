@@ -12,6 +12,7 @@
 //! |---|---|---|
 //! | `plant` | [`plant::PlantProcess`] | `testbed_sim::plant_node` |
 //! | `sim-gyro`, `sim-inclinometer`, `sim-magnetometer`, `sim-wheels`, `sim-cmg` | [`sim_gateway::SimGateway`] | `testbed_sim::sim_devices` |
+//! | `sim-devices` (several of them in one process: the profile's `device` list) | [`sim_gateway::SimGateway`] | `testbed_sim::sim_devices` |
 //! | `estimator` | [`estimator::EstimatorProcess`] | `testbed_flight::estimator_node` |
 //! | `controller` | [`controller::ControllerProcess`] | `testbed_flight::controller_node` |
 //! | `logger` | [`logger::LoggerProcess`] | `testbed_log` |

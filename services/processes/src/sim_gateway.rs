@@ -8,7 +8,7 @@
 //! which the device samples (a 2.5-Hz sensor on the 10-Hz truth wakes 2.5 times a second:
 //! [`TopicSubscriber::wake_from`]); the truths in between are taken with the next sample's.
 
-use ipc_types::{CmgCommand, SimTruth, Topic, WheelCommand};
+use ipc_types::{CmgCommand, Device, SimTruth, Topic, WheelCommand};
 use testbed_bus::{Bus, BusError, Flow, TopicPublisher, TopicSubscriber, Wake};
 use testbed_flight::schedule::Schedule;
 use testbed_runtime::{Context, Io, Node, RunConfig, WakeOn};
@@ -83,49 +83,130 @@ sim_device!(SimCmg, ipc_types::CmgTelemetry, |bus: &Bus| Ok(Some(
     Box::new(Commands(bus.subscriber::<CmgCommand>()?)) as Box<dyn CommandInput<SimCmg>>
 )));
 
-/// A simulated gateway's ports: truth (and commands) in, the device's samples out.
-pub struct SimGatewayPorts<D: SimDevice> {
-    truth: TopicSubscriber<SimTruth>,
+/// One simulated device's work on the truth: its model, the commands it follows and the
+/// samples it publishes, whichever gateway process hosts it.
+struct DeviceTask<D: SimDevice> {
+    device: D,
     commands: Option<Box<dyn CommandInput<D>>>,
     output: TopicPublisher<D::Sample>,
 }
 
-/// The simulated gateway of device `D`.
-pub struct SimGateway<D> {
-    device: D,
+/// A [`DeviceTask`] of any device, as a gateway hosting several holds it.
+trait Task {
+    /// Applies every pending command (wheels, CMG).
+    fn take_commands(&mut self) -> Result<(), BusError>;
+    /// Publishes the sample of `truth`'s tick if the device samples then; whether it did.
+    fn on_truth(&mut self, truth: &SimTruth) -> Result<bool, BusError>;
+    /// Ticks between the device's samples.
+    fn ticks_per_sample(&self) -> u64;
+}
+
+impl<D: SimDevice> Task for DeviceTask<D> {
+    fn take_commands(&mut self) -> Result<(), BusError> {
+        if let Some(commands) = &self.commands {
+            commands.drain_into(&mut self.device)?;
+        }
+        Ok(())
+    }
+
+    fn on_truth(&mut self, truth: &SimTruth) -> Result<bool, BusError> {
+        let Some(sample) = self.device.on_truth(truth) else {
+            return Ok(false);
+        };
+        self.output.publish(&sample)?;
+        Ok(true)
+    }
+
+    fn ticks_per_sample(&self) -> u64 {
+        self.device.ticks_per_sample()
+    }
+}
+
+fn open_task<D: SimDevice>(cx: &Context, schedule: Schedule) -> anyhow::Result<Box<dyn Task>> {
+    Ok(Box::new(DeviceTask {
+        device: D::new(cx.config, schedule),
+        commands: D::commands(cx.bus)?,
+        output: cx.bus.publisher::<D::Sample>()?,
+    }))
+}
+
+/// A simulated gateway's port: the plant's truth (the devices' own ports are in their tasks).
+pub struct SimGatewayPorts {
+    truth: TopicSubscriber<SimTruth>,
+}
+
+/// A simulated gateway process: one device (`sim-gyro`, …) or several sharing a process and a
+/// wake-up per tick (`sim-devices`). Each device samples and publishes exactly as it would
+/// alone: the tasks take the same truths in the same order.
+pub struct SimGateway {
+    tasks: Vec<Box<dyn Task>>,
     truths: Vec<SimTruth>,
     schedule: Schedule,
-    /// The device's sample period: how often the gateway takes the truth (liveness of the
-    /// truth stream as this gateway sees it).
+    /// Ticks between the samples of the device that samples most often: the gateway takes
+    /// the truth at that period (and watches the truth stream's liveness at it).
+    every: u64,
     period: std::time::Duration,
 }
 
-impl<D: SimDevice> SimGateway<D> {
-    pub fn open(cx: &Context) -> anyhow::Result<(Self, SimGatewayPorts<D>)> {
+impl SimGateway {
+    /// The gateway of `devices` (at least one, none twice).
+    pub fn open(cx: &Context, devices: &[Device]) -> anyhow::Result<(Self, SimGatewayPorts)> {
+        anyhow::ensure!(!devices.is_empty(), "a simulated gateway needs a device");
         let schedule = cx.config.schedule()?;
-        let device = D::new(cx.config, schedule);
-        let period =
-            std::time::Duration::from_nanos(schedule.period_ns * device.ticks_per_sample());
-        let commands = D::commands(cx.bus)?;
+        let mut tasks = Vec::with_capacity(devices.len());
+        for (i, device) in devices.iter().enumerate() {
+            anyhow::ensure!(
+                !devices[..i].contains(device),
+                "device {device} is listed twice"
+            );
+            tasks.push(match device {
+                Device::Gyro => open_task::<SimGyro>(cx, schedule)?,
+                Device::Inclinometer => open_task::<SimInclinometer>(cx, schedule)?,
+                Device::Magnetometer => open_task::<SimMagnetometer>(cx, schedule)?,
+                Device::Wheels => open_task::<SimWheels>(cx, schedule)?,
+                Device::Cmg => open_task::<SimCmg>(cx, schedule)?,
+            });
+        }
+        let every = tasks
+            .iter()
+            .map(|t| t.ticks_per_sample())
+            .min()
+            .unwrap_or(1);
+        let period = std::time::Duration::from_nanos(schedule.period_ns * every);
         let ports = SimGatewayPorts {
             truth: cx.bus.subscriber()?,
-            commands,
-            output: cx.bus.publisher()?,
         };
         Ok((
             Self {
-                device,
+                tasks,
                 truths: Vec::new(),
                 schedule,
+                every,
                 period,
             },
             ports,
         ))
     }
+
+    /// The gateway of the devices the launcher says this process serves
+    /// ([`ipc_types::ENV_SERVED_DEVICES`]).
+    pub fn open_served(cx: &Context) -> anyhow::Result<(Self, SimGatewayPorts)> {
+        let devices = ipc_types::served_devices().map_err(anyhow::Error::msg)?;
+        Self::open(cx, &devices)
+    }
+
+    /// The first tick after `k` on which any device samples.
+    fn next_sample_tick(&self, k: u64) -> u64 {
+        self.tasks
+            .iter()
+            .map(|t| Schedule::next_due(k, t.ticks_per_sample()))
+            .min()
+            .unwrap_or(k + 1)
+    }
 }
 
-impl<D: SimDevice> Node for SimGateway<D> {
-    type Ports = SimGatewayPorts<D>;
+impl Node for SimGateway {
+    type Ports = SimGatewayPorts;
 
     fn wake_on<'a>(
         &mut self,
@@ -143,8 +224,8 @@ impl<D: SimDevice> Node for SimGateway<D> {
         loop {
             self.truths.clear();
             ports.truth.drain_into(&mut self.truths)?;
-            if let Some(commands) = &ports.commands {
-                commands.drain_into(&mut self.device)?;
+            for task in &mut self.tasks {
+                task.take_commands()?;
             }
             if self.truths.is_empty() {
                 return Ok(Flow::Continue);
@@ -152,13 +233,13 @@ impl<D: SimDevice> Node for SimGateway<D> {
             for truth in &self.truths {
                 io.heartbeat.add_samples_in(1);
                 io.heartbeat.set_time_ns(truth.header.time_ns);
-                if let Some(sample) = self.device.on_truth(truth) {
-                    ports.output.publish(&sample)?;
-                    io.heartbeat.add_samples_out(1);
+                for task in &mut self.tasks {
+                    if task.on_truth(truth)? {
+                        io.heartbeat.add_samples_out(1);
+                    }
                 }
             }
-            let every = self.device.ticks_per_sample();
-            if every == 1 {
+            if self.every == 1 {
                 return Ok(Flow::Continue);
             }
             let last_tick = self
@@ -166,9 +247,8 @@ impl<D: SimDevice> Node for SimGateway<D> {
                 .last()
                 .and_then(|t| self.schedule.tick_at(t.header.time_ns));
             if let Some(k) = last_tick {
-                ports
-                    .truth
-                    .wake_from(self.schedule.time_ns(Schedule::next_due(k, every)));
+                let next = self.next_sample_tick(k);
+                ports.truth.wake_from(self.schedule.time_ns(next));
             }
         }
     }
