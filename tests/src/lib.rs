@@ -91,6 +91,23 @@ pub fn profile(name: &str) -> PathBuf {
         .join(format!("{name}.toml"))
 }
 
+/// A 40-simulated-s lockstep run of `profile` with `seed` and a pinned wall-clock start (the
+/// log's times are the start plus the run clock), logged to `log`: for byte comparisons.
+pub fn pinned_lockstep_run(profile: &Path, log: &Path, seed: u64) -> serde_json::Value {
+    testbed_run(&[
+        "--profile",
+        profile.to_str().expect("UTF-8 path"),
+        "--duration",
+        "40",
+        "--seed",
+        &seed.to_string(),
+        "--start-time-ns",
+        "1795503600000000000",
+        "--log",
+        log.to_str().expect("UTF-8 path"),
+    ])
+}
+
 /// Run `testbed run --json` with `args` and return its summary.
 pub fn testbed_run(args: &[&str]) -> serde_json::Value {
     let out = Command::new(binary("testbed"))

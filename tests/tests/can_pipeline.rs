@@ -8,7 +8,7 @@ use ipc_types::{
 };
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use testbed_e2e::{Scratch, profile, testbed_run};
+use testbed_e2e::{Scratch, pinned_lockstep_run, profile, testbed_run};
 use testbed_log::{LogEncode, RunLog};
 
 fn number(json: &serde_json::Value, key: &str) -> f64 {
@@ -259,19 +259,7 @@ fn can_sim_with_faults_is_byte_identical_run_to_run() {
     let log = scratch.path().join("run.mcap");
     let mut runs = Vec::new();
     for _ in 0..2 {
-        testbed_run(&[
-            "--profile",
-            profile.to_str().unwrap(),
-            "--duration",
-            "40",
-            "--seed",
-            "12",
-            // The log's times are the run's wall-clock start plus the run clock: pin the start.
-            "--start-time-ns",
-            "1795503600000000000",
-            "--log",
-            log.to_str().unwrap(),
-        ]);
+        pinned_lockstep_run(&profile, &log, 12);
         runs.push((
             std::fs::read(&log).unwrap(),
             std::fs::read(log.with_extension("candump.log")).unwrap(),

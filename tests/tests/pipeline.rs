@@ -7,7 +7,8 @@ use std::os::unix::process::CommandExt;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 use testbed_e2e::{
-    Scratch, assert_estimates_equal_the_in_process_loop, binary, profile, testbed_run,
+    Scratch, assert_estimates_equal_the_in_process_loop, binary, pinned_lockstep_run, profile,
+    testbed_run,
 };
 use testbed_log::{LogRecord, RunLog};
 use testbed_runtime::RunConfig;
@@ -64,19 +65,7 @@ fn two_lockstep_runs_with_the_same_seed_give_byte_identical_logs() {
     let log = scratch.path().join("run.mcap");
     let mut bytes = Vec::new();
     for _ in 0..2 {
-        testbed_run(&[
-            "--profile",
-            sim.to_str().unwrap(),
-            "--duration",
-            "40",
-            "--seed",
-            "11",
-            // The log's times are the run's wall-clock start plus the run clock: pin the start.
-            "--start-time-ns",
-            "1795503600000000000",
-            "--log",
-            log.to_str().unwrap(),
-        ]);
+        pinned_lockstep_run(&sim, &log, 11);
         bytes.push(std::fs::read(&log).unwrap());
     }
     assert!(bytes[0].len() > 10_000, "the log holds the run");
@@ -98,18 +87,7 @@ fn the_simulated_gateways_in_one_process_publish_what_five_processes_do() {
     let mut runs = Vec::new();
     for name in ["simulation", "simulation-grouped"] {
         let log = scratch.path().join(format!("{name}.mcap"));
-        testbed_run(&[
-            "--profile",
-            profile(name).to_str().unwrap(),
-            "--duration",
-            "40",
-            "--seed",
-            "11",
-            "--start-time-ns",
-            "1795503600000000000",
-            "--log",
-            log.to_str().unwrap(),
-        ]);
+        pinned_lockstep_run(&profile(name), &log, 11);
         let opened = RunLog::open(&log).unwrap();
         assert!(opened.is_complete(), "{name}");
         // Heartbeats and health events name their process: the only records that may differ.
