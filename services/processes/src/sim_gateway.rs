@@ -7,6 +7,13 @@
 //! Commands do not wake the gateway: only the truth does, and only the truth of a tick on
 //! which the device samples (a 2.5-Hz sensor on the 10-Hz truth wakes 2.5 times a second:
 //! [`TopicSubscriber::wake_from`]); the truths in between are taken with the next sample's.
+//!
+//! One process may host several devices (`sim-devices`, the profile's `device` list): each is a
+//! task with its own model, commands and output, all fed the same truths in the same order, so
+//! each publishes what it would in a process of its own; the process wakes from the next tick
+//! on which any of its devices samples. On this project's virtual machine a paced tick's cost
+//! is mostly per process woken, which is what grouping saves (bench/README.md, "One process
+//! for the simulated gateways").
 
 use ipc_types::{CmgCommand, Device, SimTruth, Topic, WheelCommand};
 use testbed_bus::{Bus, BusError, Flow, TopicPublisher, TopicSubscriber, Wake};
