@@ -33,13 +33,8 @@ pub fn served_devices() -> Result<Vec<Device>, String> {
 pub fn parse_devices(list: &str) -> Result<Vec<Device>, String> {
     let devices = list
         .split(',')
-        .map(|name| {
-            Device::from_name(name.trim()).ok_or_else(|| {
-                let known: Vec<&str> = Device::ALL.iter().map(|d| d.name()).collect();
-                format!("unknown device {name:?} (known: {})", known.join(", "))
-            })
-        })
-        .collect::<Result<Vec<_>, _>>()?;
+        .map(|name| name.trim().parse())
+        .collect::<Result<Vec<Device>, _>>()?;
     if devices.is_empty() {
         return Err("no device".to_owned());
     }
@@ -88,6 +83,18 @@ impl Device {
     /// The device called `name`, if any.
     pub fn from_name(name: &str) -> Option<Self> {
         Self::ALL.into_iter().find(|d| d.name() == name)
+    }
+}
+
+impl core::str::FromStr for Device {
+    type Err = String;
+
+    /// The device called `name`; the error names it and the known devices.
+    fn from_str(name: &str) -> Result<Self, String> {
+        Self::from_name(name).ok_or_else(|| {
+            let known: Vec<&str> = Self::ALL.iter().map(|d| d.name()).collect();
+            format!("unknown device {name:?} (known: {})", known.join(", "))
+        })
     }
 }
 

@@ -123,15 +123,7 @@ fn one_or_more_devices<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Vec<Dev
     }
     names
         .iter()
-        .map(|name| {
-            Device::from_name(name).ok_or_else(|| {
-                let known: Vec<&str> = Device::ALL.iter().map(|d| d.name()).collect();
-                serde::de::Error::custom(format!(
-                    "unknown device {name:?} (known: {})",
-                    known.join(", ")
-                ))
-            })
-        })
+        .map(|name| name.parse().map_err(serde::de::Error::custom))
         .collect()
 }
 
