@@ -1,0 +1,129 @@
+// A null pipeline: processes that do nothing but wake each other through futex words in shared
+// memory, in the activation pattern of the paced pipeline's tick, all on CPU 0, each touching
+// PAGES distinct 4-KiB pages per activation. Prints the CPU (user + system) of all of them per
+// second of run: what the process split alone costs on this host, before any code of ours.
+//
+//   split:   the plant's timer wakes gyro, wheels and CMG gateways every tick and the
+//            inclinometer and magnetometer gateways every 4th; the sensor gateways ring the
+//            estimator, the estimator rings the controller (profile `simulation`, 8 processes)
+//   grouped: the plant wakes one gateway process, which rings the estimator, which rings the
+//            controller (profile `simulation-grouped`, 4 processes)
+//   timer:   the plant's timer alone
+//
+// gcc -O2 -o null-pipeline null-pipeline.c && ./null-pipeline split 30 150
+#define _GNU_SOURCE
+#include <linux/futex.h>
+#include <sched.h>
+#include <stdatomic.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/mman.h>
+#include <sys/resource.h>
+#include <sys/syscall.h>
+#include <sys/wait.h>
+#include <time.h>
+#include <unistd.h>
+
+enum { PLANT, GYRO, WHEELS, CMG, TILT, FIELD, ESTIMATOR, CONTROLLER, N };
+typedef struct { _Atomic uint32_t word; _Atomic uint32_t waiting; char pad[56]; } bell_t;
+static bell_t *bells;
+static _Atomic int *stop;
+static int rings[N]; /* bit mask of the processes each one rings after an activation */
+
+static void ring(int i) {
+  atomic_fetch_add(&bells[i].word, 1);
+  if (atomic_load(&bells[i].waiting)) syscall(SYS_futex, &bells[i].word, FUTEX_WAKE, 1, 0, 0, 0);
+}
+
+static uint32_t wait_bell(int i, uint32_t seen) {
+  for (;;) {
+    uint32_t now = atomic_load(&bells[i].word);
+    if (now != seen || atomic_load(stop)) return now;
+    atomic_store(&bells[i].waiting, 1);
+    struct timespec timeout = {0, 300000000};
+    syscall(SYS_futex, &bells[i].word, FUTEX_WAIT, seen, &timeout, 0, 0);
+    atomic_store(&bells[i].waiting, 0);
+  }
+}
+
+static char *pages_of_own(int pages) {
+  if (!pages) return 0;
+  char *mem = mmap(0, (size_t)pages * 4096, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+  memset(mem, 1, (size_t)pages * 4096);
+  return mem;
+}
+
+static void touch(char *mem, int pages) {
+  for (int k = 0; k < pages; k++) mem[(size_t)k * 4096]++;
+}
+
+static void process(int i, int pages) {
+  char *mem = pages_of_own(pages);
+  uint32_t seen = 0;
+  for (;;) {
+    seen = wait_bell(i, seen);
+    if (atomic_load(stop)) exit(0);
+    touch(mem, pages);
+    for (int t = 0; t < N; t++)
+      if (rings[i] & (1 << t)) ring(t);
+  }
+}
+
+int main(int argc, char **argv) {
+  const char *pattern = argc > 1 ? argv[1] : "split";
+  int seconds = argc > 2 ? atoi(argv[2]) : 30;
+  int pages = argc > 3 ? atoi(argv[3]) : 0;
+  cpu_set_t cpu0;
+  CPU_ZERO(&cpu0);
+  CPU_SET(0, &cpu0);
+  sched_setaffinity(0, sizeof cpu0, &cpu0);
+  char *shared = mmap(0, 4096, PROT_READ | PROT_WRITE, MAP_SHARED | MAP_ANONYMOUS, -1, 0);
+  bells = (bell_t *)shared;
+  stop = (_Atomic int *)(shared + 2048);
+  int every_tick = 0, every_4th = 0, started = 0;
+  if (!strcmp(pattern, "split")) {
+    every_tick = 1 << GYRO | 1 << WHEELS | 1 << CMG;
+    every_4th = 1 << TILT | 1 << FIELD;
+    rings[GYRO] = rings[TILT] = rings[FIELD] = 1 << ESTIMATOR;
+    rings[ESTIMATOR] = 1 << CONTROLLER;
+    started = every_tick | every_4th | 1 << ESTIMATOR | 1 << CONTROLLER;
+  } else if (!strcmp(pattern, "grouped")) {
+    every_tick = 1 << GYRO;
+    rings[GYRO] = 1 << ESTIMATOR;
+    rings[ESTIMATOR] = 1 << CONTROLLER;
+    started = every_tick | 1 << ESTIMATOR | 1 << CONTROLLER;
+  } else if (strcmp(pattern, "timer")) {
+    fprintf(stderr, "pattern must be split, grouped or timer, not %s\n", pattern);
+    return 2;
+  }
+  for (int i = 1; i < N; i++)
+    if (started & (1 << i) && fork() == 0) process(i, pages);
+  if (fork() == 0) {
+    char *mem = pages_of_own(pages);
+    struct timespec next;
+    clock_gettime(CLOCK_MONOTONIC, &next);
+    for (unsigned tick = 0; !atomic_load(stop); tick++) {
+      next.tv_nsec += 100000000;
+      if (next.tv_nsec >= 1000000000) { next.tv_nsec -= 1000000000; next.tv_sec++; }
+      clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &next, 0);
+      touch(mem, pages);
+      int mask = every_tick | (tick % 4 == 0 ? every_4th : 0);
+      for (int t = 0; t < N; t++)
+        if (mask & (1 << t)) ring(t);
+    }
+    exit(0);
+  }
+  sleep(seconds);
+  atomic_store(stop, 1);
+  for (int i = 0; i < N; i++) ring(i);
+  while (wait(0) > 0) {}
+  struct rusage children;
+  getrusage(RUSAGE_CHILDREN, &children);
+  double cpu = children.ru_utime.tv_sec + children.ru_utime.tv_usec * 1e-6 +
+               children.ru_stime.tv_sec + children.ru_stime.tv_usec * 1e-6;
+  printf("%-7s pages=%-4d %d s: %.3f %% of one core, %.1f us a tick\n", pattern, pages, seconds,
+         100 * cpu / seconds, cpu / (seconds * 10.0) * 1e6);
+  return 0;
+}
