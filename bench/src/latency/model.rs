@@ -49,7 +49,19 @@ pub struct Measurement {
     pub wait: Vec<(String, WaitCounts)>,
     /// Chain: where the time goes, stage by stage (hops and compute).
     pub stages: Vec<(String, Percentiles)>,
+    /// Each round on its own, in round order (`None`: the round failed): rows of one run
+    /// compared round by round, each pair measured minutes apart at most.
+    #[serde(default)]
+    pub rounds: Vec<Option<RoundStats>>,
     pub error: Option<String>,
+}
+
+/// What one round of a configuration measured.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub struct RoundStats {
+    pub latency: Percentiles,
+    /// Share of the machine's CPU time that was busy during the round (anyone's).
+    pub machine_busy: f64,
 }
 
 impl Measurement {
@@ -210,6 +222,16 @@ impl Plan {
             .iter()
             .filter_map(|p| p.as_ref().err().cloned())
             .collect();
+        m.rounds = parts
+            .iter()
+            .map(|part| {
+                let part = part.as_ref().ok()?;
+                (!part.latencies.is_empty()).then(|| RoundStats {
+                    latency: percentiles(&mut part.latencies.clone()),
+                    machine_busy: part.busy,
+                })
+            })
+            .collect();
         for part in parts.into_iter().flatten() {
             all.extend(part.latencies);
             for (name, times) in part.stages {
@@ -252,5 +274,79 @@ impl Plan {
         m.wall_s = wall.as_secs_f64();
         m.machine_busy = if m.wall_s > 0.0 { busy / m.wall_s } else { 0.0 };
         m
+    }
+}
+
+/// The ratio `value(a) / value(b)` of every round that both rows measured (round i of one
+/// against round i of the other: the configurations take turns within a round), in round order.
+pub fn round_ratios(
+    a: &Measurement,
+    b: &Measurement,
+    value: impl Fn(&Percentiles) -> f64,
+) -> Vec<f64> {
+    a.rounds
+        .iter()
+        .zip(&b.rounds)
+        .filter_map(|(a, b)| Some(value(&a.as_ref()?.latency) / value(&b.as_ref()?.latency)))
+        .filter(|ratio| ratio.is_finite())
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn part(latencies_us: &[u64]) -> Result<Part, String> {
+        Ok(Part {
+            latencies: latencies_us.iter().map(|us| us * 1000).collect(),
+            busy: 0.25,
+            wall: Duration::from_secs(1),
+            ..Part::default()
+        })
+    }
+
+    fn plan() -> Plan {
+        Plan {
+            kind: Kind::Chain,
+            transport: Transport::Uds,
+            size: 0,
+            count: 6,
+            interval_us: 500,
+            load: false,
+            binaries: false,
+            chain_cpu: None,
+        }
+    }
+
+    #[test]
+    fn rounds_keep_their_order_and_a_failed_round_its_place() {
+        let m = plan().merge(vec![
+            part(&[10, 20]),
+            Err("slow start".into()),
+            part(&[30, 40]),
+        ]);
+        let p50s: Vec<Option<f64>> = m
+            .rounds
+            .iter()
+            .map(|r| r.as_ref().map(|r| r.latency.p50))
+            .collect();
+        assert_eq!(p50s, [Some(10.0), None, Some(30.0)]);
+        assert_eq!(m.rounds[0].map(|r| r.machine_busy), Some(0.25));
+        assert_eq!(
+            m.latency.n, 4,
+            "the pooled distribution has every round that ran"
+        );
+    }
+
+    #[test]
+    fn round_ratios_pair_round_i_with_round_i_and_skip_a_round_either_lacks() {
+        let a = plan().merge(vec![part(&[20]), part(&[30]), Err("x".into()), part(&[50])]);
+        let b = plan().merge(vec![
+            part(&[10]),
+            Err("y".into()),
+            part(&[10]),
+            part(&[100]),
+        ]);
+        assert_eq!(round_ratios(&a, &b, |l| l.p50), [2.0, 0.5]);
     }
 }

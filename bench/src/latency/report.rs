@@ -263,6 +263,7 @@ fn fill(out: &mut String, r: &Report, key: &str) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::latency::model::RoundStats;
     use crate::latency::protocol::Transport;
     use testbed_bus::WaitStrategy;
 
@@ -324,6 +325,54 @@ mod tests {
         r
     }
 
+    /// `m` with one round per p99 given (p50 a quarter of it).
+    fn with_rounds(mut m: Measurement, p99s: &[f64]) -> Measurement {
+        m.rounds = p99s
+            .iter()
+            .map(|&p99| {
+                Some(RoundStats {
+                    latency: Percentiles {
+                        n: 25,
+                        p50: p99 / 4.0,
+                        p99,
+                        ..Percentiles::default()
+                    },
+                    machine_busy: 0.1,
+                })
+            })
+            .collect();
+        m
+    }
+
+    #[test]
+    fn the_checks_compare_the_chains_round_by_round_too() {
+        let mut r = report();
+        for m in &mut r.measurements {
+            let p99s: &[f64] = match (m.transport, m.load) {
+                (Transport::BUS, false) => &[90.0, 110.0, 95.0, 300.0],
+                (Transport::Uds, false) => &[100.0, 100.0, 100.0, 100.0],
+                (Transport::IoxPoll, false) => &[40.0, 40.0, 40.0, 40.0],
+                _ => continue,
+            };
+            *m = with_rounds(m.clone(), p99s);
+        }
+        let mut out = String::new();
+        checks_table(&mut out, &r);
+        let idle = out
+            .lines()
+            .find(|l| l.contains("| idle |") && l.contains("doorbell (block)"))
+            .expect("the idle bus row");
+        // p99 ratios 0.9, 1.1, 0.95, 3.0: the median of four is the higher middle one.
+        assert!(idle.contains("| 1.10× (2 of 4 ≤ 1) |"), "{idle}");
+        // p50 ratios against the floor's rounds (p50 10): 2.25, 2.75, 2.375, 7.5.
+        assert!(idle.contains("| 2.75× (3 of 4 ≤ 3) |"), "{idle}");
+        let loaded = out
+            .lines()
+            .find(|l| l.contains("| load |") && l.contains("doorbell (block)"))
+            .expect("the loaded bus row");
+        assert!(loaded.contains("| n/a |"), "no rounds recorded: {loaded}");
+    }
+
     #[test]
     fn under_load_a_busy_poll_slower_than_the_socket_is_no_floor() {
         let r = report();
@@ -359,7 +408,7 @@ mod tests {
         // free floor's 15.
         assert!(
             out.contains(
-                "| iceoryx2 + doorbell (block) — chain on CPU 0 | idle | 90.00 | 80.00 | **no** | 24.00 | 15.00 | 1.60× | **yes** |"
+                "| iceoryx2 + doorbell (block) — chain on CPU 0 | idle | 90.00 | 80.00 | **no** | n/a | 24.00 | 15.00 | 1.60× | **yes** | n/a |"
             ),
             "{out}"
         );

@@ -2,9 +2,10 @@
 //! every number next to its baselines of the same run (the busy-poll floor, the Unix socket,
 //! `block`).
 
-use crate::latency::model::{Kind, Measurement, Report};
+use crate::latency::model::{Kind, Measurement, Report, round_ratios};
 use crate::latency::protocol::Transport;
 use crate::latency::stats::Percentiles;
+use crate::median;
 use std::fmt::Write as _;
 
 /// More than this many times `block`'s CPU per message disqualifies a polling wait strategy
@@ -71,21 +72,38 @@ fn against(x: f64, y: f64) -> String {
 /// socket's (more polling processes than CPUs: they take turns at `sched_yield`). `None`
 /// where neither is a floor.
 pub fn floor_of(r: &Report, kind: Kind, load: bool, size: usize) -> Option<(f64, bool)> {
+    floor_row(r, kind, load, size).map(|(floor, idle)| (floor.latency.p50, idle))
+}
+
+/// The busy-poll row that is the floor of `load` (see [`floor_of`]), and whether it is the
+/// idle one standing in.
+fn floor_row(r: &Report, kind: Kind, load: bool, size: usize) -> Option<(&Measurement, bool)> {
     let is_floor = |load: bool| {
-        let floor = r
-            .find(kind, Transport::IoxPoll, load, size, false)?
-            .latency
-            .p50;
+        let floor = r.find(kind, Transport::IoxPoll, load, size, false)?;
         let uds = r
             .find(kind, Transport::Uds, load, size, false)
             .map_or(f64::INFINITY, |u| u.latency.p50);
-        (floor <= uds).then_some(floor)
+        (floor.latency.p50 <= uds).then_some(floor)
     };
     match is_floor(load) {
         Some(f) => Some((f, false)),
         None if load => is_floor(false).map(|f| (f, true)),
         None => None,
     }
+}
+
+/// Round-by-round ratios: their median and how many are at or below `bound`, e.g.
+/// "0.93× (3 of 4 ≤ 1)".
+fn rounds_cell(ratios: &[f64], bound: f64) -> String {
+    if ratios.is_empty() {
+        return "n/a".into();
+    }
+    let within = ratios.iter().filter(|r| **r <= bound).count();
+    format!(
+        "{:.2}× ({within} of {} ≤ {bound})",
+        median(ratios.to_vec()),
+        ratios.len()
+    )
 }
 
 /// The median ÷ the floor of the same load (or the idle floor, marked).
@@ -166,6 +184,10 @@ pub fn checks_table(out: &mut String, r: &Report) {
                 ),
                 None => ("none".into(), "n/a"),
             };
+            let p99_rounds = round_ratios(m, uds, |l| l.p99);
+            let p50_rounds = floor_row(r, Kind::Chain, m.load, 0)
+                .map(|(floor, _)| round_ratios(m, floor, |l| l.p50))
+                .unwrap_or_default();
             Some(vec![
                 m.label(),
                 load_name(m.load),
@@ -177,15 +199,17 @@ pub fn checks_table(out: &mut String, r: &Report) {
                     "**no**"
                 }
                 .into(),
+                rounds_cell(&p99_rounds, 1.0),
                 us(m.latency.p50),
                 floor,
                 floor_cell(r, m),
                 within.into(),
+                rounds_cell(&p50_rounds, 3.0),
             ])
         });
     table(
         out,
-        "chain | load | p99 µs | Unix socket p99 µs | p99 at or below the socket's | p50 µs | busy-poll floor p50 µs | p50 ÷ floor | within 3× of the floor",
+        "chain | load | p99 µs | Unix socket p99 µs | p99 at or below the socket's | p99 ÷ socket's, round by round (median) | p50 µs | busy-poll floor p50 µs | p50 ÷ floor | within 3× of the floor | p50 ÷ floor, round by round (median)",
         2,
         rows,
     );
