@@ -12,52 +12,14 @@
 //
 // gcc -O2 -o null-pipeline null-pipeline.c && ./null-pipeline split 30 150
 #define _GNU_SOURCE
-#include <linux/futex.h>
 #include <sched.h>
-#include <stdatomic.h>
-#include <stdint.h>
 #include <stdio.h>
-#include <stdlib.h>
-#include <string.h>
-#include <sys/mman.h>
 #include <sys/resource.h>
-#include <sys/syscall.h>
 #include <sys/wait.h>
-#include <time.h>
-#include <unistd.h>
+#include "probe.h"
 
 enum { PLANT, GYRO, WHEELS, CMG, TILT, FIELD, ESTIMATOR, CONTROLLER, N };
-typedef struct { _Atomic uint32_t word; _Atomic uint32_t waiting; char pad[56]; } bell_t;
-static bell_t *bells;
-static _Atomic int *stop;
 static int rings[N]; /* bit mask of the processes each one rings after an activation */
-
-static void ring(int i) {
-  atomic_fetch_add(&bells[i].word, 1);
-  if (atomic_load(&bells[i].waiting)) syscall(SYS_futex, &bells[i].word, FUTEX_WAKE, 1, 0, 0, 0);
-}
-
-static uint32_t wait_bell(int i, uint32_t seen) {
-  for (;;) {
-    uint32_t now = atomic_load(&bells[i].word);
-    if (now != seen || atomic_load(stop)) return now;
-    atomic_store(&bells[i].waiting, 1);
-    struct timespec timeout = {0, 300000000};
-    syscall(SYS_futex, &bells[i].word, FUTEX_WAIT, seen, &timeout, 0, 0);
-    atomic_store(&bells[i].waiting, 0);
-  }
-}
-
-static char *pages_of_own(int pages) {
-  if (!pages) return 0;
-  char *mem = mmap(0, (size_t)pages * 4096, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
-  memset(mem, 1, (size_t)pages * 4096);
-  return mem;
-}
-
-static void touch(char *mem, int pages) {
-  for (int k = 0; k < pages; k++) mem[(size_t)k * 4096]++;
-}
 
 static void process(int i, int pages) {
   char *mem = pages_of_own(pages);

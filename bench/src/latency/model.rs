@@ -222,17 +222,17 @@ impl Plan {
             .iter()
             .filter_map(|p| p.as_ref().err().cloned())
             .collect();
-        m.rounds = parts
-            .iter()
-            .map(|part| {
-                let part = part.as_ref().ok()?;
-                (!part.latencies.is_empty()).then(|| RoundStats {
-                    latency: percentiles(&mut part.latencies.clone()),
+        for part in parts {
+            let Ok(mut part) = part else {
+                m.rounds.push(None);
+                continue;
+            };
+            // Sorted in place by `percentiles`; the pooled distribution does not need the order.
+            m.rounds
+                .push((!part.latencies.is_empty()).then(|| RoundStats {
+                    latency: percentiles(&mut part.latencies),
                     machine_busy: part.busy,
-                })
-            })
-            .collect();
-        for part in parts.into_iter().flatten() {
+                }));
             all.extend(part.latencies);
             for (name, times) in part.stages {
                 match stages.iter_mut().find(|(n, _)| *n == name) {
