@@ -4,17 +4,11 @@
 // shared by more processes: does an activation cost more when more address spaces take turns?
 // gcc -O2 -o address-spaces address-spaces.c && ./address-spaces 8 150 3   (A P repeats)
 #define _GNU_SOURCE
-#include <sched.h>
 #include <stdio.h>
-#include <sys/resource.h>
 #include <sys/wait.h>
 #include "probe.h"
 
 static _Atomic int *left; /* activations still to come in this tick */
-
-static double cpu_s(const struct rusage *u) {
-  return u->ru_utime.tv_sec + u->ru_utime.tv_usec * 1e-6 + u->ru_stime.tv_sec + u->ru_stime.tv_usec * 1e-6;
-}
 
 // Ring process i of K: each activation touches its pages and passes the token on.
 static void member(int i, int K, int P) {
@@ -39,9 +33,7 @@ static double run(int K, int A, int P, int seconds) {
     struct timespec next;
     clock_gettime(CLOCK_MONOTONIC, &next);
     while (!atomic_load(stop)) {
-      next.tv_nsec += 100000000;
-      if (next.tv_nsec >= 1000000000) { next.tv_nsec -= 1000000000; next.tv_sec++; }
-      clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &next, 0);
+      sleep_to_next_tick(&next);
       atomic_store(left, A);
       ring(1);
     }
@@ -51,11 +43,9 @@ static double run(int K, int A, int P, int seconds) {
   }
   sleep(seconds);
   atomic_store(stop, 1);
-  struct rusage before, after;
-  getrusage(RUSAGE_CHILDREN, &before);
+  double before = children_cpu_s();
   waitpid(pid, 0, 0);
-  getrusage(RUSAGE_CHILDREN, &after);
-  return cpu_s(&after) - cpu_s(&before);
+  return children_cpu_s() - before;
 }
 
 int main(int argc, char **argv) {
@@ -64,11 +54,8 @@ int main(int argc, char **argv) {
     return 2;
   }
   int A = atoi(argv[1]), P = atoi(argv[2]), reps = atoi(argv[3]);
-  cpu_set_t cpu0;
-  CPU_ZERO(&cpu0);
-  CPU_SET(0, &cpu0);
-  sched_setaffinity(0, sizeof cpu0, &cpu0);
-  char *shared = mmap(0, 8192, PROT_READ | PROT_WRITE, MAP_SHARED | MAP_ANONYMOUS, -1, 0);
+  pin_to_cpu0();
+  char *shared = shared_memory(8192);
   bells = (bell_t *)shared;
   stop = (_Atomic int *)(shared + 4096);
   left = (_Atomic int *)(shared + 4160);

@@ -12,9 +12,7 @@
 //
 // gcc -O2 -o null-pipeline null-pipeline.c && ./null-pipeline split 30 150
 #define _GNU_SOURCE
-#include <sched.h>
 #include <stdio.h>
-#include <sys/resource.h>
 #include <sys/wait.h>
 #include "probe.h"
 
@@ -37,11 +35,8 @@ int main(int argc, char **argv) {
   const char *pattern = argc > 1 ? argv[1] : "split";
   int seconds = argc > 2 ? atoi(argv[2]) : 30;
   int pages = argc > 3 ? atoi(argv[3]) : 0;
-  cpu_set_t cpu0;
-  CPU_ZERO(&cpu0);
-  CPU_SET(0, &cpu0);
-  sched_setaffinity(0, sizeof cpu0, &cpu0);
-  char *shared = mmap(0, 4096, PROT_READ | PROT_WRITE, MAP_SHARED | MAP_ANONYMOUS, -1, 0);
+  pin_to_cpu0();
+  char *shared = shared_memory(4096);
   bells = (bell_t *)shared;
   stop = (_Atomic int *)(shared + 2048);
   int every_tick = 0, every_4th = 0, started = 0;
@@ -67,9 +62,7 @@ int main(int argc, char **argv) {
     struct timespec next;
     clock_gettime(CLOCK_MONOTONIC, &next);
     for (unsigned tick = 0; !atomic_load(stop); tick++) {
-      next.tv_nsec += 100000000;
-      if (next.tv_nsec >= 1000000000) { next.tv_nsec -= 1000000000; next.tv_sec++; }
-      clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &next, 0);
+      sleep_to_next_tick(&next);
       touch(mem, pages);
       int mask = every_tick | (tick % 4 == 0 ? every_4th : 0);
       for (int t = 0; t < N; t++)
@@ -81,10 +74,7 @@ int main(int argc, char **argv) {
   atomic_store(stop, 1);
   for (int i = 0; i < N; i++) ring(i);
   while (wait(0) > 0) {}
-  struct rusage children;
-  getrusage(RUSAGE_CHILDREN, &children);
-  double cpu = children.ru_utime.tv_sec + children.ru_utime.tv_usec * 1e-6 +
-               children.ru_stime.tv_sec + children.ru_stime.tv_usec * 1e-6;
+  double cpu = children_cpu_s();
   printf("%-7s pages=%-4d %d s: %.3f %% of one core, %.1f us a tick\n", pattern, pages, seconds,
          100 * cpu / seconds, cpu / (seconds * 10.0) * 1e6);
   return 0;
