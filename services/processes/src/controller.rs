@@ -11,7 +11,7 @@ use ipc_types::{
 };
 use std::time::Duration;
 use testbed_bus::{Flow, LoopExit, SourceId, TopicPublisher, TopicSubscriber, Wake};
-use testbed_flight::controller_node::ControllerNode;
+use testbed_flight::controller_node::{ControlCycle, ControllerNode};
 use testbed_flight::safe_mode::SafeTransition;
 use testbed_flight::tasks::ControllerTask;
 use testbed_runtime::{Context, Io, Node, WakeOn};
@@ -50,6 +50,8 @@ pub struct ControllerProcess {
     silent_deadlines: u64,
     /// The run's end (`run.duration_s`), ns: silence from then on is the run ending.
     run_end_ns: u64,
+    /// The cycles of one wake-up, a buffer kept for the run (a cycle allocates nothing).
+    cycles: Vec<ControlCycle>,
 }
 
 impl ControllerProcess {
@@ -85,6 +87,7 @@ impl ControllerProcess {
                 ack_sequence: 0,
                 silent_deadlines: 0,
                 run_end_ns: (config.run.duration_s * 1e9) as u64,
+                cycles: Vec::with_capacity(4),
             },
             ports,
         ))
@@ -161,7 +164,10 @@ impl Node for ControllerProcess {
         } else {
             None
         };
-        let mut cycles: Vec<_> = node.ready().into_iter().chain(silence).collect();
+        let cycles = &mut self.cycles;
+        cycles.clear();
+        node.ready_into(cycles);
+        cycles.extend(silence);
         // Telemetry the controller does not wait for wakes nothing (see
         // `telemetry_wake_from_ns`). Set before the commands go out, so that the telemetry
         // they cause finds it; then looked at once more, since telemetry sent before the
@@ -176,9 +182,9 @@ impl Node for ControllerProcess {
                 break;
             }
             io.heartbeat.add_samples_in(late as u64);
-            cycles.extend(node.ready());
+            node.ready_into(cycles);
         }
-        for cycle in cycles {
+        for cycle in cycles.drain(..) {
             io.heartbeat.set_time_ns(cycle.status.header.time_ns);
             ports.status.publish(&cycle.status)?;
             if let (Some(port), Some(thrusters)) = (&ports.thruster_command, &cycle.thrusters) {

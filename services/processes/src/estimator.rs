@@ -20,6 +20,8 @@ pub struct EstimatorProcess {
     node: EstimatorNode,
     /// Sample periods of the gyro, inclinometer and magnetometer (liveness of the inputs).
     periods: [Duration; 3],
+    /// The estimates of one wake-up, a buffer kept for the run (a tick allocates nothing).
+    estimates: Vec<AttitudeEstimate>,
 }
 
 impl EstimatorProcess {
@@ -39,7 +41,14 @@ impl EstimatorProcess {
             field: cx.bus.subscriber()?,
             estimate: cx.bus.publisher()?,
         };
-        Ok((Self { node, periods }, ports))
+        Ok((
+            Self {
+                node,
+                periods,
+                estimates: Vec::with_capacity(4),
+            },
+            ports,
+        ))
     }
 }
 
@@ -64,7 +73,8 @@ impl Node for EstimatorProcess {
             + ports.tilt.drain(|s| node.on_inclinometer(s))?
             + ports.field.drain(|s| node.on_magnetometer(s))?;
         io.heartbeat.add_samples_in(received as u64);
-        for estimate in node.ready() {
+        node.ready_into(&mut self.estimates);
+        for estimate in self.estimates.drain(..) {
             io.heartbeat.set_time_ns(estimate.header.time_ns);
             ports.estimate.publish(&estimate)?;
             io.heartbeat.add_samples_out(1);

@@ -323,6 +323,14 @@ impl ControllerNode {
     /// overtaken by a later estimate runs with what it has (missing telemetry reads as zero).
     /// Once the estimate is lost, every tick with actuator telemetry runs in safe mode.
     pub fn ready(&mut self) -> Vec<ControlCycle> {
+        let mut out = Vec::new();
+        self.ready_into(&mut out);
+        out
+    }
+
+    /// [`Self::ready`] appending to `out`, which is not cleared: a process keeps one buffer for
+    /// the run, so that a cycle allocates nothing.
+    pub fn ready_into(&mut self, out: &mut Vec<ControlCycle>) {
         let estimate_lost = self.estimate_lost();
         let newest_estimate = self
             .pending
@@ -330,7 +338,6 @@ impl ControllerNode {
             .rev()
             .find(|(_, p)| p.estimate.is_some())
             .map(|(t, _)| *t);
-        let mut out = Vec::new();
         while let Some((&t_ns, p)) = self.pending.first_key_value() {
             let complete = p.estimate.is_some() && p.wheels.is_some() && p.cmg.is_some();
             let overtaken = newest_estimate.is_some_and(|n| n > t_ns);
@@ -347,7 +354,6 @@ impl ControllerNode {
                 out.push(self.cycle(t_ns, &p));
             }
         }
-        out
     }
 
     fn cycle(&mut self, t_ns: u64, p: &Pending) -> ControlCycle {

@@ -115,13 +115,20 @@ impl EstimatorNode {
 
     /// Process every tick that is complete or overtaken, oldest first; one estimate each.
     pub fn ready(&mut self) -> Vec<AttitudeEstimate> {
+        let mut out = Vec::new();
+        self.ready_into(&mut out);
+        out
+    }
+
+    /// [`Self::ready`] appending to `out`, which is not cleared: a process keeps one buffer for
+    /// the run, so that a tick allocates nothing.
+    pub fn ready_into(&mut self, out: &mut Vec<AttitudeEstimate>) {
         let newest_gyro = self
             .pending
             .iter()
             .rev()
             .find(|(_, p)| p.gyro.is_some())
             .map(|(t, _)| *t);
-        let mut out = Vec::new();
         while let Some((&t_ns, pending)) = self.pending.first_key_value() {
             let overtaken = newest_gyro.is_some_and(|newest| newest > t_ns);
             if !(self.complete(t_ns, pending) || overtaken) {
@@ -134,7 +141,6 @@ impl EstimatorNode {
                 out.push(estimate);
             }
         }
-        out
     }
 
     fn process(&mut self, t_ns: u64, p: &Pending) -> Option<AttitudeEstimate> {

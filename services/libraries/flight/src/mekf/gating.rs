@@ -5,46 +5,50 @@
 //! block's tangent basis).
 
 use super::spd_factor::SpdFactor;
-use super::update::{BlockData, Linearised};
+use super::update::{Blocks, Linearised};
 use super::{Block, BlockStatus, InnovationStats, Mekf, MekfError, UpdateReport};
 use crate::stats::chi_square_quantile;
-use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
+use nalgebra::{Matrix3, Matrix6, SVector, Vector3};
 
 impl Mekf {
     /// Gate each block on its own innovation, computed with the prior state and the rate
     /// estimate; records each block's statistics and status (`Applied` provisionally, confirmed
-    /// by the update) in `report` and returns the accepted blocks, in order.
+    /// by the update) in `report` and returns the accepted blocks, indexed by [`Block`].
     pub(super) fn gate_blocks(
         &self,
-        blocks: &[(Block, BlockData)],
+        blocks: &Blocks,
         lag_s: f64,
         report: &mut UpdateReport,
-    ) -> Vec<BlockData> {
+    ) -> Blocks {
         let w_hat = self.last_w_meas.unwrap_or(self.bias) - self.bias;
-        let mut accepted: Vec<BlockData> = Vec::with_capacity(2);
-        for (block, data) in blocks {
+        let mut accepted: Blocks = [None; 2];
+        for (block, data) in [Block::Gravity, Block::Magnetic]
+            .into_iter()
+            .zip(blocks)
+            .filter_map(|(block, data)| Some((block, data.as_ref()?)))
+        {
             let lin = self.linearise(data, &self.q, &w_hat, lag_s);
-            let s =
-                &lin.h * DMatrix::from_column_slice(6, 6, self.p.as_slice()) * lin.h.transpose()
-                    + &lin.r;
             let result = match block {
                 Block::Gravity => &mut report.gravity,
                 Block::Magnetic => &mut report.magnetic,
             };
-            let Some(factor) = SpdFactor::new(&s) else {
-                result.status = BlockStatus::NotInvertible;
-                continue;
-            };
             let threshold = if self.config.gate_enabled {
-                self.gate[*block as usize]
+                self.gate[block as usize]
             } else {
                 f64::INFINITY
             };
-            let stats = innovation_stats(&lin, &s, &factor, threshold);
+            let stats = match lin.dim {
+                2 => innovation_stats::<2>(&lin, &self.p, threshold),
+                _ => innovation_stats::<3>(&lin, &self.p, threshold),
+            };
+            let Some(stats) = stats else {
+                result.status = BlockStatus::NotInvertible;
+                continue;
+            };
             result.stats = Some(stats);
             if stats.nis.is_finite() && stats.nis <= threshold {
                 result.status = BlockStatus::Applied; // provisional; confirmed below
-                accepted.push(*data);
+                accepted[block as usize] = Some(*data);
             } else {
                 result.status = BlockStatus::Rejected;
             }
@@ -67,16 +71,19 @@ pub(super) fn gate_thresholds(p: f64) -> Result<[f64; 2], MekfError> {
     }
 }
 
-/// NIS, whitened and normalised innovations of one linearised block.
-fn innovation_stats(
+/// NIS, whitened and normalised innovations of one linearised block of `D` rows with the prior
+/// covariance `p`, or `None` if its innovation covariance `S` is not invertible.
+fn innovation_stats<const D: usize>(
     lin: &Linearised,
-    s: &DMatrix<f64>,
-    factor: &SpdFactor,
+    p: &Matrix6<f64>,
     threshold: f64,
-) -> InnovationStats {
+) -> Option<InnovationStats> {
+    let (nu, h, r) = lin.sized::<D>();
+    let s = h * p * h.transpose() + r;
+    let factor = SpdFactor::new(&s)?;
     let w = factor
-        .whiten(&lin.nu)
-        .unwrap_or_else(|| DVector::from_element(lin.nu.len(), f64::NAN));
+        .whiten(&nu)
+        .unwrap_or_else(|| SVector::<f64, D>::from_element(f64::NAN));
     let nis = w.norm_squared();
     let mut whitened = Vector3::zeros();
     for (i, x) in w.iter().enumerate().take(3) {
@@ -86,7 +93,7 @@ fn innovation_stats(
     let (nu_b, s_b) = match &lin.basis {
         Some(t) => {
             let s2 = nalgebra::Matrix2::from_column_slice(s.as_slice());
-            let nu2 = nalgebra::Vector2::from_column_slice(lin.nu.as_slice());
+            let nu2 = lin.nu.fixed_rows::<2>(0).into_owned();
             (t * nu2, t * s2 * t.transpose())
         }
         None => (lin.residual, Matrix3::from_column_slice(s.as_slice())),
@@ -101,15 +108,15 @@ fn innovation_stats(
             mask[i] = true;
         }
     }
-    InnovationStats {
+    Some(InnovationStats {
         residual: lin.residual,
         whitened,
         normalised,
         normalised_mask: mask,
         nis,
-        dof: lin.nu.len(),
+        dof: D,
         threshold,
-    }
+    })
 }
 
 #[cfg(test)]

@@ -2,47 +2,50 @@
 //! definite; the gravity block is dimensionless, the magnetic block in tesla², up to 1e-15
 //! apart): Cholesky after symmetric diagonal equilibration, refusing ill-conditioned matrices.
 //! Used for the gate's NIS and whitened innovations and for the Kalman gain.
+//!
+//! Sized at compile time (`D` = 2, 3 or 5: gravity, magnetic field, both), so a factorisation
+//! lives on the stack: the update allocates nothing.
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::{Cholesky, Const, SMatrix, SVector};
 
 /// Smallest pivot² of the equilibrated (unit-diagonal) innovation covariance accepted by the
 /// factorisation: a condition number of about 1e12.
 const MIN_PIVOT_SQ: f64 = 1e-12;
 
-/// Cholesky factor of an equilibrated symmetric positive definite matrix: `S = D⁻¹ L Lᵀ D⁻¹`
-/// with `D = diag(1/sqrt(S_ii))`.
-pub(super) struct SpdFactor {
-    d: DVector<f64>,
-    l: DMatrix<f64>,
-    chol: nalgebra::Cholesky<f64, nalgebra::Dyn>,
+/// Cholesky factor of an equilibrated symmetric positive definite `D×D` matrix:
+/// `S = D⁻¹ L Lᵀ D⁻¹` with `D = diag(1/sqrt(S_ii))`.
+pub(super) struct SpdFactor<const D: usize> {
+    d: SVector<f64, D>,
+    l: SMatrix<f64, D, D>,
+    chol: Cholesky<f64, Const<D>>,
 }
 
-impl SpdFactor {
-    pub(super) fn new(s: &DMatrix<f64>) -> Option<Self> {
-        let n = s.nrows();
-        let mut d = DVector::zeros(n);
-        for i in 0..n {
+impl<const D: usize> SpdFactor<D> {
+    pub(super) fn new(s: &SMatrix<f64, D, D>) -> Option<Self> {
+        let mut d = SVector::<f64, D>::zeros();
+        for i in 0..D {
             let sii = s[(i, i)];
             if !(sii.is_finite() && sii > 0.0) {
                 return None;
             }
             d[i] = 1.0 / sii.sqrt();
         }
-        let scaled = DMatrix::from_fn(n, n, |i, j| 0.5 * (s[(i, j)] + s[(j, i)]) * d[i] * d[j]);
+        let scaled =
+            SMatrix::<f64, D, D>::from_fn(|i, j| 0.5 * (s[(i, j)] + s[(j, i)]) * d[i] * d[j]);
         if !scaled.iter().all(|x| x.is_finite()) {
             return None;
         }
         let chol = scaled.cholesky()?;
         let l = chol.l();
-        if (0..n).any(|i| l[(i, i)] * l[(i, i)] < MIN_PIVOT_SQ) {
+        if (0..D).any(|i| l[(i, i)] * l[(i, i)] < MIN_PIVOT_SQ) {
             return None;
         }
         Some(Self { d, l, chol })
     }
 
     /// `S⁻¹ b`.
-    pub(super) fn solve(&self, b: &DMatrix<f64>) -> DMatrix<f64> {
-        let mut x = b.clone();
+    pub(super) fn solve<const C: usize>(&self, b: &SMatrix<f64, D, C>) -> SMatrix<f64, D, C> {
+        let mut x = *b;
         for (i, mut row) in x.row_iter_mut().enumerate() {
             row *= self.d[i];
         }
@@ -54,7 +57,7 @@ impl SpdFactor {
     }
 
     /// Whitened vector `L_S⁻¹ v` with `S = L_S L_Sᵀ` (`L_S = D⁻¹ L`, lower triangular).
-    pub(super) fn whiten(&self, v: &DVector<f64>) -> Option<DVector<f64>> {
+    pub(super) fn whiten(&self, v: &SVector<f64, D>) -> Option<SVector<f64, D>> {
         self.l.solve_lower_triangular(&v.component_mul(&self.d))
     }
 }

@@ -7,7 +7,9 @@
 use super::model::{MIN_GRAVITY_Z, inclinometer_covariance, measurement_jacobian, tangent_basis};
 use super::spd_factor::SpdFactor;
 use super::{Block, BlockResult, BlockStatus, Mekf, MekfError, NS_PER_S, UpdateReport, symmetrise};
-use nalgebra::{DMatrix, DVector, Matrix2x3, Matrix3, Matrix3x2, Matrix6, Vector3, Vector6};
+use nalgebra::{
+    Matrix2x3, Matrix3, Matrix3x2, Matrix3x6, Matrix6, SMatrix, SVector, Vector3, Vector6,
+};
 use testbed_model::attitude::{self, Attitude};
 
 /// Relinearise the update when the correction exceeds this, rad (see [`mekf`](super), "Iterated
@@ -24,6 +26,9 @@ pub struct VectorMeasurements {
     pub field_b_t: Option<Vector3<f64>>,
 }
 
+/// The usable blocks of an update, indexed by [`Block`] (`None`: absent, invalid or rejected).
+pub(super) type Blocks = [Option<BlockData>; 2];
+
 /// One measurement block ready for linearisation.
 #[derive(Debug, Clone, Copy)]
 pub(super) enum BlockData {
@@ -33,18 +38,36 @@ pub(super) enum BlockData {
     Magnetic { y: Vector3<f64>, r: Matrix3<f64> },
 }
 
-/// A block linearised about one state.
+/// A block linearised about one state, in the leading `dim` rows (and columns) of fixed 3-row
+/// storage: 2 for the gravity block, 3 for the magnetic block (the rest is zero). Fixed sizes
+/// keep the update on the stack.
 pub(super) struct Linearised {
-    /// Innovation (2 or 3 components).
-    pub(super) nu: DVector<f64>,
-    /// Sensitivity to `[δθ, δb]` (2×6 or 3×6).
-    pub(super) h: DMatrix<f64>,
-    /// Measurement covariance (2×2 or 3×3).
-    pub(super) r: DMatrix<f64>,
+    /// Rows the block contributes: 2 (gravity, tangent plane) or 3 (magnetic field).
+    pub(super) dim: usize,
+    /// Innovation, first `dim` components.
+    pub(super) nu: Vector3<f64>,
+    /// Sensitivity to `[δθ, δb]`, first `dim` rows.
+    pub(super) h: Matrix3x6<f64>,
+    /// Measurement covariance, leading `dim × dim`.
+    pub(super) r: Matrix3<f64>,
     /// Raw 3-D residual `y − A r`.
     pub(super) residual: Vector3<f64>,
     /// Tangent basis of the gravity block (None for the magnetic block).
     pub(super) basis: Option<Matrix3x2<f64>>,
+}
+
+impl Linearised {
+    /// The block's innovation, sensitivity and covariance at its size `D` (= `dim`).
+    pub(super) fn sized<const D: usize>(
+        &self,
+    ) -> (SVector<f64, D>, SMatrix<f64, D, 6>, SMatrix<f64, D, D>) {
+        debug_assert_eq!(self.dim, D);
+        (
+            self.nu.fixed_rows::<D>(0).into_owned(),
+            self.h.fixed_rows::<D>(0).into_owned(),
+            self.r.fixed_view::<D, D>(0, 0).into_owned(),
+        )
+    }
 }
 
 impl Mekf {
@@ -88,11 +111,11 @@ impl Mekf {
             correction: Vector6::zeros(),
         };
 
-        // Collect the usable blocks.
-        let mut blocks: Vec<(Block, BlockData)> = Vec::with_capacity(2);
+        // Collect the usable blocks, indexed by `Block`.
+        let mut blocks: Blocks = [None; 2];
         if let Some([theta, phi]) = meas.tilt_rad {
             match self.gravity_block(theta, phi) {
-                Some(data) => blocks.push((Block::Gravity, data)),
+                Some(data) => blocks[Block::Gravity as usize] = Some(data),
                 None => report.gravity.status = BlockStatus::Invalid,
             }
         }
@@ -100,7 +123,7 @@ impl Mekf {
             if m.iter().all(|x| x.is_finite()) {
                 let sigma = Vector3::from(self.config.magnetometer_sigma_t);
                 let r = Matrix3::from_diagonal(&sigma.component_mul(&sigma));
-                blocks.push((Block::Magnetic, BlockData::Magnetic { y: m, r }));
+                blocks[Block::Magnetic as usize] = Some(BlockData::Magnetic { y: m, r });
             } else {
                 report.magnetic.status = BlockStatus::Invalid;
             }
@@ -109,8 +132,15 @@ impl Mekf {
         // Gate each block on its own innovation, with the prior.
         let accepted = self.gate_blocks(&blocks, lag_s, &mut report);
 
-        if !accepted.is_empty() {
-            match self.apply(&accepted, lag_s) {
+        // The joint update at the size of the accepted blocks stacked.
+        let applied = match accepted {
+            [Some(gravity), Some(magnetic)] => Some(self.apply::<5>(&[gravity, magnetic], lag_s)),
+            [Some(gravity), None] => Some(self.apply::<2>(&[gravity], lag_s)),
+            [None, Some(magnetic)] => Some(self.apply::<3>(&[magnetic], lag_s)),
+            [None, None] => None,
+        };
+        if let Some(applied) = applied {
+            match applied {
                 Some((iterations, correction)) => {
                     report.iterations = iterations;
                     report.correction = correction;
@@ -184,21 +214,27 @@ impl Mekf {
                 let t = tangent_basis(&a);
                 let tt: Matrix2x3<f64> = t.transpose();
                 let residual = y - a;
-                Linearised {
-                    nu: DVector::from_column_slice((tt * residual).as_slice()),
-                    h: DMatrix::from_column_slice(2, 6, (tt * h3).as_slice()),
-                    r: DMatrix::from_column_slice(2, 2, (tt * r * t).as_slice()),
+                let mut lin = Linearised {
+                    dim: 2,
+                    nu: Vector3::zeros(),
+                    h: Matrix3x6::zeros(),
+                    r: Matrix3::zeros(),
                     residual,
                     basis: Some(t),
-                }
+                };
+                lin.nu.fixed_rows_mut::<2>(0).copy_from(&(tt * residual));
+                lin.h.fixed_rows_mut::<2>(0).copy_from(&(tt * h3));
+                lin.r.fixed_view_mut::<2, 2>(0, 0).copy_from(&(tt * r * t));
+                lin
             }
             BlockData::Magnetic { y, r } => {
                 let (a, h3) = measurement_jacobian(q, &self.field_l, w_hat, lag_s);
                 let residual = y - a;
                 Linearised {
-                    nu: DVector::from_column_slice(residual.as_slice()),
-                    h: DMatrix::from_column_slice(3, 6, h3.as_slice()),
-                    r: DMatrix::from_column_slice(3, 3, r.as_slice()),
+                    dim: 3,
+                    nu: residual,
+                    h: h3,
+                    r: *r,
                     residual,
                     basis: None,
                 }
@@ -206,43 +242,46 @@ impl Mekf {
         }
     }
 
-    /// Joint (iterated) update with the accepted blocks. Returns the number of linearisations and
-    /// the applied correction, or `None` (state untouched) if `S` is not invertible.
-    fn apply(&mut self, blocks: &[BlockData], lag_s: f64) -> Option<(u32, Vector6<f64>)> {
-        let p = DMatrix::from_column_slice(6, 6, self.p.as_slice());
+    /// Joint (iterated) update with the accepted blocks, stacked in `M` rows (2 gravity, 3
+    /// magnetic field, 5 both). Returns the number of linearisations and the applied correction,
+    /// or `None` (state untouched) if `S` is not invertible.
+    fn apply<const M: usize>(
+        &mut self,
+        blocks: &[BlockData],
+        lag_s: f64,
+    ) -> Option<(u32, Vector6<f64>)> {
+        let p = self.p;
         let w_meas = self.last_w_meas.unwrap_or(self.bias);
-        let mut delta = DVector::<f64>::zeros(6);
+        let mut delta = Vector6::<f64>::zeros();
         let mut iterations = 0;
-        let mut last: Option<(DMatrix<f64>, DMatrix<f64>, DMatrix<f64>)> = None; // K, H, R
+        let mut last: Option<(SMatrix<f64, 6, M>, SMatrix<f64, M, 6>, SMatrix<f64, M, M>)> = None; // K, H, R
         while iterations < self.config.max_update_iterations {
             iterations += 1;
             let dtheta = Vector3::new(delta[0], delta[1], delta[2]);
             let q_i = attitude::apply_error(&self.q, &dtheta);
             let b_i = self.bias + Vector3::new(delta[3], delta[4], delta[5]);
             let w_hat = w_meas - b_i;
-            let lins: Vec<Linearised> = blocks
-                .iter()
-                .map(|b| self.linearise(b, &q_i, &w_hat, lag_s))
-                .collect();
-            let m: usize = lins.iter().map(|l| l.nu.len()).sum();
-            let mut h = DMatrix::<f64>::zeros(m, 6);
-            let mut nu = DVector::<f64>::zeros(m);
-            let mut r = DMatrix::<f64>::zeros(m, m);
+            let mut h = SMatrix::<f64, M, 6>::zeros();
+            let mut nu = SVector::<f64, M>::zeros();
+            let mut r = SMatrix::<f64, M, M>::zeros();
             let mut row = 0;
-            for l in &lins {
-                let k = l.nu.len();
-                h.view_mut((row, 0), (k, 6)).copy_from(&l.h);
-                nu.rows_mut(row, k).copy_from(&l.nu);
-                r.view_mut((row, row), (k, k)).copy_from(&l.r);
+            for block in blocks {
+                let l = self.linearise(block, &q_i, &w_hat, lag_s);
+                let k = l.dim;
+                h.view_mut((row, 0), (k, 6)).copy_from(&l.h.rows(0, k));
+                nu.rows_mut(row, k).copy_from(&l.nu.rows(0, k));
+                r.view_mut((row, row), (k, k))
+                    .copy_from(&l.r.view((0, 0), (k, k)));
                 row += k;
             }
-            let s = &h * &p * h.transpose() + &r;
+            debug_assert_eq!(row, M, "the blocks stack to M rows");
+            let s = h * p * h.transpose() + r;
             let factor = SpdFactor::new(&s)?;
             // K = P Hᵀ S⁻¹  ⇔  Kᵀ = S⁻¹ H P (S, P symmetric).
-            let gain = factor.solve(&(&h * &p)).transpose();
+            let gain = factor.solve(&(h * p)).transpose();
             // Gauss–Newton step of the iterated EKF: δ_{i+1} = K_i (ν_i + H_i δ_i).
-            let next = &gain * (&nu + &h * &delta);
-            let change = (next.rows(0, 3) - delta.rows(0, 3)).norm();
+            let next = gain * (nu + h * delta);
+            let change = (next.fixed_rows::<3>(0) - delta.fixed_rows::<3>(0)).norm();
             delta = next;
             last = Some((gain, h, r));
             if !delta.iter().all(|x| x.is_finite()) {
@@ -254,13 +293,12 @@ impl Mekf {
         }
         let (gain, h, r) = last?;
         // Joseph form: P⁺ = (I − K H) P (I − K H)ᵀ + K R Kᵀ.
-        let i_kh = DMatrix::<f64>::identity(6, 6) - &gain * &h;
-        let p_new = &i_kh * &p * i_kh.transpose() + &gain * &r * gain.transpose();
-        let p_new = Matrix6::from_column_slice(p_new.as_slice());
+        let i_kh = Matrix6::<f64>::identity() - gain * h;
+        let p_new = i_kh * p * i_kh.transpose() + gain * r * gain.transpose();
         if !p_new.iter().all(|x| x.is_finite()) {
             return None;
         }
-        let correction = Vector6::from_column_slice(delta.as_slice());
+        let correction = delta;
         self.q = attitude::apply_error(&self.q, &correction.fixed_rows::<3>(0).into_owned());
         self.q.renormalize();
         self.bias += correction.fixed_rows::<3>(3);
