@@ -19,7 +19,7 @@ use ipc_types::{
 };
 use std::time::{Duration, Instant};
 use testbed_bus::{Bus, BusError, Flow, LoopExit, SourceId, TopicPublisher, TopicSubscriber, Wake};
-use testbed_can::{FrameBatch, Sample, TransportError};
+use testbed_can::{EncodeError, FrameBatch, Sample, TransportError};
 use testbed_gateways::bus_transport::SoftwareBusTransport;
 use testbed_gateways::gateway::{Gateway, GatewayDevice, Served};
 use testbed_gateways::node;
@@ -131,6 +131,9 @@ pub struct CanGateway {
     link: LinkState,
     /// The thruster gateway's checks and estimate.
     thrusters: Option<ThrusterSide>,
+    /// The encoded commands of one wake-up, a buffer kept for the run (a command allocates
+    /// nothing).
+    command_batches: Vec<(u64, Result<FrameBatch, EncodeError>)>,
 }
 
 /// A SocketCAN interface's up/down state as the gateway last saw it.
@@ -215,6 +218,7 @@ impl CanGateway {
             period: Duration::from_nanos(schedule.period_ns),
             command_source: None,
             zeroed: false,
+            command_batches: Vec::with_capacity(4),
             link: LinkState {
                 down: false,
                 losses: 0,
@@ -319,16 +323,15 @@ impl CanGateway {
                 (None, None) => 0,
             };
             self.gateway.set_link_check_errors(rejected);
-            if let Some(t_ns) = outcome.tick.filter(|_| !outcome.samples.is_empty()) {
+            if let Some(t_ns) = outcome.tick.filter(|_| outcome.sample.is_some()) {
                 // The status goes out before the samples, which let the lockstep run go on; only
                 // at ticks with a sample (where the run waits for this gateway), so the status
                 // is always logged within its tick.
                 self.publish_status(ports, io, t_ns)?;
             }
-            for sample in &outcome.samples {
-                self.latest_ns = testbed_gateways::gateway::sample_header(sample).time_ns;
+            if let Some(mut sample) = outcome.sample {
+                self.latest_ns = testbed_gateways::gateway::sample_header(&sample).time_ns;
                 io.heartbeat.set_time_ns(self.latest_ns);
-                let mut sample = *sample;
                 if let (Sample::ThrusterStatus(status), Some(side)) =
                     (&mut sample, self.thrusters.as_mut())
                     && let Some(stuck) = side.on_status(status)
@@ -354,7 +357,7 @@ impl CanGateway {
     /// Limits, encodes and sends every pending command.
     fn send_commands(&mut self, ports: &CanGatewayPorts, io: &Io) -> anyhow::Result<()> {
         let gateway = &mut self.gateway;
-        let mut batches = Vec::new();
+        let mut batches = std::mem::take(&mut self.command_batches);
         let drained = match (
             &ports.wheel_commands,
             &ports.cmg_commands,
@@ -392,7 +395,8 @@ impl CanGateway {
                 0.0,
             );
         }
-        self.send_batches(ports, io, batches);
+        self.send_batches(ports, io, batches.drain(..));
+        self.command_batches = batches;
         Ok(())
     }
 
@@ -420,14 +424,14 @@ impl CanGateway {
                 (self.period * testbed_runtime::health::LOST_AFTER_PERIODS).as_secs_f64(),
             );
         }
-        self.send_batches(ports, io, vec![(self.latest_ns, batch)]);
+        self.send_batches(ports, io, [(self.latest_ns, batch)]);
     }
 
     fn send_batches<E: std::fmt::Display>(
         &mut self,
         ports: &CanGatewayPorts,
         io: &Io,
-        batches: Vec<(u64, Result<FrameBatch, E>)>,
+        batches: impl IntoIterator<Item = (u64, Result<FrameBatch, E>)>,
     ) {
         let gateway = &mut self.gateway;
         for (t_ns, batch) in batches {

@@ -42,7 +42,7 @@ fn gyro_samples(link: &mut Link, config: &RunConfig, n: usize) -> Vec<Sample> {
     let start = Instant::now();
     while out.len() < n && start.elapsed() < Duration::from_secs(5) {
         match link.poll() {
-            Ok(Some(f)) => out.extend(gateway.on_frame(&f.frame).samples),
+            Ok(Some(f)) => out.extend(gateway.on_frame(&f.frame).sample),
             Ok(None) => std::thread::sleep(Duration::from_millis(1)),
             Err(e) => panic!("{e}"),
         }

@@ -1,7 +1,7 @@
 //! A device gateway's logic, without I/O: frames in, samples out; commands in, frames out.
 //!
 //! [`Gateway::on_frame`] takes every frame its link delivers (after the link's own checks) and
-//! returns the samples to publish; [`Gateway::wheel_command`] / [`Gateway::cmg_command`] limit
+//! returns the sample to publish, if any; [`Gateway::wheel_command`] / [`Gateway::cmg_command`] limit
 //! a command and encode it into the frames to send. The process shell (`crate::run`) moves
 //! frames and samples between this and the bus.
 //!
@@ -221,8 +221,8 @@ fn sample_header_mut(sample: &mut Sample) -> &mut SampleHeader {
 pub struct FrameOutcome {
     /// The frame was the node's tick sync for this run-clock time (tick-sync mode).
     pub tick: Option<u64>,
-    /// Samples to publish, in order.
-    pub samples: Vec<Sample>,
+    /// The sample to publish, if any (a frame completes or closes at most one).
+    pub sample: Option<Sample>,
 }
 
 /// The node's µs stamp on the run clock: extended to 64 bits, in ns, and snapped to the
@@ -468,7 +468,7 @@ impl Gateway {
                 } else {
                     FrameOutcome {
                         tick: None,
-                        samples: vec![self.publish(t_ns, sample)],
+                        sample: Some(self.publish(t_ns, sample)),
                     }
                 }
             }
@@ -496,7 +496,7 @@ impl Gateway {
     fn on_sync(&mut self, t_ns: u64) -> FrameOutcome {
         let mut out = FrameOutcome {
             tick: Some(t_ns),
-            samples: Vec::new(),
+            sample: None,
         };
         if self.published_until.is_some_and(|p| t_ns <= p) {
             return out;
@@ -507,7 +507,7 @@ impl Gateway {
             .is_some_and(|k| self.device.due(&self.schedule, k));
         match self.completed.take() {
             Some((t, sample)) if t == t_ns => {
-                out.samples.push(self.publish(t_ns, sample));
+                out.sample = Some(self.publish(t_ns, sample));
                 self.closed_counter = self
                     .current_counter
                     .take()
@@ -524,8 +524,7 @@ impl Gateway {
                     header.flags =
                         (header.flags & SampleHeader::SATURATED_ANY) | SampleHeader::STALE;
                     self.stale_samples += 1;
-                    let sample = self.publish(t_ns, stale);
-                    out.samples.push(sample);
+                    out.sample = Some(self.publish(t_ns, stale));
                     self.closed_counter = self
                         .current_counter
                         .take()
@@ -617,7 +616,7 @@ mod tests {
     }
 
     fn published(g: &mut Gateway, frames: &[CanFrame]) -> Vec<Sample> {
-        frames.iter().flat_map(|f| g.on_frame(f).samples).collect()
+        frames.iter().filter_map(|f| g.on_frame(f).sample).collect()
     }
 
     #[test]

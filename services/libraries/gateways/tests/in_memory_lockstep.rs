@@ -63,7 +63,7 @@ fn run(config: &RunConfig) -> Outcome {
         for (gateway, check_errors) in &mut gateways {
             for frame in &frames {
                 match frame {
-                    TxFrame::Send(f) => samples.extend(gateway.on_frame(f).samples),
+                    TxFrame::Send(f) => samples.extend(gateway.on_frame(f).sample),
                     TxFrame::Corrupt(..) => {
                         *check_errors += 1;
                         gateway.set_link_check_errors(*check_errors);
