@@ -83,6 +83,17 @@ pub struct Applied {
     pub thrusters: Option<AppliedThrusterCommand>,
 }
 
+impl Applied {
+    /// The wheel torques and gimbal rates as applied, as commands (what the plant and the
+    /// simulated actuators take).
+    pub fn commands(&self) -> (WheelCommand, CmgCommand) {
+        (
+            WheelCommand::new(self.wheel.header, self.wheel.torque),
+            CmgCommand::new(self.cmg.header, self.cmg.gimbal_rate),
+        )
+    }
+}
+
 /// The node's side of the thruster valves.
 struct NodeThrusters {
     /// The valves as their position sensors read them (a copy of the plant's valve model).
@@ -593,15 +604,15 @@ impl SimCanNode {
                 _pad0: 0,
             }
         });
-        // The telemetry of the next tick reports the commands in effect.
-        self.wheels
-            .on_command(&WheelCommand::new(wheel.header, wheel.torque));
-        self.cmg
-            .on_command(&CmgCommand::new(cmg.header, cmg.gimbal_rate));
-        Applied {
+        let applied = Applied {
             wheel,
             cmg,
             thrusters,
-        }
+        };
+        // The telemetry of the next tick reports the commands in effect.
+        let (wheel_command, cmg_command) = applied.commands();
+        self.wheels.on_command(&wheel_command);
+        self.cmg.on_command(&cmg_command);
+        applied
     }
 }

@@ -13,7 +13,7 @@
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 
-use ipc_types::{AttitudeEstimate, CmgCommand, Device, WheelCommand};
+use ipc_types::{AttitudeEstimate, Device};
 use testbed_can::Sample;
 use testbed_flight::controller_node::{ControlCycle, ControllerNode};
 use testbed_flight::estimator_node::EstimatorNode;
@@ -182,14 +182,9 @@ fn steady_state_allocations(duration_s: f64, warm_up_s: f64) -> Allocations {
             }
         }
         let applied = applied.expect("the node answers every tick");
-        plant.on_wheel_command(&WheelCommand::new(
-            applied.wheel.header,
-            applied.wheel.torque,
-        ));
-        plant.on_cmg_command(&CmgCommand::new(
-            applied.cmg.header,
-            applied.cmg.gimbal_rate,
-        ));
+        let (wheel_command, cmg_command) = applied.commands();
+        plant.on_wheel_command(&wheel_command);
+        plant.on_cmg_command(&cmg_command);
         if plant.at_end() {
             return seen;
         }

@@ -4,7 +4,7 @@
 //! injected fault must show up in exactly one receiver counter, and the platform must still
 //! level.
 
-use ipc_types::{CanLinkStatus, CmgCommand, SampleHeader, WheelCommand};
+use ipc_types::{CanLinkStatus, SampleHeader};
 use testbed_can::Sample;
 use testbed_flight::controller_node::ControllerNode;
 use testbed_flight::convert::quaternion_from_array;
@@ -98,14 +98,9 @@ fn run(config: &RunConfig) -> Outcome {
             applied.unwrap_or_else(|| panic!("tick {} not answered by the node", plant.tick()));
         assert_eq!(applied.wheel.header.time_ns, truth.header.time_ns);
         out.stale_applied += u64::from(applied.wheel.header.has(SampleHeader::STALE));
-        plant.on_wheel_command(&WheelCommand::new(
-            applied.wheel.header,
-            applied.wheel.torque,
-        ));
-        plant.on_cmg_command(&CmgCommand::new(
-            applied.cmg.header,
-            applied.cmg.gimbal_rate,
-        ));
+        let (wheel_command, cmg_command) = applied.commands();
+        plant.on_wheel_command(&wheel_command);
+        plant.on_cmg_command(&cmg_command);
         assert!(plant.answered(), "tick {} not answered", plant.tick());
         if plant.at_end() {
             break;

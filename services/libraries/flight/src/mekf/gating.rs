@@ -37,9 +37,10 @@ impl Mekf {
             } else {
                 f64::INFINITY
             };
-            let stats = match lin.dim {
-                2 => innovation_stats::<2>(&lin, &self.p, threshold),
-                _ => innovation_stats::<3>(&lin, &self.p, threshold),
+            // The block's size: gravity in its tangent plane (2), the magnetic field (3).
+            let stats = match block {
+                Block::Gravity => innovation_stats::<2>(&lin, &self.p, threshold),
+                Block::Magnetic => innovation_stats::<3>(&lin, &self.p, threshold),
             };
             let Some(stats) = stats else {
                 result.status = BlockStatus::NotInvertible;

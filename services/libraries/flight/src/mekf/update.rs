@@ -139,20 +139,19 @@ impl Mekf {
             [None, Some(magnetic)] => Some(self.apply::<3>(&[magnetic], lag_s)),
             [None, None] => None,
         };
-        if let Some(applied) = applied {
-            match applied {
-                Some((iterations, correction)) => {
-                    report.iterations = iterations;
-                    report.correction = correction;
-                }
-                None => {
-                    for r in [&mut report.gravity, &mut report.magnetic] {
-                        if r.status == BlockStatus::Applied {
-                            r.status = BlockStatus::NotInvertible;
-                        }
+        match applied {
+            Some(Some((iterations, correction))) => {
+                report.iterations = iterations;
+                report.correction = correction;
+            }
+            Some(None) => {
+                for r in [&mut report.gravity, &mut report.magnetic] {
+                    if r.status == BlockStatus::Applied {
+                        r.status = BlockStatus::NotInvertible;
                     }
                 }
             }
+            None => {}
         }
 
         // Counters.
