@@ -82,6 +82,12 @@ impl Node for EstimatorProcess {
         Ok(Flow::Continue)
     }
 
+    /// A tick's gyro, inclinometer and magnetometer samples wake the estimator once, not once
+    /// per sensor.
+    fn samples_awaited(&self) -> u32 {
+        self.node.samples_awaited()
+    }
+
     fn stop(
         &mut self,
         _ports: &EstimatorPorts,

@@ -15,6 +15,11 @@
 //! - **Wait** (consumer): read the counter, look at *all* its subscribers, and if nothing is
 //!   pending, `futex(FUTEX_WAIT, counter == seen, timeout)`. Every topic of the consumer shares
 //!   the one counter, so samples published while it works are one wake-up, not one per topic.
+//! - **Threshold** (consumer, optional): a consumer that knows it needs N more samples before
+//!   it can do anything (the estimator on a tick with gyro, inclinometer and magnetometer
+//!   samples due: 3) asks to be woken at the N-th ring after `seen`
+//!   ([`Bell::wait_for_rings`]); the rings before it only count. One wake-up per cycle, however
+//!   the samples' publishers are scheduled.
 //!
 //! # No lost wake-up
 //!
@@ -27,6 +32,14 @@
 //! least one side sees the other's write and no ring is skipped for a sleeping consumer. There
 //! is no state that a drain must reset (the iceoryx2 race was a reset racing a send), hence
 //! nothing to race. `tests` ping-pong between threads with no timeout fallback to catch one.
+//!
+//! The threshold keeps this: the consumer stores the count it wants waking at (`wake_at`)
+//! *before* it raises `sleepers`, and a publisher reads `wake_at` *after* it has seen
+//! `sleepers` raised, so it compares its ring with the threshold of the wait it may end. A ring
+//! below the threshold skips the `FUTEX_WAKE` only for a consumer that asked to sleep through
+//! it; a ring that lands before the consumer is in the kernel still changes the counter, so
+//! the wait returns at once (one early look, never a lost one). The consumer counts only
+//! samples it awaits, so every ring after `seen` is at least one of them or an extra.
 //!
 //! # The table
 //!
@@ -57,7 +70,7 @@ pub const MAX_CONSUMERS: usize = 64;
 pub const MAX_TOPICS: usize = 64;
 
 /// The table's first word once initialised: layout name and version.
-const MAGIC: u64 = u64::from_le_bytes(*b"tbbell02");
+const MAGIC: u64 = u64::from_le_bytes(*b"tbbell03");
 
 /// One consumer's doorbell, alone on its cache line (publishers of other consumers do not
 /// contend for it).
@@ -69,6 +82,10 @@ struct BellSlot {
     sleepers: AtomicU32,
     /// Process id of the owner; 0 when free.
     owner: AtomicU32,
+    /// The ring count at which a sleeping owner wants waking ([`Bell::wait_for_rings`]):
+    /// publishers ring the futex only from it on. Written by the owner before it raises
+    /// `sleepers`.
+    wake_at: AtomicU32,
 }
 
 #[repr(C)]
@@ -359,8 +376,21 @@ impl Bell {
 
     /// Sleeps until the doorbell rings after `seen` was read, `timeout` passes or a signal
     /// arrives. Returns at once if it rang already.
+    #[cfg(test)]
     pub(crate) fn wait(&self, seen: u32, timeout: Duration) -> Woken {
+        self.wait_for_rings(seen, 1, timeout)
+    }
+
+    /// Like [`wait`](Self::wait), but sleeps through the rings after `seen` until the
+    /// `rings`-th (at least 1): for a consumer that needs that many more samples before it can
+    /// act. Returns at once if the count moved since `seen` (before the consumer was asleep, a
+    /// ring cannot be told from the threshold's last one).
+    pub(crate) fn wait_for_rings(&self, seen: u32, rings: u32, timeout: Duration) -> Woken {
         let slot = self.slot();
+        // Bounded so that `reached` stays meaningful across the counter's wrap.
+        let rings = rings.clamp(1, MAX_RINGS_AWAITED);
+        slot.wake_at
+            .store(seen.wrapping_add(rings), Ordering::SeqCst);
         slot.sleepers.fetch_add(1, Ordering::SeqCst);
         let woken = futex_wait(&slot.rings, seen, timeout);
         slot.sleepers.fetch_sub(1, Ordering::SeqCst);
@@ -403,11 +433,21 @@ impl TopicBells {
     }
 }
 
+/// Most rings a consumer may sleep through ([`Bell::wait_for_rings`]).
+pub(crate) const MAX_RINGS_AWAITED: u32 = 1 << 16;
+
 fn ring_slot(slot: &BellSlot) {
-    slot.rings.fetch_add(1, Ordering::SeqCst);
-    if slot.sleepers.load(Ordering::SeqCst) != 0 {
+    let rings = slot.rings.fetch_add(1, Ordering::SeqCst).wrapping_add(1);
+    if slot.sleepers.load(Ordering::SeqCst) != 0
+        && reached(rings, slot.wake_at.load(Ordering::SeqCst))
+    {
         futex_wake(&slot.rings);
     }
+}
+
+/// Whether the ring count `rings` is at or past `wake_at`, across the counter's wrap.
+fn reached(rings: u32, wake_at: u32) -> bool {
+    rings.wrapping_sub(wake_at) < u32::MAX / 2
 }
 
 /// A doorbell private to one process, for an event loop without subscribers (intervals only):
@@ -527,6 +567,74 @@ mod tests {
         drop(bell);
         drop(topic);
         drop(doorbells);
+        std::fs::remove_file(&path).expect("removing the table");
+    }
+
+    #[test]
+    fn a_waiter_sleeps_through_the_rings_below_its_threshold() {
+        let path = table_path("threshold");
+        let doorbells = Doorbells::open_at(&path).expect("table");
+        let bell = doorbells.claim().expect("bell");
+        let topic = doorbells.topic("a/topic").expect("topic");
+        bell.subscribe(&topic);
+        let index = bell.index;
+
+        // The owner waits for 3 rings; another thread rings twice, then a third time.
+        let seen = bell.rings();
+        let ringer = {
+            let path = path.clone();
+            std::thread::spawn(move || {
+                let doorbells = Doorbells::open_at(&path).expect("table");
+                let topic = doorbells.topic("a/topic").expect("topic");
+                let sleepers = || {
+                    doorbells.table().bells[index]
+                        .sleepers
+                        .load(Ordering::SeqCst)
+                };
+                // Ring only once the owner is asleep (or about to be, in the kernel).
+                while sleepers() == 0 {
+                    std::thread::sleep(Duration::from_millis(1));
+                }
+                std::thread::sleep(Duration::from_millis(20));
+                topic.ring();
+                topic.ring();
+                // Two rings below the threshold: the owner must still be asleep 200 ms later.
+                std::thread::sleep(Duration::from_millis(200));
+                let asleep_after_two = sleepers() == 1;
+                let third_at = Instant::now();
+                topic.ring();
+                (asleep_after_two, third_at)
+            })
+        };
+        let woken = bell.wait_for_rings(seen, 3, Duration::from_secs(10));
+        let woke_at = Instant::now();
+        let (asleep_after_two, third_at) = ringer.join().expect("ringer");
+        assert_eq!(woken, Woken::Rung);
+        assert!(
+            asleep_after_two,
+            "two rings woke a waiter that asked for three"
+        );
+        assert!(woke_at >= third_at, "woken before the third ring");
+        assert_eq!(bell.rings(), seen.wrapping_add(3));
+
+        // A ring between reading the count and the wait still returns at once, threshold or
+        // not (it cannot be told from the threshold's last ring).
+        let seen = bell.rings();
+        topic.ring();
+        let started = Instant::now();
+        assert_eq!(
+            bell.wait_for_rings(seen, 3, Duration::from_secs(5)),
+            Woken::Rung
+        );
+        assert!(started.elapsed() < Duration::from_secs(1));
+
+        // The threshold holds across the counter's wrap.
+        assert!(reached(2, u32::MAX - 1));
+        assert!(reached(5, 5));
+        assert!(!reached(4, 5));
+        assert!(!reached(u32::MAX, 1));
+
+        drop((bell, topic, doorbells));
         std::fs::remove_file(&path).expect("removing the table");
     }
 
@@ -660,5 +768,111 @@ mod tests {
         );
         assert_eq!((ra, rb), (MESSAGES, MESSAGES));
         std::fs::remove_file(&path).expect("removing the table");
+    }
+
+    /// The same race with thresholds: one side publishes bursts of three messages, ringing after
+    /// each, and the other sleeps until as many rings as messages of the burst it still misses
+    /// (the estimator's wait on a tick with three sensor samples due), then acknowledges the
+    /// burst. 30 000 bursts with a 5-s timeout standing in for "forever"; the bound is zero
+    /// timeouts: a ring below the threshold that was the last one the waiter needed, or any
+    /// other lost wake-up, is a bug.
+    #[test]
+    fn no_wake_up_is_lost_when_waiting_for_several_rings() {
+        let path = table_path("burst");
+        const BURSTS: u64 = 30_000;
+        const PER_BURST: u64 = 3;
+        // Messages sent by the producer so far, and bursts acknowledged by the consumer.
+        let sent = Arc::new(AtomicU64::new(0));
+        let acked = Arc::new(AtomicU64::new(0));
+        let timeouts = Arc::new(AtomicU64::new(0));
+        let failed = Arc::new(AtomicBool::new(false));
+        let shared = || {
+            (
+                sent.clone(),
+                acked.clone(),
+                timeouts.clone(),
+                failed.clone(),
+                path.clone(),
+            )
+        };
+        let producer = {
+            let (sent, acked, timeouts, failed, path) = shared();
+            std::thread::spawn(move || {
+                let doorbells = Doorbells::open_at(&path).expect("table");
+                let bell = doorbells.claim().expect("bell");
+                let data = doorbells.topic("burst/data").expect("topic");
+                let acks = doorbells.topic("burst/ack").expect("topic");
+                bell.subscribe(&acks);
+                for burst in 1..=BURSTS {
+                    for _ in 0..PER_BURST {
+                        sent.fetch_add(1, Ordering::SeqCst);
+                        data.ring();
+                        // Vary the spacing so the waiter is caught at every step of its wait.
+                        if burst % 7 == 0 {
+                            std::thread::yield_now();
+                        }
+                    }
+                    loop {
+                        let seen = bell.rings();
+                        if acked.load(Ordering::SeqCst) >= burst || failed.load(Ordering::Relaxed) {
+                            break;
+                        }
+                        if bell.wait(seen, Duration::from_secs(5)) == Woken::TimedOut {
+                            timeouts.fetch_add(1, Ordering::SeqCst);
+                            failed.store(true, Ordering::Relaxed);
+                        }
+                    }
+                    if failed.load(Ordering::Relaxed) {
+                        break;
+                    }
+                }
+            })
+        };
+        let consumer = {
+            let (sent, acked, timeouts, failed, path) = shared();
+            std::thread::spawn(move || {
+                let doorbells = Doorbells::open_at(&path).expect("table");
+                let bell = doorbells.claim().expect("bell");
+                let data = doorbells.topic("burst/data").expect("topic");
+                let acks = doorbells.topic("burst/ack").expect("topic");
+                bell.subscribe(&data);
+                let mut waits = 0u64;
+                for burst in 1..=BURSTS {
+                    loop {
+                        let seen = bell.rings();
+                        let missing =
+                            (burst * PER_BURST).saturating_sub(sent.load(Ordering::SeqCst));
+                        if missing == 0 || failed.load(Ordering::Relaxed) {
+                            break;
+                        }
+                        waits += 1;
+                        let rings = u32::try_from(missing).expect("at most a burst");
+                        if bell.wait_for_rings(seen, rings, Duration::from_secs(5))
+                            == Woken::TimedOut
+                        {
+                            timeouts.fetch_add(1, Ordering::SeqCst);
+                            failed.store(true, Ordering::Relaxed);
+                        }
+                    }
+                    if failed.load(Ordering::Relaxed) {
+                        break;
+                    }
+                    acked.store(burst, Ordering::SeqCst);
+                    acks.ring();
+                }
+                waits
+            })
+        };
+        producer.join().expect("producer");
+        let waits = consumer.join().expect("consumer");
+        assert_eq!(
+            timeouts.load(Ordering::SeqCst),
+            0,
+            "a wait slept through the ring it needed ({} of {BURSTS} bursts acknowledged)",
+            acked.load(Ordering::SeqCst)
+        );
+        assert_eq!(acked.load(Ordering::SeqCst), BURSTS);
+        std::fs::remove_file(&path).expect("removing the table");
+        eprintln!("{waits} waits for {} messages", BURSTS * PER_BURST);
     }
 }

@@ -210,6 +210,8 @@ pub struct EventLoop<'w, 'a> {
     lateness: Cell<Duration>,
     /// The previous sleep ended with a ring (for [`WaitStats::stale_notifications`]).
     was_rung: Cell<bool>,
+    /// Rings to sleep through before a data wake-up ([`EventLoop::wake_after_rings`]).
+    rings_awaited: Option<&'a Cell<u32>>,
 }
 
 impl<'w, 'a> EventLoop<'w, 'a> {
@@ -239,6 +241,7 @@ impl<'w, 'a> EventLoop<'w, 'a> {
             stats: Cell::new(WaitStats::default()),
             lateness: Cell::new(Duration::ZERO),
             was_rung: Cell::new(false),
+            rings_awaited: None,
         }
     }
 
@@ -370,6 +373,21 @@ impl<'w, 'a> EventLoop<'w, 'a> {
         Ok(source)
     }
 
+    /// Sleeps until `awaited` rings of the doorbell have come instead of the first (read before
+    /// each sleep; the owner changes it from its callbacks; 0 counts as 1): for a process
+    /// that knows how many more samples it needs before it can act, such as an estimator
+    /// waiting for a tick's gyro, inclinometer and magnetometer samples, which would otherwise
+    /// wake once per sample as their publishers happen to be scheduled. Intervals, deadlines
+    /// and the heartbeat wake it as before, and a ring that comes while it is awake still
+    /// makes its next look at once.
+    ///
+    /// `awaited` must not count more than the process needs: every sample it counts must be
+    /// one that rings this loop's doorbell. Counting too many delays the process until
+    /// further samples or a deadline; counting too few costs a wake-up.
+    pub fn wake_after_rings(&mut self, awaited: &'a Cell<u32>) {
+        self.rings_awaited = Some(awaited);
+    }
+
     /// Missed deadlines of `source` so far.
     pub fn missed_deadlines(&self, source: SourceId) -> u64 {
         self.attachments.get(source.0).map_or(0, |a| a.missed.get())
@@ -405,8 +423,9 @@ impl<'w, 'a> EventLoop<'w, 'a> {
 
     /// Sleeps until the doorbell rings after `seen`, `timeout` passes or a signal arrives.
     fn sleep(&self, seen: u32, timeout: Duration) -> Woken {
+        let rings = self.rings_awaited.map_or(1, Cell::get);
         let woken = match &self.bell {
-            Some(bell) => bell.wait(seen, timeout),
+            Some(bell) => bell.wait_for_rings(seen, rings, timeout),
             None => self.waiter.local.wait(seen, timeout),
         };
         self.was_rung.set(woken == Woken::Rung);

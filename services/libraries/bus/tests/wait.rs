@@ -747,6 +747,65 @@ fn a_subscriber_woken_from_a_time_on_sleeps_through_earlier_samples_and_takes_th
 }
 
 #[test]
+fn a_loop_awaiting_several_samples_wakes_once_for_them() {
+    // An estimator on a tick with three samples due asks to be woken at the third ring: the
+    // first two arrive unrung (while it sleeps) and are taken with the third. Then it awaits
+    // one, and each sample wakes it again.
+    let config = BusConfig::isolated();
+    {
+        let bus = Bus::open("consumer", &config).expect("bus");
+        let sub = bus.subscriber::<GyroSample>().expect("subscriber");
+        let waiter = Waiter::new().expect("waiter");
+        let awaited = std::cell::Cell::new(3);
+        let mut events = EventLoop::with_wait_strategy(&waiter, WaitStrategy::Block);
+        let source = events.on_data(&sub).expect("attach");
+        events.wake_after_rings(&awaited);
+        let (start, publisher) = publisher_thread(&config, |publisher| {
+            for i in 1..=5 {
+                // Late enough that the consumer is asleep for each.
+                thread::sleep(Duration::from_millis(50));
+                publisher.publish(&gyro(i)).expect("publish");
+            }
+        });
+        // The publisher's start-up ring came before `publisher_thread` returned; this look
+        // leaves it behind.
+        events
+            .run_once(Duration::ZERO, |_| Flow::Continue)
+            .expect("first look");
+        let woken_before = events.wait_stats().woken;
+        start.send(()).expect("start");
+        let mut taken: Vec<Vec<u64>> = Vec::new();
+        let begin = Instant::now();
+        while taken.iter().map(Vec::len).sum::<usize>() < 5 {
+            assert!(begin.elapsed() < HANG_GUARD, "a sample never woke the loop");
+            events
+                .run_once(Duration::from_secs(1), |wake| {
+                    assert_eq!(wake, Wake::Data(source));
+                    let mut batch = Vec::new();
+                    sub.drain(|s| batch.push(s.header.sequence)).expect("drain");
+                    taken.push(batch);
+                    // Three taken: from now on every sample is awaited alone.
+                    awaited.set(1);
+                    Flow::Continue
+                })
+                .expect("event loop");
+        }
+        let _ = start.send(());
+        publisher
+            .join()
+            .expect("publisher thread")
+            .expect("publisher");
+        assert_eq!(
+            taken,
+            [vec![1, 2, 3], vec![4], vec![5]],
+            "the first three samples in one wake-up, then one each"
+        );
+        assert_eq!(events.wait_stats().woken - woken_before, 3);
+    }
+    remove_all(&config).expect("remove_all");
+}
+
+#[test]
 fn only_a_ring_that_finds_nothing_counts_as_a_stale_notification() {
     // The look a loop takes before it sleeps again, after a round that handled a sample, is
     // not a wake-up; a ring that wakes the loop to nothing (here a new publisher's start-up

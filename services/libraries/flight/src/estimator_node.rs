@@ -113,6 +113,30 @@ impl EstimatorNode {
             && (!self.schedule.field_due(k) || p.field.is_some())
     }
 
+    /// How many sensor samples must still arrive before the next estimate can be made: those
+    /// the oldest unprocessed tick lacks (its gyro sample, and its inclinometer and
+    /// magnetometer samples if they are due on it), at least 1. A process sleeps through
+    /// fewer samples' wake-ups (the runtime's `Node::samples_awaited`): on a tick with
+    /// vector samples due, one wake-up instead of one per sensor. A sample that never comes is
+    /// made up for by the next tick's gyro sample, which overtakes the tick as before. 1
+    /// before the first estimate (the first tick is not known yet).
+    pub fn samples_awaited(&self) -> u32 {
+        let next = match self.pending.first_key_value() {
+            Some((&t_ns, pending)) => self.schedule.tick_at(t_ns).map(|k| (k, *pending)),
+            None => self
+                .last_processed
+                .and_then(|t_ns| self.schedule.tick_at(t_ns))
+                .map(|k| (k + 1, Pending::default())),
+        };
+        let Some((k, p)) = next else {
+            return 1;
+        };
+        let missing = u32::from(p.gyro.is_none())
+            + u32::from(self.schedule.tilt_due(k) && p.tilt.is_none())
+            + u32::from(self.schedule.field_due(k) && p.field.is_none());
+        missing.max(1)
+    }
+
     /// Process every tick that is complete or overtaken, oldest first; one estimate each.
     pub fn ready(&mut self) -> Vec<AttitudeEstimate> {
         let mut out = Vec::new();

@@ -26,6 +26,7 @@ use crate::process::{self, HEARTBEAT_PERIOD};
 use crate::{ClockMode, RunConfig};
 use anyhow::Context as _;
 use ipc_types::{ProcessState, Topic};
+use std::cell::Cell;
 use std::time::{Duration, Instant};
 use testbed_bus::{
     Bus, BusError, EventLoop, Flow, HeartbeatPublisher, LoopExit, SourceId, TopicSubscriber,
@@ -161,6 +162,15 @@ pub trait Node {
     /// Called for every wake-up.
     fn on_wake(&mut self, ports: &Self::Ports, wake: Wake, io: &Io) -> anyhow::Result<Flow>;
 
+    /// How many more input samples must arrive before a wake-up for data can do anything;
+    /// asked after every wake-up. The node then sleeps through the rings of fewer samples
+    /// ([`EventLoop::wake_after_rings`]); intervals, deadlines and the heartbeat still wake it.
+    /// 1 (the default) wakes it for every sample. Never more than it needs: every sample
+    /// counted must be one that wakes it ([`WakeOn::data`], [`WakeOn::input`], ...).
+    fn samples_awaited(&self) -> u32 {
+        1
+    }
+
     /// Called once when the loop has ended, also after an error (`Stopping`): last writes and
     /// the process's report.
     fn stop(&mut self, _ports: &Self::Ports, _io: &Io, _exit: LoopExit) -> anyhow::Result<()> {
@@ -188,7 +198,9 @@ pub fn run<N: Node>(
         return Ok(());
     }
     let waiter = Waiter::new()?;
+    let samples_awaited = Cell::new(node.samples_awaited());
     let mut events = EventLoop::new(&waiter);
+    events.wake_after_rings(&samples_awaited);
     if config.run.mode == ClockMode::Lockstep && !WaitStrategy::set_in_env() {
         // Validated with the configuration: a bad value never gets this far.
         events.set_wait_strategy(config.lockstep_wait().map_err(anyhow::Error::msg)?);
@@ -226,7 +238,9 @@ pub fn run<N: Node>(
     if step(node.start(&ports, &io)) == Flow::Continue {
         let on_wake = |wake| {
             watch.check(Instant::now(), &heartbeat, &health);
-            step(node.on_wake(&ports, wake, &io))
+            let flow = step(node.on_wake(&ports, wake, &io));
+            samples_awaited.set(node.samples_awaited());
+            flow
         };
         match events.run(on_wake) {
             Ok(e) => exit = e,

@@ -75,3 +75,67 @@ fn an_invalid_gyro_sample_answers_its_tick_with_the_last_valid_rate() {
     assert_eq!(with_stale, with_held);
     assert_ne!(with_stale, reference);
 }
+
+/// What the estimator process sleeps through: the samples its next estimate still lacks, at
+/// each step of a tick, whatever order they come in, and when one never comes.
+#[test]
+fn the_estimator_awaits_the_samples_its_next_tick_lacks() {
+    let (config, samples) = samples();
+    let schedule = config.schedule().unwrap();
+    let mut node = EstimatorNode::new(config.estimator_config(), schedule);
+    let due = |k: u64| 1 + u32::from(schedule.tilt_due(k)) + u32::from(schedule.field_due(k));
+    // The first tick is not known before its first sample.
+    assert_eq!(node.samples_awaited(), 1);
+    let mut vector_ticks = 0;
+    for (k, (g, t, f)) in samples.iter().enumerate().take(40) {
+        let k = k as u64;
+        if k > 0 {
+            assert_eq!(
+                node.samples_awaited(),
+                due(k),
+                "tick {k}, before its samples"
+            );
+        }
+        // The vector samples first on odd ticks, the gyro first on even ones.
+        if k % 2 == 1 {
+            t.iter().for_each(|t| node.on_inclinometer(t));
+            f.iter().for_each(|f| node.on_magnetometer(f));
+            node.on_gyro(g);
+        } else {
+            node.on_gyro(g);
+            if due(k) == 3 {
+                vector_ticks += 1;
+                assert_eq!(node.samples_awaited(), 2, "tick {k}, gyro in");
+                node.on_inclinometer(t.as_ref().unwrap());
+                assert_eq!(node.samples_awaited(), 1, "tick {k}, gyro and tilt in");
+            } else {
+                t.iter().for_each(|t| node.on_inclinometer(t));
+            }
+            f.iter().for_each(|f| node.on_magnetometer(f));
+        }
+        assert_eq!(node.ready().len(), 1, "tick {k} answered");
+    }
+    assert!(vector_ticks > 0, "the 40 ticks include vector ticks");
+
+    // A magnetometer sample that never comes: the tick waits for it or the next gyro sample
+    // (one more sample either way), and the next gyro sample answers both ticks.
+    let k = (40..).find(|&k| due(k) == 3).unwrap();
+    for (g, t, f) in &samples[40..k as usize] {
+        node.on_gyro(g);
+        t.iter().for_each(|t| node.on_inclinometer(t));
+        f.iter().for_each(|f| node.on_magnetometer(f));
+        assert_eq!(node.ready().len(), 1);
+    }
+    let (g, t, _) = &samples[k as usize];
+    node.on_gyro(g);
+    node.on_inclinometer(t.as_ref().unwrap());
+    assert!(node.ready().is_empty());
+    assert_eq!(node.samples_awaited(), 1);
+    node.on_gyro(&samples[k as usize + 1].0);
+    assert_eq!(
+        node.ready().len(),
+        2,
+        "the next gyro sample overtakes the tick"
+    );
+    assert_eq!(node.samples_awaited(), due(k + 2));
+}

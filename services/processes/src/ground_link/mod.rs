@@ -192,6 +192,8 @@ pub struct GroundLinkProcess {
     last_mode: Option<u32>,
     last_status: Instant,
     buffer: Vec<u8>,
+    /// The records of one wake-up, a buffer kept for the run.
+    records: Vec<LogRecord>,
 }
 
 /// The run's command token: configured, given by `testbed run`, or made here.
@@ -306,6 +308,7 @@ impl GroundLinkProcess {
                 last_mode: None,
                 last_status: Instant::now() - STATUS_PERIOD,
                 buffer: Vec::with_capacity(1024),
+                records: Vec::new(),
             },
             ports,
         ))
@@ -438,14 +441,15 @@ impl Node for GroundLinkProcess {
             } else {
                 UNWATCHED_PERIOD
             });
-        let mut records = Vec::new();
+        let mut records = std::mem::take(&mut self.records);
         for s in &ports.streams {
             s.drain(&mut |r| records.push(r))?;
         }
         io.heartbeat.add_samples_in(records.len() as u64);
-        for record in &records {
-            self.serve(record);
+        for record in records.drain(..) {
+            self.serve(&record);
         }
+        self.records = records;
         while let Ok(message) = self.from_viewers.try_recv() {
             match message {
                 ToBus::Command(command) => {
