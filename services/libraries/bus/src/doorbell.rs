@@ -706,6 +706,33 @@ mod tests {
         std::fs::remove_file(&path).expect("removing the table");
     }
 
+    /// Waits on `bell` until `needed` says it is done (`None`), each time for the rings it asks
+    /// for (`Some(rings)`), with a 5-s timeout standing in for "forever": a timed-out wait is
+    /// counted in `timeouts` and sets `failed`, which ends this and the other side's waits.
+    /// Returns how many waits it made.
+    fn wait_until(
+        bell: &Bell,
+        mut needed: impl FnMut() -> Option<u32>,
+        timeouts: &AtomicU64,
+        failed: &AtomicBool,
+    ) -> u64 {
+        let mut waits = 0;
+        loop {
+            let seen = bell.rings();
+            let Some(rings) = needed() else {
+                return waits;
+            };
+            if failed.load(Ordering::Relaxed) {
+                return waits;
+            }
+            waits += 1;
+            if bell.wait_for_rings(seen, rings, Duration::from_secs(5)) == Woken::TimedOut {
+                timeouts.fetch_add(1, Ordering::SeqCst);
+                failed.store(true, Ordering::Relaxed);
+            }
+        }
+    }
+
     /// The lost wake-up a doorbell must never have: a consumer that reads the counter, finds
     /// nothing, and sleeps through a ring that came in between. Two threads exchange 100 000
     /// messages through two doorbells as fast as they can (each side waits only when it finds
@@ -737,17 +764,11 @@ mod tests {
                         sent[0].store(i, Ordering::SeqCst);
                         theirs.ring();
                     }
-                    loop {
-                        let seen = bell.rings();
+                    let next = || {
                         received = sent[1 - me].load(Ordering::SeqCst);
-                        if received >= i || failed.load(Ordering::Relaxed) {
-                            break;
-                        }
-                        if bell.wait(seen, Duration::from_secs(5)) == Woken::TimedOut {
-                            timeouts.fetch_add(1, Ordering::SeqCst);
-                            failed.store(true, Ordering::Relaxed);
-                        }
-                    }
+                        (received < i).then_some(1)
+                    };
+                    wait_until(&bell, next, &timeouts, &failed);
                     if failed.load(Ordering::Relaxed) {
                         break;
                     }
@@ -768,6 +789,15 @@ mod tests {
         );
         assert_eq!((ra, rb), (MESSAGES, MESSAGES));
         std::fs::remove_file(&path).expect("removing the table");
+    }
+
+    /// One side of the burst test: its own doorbell, and the data and acknowledgement topics.
+    fn burst_side(path: &Path) -> (Bell, TopicBells, TopicBells) {
+        let doorbells = Doorbells::open_at(path).expect("table");
+        let bell = doorbells.claim().expect("bell");
+        let data = doorbells.topic("burst/data").expect("topic");
+        let acks = doorbells.topic("burst/ack").expect("topic");
+        (bell, data, acks)
     }
 
     /// The same race with thresholds: one side publishes bursts of three messages, ringing after
@@ -798,10 +828,7 @@ mod tests {
         let producer = {
             let (sent, acked, timeouts, failed, path) = shared();
             std::thread::spawn(move || {
-                let doorbells = Doorbells::open_at(&path).expect("table");
-                let bell = doorbells.claim().expect("bell");
-                let data = doorbells.topic("burst/data").expect("topic");
-                let acks = doorbells.topic("burst/ack").expect("topic");
+                let (bell, data, acks) = burst_side(&path);
                 bell.subscribe(&acks);
                 for burst in 1..=BURSTS {
                     for _ in 0..PER_BURST {
@@ -812,16 +839,8 @@ mod tests {
                             std::thread::yield_now();
                         }
                     }
-                    loop {
-                        let seen = bell.rings();
-                        if acked.load(Ordering::SeqCst) >= burst || failed.load(Ordering::Relaxed) {
-                            break;
-                        }
-                        if bell.wait(seen, Duration::from_secs(5)) == Woken::TimedOut {
-                            timeouts.fetch_add(1, Ordering::SeqCst);
-                            failed.store(true, Ordering::Relaxed);
-                        }
-                    }
+                    let acknowledged = || (acked.load(Ordering::SeqCst) < burst).then_some(1);
+                    wait_until(&bell, acknowledged, &timeouts, &failed);
                     if failed.load(Ordering::Relaxed) {
                         break;
                     }
@@ -831,29 +850,17 @@ mod tests {
         let consumer = {
             let (sent, acked, timeouts, failed, path) = shared();
             std::thread::spawn(move || {
-                let doorbells = Doorbells::open_at(&path).expect("table");
-                let bell = doorbells.claim().expect("bell");
-                let data = doorbells.topic("burst/data").expect("topic");
-                let acks = doorbells.topic("burst/ack").expect("topic");
+                let (bell, data, acks) = burst_side(&path);
                 bell.subscribe(&data);
                 let mut waits = 0u64;
                 for burst in 1..=BURSTS {
-                    loop {
-                        let seen = bell.rings();
+                    // As many rings as messages of the burst still missing.
+                    let missing = || {
                         let missing =
                             (burst * PER_BURST).saturating_sub(sent.load(Ordering::SeqCst));
-                        if missing == 0 || failed.load(Ordering::Relaxed) {
-                            break;
-                        }
-                        waits += 1;
-                        let rings = u32::try_from(missing).expect("at most a burst");
-                        if bell.wait_for_rings(seen, rings, Duration::from_secs(5))
-                            == Woken::TimedOut
-                        {
-                            timeouts.fetch_add(1, Ordering::SeqCst);
-                            failed.store(true, Ordering::Relaxed);
-                        }
-                    }
+                        (missing > 0).then(|| u32::try_from(missing).expect("at most a burst"))
+                    };
+                    waits += wait_until(&bell, missing, &timeouts, &failed);
                     if failed.load(Ordering::Relaxed) {
                         break;
                     }

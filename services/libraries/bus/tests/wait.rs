@@ -684,6 +684,56 @@ fn heartbeat_rides_on_every_tick_of(period: Duration, periods: f64, run_periods:
     remove_all(&config).expect("remove_all");
 }
 
+/// Publishes gyro samples 1 to `count` from another thread, 50 ms apart (late enough that the
+/// loop has had its look and is asleep for each: a sample already there at a loop's look
+/// before it sleeps is taken at once), and runs `events` until `sub` has taken them all. Each
+/// data wake-up drains `sub` into one batch and then calls `after_batch`. Returns the batches
+/// and the data wake-ups they took.
+fn take_slow_samples(
+    config: &BusConfig,
+    events: &mut EventLoop<'_, '_>,
+    sub: &testbed_bus::TopicSubscriber<GyroSample>,
+    source: testbed_bus::SourceId,
+    count: u64,
+    mut after_batch: impl FnMut(),
+) -> (Vec<Vec<u64>>, u64) {
+    let (start, publisher) = publisher_thread(config, move |publisher| {
+        for i in 1..=count {
+            thread::sleep(Duration::from_millis(50));
+            publisher.publish(&gyro(i)).expect("publish");
+        }
+    });
+    // The publisher's own start-up ring (subscribers connect to a new publisher) came before
+    // `publisher_thread` returned: this first look attaches to the publisher and leaves that
+    // ring behind.
+    events
+        .run_once(Duration::ZERO, |_| Flow::Continue)
+        .expect("first look");
+    let woken_before = events.wait_stats().woken;
+    start.send(()).expect("start");
+    let mut batches: Vec<Vec<u64>> = Vec::new();
+    let begin = Instant::now();
+    while batches.iter().map(Vec::len).sum::<usize>() < count as usize {
+        assert!(begin.elapsed() < HANG_GUARD, "a sample never woke the loop");
+        events
+            .run_once(Duration::from_secs(1), |wake| {
+                assert_eq!(wake, Wake::Data(source));
+                let mut batch = Vec::new();
+                sub.drain(|s| batch.push(s.header.sequence)).expect("drain");
+                batches.push(batch);
+                after_batch();
+                Flow::Continue
+            })
+            .expect("event loop");
+    }
+    let _ = start.send(());
+    publisher
+        .join()
+        .expect("publisher thread")
+        .expect("publisher");
+    (batches, events.wait_stats().woken - woken_before)
+}
+
 #[test]
 fn a_subscriber_woken_from_a_time_on_sleeps_through_earlier_samples_and_takes_them_all() {
     // A 2.5-Hz sensor model on a 10-Hz stream asks to be woken only for the sample of its own
@@ -697,51 +747,13 @@ fn a_subscriber_woken_from_a_time_on_sleeps_through_earlier_samples_and_takes_th
         let source = events.on_data(&truth).expect("attach");
         // Samples are stamped `sequence` × 100 ms: wake for the fourth.
         truth.wake_from(gyro(4).header.time_ns);
-        let (start, publisher) = publisher_thread(&config, |publisher| {
-            for i in 1..=4 {
-                // Late enough that the consumer has had its look and is asleep for each: a
-                // sample already there at a loop's look before it sleeps is taken at once.
-                thread::sleep(Duration::from_millis(50));
-                publisher.publish(&gyro(i)).expect("publish");
-            }
-        });
-        // The publisher's own start-up ring (subscribers connect to a new publisher) came
-        // before `publisher_thread` returned: this first look attaches to the publisher and
-        // leaves that ring behind.
-        events
-            .run_once(Duration::ZERO, |_| Flow::Continue)
-            .expect("first look");
-        let woken_before = events.wait_stats().woken;
-        start.send(()).expect("start");
-        let mut taken = Vec::new();
-        let begin = Instant::now();
-        while taken.len() < 4 {
-            assert!(
-                begin.elapsed() < HANG_GUARD,
-                "the fourth sample never woke the loop"
-            );
-            events
-                .run_once(Duration::from_secs(1), |wake| {
-                    assert_eq!(wake, Wake::Data(source));
-                    truth
-                        .drain(|s| taken.push(s.header.sequence))
-                        .expect("drain");
-                    Flow::Continue
-                })
-                .expect("event loop");
-        }
-        let _ = start.send(());
-        publisher
-            .join()
-            .expect("publisher thread")
-            .expect("publisher");
-        assert_eq!(taken, [1, 2, 3, 4], "every sample is taken, in order");
+        let (batches, woken) = take_slow_samples(&config, &mut events, &truth, source, 4, || {});
         assert_eq!(
-            events.wait_stats().woken - woken_before,
-            1,
-            "one wake-up, for the fourth sample: {:?}",
-            events.wait_stats()
+            batches,
+            [vec![1, 2, 3, 4]],
+            "every sample is taken, in order, in one wake-up for the fourth"
         );
+        assert_eq!(woken, 1, "{:?}", events.wait_stats());
     }
     remove_all(&config).expect("remove_all");
 }
@@ -760,47 +772,15 @@ fn a_loop_awaiting_several_samples_wakes_once_for_them() {
         let mut events = EventLoop::with_wait_strategy(&waiter, WaitStrategy::Block);
         let source = events.on_data(&sub).expect("attach");
         events.wake_after_rings(&awaited);
-        let (start, publisher) = publisher_thread(&config, |publisher| {
-            for i in 1..=5 {
-                // Late enough that the consumer is asleep for each.
-                thread::sleep(Duration::from_millis(50));
-                publisher.publish(&gyro(i)).expect("publish");
-            }
-        });
-        // The publisher's start-up ring came before `publisher_thread` returned; this look
-        // leaves it behind.
-        events
-            .run_once(Duration::ZERO, |_| Flow::Continue)
-            .expect("first look");
-        let woken_before = events.wait_stats().woken;
-        start.send(()).expect("start");
-        let mut taken: Vec<Vec<u64>> = Vec::new();
-        let begin = Instant::now();
-        while taken.iter().map(Vec::len).sum::<usize>() < 5 {
-            assert!(begin.elapsed() < HANG_GUARD, "a sample never woke the loop");
-            events
-                .run_once(Duration::from_secs(1), |wake| {
-                    assert_eq!(wake, Wake::Data(source));
-                    let mut batch = Vec::new();
-                    sub.drain(|s| batch.push(s.header.sequence)).expect("drain");
-                    taken.push(batch);
-                    // Three taken: from now on every sample is awaited alone.
-                    awaited.set(1);
-                    Flow::Continue
-                })
-                .expect("event loop");
-        }
-        let _ = start.send(());
-        publisher
-            .join()
-            .expect("publisher thread")
-            .expect("publisher");
+        // Three taken: from then on every sample is awaited alone.
+        let (batches, woken) =
+            take_slow_samples(&config, &mut events, &sub, source, 5, || awaited.set(1));
         assert_eq!(
-            taken,
+            batches,
             [vec![1, 2, 3], vec![4], vec![5]],
             "the first three samples in one wake-up, then one each"
         );
-        assert_eq!(events.wait_stats().woken - woken_before, 3);
+        assert_eq!(woken, 3, "{:?}", events.wait_stats());
     }
     remove_all(&config).expect("remove_all");
 }
