@@ -129,7 +129,7 @@ pub struct CmgCommand {
 /// `sqrt(det(Ĵ Ĵᵀ))` with `Ĵ = J(δ) / h0` (dimensionless): the singularity measure of the
 /// pyramid at gimbal angles `gimbal_rad` (rad).
 pub fn singularity_measure(pyramid: &CmgPyramid, gimbal_rad: &Vector4<f64>) -> f64 {
-    let j = pyramid.jacobian(gimbal_rad) / pyramid.rotor_momentum_nms;
+    let j = pyramid.jacobian(gimbal_rad) / pyramid.rotor_momentum_nms();
     (j * j.transpose()).determinant().max(0.0).sqrt()
 }
 
@@ -149,7 +149,7 @@ pub fn envelope_along(pyramid: &CmgPyramid, direction_b: &Vector3<f64>) -> f64 {
                 .sqrt()
         })
         .sum::<f64>()
-        * pyramid.rotor_momentum_nms
+        * pyramid.rotor_momentum_nms()
 }
 
 /// Largest eigenaxis slew rate (rad/s) about the unit body axis `axis_b` that keeps the cluster
@@ -241,7 +241,7 @@ impl CmgSteering {
         if !time_s.is_finite() {
             return Err(ControlError::NonFiniteInput("time_s"));
         }
-        let h0 = self.pyramid.rotor_momentum_nms;
+        let h0 = self.pyramid.rotor_momentum_nms();
         let jac = self.pyramid.jacobian(gimbal_rad);
         let h = self.pyramid.momentum(gimbal_rad);
         let j_hat = jac / h0;
@@ -504,12 +504,12 @@ mod tests {
         let m = singularity_measure(&p, &ds);
         assert!(m < 1e-12, "{m}");
         let h = p.momentum(&ds);
-        assert!((h - Vector3::new(2.0 * p.skew_rad.cos(), 0.0, 0.0)).norm() < 1e-12);
+        assert!((h - Vector3::new(2.0 * p.skew_rad().cos(), 0.0, 0.0)).norm() < 1e-12);
         assert!(p.jacobian(&ds).row(0).norm() < 1e-12);
         // Elliptic (Wie's test): with the singular direction u = X, Q = diag(u · ĥ_i) and a basis N
         // of the null space of J, P = Nᵀ Q N is definite, so null motion cannot leave it.
         let jac = p.jacobian(&ds);
-        let cb = p.skew_rad.cos();
+        let cb = p.skew_rad().cos();
         let null = nalgebra::Matrix4x2::new(1.0, cb, 0.0, 1.0, -1.0, cb, 0.0, -1.0);
         assert!((jac * null).norm() < 1e-12);
         let q = nalgebra::Matrix4::from_diagonal(&Vector4::from_fn(|i, _| {

@@ -15,33 +15,80 @@
 use nalgebra::{Matrix3x4, Vector3, Vector4};
 
 /// Pyramid cluster of four single-gimbal CMGs with equal rotor momentum.
+///
+/// The axes of each CMG depend only on the skew angle, so they are computed once here: the
+/// plant evaluates the momentum and its Jacobian forty times a tick (four RK4 stages of ten
+/// substeps), and recomputing five sines and cosines of constant angles per CMG and per
+/// Jacobian entry was a third of its instructions. The values are the ones the formulas of
+/// [`gimbal_axis`](Self::gimbal_axis) and of the spin and torque axes give, bit for bit.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CmgPyramid {
     /// Rotor momentum of each CMG, Nms.
-    pub rotor_momentum_nms: f64,
+    rotor_momentum_nms: f64,
     /// Skew angle β between each gimbal axis and body Z, rad.
-    pub skew_rad: f64,
+    skew_rad: f64,
+    /// Per CMG: gimbal axis `g_i`, spin axis `s_i` (rotor direction at δ = 0), torque axis
+    /// `t_i = g_i × s_i` (rotor direction at δ = 90°), body axes.
+    axes: [CmgAxes; 4],
+}
+
+/// The fixed axes of one CMG of the pyramid, body axes, unit vectors.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct CmgAxes {
+    gimbal: Vector3<f64>,
+    spin: Vector3<f64>,
+    torque: Vector3<f64>,
 }
 
 impl CmgPyramid {
-    pub fn from_config(config: &crate::config::CmgConfig) -> Self {
+    /// A pyramid of rotor momentum `rotor_momentum_nms` (Nms) per CMG and skew angle `skew_rad`
+    /// (rad).
+    pub fn new(rotor_momentum_nms: f64, skew_rad: f64) -> Self {
+        let (sb, cb) = skew_rad.sin_cos();
+        let axes = std::array::from_fn(|i| {
+            let az = i as f64 * std::f64::consts::FRAC_PI_2;
+            let gimbal = Vector3::new(sb * az.cos(), sb * az.sin(), cb);
+            // Horizontal tangent at azimuth az, then t = g × s.
+            let spin = Vector3::new(-az.sin(), az.cos(), 0.0);
+            CmgAxes {
+                gimbal,
+                spin,
+                torque: gimbal.cross(&spin),
+            }
+        });
         Self {
-            rotor_momentum_nms: config.rotor_momentum_nms,
-            skew_rad: config.skew_deg * crate::config::DEG,
+            rotor_momentum_nms,
+            skew_rad,
+            axes,
         }
+    }
+
+    pub fn from_config(config: &crate::config::CmgConfig) -> Self {
+        Self::new(
+            config.rotor_momentum_nms,
+            config.skew_deg * crate::config::DEG,
+        )
+    }
+
+    /// Rotor momentum of each CMG, Nms.
+    pub fn rotor_momentum_nms(&self) -> f64 {
+        self.rotor_momentum_nms
+    }
+
+    /// Skew angle β between each gimbal axis and body Z, rad.
+    pub fn skew_rad(&self) -> f64 {
+        self.skew_rad
     }
 
     /// Unit gimbal axis of CMG `i` (0..3) in body axes.
     pub fn gimbal_axis(&self, i: usize) -> Vector3<f64> {
-        let (sb, cb) = self.skew_rad.sin_cos();
-        let az = i as f64 * std::f64::consts::FRAC_PI_2;
-        Vector3::new(sb * az.cos(), sb * az.sin(), cb)
+        self.axes[i].gimbal
     }
 
     /// Unit rotor momentum direction of CMG `i` at gimbal angle `delta` (rad), body axes.
     pub fn rotor_direction(&self, i: usize, delta: f64) -> Vector3<f64> {
-        let (s, t) = self.spin_and_torque_axes(i);
-        s * delta.cos() + t * delta.sin()
+        let CmgAxes { spin, torque, .. } = self.axes[i];
+        spin * delta.cos() + torque * delta.sin()
     }
 
     /// Total cluster momentum in body axes, Nms.
@@ -54,11 +101,12 @@ impl CmgPyramid {
 
     /// Jacobian `∂h/∂δ` (Nms/rad), so that `h' = J(δ) δ'`. Column i is `h0 · g_i × ĥ_i`.
     pub fn jacobian(&self, gimbal_rad: &Vector4<f64>) -> Matrix3x4<f64> {
-        Matrix3x4::from_fn(|row, i| {
-            let (s, t) = self.spin_and_torque_axes(i);
+        let columns: [Vector3<f64>; 4] = std::array::from_fn(|i| {
+            let CmgAxes { spin, torque, .. } = self.axes[i];
             let d = gimbal_rad[i];
-            (t * d.cos() - s * d.sin())[row] * self.rotor_momentum_nms
-        })
+            (torque * d.cos() - spin * d.sin()) * self.rotor_momentum_nms
+        });
+        Matrix3x4::from_columns(&columns)
     }
 
     /// Maximum momentum the cluster can store along body X or Y (the envelope's extent), Nms:
@@ -71,15 +119,6 @@ impl CmgPyramid {
     pub fn envelope_z_nms(&self) -> f64 {
         4.0 * self.rotor_momentum_nms * self.skew_rad.sin()
     }
-
-    /// `(s_i, t_i)`: rotor direction at δ = 0 and at δ = 90°, both ⟂ the gimbal axis.
-    fn spin_and_torque_axes(&self, i: usize) -> (Vector3<f64>, Vector3<f64>) {
-        let az = i as f64 * std::f64::consts::FRAC_PI_2;
-        // Horizontal tangent at azimuth az, then t = g × s.
-        let s = Vector3::new(-az.sin(), az.cos(), 0.0);
-        let t = self.gimbal_axis(i).cross(&s);
-        (s, t)
-    }
 }
 
 #[cfg(test)]
@@ -87,16 +126,13 @@ mod tests {
     use super::*;
 
     fn pyramid() -> CmgPyramid {
-        CmgPyramid {
-            rotor_momentum_nms: 1.0,
-            skew_rad: 54.74_f64.to_radians(),
-        }
+        CmgPyramid::new(1.0, 54.74_f64.to_radians())
     }
 
     #[test]
     fn matches_the_closed_form_of_wie() {
         let p = pyramid();
-        let (sb, cb) = p.skew_rad.sin_cos();
+        let (sb, cb) = p.skew_rad().sin_cos();
         let d = Vector4::new(0.3, -1.1, 2.0, 0.7);
         let (s, c) = (d.map(f64::sin), d.map(f64::cos));
         let expected = Vector3::new(
