@@ -97,8 +97,15 @@ impl FromStr for Delivery {
 /// them at their defaults unless a test needs otherwise.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct ServiceLimits {
-    /// Publishers per topic (every process publishes a heartbeat on the same topic).
+    /// Publishers per shared topic: one that every process or CAN sender publishes on
+    /// (heartbeats, health events, the software CAN bus and its link counters).
     pub max_publishers: usize,
+    /// Publishers per other topic: one in a run, with room for a restarted process's port
+    /// before its dead predecessor's is freed and for a test's injector. Kept small because
+    /// every receive visits every publisher slot of its service (iceoryx2 0.10): at 16 that was
+    /// a third of the estimator's and the controller's instructions a tick (bench/README.md,
+    /// session 28).
+    pub max_data_publishers: usize,
     /// Subscribers per topic.
     pub max_subscribers: usize,
     /// Nodes (processes) per service.
@@ -114,6 +121,7 @@ impl Default for ServiceLimits {
     fn default() -> Self {
         Self {
             max_publishers: 16,
+            max_data_publishers: 4,
             max_subscribers: 16,
             max_nodes: 32,
             max_buffer_size: 256,

@@ -76,6 +76,24 @@ pub(crate) fn delivery_of<T: Topic>(bus: &Bus) -> Delivery {
     }
 }
 
+/// Topics with many publishers: every process's heartbeats and health events, every CAN
+/// sender's frames and link counters. The others have one publisher in a run.
+const SHARED_TOPICS: &[&str] = &[
+    ipc_types::topic::HEARTBEAT,
+    ipc_types::topic::HEALTH,
+    ipc_types::topic::CAN_BUS,
+    ipc_types::topic::CAN_STATUS,
+];
+
+/// The publisher slots of `T`'s service.
+pub(crate) fn max_publishers_of<T: Topic>(limits: &crate::ServiceLimits) -> usize {
+    if SHARED_TOPICS.contains(&T::NAME) {
+        limits.max_publishers
+    } else {
+        limits.max_data_publishers
+    }
+}
+
 fn open_data_service<T: Topic>(
     bus: &Bus,
 ) -> Result<publish_subscribe::PortFactory<ipc::Service, T, ()>, BusError> {
@@ -86,7 +104,7 @@ fn open_data_service<T: Topic>(
         .enable_safe_overflow(delivery_of::<T>(bus) == Delivery::Overflow)
         .subscriber_max_buffer_size(limits.max_buffer_size)
         .history_size(limits.history_size)
-        .max_publishers(limits.max_publishers)
+        .max_publishers(max_publishers_of::<T>(&limits))
         .max_subscribers(limits.max_subscribers)
         .max_nodes(limits.max_nodes)
         .open_or_create()

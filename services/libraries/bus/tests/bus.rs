@@ -317,6 +317,31 @@ fn processes_must_agree_on_the_delivery_mode() {
 }
 
 #[test]
+fn a_data_topic_has_few_publisher_slots_and_a_shared_topic_many() {
+    let iso = Isolated::new(Delivery::Overflow);
+    {
+        let limits = iso.config.limits;
+        assert!(limits.max_data_publishers < limits.max_publishers);
+        let bus = Bus::open("slots", &iso.config).expect("bus");
+        let gyros: Vec<_> = (0..limits.max_data_publishers)
+            .map(|_| {
+                bus.publisher::<GyroSample>()
+                    .expect("publisher within the limit")
+            })
+            .collect();
+        let err = bus
+            .publisher::<GyroSample>()
+            .expect_err("one publisher more than the data topic's slots");
+        assert!(err.to_string().contains(ipc_types::topic::GYRO), "{err}");
+        let heartbeats: Vec<_> = (0..limits.max_publishers)
+            .map(|_| bus.publisher::<Heartbeat>().expect("heartbeat publisher"))
+            .collect();
+        drop((gyros, heartbeats));
+    }
+    iso.finish();
+}
+
+#[test]
 fn subscriber_options_are_checked() {
     let iso = Isolated::new(Delivery::Overflow);
     {
