@@ -341,6 +341,39 @@ fn a_data_topic_has_few_publisher_slots_and_a_shared_topic_many() {
     iso.finish();
 }
 
+/// The end of a run: every process leaves with samples its subscribers have not taken yet
+/// (the logger takes the last health events after the others have stopped). A subscriber keeps
+/// the connections of departed publishers so that it can still take their samples; it must
+/// keep as many as a topic can have publishers.
+#[test]
+fn samples_of_every_publisher_that_left_are_still_received() {
+    let iso = Isolated::new(Delivery::Overflow);
+    {
+        let max = iso.config.limits.max_publishers;
+        let bus = Bus::open("departed", &iso.config).expect("bus");
+        let subscriber = bus
+            .subscriber_with::<Heartbeat>(SubscriberOptions::buffer(4))
+            .expect("subscriber");
+        let publishers: Vec<_> = (0..max)
+            .map(|_| bus.publisher::<Heartbeat>().expect("publisher"))
+            .collect();
+        assert_eq!(subscriber.drain(|_| {}).expect("connect"), 0);
+        for (k, publisher) in publishers.iter().enumerate() {
+            let mut beat = Heartbeat::default();
+            beat.header.sequence = k as u64;
+            publisher.publish(&beat).expect("publish");
+        }
+        drop(publishers);
+        let mut received = Vec::new();
+        subscriber
+            .drain(|beat| received.push(beat.header.sequence))
+            .expect("drain");
+        received.sort_unstable();
+        assert_eq!(received, (0..max as u64).collect::<Vec<_>>());
+    }
+    iso.finish();
+}
+
 #[test]
 fn subscriber_options_are_checked() {
     let iso = Isolated::new(Delivery::Overflow);
