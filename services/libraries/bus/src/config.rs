@@ -102,9 +102,8 @@ pub struct ServiceLimits {
     pub max_publishers: usize,
     /// Publishers per other topic: one in a run, with room for a restarted process's port
     /// before its dead predecessor's is freed and for a test's injector. Kept small because
-    /// every receive visits every publisher slot of its service (iceoryx2 0.10): at 16 that was
-    /// a third of the estimator's and the controller's instructions a tick (bench/README.md,
-    /// session 28).
+    /// every receive visits every publisher slot of its service (iceoryx2 0.10), these and the
+    /// departed publishers' (`max_publishers` of them, [`BusConfig::to_iceoryx2`]).
     pub max_data_publishers: usize,
     /// Subscribers per topic.
     pub max_subscribers: usize,
