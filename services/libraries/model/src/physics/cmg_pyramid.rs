@@ -19,8 +19,8 @@ use nalgebra::{Matrix3x4, Vector3, Vector4};
 /// The axes of each CMG depend only on the skew angle, so they are computed once here: the
 /// plant evaluates the momentum and its Jacobian forty times a tick (four RK4 stages of ten
 /// substeps), and recomputing six sines and cosines of constant angles per CMG and per
-/// Jacobian entry was a third of its instructions. The values are the ones the formulas of
-/// [`gimbal_axis`](Self::gimbal_axis) and of the spin and torque axes give, bit for bit.
+/// Jacobian entry was a third of its instructions. [`new`](Self::new) uses the formulas that
+/// were evaluated at each call before, so the axes are the same bit for bit.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CmgPyramid {
     /// Rotor momentum of each CMG, Nms.
