@@ -547,7 +547,7 @@ pub struct InclinometerScale {
 }
 
 impl ModelConfig {
-    /// Parse and validate a TOML document; `origin` names it in errors (a path, or "<inline>").
+    /// Parse and validate a TOML document; `origin` names it in errors (a path, or `"<inline>"`).
     pub fn from_toml_str(text: &str, origin: &str) -> Result<Self, ConfigError> {
         let config: ModelConfig = toml::from_str(text).map_err(|e| ConfigError::Parse {
             origin: origin.to_string(),
