@@ -70,6 +70,9 @@ pub trait Topic:
 {
     /// Name of the publish/subscribe service (one of the [`topic`] constants).
     const NAME: &'static str;
+    /// Who publishes the topic and how it is delivered (sets the service's publisher slots and
+    /// overflow policy).
+    const ROLE: TopicRole = TopicRole::Data;
 
     /// The sample's common header.
     fn header(&self) -> &SampleHeader;
@@ -77,10 +80,34 @@ pub trait Topic:
     fn header_mut(&mut self) -> &mut SampleHeader;
 }
 
+/// Who publishes a topic, and so how its service is built.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TopicRole {
+    /// One publisher in a run (a gateway's samples, the estimate, the commands). Delivered
+    /// as the run says: lossless in lockstep, overflowing when paced.
+    Data,
+    /// Many publishers, delivered as the run says: every CAN sender's frames and link counters.
+    Shared,
+    /// Published by every process about itself, and always overflowing. Heartbeats are paced
+    /// by wall time and never part of a reproducible log, and a process must never block on a
+    /// heartbeat nobody reads; health events are rare and published when something has already
+    /// gone wrong, possibly with a dead subscriber: reporting a fault must never block the
+    /// reporter.
+    Housekeeping,
+}
+
+impl TopicRole {
+    /// Whether more than one process publishes the topic in a run.
+    pub const fn has_many_publishers(self) -> bool {
+        !matches!(self, Self::Data)
+    }
+}
+
 macro_rules! impl_topic {
-    ($($ty:ty => $name:ident),* $(,)?) => {$(
+    ($($ty:ty => $name:ident $(as $role:ident)?),* $(,)?) => {$(
         impl Topic for $ty {
             const NAME: &'static str = topic::$name;
+            $(const ROLE: TopicRole = TopicRole::$role;)?
             fn header(&self) -> &SampleHeader { &self.header }
             fn header_mut(&mut self) -> &mut SampleHeader { &mut self.header }
         }
@@ -99,12 +126,12 @@ impl_topic! {
     ControllerStatus => CONTROLLER_STATUS,
     SimTruth => SIM_TRUTH,
     SimClockTick => SIM_CLOCK,
-    Heartbeat => HEARTBEAT,
-    CanBusFrame => CAN_BUS,
-    CanLinkStatus => CAN_STATUS,
+    Heartbeat => HEARTBEAT as Housekeeping,
+    CanBusFrame => CAN_BUS as Shared,
+    CanLinkStatus => CAN_STATUS as Shared,
     AppliedWheelCommand => WHEEL_APPLIED,
     AppliedCmgCommand => CMG_APPLIED,
-    HealthEvent => HEALTH,
+    HealthEvent => HEALTH as Housekeeping,
     GroundCommand => GROUND_COMMAND,
     GroundCommandAck => GROUND_COMMAND_ACK,
 }

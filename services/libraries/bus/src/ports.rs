@@ -10,7 +10,7 @@ use iceoryx2::port::publisher::Publisher;
 use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::prelude::*;
 use iceoryx2::service::port_factory::publish_subscribe;
-use ipc_types::Topic;
+use ipc_types::{Topic, TopicRole};
 
 use crate::doorbell::{Bell, TopicBells};
 use crate::{Bus, BusError, Delivery};
@@ -63,31 +63,19 @@ impl SubscriberOptions {
     }
 }
 
-/// The delivery mode of `T`'s topic: the run's, except for heartbeats and health events,
-/// which always overflow. Heartbeats are paced by wall time and never part of a reproducible
-/// log, and a process must never block on a heartbeat nobody reads; health events are rare
-/// (far fewer than a subscriber's buffer) and are published when something has already gone
-/// wrong, possibly with a dead subscriber: reporting a fault must never block the reporter.
+/// The delivery mode of `T`'s topic: the run's, except for housekeeping topics (heartbeats,
+/// health events), which always overflow ([`TopicRole::Housekeeping`] says why).
 pub(crate) fn delivery_of<T: Topic>(bus: &Bus) -> Delivery {
-    if T::NAME == ipc_types::topic::HEARTBEAT || T::NAME == ipc_types::topic::HEALTH {
-        Delivery::Overflow
-    } else {
-        bus.config().delivery
+    match T::ROLE {
+        TopicRole::Housekeeping => Delivery::Overflow,
+        TopicRole::Data | TopicRole::Shared => bus.config().delivery,
     }
 }
 
-/// Topics with many publishers: every process's heartbeats and health events, every CAN
-/// sender's frames and link counters. The others have one publisher in a run.
-const SHARED_TOPICS: &[&str] = &[
-    ipc_types::topic::HEARTBEAT,
-    ipc_types::topic::HEALTH,
-    ipc_types::topic::CAN_BUS,
-    ipc_types::topic::CAN_STATUS,
-];
-
-/// The publisher slots of `T`'s service.
+/// The publisher slots of `T`'s service: few for a topic with one publisher in a run, since
+/// every receive visits each slot.
 pub(crate) fn max_publishers_of<T: Topic>(limits: &crate::ServiceLimits) -> usize {
-    if SHARED_TOPICS.contains(&T::NAME) {
+    if T::ROLE.has_many_publishers() {
         limits.max_publishers
     } else {
         limits.max_data_publishers

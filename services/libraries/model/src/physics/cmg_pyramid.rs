@@ -109,6 +109,27 @@ impl CmgPyramid {
         Matrix3x4::from_columns(&columns)
     }
 
+    /// [`Self::momentum`] and [`Self::jacobian`] at the same gimbal angles, each angle's sine and
+    /// cosine taken once: the equations of motion need both at every evaluation, and the
+    /// sines and cosines were most of the plant's arithmetic (bench/README.md, session 29).
+    /// Bit for bit the two calls' results.
+    pub fn momentum_and_jacobian(
+        &self,
+        gimbal_rad: &Vector4<f64>,
+    ) -> (Vector3<f64>, Matrix3x4<f64>) {
+        let mut directions = Vector3::zeros();
+        let columns: [Vector3<f64>; 4] = std::array::from_fn(|i| {
+            let CmgAxes { spin, torque, .. } = self.axes[i];
+            let (sin, cos) = (gimbal_rad[i].sin(), gimbal_rad[i].cos());
+            directions += spin * cos + torque * sin;
+            (torque * cos - spin * sin) * self.rotor_momentum_nms
+        });
+        (
+            directions * self.rotor_momentum_nms,
+            Matrix3x4::from_columns(&columns),
+        )
+    }
+
     /// Maximum momentum the cluster can store along body X or Y (the envelope's extent), Nms:
     /// `h0 (2 + 2 cos β)`.
     pub fn envelope_xy_nms(&self) -> f64 {
@@ -155,6 +176,23 @@ mod tests {
             dm[i] -= 1e-6;
             let numeric = (p.momentum(&dp) - p.momentum(&dm)) / 2e-6;
             assert!((jac.column(i) - numeric).norm() < 1e-8);
+        }
+    }
+
+    #[test]
+    fn momentum_and_jacobian_together_are_bit_for_bit_the_two_apart() {
+        let p = CmgPyramid::new(0.78, 0.9);
+        for k in 0..64 {
+            let x = k as f64;
+            let d = Vector4::new(
+                0.37 * x - 9.0,
+                -0.11 * x,
+                1.9 - 0.05 * x * x,
+                (0.7 * x).sin(),
+            );
+            let (momentum, jacobian) = p.momentum_and_jacobian(&d);
+            assert_eq!(momentum, p.momentum(&d), "momentum at {d:?}");
+            assert_eq!(jacobian, p.jacobian(&d), "jacobian at {d:?}");
         }
     }
 

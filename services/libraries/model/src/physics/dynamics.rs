@@ -208,10 +208,11 @@ impl Dynamics {
         gimbal: &Vector4<f64>,
         input: &StepInput,
     ) -> (Vector3<f64>, Vector3<f64>) {
-        let h = wheel_speed * self.wheel_inertia + self.cmg.momentum(gimbal);
+        let (cmg_momentum, cmg_jacobian) = self.cmg.momentum_and_jacobian(gimbal);
+        let h = wheel_speed * self.wheel_inertia + cmg_momentum;
         let mut rhs = self.external.torque(q, rate_b).total_b()
             - rate_b.cross(&(self.inertia * rate_b + h))
-            - self.cmg.jacobian(gimbal) * input.gimbal_rate_rad_s;
+            - cmg_jacobian * input.gimbal_rate_rad_s;
         if let Some(thrust) = &self.thruster_torque_b {
             rhs += thrust;
         }
