@@ -91,6 +91,42 @@ pub fn profile(name: &str) -> PathBuf {
         .join(format!("{name}.toml"))
 }
 
+/// The simulation profile for fault tests, written to `dir/file_name`: run in `mode`
+/// (`"paced"` or `"lockstep"`), safe mode tolerated, and every process but the plant (whose
+/// exit ends the run) and the ground link (which has its own policy in the profile) restarted
+/// on exit up to `max_restarts` times, half a second after it ends.
+pub fn restarting_simulation_profile(
+    dir: &Path,
+    file_name: &str,
+    mode: &str,
+    max_restarts: u32,
+) -> PathBuf {
+    let text = std::fs::read_to_string(profile("simulation")).expect("simulation profile");
+    let mut out = String::new();
+    for line in text.lines() {
+        if line.starts_with("mode = ") {
+            out.push_str(&format!("mode = \"{mode}\"\n"));
+            continue;
+        }
+        out.push_str(line);
+        out.push('\n');
+        if line == "[supervision]" {
+            out.push_str("tolerate_safe_mode = true\nrestart_delay_s = 0.5\n");
+        }
+        if let Some(name) = line.strip_prefix("name = ")
+            && name != "\"plant\""
+            && name != "\"ground-link\""
+        {
+            out.push_str(&format!(
+                "on_exit = \"restart\"\nmax_restarts = {max_restarts}\n"
+            ));
+        }
+    }
+    let path = dir.join(file_name);
+    std::fs::write(&path, out).expect("writing the fault-test profile");
+    path
+}
+
 /// A 40-simulated-s lockstep run of `profile` with `seed` and a pinned wall-clock start (the
 /// log's times are the start plus the run clock), logged to `log`: for byte comparisons.
 pub fn pinned_lockstep_run(profile: &Path, log: &Path, seed: u64) -> serde_json::Value {

@@ -15,7 +15,7 @@ use std::collections::BTreeSet;
 use std::path::Path;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
-use testbed_e2e::{Scratch, binary, descendant, profile};
+use testbed_e2e::{Scratch, binary, descendant, restarting_simulation_profile};
 use testbed_flight::convert::quaternion_from_array;
 use testbed_log::RunLog;
 use testbed_model::attitude;
@@ -45,30 +45,9 @@ fn entries(dir: &str, prefix: &str) -> BTreeSet<String> {
         .unwrap_or_default()
 }
 
+/// The simulation profile, paced, every process but the plant restarted up to 100 times.
 fn chaos_profile(dir: &Path) -> std::path::PathBuf {
-    let text = std::fs::read_to_string(profile("simulation")).expect("simulation profile");
-    let mut out = String::new();
-    for line in text.lines() {
-        if line.starts_with("mode = ") {
-            out.push_str("mode = \"paced\"\n");
-            continue;
-        }
-        out.push_str(line);
-        out.push('\n');
-        if line == "[supervision]" {
-            out.push_str("tolerate_safe_mode = true\nrestart_delay_s = 0.5\n");
-        }
-        // The ground link has its own restart policy in the profile.
-        if let Some(name) = line.strip_prefix("name = ")
-            && name != "\"plant\""
-            && name != "\"ground-link\""
-        {
-            out.push_str("on_exit = \"restart\"\nmax_restarts = 100\n");
-        }
-    }
-    let path = dir.join("chaos.toml");
-    std::fs::write(&path, out).expect("writing the chaos profile");
-    path
+    restarting_simulation_profile(dir, "chaos.toml", "paced", 100)
 }
 
 #[test]

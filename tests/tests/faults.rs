@@ -15,7 +15,7 @@ use ipc_types::{AttitudeEstimate, HealthEvent, HealthEventKind, SimTruth, WheelC
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
-use testbed_e2e::{Scratch, binary, descendant, profile};
+use testbed_e2e::{Scratch, binary, descendant, restarting_simulation_profile};
 use testbed_log::RunLog;
 
 /// The control period of the default configuration, s.
@@ -42,32 +42,11 @@ enum Fault {
 /// The simulation profile, every process but the plant restarted up to 3 times, safe mode
 /// tolerated, in `mode`.
 fn fault_profile(dir: &Path, mode: Mode) -> PathBuf {
-    let text = std::fs::read_to_string(profile("simulation")).expect("simulation profile");
-    let mut out = String::new();
-    for line in text.lines() {
-        if line.starts_with("mode = ") {
-            out.push_str(match mode {
-                Mode::Paced => "mode = \"paced\"\n",
-                Mode::Lockstep => "mode = \"lockstep\"\n",
-            });
-            continue;
-        }
-        out.push_str(line);
-        out.push('\n');
-        if line == "[supervision]" {
-            out.push_str("tolerate_safe_mode = true\nrestart_delay_s = 0.5\n");
-        }
-        // The ground link has its own restart policy in the profile.
-        if let Some(name) = line.strip_prefix("name = ")
-            && name != "\"plant\""
-            && name != "\"ground-link\""
-        {
-            out.push_str("on_exit = \"restart\"\nmax_restarts = 3\n");
-        }
-    }
-    let path = dir.join("faults.toml");
-    std::fs::write(&path, out).expect("writing the fault profile");
-    path
+    let mode = match mode {
+        Mode::Paced => "paced",
+        Mode::Lockstep => "lockstep",
+    };
+    restarting_simulation_profile(dir, "faults.toml", mode, 3)
 }
 
 struct Outcome {
