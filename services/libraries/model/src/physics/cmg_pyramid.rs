@@ -110,8 +110,8 @@ impl CmgPyramid {
     }
 
     /// [`Self::momentum`] and [`Self::jacobian`] at the same gimbal angles, each angle's sine and
-    /// cosine taken once: the equations of motion need both at every evaluation, and the
-    /// sines and cosines were most of the plant's arithmetic (bench/README.md, session 29).
+    /// cosine taken once: the equations of motion need both at every evaluation, and taking
+    /// them twice was an eighth of the plant's instructions (bench/README.md, session 29).
     /// Bit for bit the two calls' results.
     pub fn momentum_and_jacobian(
         &self,
