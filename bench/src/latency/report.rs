@@ -373,6 +373,40 @@ mod tests {
         assert!(loaded.contains("| n/a |"), "no rounds recorded: {loaded}");
     }
 
+    /// A hop is checked against the socket hop of the same load, pooled and round by round; one
+    /// slow round can put the pooled p99 above the socket's while most rounds are below.
+    #[test]
+    fn a_hop_is_checked_against_the_socket_hop_pooled_and_round_by_round() {
+        let mut r = report();
+        r.measurements.extend([
+            with_rounds(
+                row(Kind::Hop, Transport::BUS, false, 7.0, 35.0, 25.0),
+                &[17.0, 16.0, 17.0, 47.0],
+            ),
+            with_rounds(
+                row(Kind::Hop, Transport::Uds, false, 10.0, 21.0, 26.0),
+                &[22.0, 20.0, 23.0, 16.0],
+            ),
+            row(Kind::Hop, Transport::BUS, true, 6.0, 17.0, 24.0),
+        ]);
+        let mut out = String::new();
+        checks_table(&mut out, &r);
+        let idle = out
+            .lines()
+            .find(|l| l.starts_with("| 48 B | idle |"))
+            .expect("the idle hop row");
+        // p50 7 against 10; p99 35 against 21 pooled, round by round 0.77, 0.80, 0.74, 2.94
+        // (median of four: the higher middle one); the p50s are a quarter of the p99s.
+        assert_eq!(
+            idle,
+            "| 48 B | idle | 7.00 | 10.00 | **yes** | 0.80× (3 of 4 ≤ 1) | 35.00 | 21.00 | **no** | 0.80× (3 of 4 ≤ 1) |"
+        );
+        assert!(
+            !out.contains("| 48 B | load |"),
+            "no socket hop under load, no check: {out}"
+        );
+    }
+
     #[test]
     fn under_load_a_busy_poll_slower_than_the_socket_is_no_floor() {
         let r = report();

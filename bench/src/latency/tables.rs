@@ -213,6 +213,7 @@ pub fn checks_table(out: &mut String, r: &Report) {
         2,
         rows,
     );
+    hop_checks_table(out, r);
     let rows = r.paced.iter().map(|p| match &p.error {
         Some(e) => failed(vec![format!("`{}`", p.wait), load_name(p.load)], e),
         None => vec![
@@ -236,6 +237,45 @@ pub fn checks_table(out: &mut String, r: &Report) {
             rows,
         );
     }
+}
+
+/// One hop of the bus (`block`) against one Unix-socket hop of the same size and load: p50 and
+/// p99, pooled and round by round, as the chains are checked.
+fn hop_checks_table(out: &mut String, r: &Report) {
+    let at_or_below = |a: f64, b: f64| if a <= b { "**yes**" } else { "**no**" };
+    let rows: Vec<Vec<String>> = r
+        .rows(Kind::Hop)
+        .filter(|m| m.transport == Transport::BUS && !m.real_binaries && m.error.is_none())
+        .filter_map(|m| {
+            let uds = r.find(Kind::Hop, Transport::Uds, m.load, m.size, false)?;
+            let (l, u) = (&m.latency, &uds.latency);
+            Some(vec![
+                format!("{} B", m.size),
+                load_name(m.load),
+                us(l.p50),
+                us(u.p50),
+                at_or_below(l.p50, u.p50).into(),
+                rounds_cell(&round_ratios(m, uds, |l| l.p50), 1.0),
+                us(l.p99),
+                us(u.p99),
+                at_or_below(l.p99, u.p99).into(),
+                rounds_cell(&round_ratios(m, uds, |l| l.p99), 1.0),
+            ])
+        })
+        .collect();
+    if rows.is_empty() {
+        return;
+    }
+    let _ = writeln!(
+        out,
+        "\nOne hop of the bus (`block`) against one Unix-socket hop, checked the same way:\n"
+    );
+    table(
+        out,
+        "hop | load | p50 µs | Unix socket p50 µs | p50 at or below the socket's | p50 ÷ socket's, round by round (median) | p99 µs | Unix socket p99 µs | p99 at or below the socket's | p99 ÷ socket's, round by round (median)",
+        2,
+        rows,
+    );
 }
 
 /// Polling wait strategies (measured rows other than `block` on the bus, placed by the
