@@ -163,7 +163,8 @@ fn no_floor_note(r: &Report, kind: Kind, size: usize) -> Option<String> {
 }
 
 /// The checks the issue asks for: each bus chain's p99 against the Unix socket's, its median
-/// against the busy-poll floor (within 3×), and the paced runs' deadline misses.
+/// against the busy-poll floor (within 3×), one bus hop against one socket hop, and the paced
+/// runs' deadline misses.
 pub fn checks_table(out: &mut String, r: &Report) {
     let rows = r
         .rows(Kind::Chain)
