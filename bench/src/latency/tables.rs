@@ -177,11 +177,7 @@ pub fn checks_table(out: &mut String, r: &Report) {
             let (floor, within) = match floor_of(r, Kind::Chain, m.load, 0) {
                 Some((f, idle)) => (
                     format!("{}{}", us(f), if idle { " (idle)" } else { "" }),
-                    if m.latency.p50 <= 3.0 * f {
-                        "**yes**"
-                    } else {
-                        "**no**"
-                    },
+                    at_or_below(m.latency.p50, 3.0 * f),
                 ),
                 None => ("none".into(), "n/a"),
             };
@@ -194,12 +190,7 @@ pub fn checks_table(out: &mut String, r: &Report) {
                 load_name(m.load),
                 us(m.latency.p99),
                 us(uds.latency.p99),
-                if m.latency.p99 <= uds.latency.p99 {
-                    "**yes**"
-                } else {
-                    "**no**"
-                }
-                .into(),
+                at_or_below(m.latency.p99, uds.latency.p99).into(),
                 rounds_cell(&p99_rounds, 1.0),
                 us(m.latency.p50),
                 floor,
@@ -240,10 +231,14 @@ pub fn checks_table(out: &mut String, r: &Report) {
     }
 }
 
+/// The verdict of a check that `value` is at or below `bound`, bold.
+fn at_or_below(value: f64, bound: f64) -> &'static str {
+    if value <= bound { "**yes**" } else { "**no**" }
+}
+
 /// One hop of the bus (`block`) against one Unix-socket hop of the same size and load: p50 and
 /// p99, pooled and round by round, as the chains are checked.
 fn hop_checks_table(out: &mut String, r: &Report) {
-    let at_or_below = |a: f64, b: f64| if a <= b { "**yes**" } else { "**no**" };
     let rows: Vec<Vec<String>> = r
         .rows(Kind::Hop)
         .filter(|m| m.transport == Transport::BUS && !m.real_binaries && m.error.is_none())

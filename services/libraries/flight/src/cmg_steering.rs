@@ -242,8 +242,7 @@ impl CmgSteering {
             return Err(ControlError::NonFiniteInput("time_s"));
         }
         let h0 = self.pyramid.rotor_momentum_nms();
-        let jac = self.pyramid.jacobian(gimbal_rad);
-        let h = self.pyramid.momentum(gimbal_rad);
+        let (h, jac) = self.pyramid.momentum_and_jacobian(gimbal_rad);
         let j_hat = jac / h0;
         let jjt = j_hat * j_hat.transpose();
         let det = jjt.determinant().max(0.0);
