@@ -1,8 +1,10 @@
 //! Shared measurement helpers: repeat, take the median, compare ratios (these machines are
 //! shared and noisy, so absolute times only mean something next to a baseline of the same run);
-//! and the latency harness of `latency` ([`latency`]).
+//! the latency harness of `latency` ([`latency`]); and issue 18's targets judged from their
+//! reports ([`targets`]).
 
 pub mod latency;
+pub mod targets;
 
 use std::path::PathBuf;
 use std::time::{Duration, Instant};

@@ -1,0 +1,255 @@
+//! Issue 18's targets on this machine, measured and judged in one command: the benchmarks that
+//! measure them (`latency` for the chain, the hop and the 10-minute paced run under load,
+//! `pipeline_speed` for the lockstep speed and Basilisk, `paced_cpu` for the paced CPU), one
+//! after the other, each writing its own report into `--out`; then one verdict per target
+//! (`testbed_bench::targets`), printed and written to `targets.md` beside the reports.
+//!
+//! ```sh
+//! cargo build --profile deploy --workspace --bins
+//! target/deploy/targets --out bench/report-targets/NAME      # about 25 min
+//! target/deploy/targets --from bench/report-targets/NAME     # judge saved reports again
+//! target/deploy/targets --quick --out /tmp/targets-smoke     # a few minutes; indicative
+//! ```
+//!
+//! Exit status 0 when every target was met, 1 when one was not or had no verdict. Run it on the
+//! machine that matters (the platform's computer): the chain is measured with its processes on
+//! the CPU the launch profiles give the tick (`--hot-path-cpu`, by default the launcher's
+//! choice), and the machine should be otherwise idle (the harness adds its own load).
+
+use anyhow::{Context, Result, bail};
+use clap::Parser;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use testbed_bench::binary_dir;
+use testbed_bench::latency::model::Report;
+use testbed_bench::targets::{self, Verdict};
+
+/// The parts, in the order they run.
+const PARTS: [&str; 4] = ["chain", "lockstep", "paced-cpu", "paced-run"];
+
+#[derive(Parser)]
+struct Args {
+    /// Directory for the benchmarks' reports and `targets.md`.
+    #[arg(long, default_value = "bench/report-targets/latest")]
+    out: PathBuf,
+    /// Measure nothing: judge the reports an earlier run left in this directory.
+    #[arg(long, value_name = "DIR")]
+    from: Option<PathBuf>,
+    /// Shorter measurements, for a smoke test: the verdicts are indicative only, and the paced
+    /// run (30 s) is too short for a verdict unless it misses a deadline.
+    #[arg(long)]
+    quick: bool,
+    /// Parts to leave out: chain, lockstep, paced-cpu, paced-run.
+    #[arg(long, value_delimiter = ',')]
+    skip: Vec<String>,
+    /// CPU the chain is placed on, as the profiles place the tick [default: the launcher's
+    /// choice, the first CPU this process may use].
+    #[arg(long)]
+    hot_path_cpu: Option<usize>,
+}
+
+/// Where each part leaves its report in the output directory.
+fn chain_dir(dir: &Path) -> PathBuf {
+    dir.join("chain")
+}
+fn paced_run_dir(dir: &Path) -> PathBuf {
+    dir.join("paced-run")
+}
+fn lockstep_json(dir: &Path) -> PathBuf {
+    dir.join("lockstep.json")
+}
+fn paced_cpu_json(dir: &Path) -> PathBuf {
+    dir.join("paced-cpu.json")
+}
+/// The chain's CPU, kept so that `--from` judges the chain placed where it was measured.
+fn hot_path_file(dir: &Path) -> PathBuf {
+    dir.join("hot-path-cpu")
+}
+
+/// The command line of one part: a sibling benchmark binary and its arguments.
+fn part_command(part: &str, dir: &Path, quick: bool, cpu: usize) -> (String, Vec<String>) {
+    let s = |xs: &[&str]| xs.iter().map(|x| x.to_string()).collect::<Vec<_>>();
+    match part {
+        "chain" => {
+            let mut a = s(&["--skip", "sweep,paced,binaries", "--waits", "block"]);
+            a.extend(["--chain-cpus".into(), cpu.to_string()]);
+            a.extend(["--out".into(), chain_dir(dir).display().to_string()]);
+            if quick {
+                a.push("--quick".into());
+            }
+            ("latency".into(), a)
+        }
+        "paced-run" => {
+            let mut a = s(&[
+                "--skip",
+                "hop,chain,sweep,binaries",
+                "--paced-waits",
+                "block",
+            ]);
+            let duration = if quick { "30" } else { "600" };
+            a.extend(["--paced-duration".into(), duration.into()]);
+            a.extend(["--out".into(), paced_run_dir(dir).display().to_string()]);
+            ("latency".into(), a)
+        }
+        "lockstep" => {
+            let mut a = s(&["--no-paced", "--json"]);
+            if quick {
+                a.extend(s(&["--duration", "60", "--repeats", "1"]));
+            }
+            ("pipeline_speed".into(), a)
+        }
+        "paced-cpu" => {
+            let mut a = s(&["--json", "--short", "5"]);
+            if quick {
+                a.extend(s(&["--repeats", "1", "--long", "15"]));
+            } else {
+                a.extend(s(&["--repeats", "3", "--long", "30"]));
+            }
+            ("paced_cpu".into(), a)
+        }
+        other => unreachable!("part {other} is checked against PARTS"),
+    }
+}
+
+/// Runs one part; a JSON-printing benchmark's standard output goes to its report file.
+fn measure(part: &str, dir: &Path, quick: bool, cpu: usize) -> Result<()> {
+    let (binary, args) = part_command(part, dir, quick, cpu);
+    let path = binary_dir()?.join(&binary);
+    if !path.exists() {
+        bail!(
+            "{} not found: cargo build --profile deploy --workspace --bins first",
+            path.display()
+        );
+    }
+    eprintln!("targets: {part}: {binary} {}", args.join(" "));
+    let json_out = match part {
+        "lockstep" => Some(lockstep_json(dir)),
+        "paced-cpu" => Some(paced_cpu_json(dir)),
+        _ => None,
+    };
+    let mut command = Command::new(&path);
+    command.args(&args).stderr(Stdio::inherit());
+    let status = match &json_out {
+        Some(file) => {
+            let out = command
+                .output()
+                .with_context(|| format!("running {}", path.display()))?;
+            if out.status.success() {
+                std::fs::write(file, &out.stdout)
+                    .with_context(|| format!("writing {}", file.display()))?;
+            }
+            out.status
+        }
+        None => command
+            .status()
+            .with_context(|| format!("running {}", path.display()))?,
+    };
+    if !status.success() {
+        bail!("{binary} {} ended with {status}", args.join(" "));
+    }
+    Ok(())
+}
+
+fn read_json(path: &Path) -> Result<serde_json::Value> {
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    serde_json::from_str(&text).with_context(|| format!("parsing {}", path.display()))
+}
+
+fn read_report(dir: &Path) -> Result<Report> {
+    let path = dir.join("report.json");
+    let text =
+        std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?;
+    serde_json::from_str(&text).with_context(|| format!("parsing {}", path.display()))
+}
+
+/// Every target's verdict from the reports in `dir`; a part whose report is missing or
+/// unreadable gives its targets no verdict, naming why.
+fn judge(dir: &Path, cpu: usize) -> Vec<Verdict> {
+    let missing = |target: &str, e: anyhow::Error| Verdict {
+        target: target.into(),
+        measured: format!("{e:#}"),
+        met: None,
+    };
+    let mut verdicts = Vec::new();
+    match read_report(&chain_dir(dir)) {
+        Ok(r) => {
+            verdicts.extend(targets::chain(&r, cpu));
+            verdicts.extend(targets::hop(&r));
+        }
+        Err(e) => verdicts.push(missing("chain and hop", e)),
+    }
+    match read_report(&paced_run_dir(dir)) {
+        Ok(r) => verdicts.push(targets::paced_run(&r)),
+        Err(e) => verdicts.push(missing("paced run under load", e)),
+    }
+    match read_json(&lockstep_json(dir)) {
+        Ok(v) => verdicts.extend(targets::lockstep(&v)),
+        Err(e) => verdicts.push(missing("lockstep speed", e)),
+    }
+    match read_json(&paced_cpu_json(dir)) {
+        Ok(v) => verdicts.push(targets::paced_cpu(&v)),
+        Err(e) => verdicts.push(missing("paced CPU", e)),
+    }
+    verdicts
+}
+
+/// The CPU the launch profiles give the tick here: the launcher's default.
+fn launcher_hot_path() -> Result<usize> {
+    let available =
+        testbed_launch::placement::available_cpus().context("reading this process's CPUs")?;
+    let roles =
+        testbed_launch::placement::CpuRoles::new(available, None).map_err(anyhow::Error::msg)?;
+    Ok(roles.hot_path())
+}
+
+fn main() -> Result<()> {
+    let args = Args::parse();
+    if let Some(part) = args.skip.iter().find(|p| !PARTS.contains(&p.as_str())) {
+        bail!("--skip: no part `{part}` (the parts: {})", PARTS.join(", "));
+    }
+    let dir = args.from.clone().unwrap_or_else(|| args.out.clone());
+    let cpu = if args.from.is_some() {
+        match std::fs::read_to_string(hot_path_file(&dir)) {
+            Ok(text) => text
+                .trim()
+                .parse()
+                .with_context(|| format!("{}: not a CPU number", hot_path_file(&dir).display()))?,
+            Err(_) => match args.hot_path_cpu {
+                Some(cpu) => cpu,
+                None => launcher_hot_path()?,
+            },
+        }
+    } else {
+        let cpu = match args.hot_path_cpu {
+            Some(cpu) => cpu,
+            None => launcher_hot_path()?,
+        };
+        std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+        std::fs::write(hot_path_file(&dir), format!("{cpu}\n"))?;
+        for part in PARTS.iter().filter(|p| !args.skip.iter().any(|s| s == *p)) {
+            // One part failing leaves its targets without a verdict; the others still run.
+            if let Err(e) = measure(part, &dir, args.quick, cpu) {
+                eprintln!("targets: {part} failed: {e:#}");
+            }
+        }
+        cpu
+    };
+    let verdicts = judge(&dir, cpu);
+    let mut md = format!(
+        "# Issue 18's targets on this machine\n\n`{}`{}; the chain placed on CPU {cpu}. Each \
+         benchmark's own report is beside this file.\n\n",
+        std::env::args().collect::<Vec<_>>().join(" "),
+        if args.quick {
+            " (quick: indicative only)"
+        } else {
+            ""
+        }
+    );
+    md.push_str(&targets::markdown(&verdicts));
+    let file = dir.join("targets.md");
+    std::fs::write(&file, &md).with_context(|| format!("writing {}", file.display()))?;
+    print!("{md}");
+    let (_, not_met, unjudged) = targets::tally(&verdicts);
+    std::process::exit(if not_met + unjudged == 0 { 0 } else { 1 });
+}
