@@ -223,6 +223,15 @@ fn number(v: &serde_json::Value, path: &[&str]) -> Option<f64> {
     path.iter().try_fold(v, |v, key| v.get(key))?.as_f64()
 }
 
+/// "one run" or "median of N runs", from a report's `repeats`.
+fn runs(repeats: Option<f64>) -> String {
+    match repeats {
+        Some(1.0) => "one run".into(),
+        Some(n) => format!("median of {n} runs"),
+        None => "runs".into(),
+    }
+}
+
 /// Lockstep targets from `pipeline_speed --json`: the `simulation` profile's speed while
 /// ticking, and that speed over Basilisk's dynamics alone.
 pub fn lockstep(v: &serde_json::Value) -> Vec<Verdict> {
@@ -237,10 +246,12 @@ pub fn lockstep(v: &serde_json::Value) -> Vec<Verdict> {
         ];
     };
     let simulated_s = number(v, &["simulated_s"]).unwrap_or(f64::NAN);
-    let repeats = number(v, &["repeats"]).unwrap_or(f64::NAN);
     let speed = Verdict::judged(
         speed_target,
-        format!("{x:.0}× (median of {repeats} runs of {simulated_s} simulated s)"),
+        format!(
+            "{x:.0}× ({} of {simulated_s} simulated s)",
+            runs(number(v, &["repeats"]))
+        ),
         x >= LOCKSTEP_MIN_X,
     );
     let basilisk = v.get("basilisk_dynamics");
@@ -293,9 +304,9 @@ pub fn paced_cpu(v: &serde_json::Value) -> Verdict {
     Verdict::judged(
         target,
         format!(
-            "{:.3} % steady state (median of {} runs of {} s){}",
+            "{:.3} % steady state ({} of {} s){}",
             100.0 * cpu,
-            number(v, &["repeats"]).unwrap_or(f64::NAN),
+            runs(number(v, &["repeats"])),
             number(v, &["long_s"]).unwrap_or(f64::NAN),
             plant
                 .map(|p| format!("; of it the simulated plant {:.3} %", 100.0 * p))
@@ -347,8 +358,8 @@ pub fn markdown(verdicts: &[Verdict]) -> String {
 mod tests {
     use super::*;
     use crate::latency::model::{PacedRun, RoundStats};
-    use crate::latency::stats::Percentiles;
 
+    /// A row of one round (the pooled distribution), its chain on `cpu`.
     fn row(
         kind: Kind,
         transport: Transport,
@@ -357,24 +368,14 @@ mod tests {
         p50: f64,
         p99: f64,
     ) -> Measurement {
-        let latency = Percentiles {
-            n: 100,
-            p50,
-            p99,
-            ..Percentiles::default()
-        };
+        let m = Measurement::test_row(kind, transport, load, p50, p99);
         Measurement {
-            kind,
-            transport,
-            load,
-            size: if kind == Kind::Hop { 48 } else { 0 },
             chain_cpu: cpu,
-            latency,
             rounds: vec![Some(RoundStats {
-                latency,
+                latency: m.latency,
                 machine_busy: 0.0,
             })],
-            ..Measurement::default()
+            ..m
         }
     }
 

@@ -6,8 +6,8 @@
 //!
 //! ```sh
 //! cargo build --profile deploy --workspace --bins
-//! target/deploy/targets --out bench/report-targets/NAME      # about 25 min
-//! target/deploy/targets --from bench/report-targets/NAME     # judge saved reports again
+//! target/deploy/targets                                     # about 20 min; into out/targets/
+//! target/deploy/targets --from out/targets                   # judge saved reports again
 //! target/deploy/targets --quick --out /tmp/targets-smoke     # a few minutes; indicative
 //! ```
 //!
@@ -18,6 +18,7 @@
 
 use anyhow::{Context, Result, bail};
 use clap::Parser;
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use testbed_bench::binary_dir;
@@ -30,16 +31,17 @@ const PARTS: [&str; 4] = ["chain", "lockstep", "paced-cpu", "paced-run"];
 #[derive(Parser)]
 struct Args {
     /// Directory for the benchmarks' reports and `targets.md`.
-    #[arg(long, default_value = "bench/report-targets/latest")]
+    #[arg(long, default_value = "out/targets")]
     out: PathBuf,
     /// Measure nothing: judge the reports an earlier run left in this directory.
-    #[arg(long, value_name = "DIR")]
+    #[arg(long, value_name = "DIR", conflicts_with_all = ["out", "quick", "skip", "hot_path_cpu"])]
     from: Option<PathBuf>,
     /// Shorter measurements, for a smoke test: the verdicts are indicative only, and the paced
     /// run (30 s) is too short for a verdict unless it misses a deadline.
     #[arg(long)]
     quick: bool,
-    /// Parts to leave out: chain, lockstep, paced-cpu, paced-run.
+    /// Parts to leave out: chain, lockstep, paced-cpu, paced-run. A part left out is judged
+    /// on the report an earlier run left in `--out`, if there is one.
     #[arg(long, value_delimiter = ',')]
     skip: Vec<String>,
     /// CPU the chain is placed on, as the profiles place the tick [default: the launcher's
@@ -64,6 +66,10 @@ fn paced_cpu_json(dir: &Path) -> PathBuf {
 /// The chain's CPU, kept so that `--from` judges the chain placed where it was measured.
 fn hot_path_file(dir: &Path) -> PathBuf {
     dir.join("hot-path-cpu")
+}
+/// The command line of the measuring run, for `--from`'s header.
+fn measured_by_file(dir: &Path) -> PathBuf {
+    dir.join("measured-by")
 }
 
 /// The command line of one part: a sibling benchmark binary and its arguments.
@@ -111,8 +117,32 @@ fn part_command(part: &str, dir: &Path, quick: bool, cpu: usize) -> (String, Vec
     }
 }
 
-/// Runs one part; a JSON-printing benchmark's standard output goes to its report file.
+/// The report file or directory a part writes.
+fn part_output(part: &str, dir: &Path) -> PathBuf {
+    match part {
+        "chain" => chain_dir(dir),
+        "paced-run" => paced_run_dir(dir),
+        "lockstep" => lockstep_json(dir),
+        "paced-cpu" => paced_cpu_json(dir),
+        other => unreachable!("part {other} is checked against PARTS"),
+    }
+}
+
+/// Runs one part; a JSON-printing benchmark's standard output goes to its report file. An
+/// earlier run's report of the part is removed first, so that a failed part is never judged
+/// on it.
 fn measure(part: &str, dir: &Path, quick: bool, cpu: usize) -> Result<()> {
+    let output = part_output(part, dir);
+    let removed = if output.is_dir() {
+        std::fs::remove_dir_all(&output)
+    } else {
+        std::fs::remove_file(&output)
+    };
+    if let Err(e) = removed
+        && e.kind() != std::io::ErrorKind::NotFound
+    {
+        bail!("removing the earlier {}: {e}", output.display());
+    }
     let (binary, args) = part_command(part, dir, quick, cpu);
     let path = binary_dir()?.join(&binary);
     if !path.exists() {
@@ -122,11 +152,7 @@ fn measure(part: &str, dir: &Path, quick: bool, cpu: usize) -> Result<()> {
         );
     }
     eprintln!("targets: {part}: {binary} {}", args.join(" "));
-    let json_out = match part {
-        "lockstep" => Some(lockstep_json(dir)),
-        "paced-cpu" => Some(paced_cpu_json(dir)),
-        _ => None,
-    };
+    let json_out = matches!(part, "lockstep" | "paced-cpu").then_some(output);
     let mut command = Command::new(&path);
     command.args(&args).stderr(Stdio::inherit());
     let status = match &json_out {
@@ -163,31 +189,40 @@ fn read_report(dir: &Path) -> Result<Report> {
     serde_json::from_str(&text).with_context(|| format!("parsing {}", path.display()))
 }
 
-/// Every target's verdict from the reports in `dir`; a part whose report is missing or
-/// unreadable gives its targets no verdict, naming why.
-fn judge(dir: &Path, cpu: usize) -> Vec<Verdict> {
+/// Every target's verdict from the reports in `dir`; a part that failed in this run
+/// (`failures`: part, error) or whose report is missing or unreadable gives its targets no
+/// verdict, naming why.
+fn judge(dir: &Path, cpu: usize, failures: &BTreeMap<&str, String>) -> Vec<Verdict> {
     let missing = |target: &str, e: anyhow::Error| Verdict {
         target: target.into(),
         measured: format!("{e:#}"),
         met: None,
     };
+    let report_of = |part: &str| match failures.get(part) {
+        Some(e) => Err(anyhow::anyhow!("{part} failed: {e}")),
+        None => read_report(&part_output(part, dir)),
+    };
+    let json_of = |part: &str| match failures.get(part) {
+        Some(e) => Err(anyhow::anyhow!("{part} failed: {e}")),
+        None => read_json(&part_output(part, dir)),
+    };
     let mut verdicts = Vec::new();
-    match read_report(&chain_dir(dir)) {
+    match report_of("chain") {
         Ok(r) => {
             verdicts.extend(targets::chain(&r, cpu));
             verdicts.extend(targets::hop(&r));
         }
         Err(e) => verdicts.push(missing("chain and hop", e)),
     }
-    match read_report(&paced_run_dir(dir)) {
+    match report_of("paced-run") {
         Ok(r) => verdicts.push(targets::paced_run(&r)),
         Err(e) => verdicts.push(missing("paced run under load", e)),
     }
-    match read_json(&lockstep_json(dir)) {
+    match json_of("lockstep") {
         Ok(v) => verdicts.extend(targets::lockstep(&v)),
         Err(e) => verdicts.push(missing("lockstep speed", e)),
     }
-    match read_json(&paced_cpu_json(dir)) {
+    match json_of("paced-cpu") {
         Ok(v) => verdicts.push(targets::paced_cpu(&v)),
         Err(e) => verdicts.push(missing("paced CPU", e)),
     }
@@ -208,43 +243,50 @@ fn main() -> Result<()> {
     if let Some(part) = args.skip.iter().find(|p| !PARTS.contains(&p.as_str())) {
         bail!("--skip: no part `{part}` (the parts: {})", PARTS.join(", "));
     }
-    let dir = args.from.clone().unwrap_or_else(|| args.out.clone());
-    let cpu = if args.from.is_some() {
-        match std::fs::read_to_string(hot_path_file(&dir)) {
-            Ok(text) => text
-                .trim()
-                .parse()
-                .with_context(|| format!("{}: not a CPU number", hot_path_file(&dir).display()))?,
-            Err(_) => match args.hot_path_cpu {
+    let command = std::env::args().collect::<Vec<_>>().join(" ");
+    let mut failures = BTreeMap::new();
+    let (dir, cpu, header) = match &args.from {
+        Some(dir) => {
+            let cpu = match std::fs::read_to_string(hot_path_file(dir)) {
+                Ok(text) => text.trim().parse().with_context(|| {
+                    format!("{}: not a CPU number", hot_path_file(dir).display())
+                })?,
+                Err(_) => launcher_hot_path()?,
+            };
+            let measured_by = std::fs::read_to_string(measured_by_file(dir))
+                .map(|c| format!("`{}`", c.trim()))
+                .unwrap_or_else(|_| "an earlier run".into());
+            let header = format!("Measured by {measured_by}, judged again by `{command}`");
+            (dir.clone(), cpu, header)
+        }
+        None => {
+            let dir = args.out.clone();
+            let cpu = match args.hot_path_cpu {
                 Some(cpu) => cpu,
                 None => launcher_hot_path()?,
-            },
-        }
-    } else {
-        let cpu = match args.hot_path_cpu {
-            Some(cpu) => cpu,
-            None => launcher_hot_path()?,
-        };
-        std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
-        std::fs::write(hot_path_file(&dir), format!("{cpu}\n"))?;
-        for part in PARTS.iter().filter(|p| !args.skip.iter().any(|s| s == *p)) {
-            // One part failing leaves its targets without a verdict; the others still run.
-            if let Err(e) = measure(part, &dir, args.quick, cpu) {
-                eprintln!("targets: {part} failed: {e:#}");
+            };
+            std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+            std::fs::write(hot_path_file(&dir), format!("{cpu}\n"))?;
+            std::fs::write(measured_by_file(&dir), format!("{command}\n"))?;
+            for part in PARTS.iter().filter(|p| !args.skip.iter().any(|s| s == *p)) {
+                // One part failing leaves its targets without a verdict; the others still run.
+                if let Err(e) = measure(part, &dir, args.quick, cpu) {
+                    eprintln!("targets: {part} failed: {e:#}");
+                    failures.insert(*part, format!("{e:#}"));
+                }
             }
+            let quick = if args.quick {
+                " (quick: indicative only)"
+            } else {
+                ""
+            };
+            (dir, cpu, format!("`{command}`{quick}"))
         }
-        cpu
     };
-    let verdicts = judge(&dir, cpu);
+    let verdicts = judge(&dir, cpu, &failures);
     let mut md = format!(
-        "# Issue 18's targets on this machine\n\n`{}`{}; the chain placed on CPU {cpu}. Each \
-         benchmark's own report is beside this file.\n\n",
-        std::env::args().collect::<Vec<_>>().join(" "),
-        if args.quick {
-            " (quick: indicative only)"
-        } else {
-            ""
-        }
+        "# Issue 18's targets on this machine\n\n{header}; the chain placed on CPU {cpu}. Each \
+         benchmark's own report is beside this file.\n\n"
     );
     md.push_str(&targets::markdown(&verdicts));
     let file = dir.join("targets.md");

@@ -78,6 +78,37 @@ impl Measurement {
     }
 }
 
+#[cfg(test)]
+impl Measurement {
+    /// A successful row for tests: median `p50` and tail `p99` µs (p90, p99.9 and the maximum
+    /// at the tail, the mean at the median), 100 messages, 48-B samples for a hop.
+    pub(crate) fn test_row(
+        kind: Kind,
+        transport: Transport,
+        load: bool,
+        p50: f64,
+        p99: f64,
+    ) -> Self {
+        Measurement {
+            kind,
+            transport,
+            load,
+            size: if kind == Kind::Hop { 48 } else { 0 },
+            latency: Percentiles {
+                n: 100,
+                p50,
+                p90: p99,
+                p99,
+                p999: p99,
+                max: p99,
+                mean: p50,
+            },
+            messages: 100,
+            ..Measurement::default()
+        }
+    }
+}
+
 /// One paced `testbed run`.
 #[derive(Debug, Clone, Default, Serialize, Deserialize)]
 pub struct PacedRun {

@@ -276,22 +276,8 @@ mod tests {
         cpu: f64,
     ) -> Measurement {
         Measurement {
-            kind,
-            transport,
-            load,
-            size: if kind == Kind::Hop { 48 } else { 0 },
-            latency: Percentiles {
-                n: 100,
-                p50,
-                p90: p99,
-                p99,
-                p999: p99,
-                max: p99,
-                mean: p50,
-            },
-            messages: 100,
             cpu_us_per_msg: cpu,
-            ..Measurement::default()
+            ..Measurement::test_row(kind, transport, load, p50, p99)
         }
     }
 
