@@ -166,7 +166,10 @@ fn measure(part: &str, dir: &Path, quick: bool, cpu: usize) -> Result<()> {
             }
             out.status
         }
+        // Its own summary goes with the progress, so that what this command prints is
+        // `targets.md`.
         None => command
+            .stdout(std::io::stderr())
             .status()
             .with_context(|| format!("running {}", path.display()))?,
     };
@@ -189,21 +192,21 @@ fn read_report(dir: &Path) -> Result<Report> {
     serde_json::from_str(&text).with_context(|| format!("parsing {}", path.display()))
 }
 
-/// Every target's verdict from the reports in `dir`; a part that failed in this run
-/// (`failures`: part, error) or whose report is missing or unreadable gives its targets no
+/// Every target's verdict from the reports in `dir`; a part this run did not measure
+/// (`unmeasured`: part, why) or whose report is missing or unreadable gives its targets no
 /// verdict, naming why.
-fn judge(dir: &Path, cpu: usize, failures: &BTreeMap<&str, String>) -> Vec<Verdict> {
+fn judge(dir: &Path, cpu: usize, unmeasured: &BTreeMap<&str, String>) -> Vec<Verdict> {
     let missing = |target: &str, e: anyhow::Error| Verdict {
         target: target.into(),
         measured: format!("{e:#}"),
         met: None,
     };
-    let report_of = |part: &str| match failures.get(part) {
-        Some(e) => Err(anyhow::anyhow!("{part} failed: {e}")),
+    let report_of = |part: &str| match unmeasured.get(part) {
+        Some(why) => Err(anyhow::anyhow!("{why}")),
         None => read_report(&part_output(part, dir)),
     };
-    let json_of = |part: &str| match failures.get(part) {
-        Some(e) => Err(anyhow::anyhow!("{part} failed: {e}")),
+    let json_of = |part: &str| match unmeasured.get(part) {
+        Some(why) => Err(anyhow::anyhow!("{why}")),
         None => read_json(&part_output(part, dir)),
     };
     let mut verdicts = Vec::new();
@@ -244,7 +247,7 @@ fn main() -> Result<()> {
         bail!("--skip: no part `{part}` (the parts: {})", PARTS.join(", "));
     }
     let command = std::env::args().collect::<Vec<_>>().join(" ");
-    let mut failures = BTreeMap::new();
+    let mut unmeasured = BTreeMap::new();
     let (dir, cpu, header) = match &args.from {
         Some(dir) => {
             let cpu = match std::fs::read_to_string(hot_path_file(dir)) {
@@ -268,11 +271,18 @@ fn main() -> Result<()> {
             std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
             std::fs::write(hot_path_file(&dir), format!("{cpu}\n"))?;
             std::fs::write(measured_by_file(&dir), format!("{command}\n"))?;
-            for part in PARTS.iter().filter(|p| !args.skip.iter().any(|s| s == *p)) {
+            for part in PARTS {
+                if args.skip.iter().any(|s| s == part) {
+                    if !part_output(part, &dir).exists() {
+                        let why = format!("{part} left out (--skip), and no earlier report here");
+                        unmeasured.insert(part, why);
+                    }
+                    continue;
+                }
                 // One part failing leaves its targets without a verdict; the others still run.
                 if let Err(e) = measure(part, &dir, args.quick, cpu) {
                     eprintln!("targets: {part} failed: {e:#}");
-                    failures.insert(*part, format!("{e:#}"));
+                    unmeasured.insert(part, format!("{part} failed: {e:#}"));
                 }
             }
             let quick = if args.quick {
@@ -283,7 +293,7 @@ fn main() -> Result<()> {
             (dir, cpu, format!("`{command}`{quick}"))
         }
     };
-    let verdicts = judge(&dir, cpu, &failures);
+    let verdicts = judge(&dir, cpu, &unmeasured);
     let mut md = format!(
         "# Issue 18's targets on this machine\n\n{header}; the chain placed on CPU {cpu}. Each \
          benchmark's own report is beside this file.\n\n"
