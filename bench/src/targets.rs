@@ -18,8 +18,7 @@
 
 use crate::latency::model::{Kind, Measurement, Report, round_ratios};
 use crate::latency::protocol::Transport;
-use crate::latency::tables::{floor_of, load_name};
-use crate::median;
+use crate::latency::tables::{floor_of, load_name, rounds_cell};
 use std::fmt::Write as _;
 
 /// Lockstep speed the issue asks of the `simulation` profile while it ticks, × real time.
@@ -60,17 +59,13 @@ impl Verdict {
     }
 }
 
-/// "0.93×, 3 of 4 rounds ≤ 1" from round-by-round ratios; empty when there are none.
+/// "; round by round 0.93× (3 of 4 ≤ 1)": the latency report's round-by-round cell; empty
+/// when no round was measured by both rows.
 fn rounds_note(ratios: &[f64], bound: f64) -> String {
     if ratios.is_empty() {
         return String::new();
     }
-    let within = ratios.iter().filter(|r| **r <= bound).count();
-    format!(
-        "; round by round {:.2}×, {within} of {} ≤ {bound}",
-        median(ratios.to_vec()),
-        ratios.len()
-    )
+    format!("; round by round {}", rounds_cell(ratios, bound))
 }
 
 /// The bus chain (`block`) placed on `cpu`, as the launch profiles place the tick, at `load`.

@@ -94,7 +94,7 @@ fn floor_row(r: &Report, kind: Kind, load: bool, size: usize) -> Option<(&Measur
 
 /// Round-by-round ratios: their median and how many are at or below `bound`, e.g.
 /// "0.93× (3 of 4 ≤ 1)".
-fn rounds_cell(ratios: &[f64], bound: f64) -> String {
+pub(crate) fn rounds_cell(ratios: &[f64], bound: f64) -> String {
     if ratios.is_empty() {
         return "n/a".into();
     }
