@@ -11,6 +11,7 @@
 //! | a paced run of 10 minutes under load without a deadline miss or a late command | `latency` paced run |
 //! | lockstep `testbed run` of `simulation` at ≥ 1000× real time, and faster than Basilisk's dynamics alone | `pipeline_speed --json` |
 //! | the paced pipeline at ≤ 0.5 % of one core, all processes | `paced_cpu --json`, steady state |
+//! | lockstep determinism, and bit-identity with the in-process loop | two pinned lockstep runs and the in-process loop of the same configuration ([`Determinism`]) |
 //!
 //! A verdict is pooled over the benchmark's rounds, as the latency report's "Checks" are; the
 //! chain's round-by-round median is shown beside it. A target nothing measured, or measured
@@ -19,7 +20,10 @@
 use crate::latency::model::{Kind, Measurement, Report, round_ratios};
 use crate::latency::protocol::Transport;
 use crate::latency::tables::{floor_of, load_name, rounds_cell};
+use ipc_types::AttitudeEstimate;
+use serde::{Deserialize, Serialize};
 use std::fmt::Write as _;
+use testbed_sim::closed_loop::Trace;
 
 /// Lockstep speed the issue asks of the `simulation` profile while it ticks, × real time.
 pub const LOCKSTEP_MIN_X: f64 = 1000.0;
@@ -311,6 +315,93 @@ pub fn paced_cpu(v: &serde_json::Value) -> Verdict {
     )
 }
 
+/// What two lockstep runs of one seed and pinned start time, and the in-process loop of the
+/// first run's configuration, gave (`determinism.json`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Determinism {
+    pub profile: String,
+    pub seed: u64,
+    /// Simulated length of each run, s.
+    pub duration_s: f64,
+    /// Sizes of the two runs' logs, bytes.
+    pub log_bytes: [u64; 2],
+    /// Offset of the first byte at which the two logs differ; `None`: identical.
+    pub first_difference: Option<u64>,
+    /// Attitude estimates in the first run's log.
+    pub estimates: usize,
+    /// Ticks of the in-process loop.
+    pub in_process_ticks: usize,
+    /// Time of the first estimate that differs in any bit from the in-process loop's (or that
+    /// one of the two lacks), s; `None`: all equal.
+    pub first_mismatch_t_s: Option<f64>,
+}
+
+/// Offset of the first byte at which `a` and `b` differ (a missing byte differs); `None` when
+/// they are equal.
+pub fn first_difference(a: &[u8], b: &[u8]) -> Option<u64> {
+    let common = a.iter().zip(b).position(|(x, y)| x != y);
+    match common {
+        Some(i) => Some(i as u64),
+        None if a.len() == b.len() => None,
+        None => Some(a.len().min(b.len()) as u64),
+    }
+}
+
+/// Time of the first logged estimate whose attitude quaternion or gyro bias is not bit for bit
+/// the in-process loop's at the same tick, or of the first tick only one of them has; `None`
+/// when they are equal throughout.
+pub fn first_estimate_mismatch(estimates: &[AttitudeEstimate], trace: &Trace) -> Option<f64> {
+    for (i, tick) in trace.ticks.iter().enumerate() {
+        let Some(sample) = estimates.get(i) else {
+            return Some(tick.t_s);
+        };
+        let equal = tick.estimate.as_ref().is_some_and(|e| {
+            testbed_flight::convert::quaternion_from_array(&sample.quaternion) == Some(e.attitude)
+                && sample.gyro_bias == <[f64; 3]>::from(e.bias_rad_s)
+        });
+        if !equal {
+            return Some(tick.t_s);
+        }
+    }
+    estimates
+        .get(trace.ticks.len())
+        .map(|extra| extra.header.time_ns as f64 * 1e-9)
+}
+
+/// The determinism targets from [`Determinism`].
+pub fn determinism(d: &Determinism) -> Vec<Verdict> {
+    let run = format!(
+        "`{}`, seed {}, {} simulated s",
+        d.profile, d.seed, d.duration_s
+    );
+    let identical = Verdict::judged(
+        "lockstep determinism: two runs of one seed give byte-identical logs",
+        match d.first_difference {
+            None => format!("{run}: both logs {} bytes, identical", d.log_bytes[0]),
+            Some(at) => format!(
+                "{run}: logs of {} and {} bytes differ from byte {at}",
+                d.log_bytes[0], d.log_bytes[1]
+            ),
+        },
+        d.first_difference.is_none(),
+    );
+    let in_process = Verdict::judged(
+        "bit-identity: the processes' estimates are the in-process loop's",
+        match d.first_mismatch_t_s {
+            None => format!(
+                "{run}: {} estimates, every one equal in every bit",
+                d.estimates
+            ),
+            Some(t) => format!(
+                "{run}: {} estimates against {} ticks, first difference at t = {t} s",
+                d.estimates, d.in_process_ticks
+            ),
+        },
+        d.first_mismatch_t_s.is_none(),
+    );
+    vec![identical, in_process]
+}
+
 /// met / not met / no verdict, for the table.
 fn verdict_word(met: Option<bool>) -> &'static str {
     match met {
@@ -487,6 +578,80 @@ mod tests {
         assert_eq!(paced_cpu(&at(0.00504)).met, Some(false));
         assert!(paced_cpu(&at(0.00466)).measured.contains("0.466 %"));
         assert_eq!(paced_cpu(&serde_json::json!({})).met, None);
+    }
+
+    #[test]
+    fn the_first_differing_byte_is_found_and_a_shorter_log_differs_where_it_ends() {
+        assert_eq!(first_difference(b"abc", b"abc"), None);
+        assert_eq!(first_difference(b"abc", b"abd"), Some(2));
+        assert_eq!(first_difference(b"abc", b"ab"), Some(2));
+        assert_eq!(first_difference(b"", b""), None);
+    }
+
+    /// The estimates of `trace` as the estimator process publishes them.
+    fn published(trace: &Trace) -> Vec<AttitudeEstimate> {
+        trace
+            .ticks
+            .iter()
+            .map(|tick| {
+                let e = tick.estimate.as_ref().expect("initialised at t = 0");
+                AttitudeEstimate {
+                    header: ipc_types::SampleHeader {
+                        time_ns: (tick.t_s * 1e9).round() as u64,
+                        ..ipc_types::SampleHeader::default()
+                    },
+                    quaternion: testbed_flight::convert::quaternion_to_array(&e.attitude),
+                    gyro_bias: e.bias_rad_s.into(),
+                    ..AttitudeEstimate::default()
+                }
+            })
+            .collect()
+    }
+
+    #[test]
+    fn an_estimate_one_bit_off_the_in_process_loop_is_named_by_its_time() {
+        let mut scenario = testbed_sim::closed_loop::Scenario::paper_stabilisation(
+            testbed_model::ModelConfig::default(),
+            7,
+        );
+        scenario.duration_s = 2.0;
+        let trace = testbed_sim::closed_loop::run(&scenario).expect("the loop runs");
+        let mut estimates = published(&trace);
+        assert_eq!(first_estimate_mismatch(&estimates, &trace), None);
+        // The gyro bias of the sixth estimate, one unit in the last place off.
+        estimates[5].gyro_bias[1] = f64::from_bits(estimates[5].gyro_bias[1].to_bits() ^ 1);
+        assert_eq!(
+            first_estimate_mismatch(&estimates, &trace),
+            Some(trace.ticks[5].t_s)
+        );
+        // One estimate short: the tick it lacks.
+        let mut short = published(&trace);
+        let last = short.pop().map(|_| trace.ticks[trace.ticks.len() - 1].t_s);
+        assert_eq!(first_estimate_mismatch(&short, &trace), last);
+    }
+
+    #[test]
+    fn determinism_is_met_only_by_identical_logs_and_estimates_equal_in_every_bit() {
+        let found = Determinism {
+            profile: "simulation".into(),
+            seed: 7,
+            duration_s: 150.0,
+            log_bytes: [1000, 1000],
+            first_difference: None,
+            estimates: 1501,
+            in_process_ticks: 1501,
+            first_mismatch_t_s: None,
+        };
+        assert_eq!(met(&determinism(&found)), [Some(true), Some(true)]);
+        let differing = Determinism {
+            first_difference: Some(17),
+            first_mismatch_t_s: Some(0.3),
+            ..found
+        };
+        let v = determinism(&differing);
+        assert_eq!(met(&v), [Some(false), Some(false)]);
+        assert!(v[0].measured.contains("from byte 17"), "{}", v[0].measured);
+        assert!(v[1].measured.contains("t = 0.3 s"), "{}", v[1].measured);
     }
 
     #[test]

@@ -16,6 +16,7 @@ fn scratch_copy(test: &str) -> PathBuf {
         "paced-run/report.json",
         "lockstep.json",
         "paced-cpu.json",
+        "determinism.json",
         "hot-path-cpu",
         "measured-by",
     ] {
@@ -47,9 +48,10 @@ fn saved_reports_are_judged_again_one_verdict_per_target() {
     let dir = scratch_copy("all");
     let (code, md) = judge(&dir);
     // Session 31 on this machine: the chain's idle median 3.04× the floor, the idle hop's p99
-    // above the socket's, the paced CPU 0.514 %.
+    // above the socket's, the paced CPU 0.514 %; the determinism runs (measured by a second
+    // run that left the other parts out) byte-identical and equal to the in-process loop.
     assert!(
-        md.contains("9 met, 3 not met, 0 without a verdict."),
+        md.contains("11 met, 3 not met, 0 without a verdict."),
         "{md}"
     );
     assert!(
@@ -59,10 +61,18 @@ fn saved_reports_are_judged_again_one_verdict_per_target() {
         "{md}"
     );
     assert!(
-        md.contains("Measured by `target/deploy/targets --out bench/report-targets/session-31`, judged again by `"),
+        md.contains(
+            "Measured by `target/deploy/targets --out bench/report-targets/session-31` and \
+             `target/release/targets --skip chain,lockstep,paced-cpu,paced-run --out \
+             bench/report-targets/session-31`, judged again by `"
+        ),
         "{md}"
     );
     assert!(md.contains("the chain placed on CPU 0"), "{md}");
+    assert!(
+        md.contains("1501 estimates, every one equal in every bit | **met** |"),
+        "{md}"
+    );
     assert_eq!(code, Some(1), "a target not met fails the command");
     let _ = std::fs::remove_dir_all(&dir);
 }
@@ -73,7 +83,7 @@ fn a_missing_report_leaves_its_target_without_a_verdict() {
     std::fs::remove_file(dir.join("paced-cpu.json")).expect("remove");
     let (code, md) = judge(&dir);
     assert!(
-        md.contains("9 met, 2 not met, 1 without a verdict."),
+        md.contains("11 met, 2 not met, 1 without a verdict."),
         "{md}"
     );
     assert!(md.contains("| paced CPU | reading "), "{md}");

@@ -1,5 +1,6 @@
 //! Issue 18's targets on this machine, measured and judged in one command: the benchmarks that
-//! measure them (`latency` for the chain, the hop and the 10-minute paced run under load,
+//! measure them (two pinned lockstep runs and the in-process loop for determinism and
+//! bit-identity, `latency` for the chain, the hop and the 10-minute paced run under load,
 //! `pipeline_speed` for the lockstep speed and Basilisk, `paced_cpu` for the paced CPU), one
 //! after the other, each writing its own report into `--out`; then one verdict per target
 //! (`testbed_bench::targets`), printed and written to `targets.md` beside the reports.
@@ -18,15 +19,25 @@
 
 use anyhow::{Context, Result, bail};
 use clap::Parser;
+use ipc_types::AttitudeEstimate;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use testbed_bench::binary_dir;
 use testbed_bench::latency::model::Report;
 use testbed_bench::targets::{self, Verdict};
+use testbed_log::RunLog;
+use testbed_runtime::RunConfig;
+use testbed_sim::closed_loop;
 
 /// The parts, in the order they run.
-const PARTS: [&str; 4] = ["chain", "lockstep", "paced-cpu", "paced-run"];
+const PARTS: [&str; 5] = ["determinism", "chain", "lockstep", "paced-cpu", "paced-run"];
+
+/// Seed of the determinism runs (the one `check-behaviour`'s fixed run uses).
+const DETERMINISM_SEED: u64 = 7;
+/// Start time both determinism runs are pinned to, ns since the Unix epoch (2026-11-24 01:00
+/// UTC; any fixed value: the log's time stamps are on it).
+const PINNED_START_NS: u64 = 1_795_503_600_000_000_000;
 
 #[derive(Parser)]
 struct Args {
@@ -40,7 +51,7 @@ struct Args {
     /// run (30 s) is too short for a verdict unless it misses a deadline.
     #[arg(long)]
     quick: bool,
-    /// Parts to leave out: chain, lockstep, paced-cpu, paced-run. A part left out is judged
+    /// Parts to leave out: determinism, chain, lockstep, paced-cpu, paced-run. A part left out is judged
     /// on the report an earlier run left in `--out`, if there is one.
     #[arg(long, value_delimiter = ',')]
     skip: Vec<String>,
@@ -63,11 +74,14 @@ fn lockstep_json(dir: &Path) -> PathBuf {
 fn paced_cpu_json(dir: &Path) -> PathBuf {
     dir.join("paced-cpu.json")
 }
+fn determinism_json(dir: &Path) -> PathBuf {
+    dir.join("determinism.json")
+}
 /// The chain's CPU, kept so that `--from` judges the chain placed where it was measured.
 fn hot_path_file(dir: &Path) -> PathBuf {
     dir.join("hot-path-cpu")
 }
-/// The command line of the measuring run, for `--from`'s header.
+/// The command lines of the measuring runs, one a line, for `--from`'s header.
 fn measured_by_file(dir: &Path) -> PathBuf {
     dir.join("measured-by")
 }
@@ -124,8 +138,81 @@ fn part_output(part: &str, dir: &Path) -> PathBuf {
         "paced-run" => paced_run_dir(dir),
         "lockstep" => lockstep_json(dir),
         "paced-cpu" => paced_cpu_json(dir),
+        "determinism" => determinism_json(dir),
         other => unreachable!("part {other} is checked against PARTS"),
     }
+}
+
+/// A benchmark or pipeline binary beside this one.
+fn sibling(binary: &str) -> Result<PathBuf> {
+    let path = binary_dir()?.join(binary);
+    if !path.exists() {
+        bail!(
+            "{} not found: cargo build --profile deploy --workspace --bins first",
+            path.display()
+        );
+    }
+    Ok(path)
+}
+
+/// Two lockstep runs of `simulation` with one seed and one pinned start time, compared byte
+/// for byte, and the in-process loop of the first run's configuration, compared estimate by
+/// estimate: `determinism.json`.
+fn determinism(dir: &Path, quick: bool) -> Result<()> {
+    let testbed = sibling("testbed")?;
+    let scratch = std::env::temp_dir().join(format!("targets-determinism-{}", std::process::id()));
+    std::fs::create_dir_all(&scratch).with_context(|| format!("creating {}", scratch.display()))?;
+    // Both runs write the same path: the log holds the run configuration, its own path included.
+    let log = scratch.join("run.mcap");
+    let duration_s = if quick { 40.0 } else { 150.0 };
+    let mut logs = Vec::new();
+    for _ in 0..2 {
+        let args = [
+            "run".to_string(),
+            "--profile".into(),
+            "simulation".into(),
+            "--duration".into(),
+            duration_s.to_string(),
+            "--seed".into(),
+            DETERMINISM_SEED.to_string(),
+            "--start-time-ns".into(),
+            PINNED_START_NS.to_string(),
+            "--no-progress".into(),
+            "--log".into(),
+            log.display().to_string(),
+        ];
+        eprintln!("targets: determinism: testbed {}", args.join(" "));
+        let status = Command::new(&testbed)
+            .args(&args)
+            .stdout(std::io::stderr())
+            .status()
+            .with_context(|| format!("running {}", testbed.display()))?;
+        if !status.success() {
+            bail!("testbed {} ended with {status}", args.join(" "));
+        }
+        logs.push(std::fs::read(&log).with_context(|| format!("reading {}", log.display()))?);
+    }
+    let run_log = RunLog::open(&log).with_context(|| format!("opening {}", log.display()))?;
+    let config = RunConfig::from_toml_str(run_log.config_toml(), &log.display().to_string())?;
+    let trace = closed_loop::run(&closed_loop::Scenario::from_run(&config))?;
+    let estimates: Vec<AttitudeEstimate> = run_log
+        .samples::<AttitudeEstimate>()?
+        .collect::<Result<_, _>>()
+        .with_context(|| format!("reading the estimates of {}", log.display()))?;
+    let found = targets::Determinism {
+        profile: "simulation".into(),
+        seed: DETERMINISM_SEED,
+        duration_s,
+        log_bytes: [logs[0].len() as u64, logs[1].len() as u64],
+        first_difference: targets::first_difference(&logs[0], &logs[1]),
+        estimates: estimates.len(),
+        in_process_ticks: trace.ticks.len(),
+        first_mismatch_t_s: targets::first_estimate_mismatch(&estimates, &trace),
+    };
+    let _ = std::fs::remove_dir_all(&scratch);
+    let file = determinism_json(dir);
+    std::fs::write(&file, serde_json::to_string_pretty(&found)?)
+        .with_context(|| format!("writing {}", file.display()))
 }
 
 /// Runs one part; a JSON-printing benchmark's standard output goes to its report file. An
@@ -143,14 +230,11 @@ fn measure(part: &str, dir: &Path, quick: bool, cpu: usize) -> Result<()> {
     {
         bail!("removing the earlier {}: {e}", output.display());
     }
-    let (binary, args) = part_command(part, dir, quick, cpu);
-    let path = binary_dir()?.join(&binary);
-    if !path.exists() {
-        bail!(
-            "{} not found: cargo build --profile deploy --workspace --bins first",
-            path.display()
-        );
+    if part == "determinism" {
+        return determinism(dir, quick);
     }
+    let (binary, args) = part_command(part, dir, quick, cpu);
+    let path = sibling(&binary)?;
     eprintln!("targets: {part}: {binary} {}", args.join(" "));
     let json_out = matches!(part, "lockstep" | "paced-cpu").then_some(output);
     let mut command = Command::new(&path);
@@ -229,6 +313,10 @@ fn judge(dir: &Path, cpu: usize, unmeasured: &BTreeMap<&str, String>) -> Vec<Ver
         Ok(v) => verdicts.push(targets::paced_cpu(&v)),
         Err(e) => verdicts.push(missing("paced CPU", e)),
     }
+    match json_of("determinism").and_then(|v| Ok(serde_json::from_value(v)?)) {
+        Ok(d) => verdicts.extend(targets::determinism(&d)),
+        Err(e) => verdicts.push(missing("determinism and bit-identity", e)),
+    }
     verdicts
 }
 
@@ -257,7 +345,10 @@ fn main() -> Result<()> {
                 Err(_) => launcher_hot_path()?,
             };
             let measured_by = std::fs::read_to_string(measured_by_file(dir))
-                .map(|c| format!("`{}`", c.trim()))
+                .map(|c| {
+                    let runs: Vec<String> = c.lines().map(|l| format!("`{}`", l.trim())).collect();
+                    runs.join(" and ")
+                })
                 .unwrap_or_else(|_| "an earlier run".into());
             let header = format!("Measured by {measured_by}, judged again by `{command}`");
             (dir.clone(), cpu, header)
@@ -270,7 +361,11 @@ fn main() -> Result<()> {
             };
             std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
             std::fs::write(hot_path_file(&dir), format!("{cpu}\n"))?;
-            std::fs::write(measured_by_file(&dir), format!("{command}\n"))?;
+            // One line per run: a run that leaves parts out keeps the lines of the runs that
+            // measured them.
+            let mut by = std::fs::read_to_string(measured_by_file(&dir)).unwrap_or_default();
+            by.push_str(&format!("{command}\n"));
+            std::fs::write(measured_by_file(&dir), by)?;
             for part in PARTS {
                 if args.skip.iter().any(|s| s == part) {
                     if !part_output(part, &dir).exists() {
