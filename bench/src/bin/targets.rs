@@ -33,7 +33,7 @@ use testbed_sim::closed_loop;
 /// The parts, in the order they run.
 const PARTS: [&str; 5] = ["determinism", "chain", "lockstep", "paced-cpu", "paced-run"];
 
-/// Seed of the determinism runs (the one `check-behaviour`'s fixed run uses).
+/// Seed of the determinism runs (any fixed seed does).
 const DETERMINISM_SEED: u64 = 7;
 /// Start time both determinism runs are pinned to, ns since the Unix epoch (2026-11-24 01:00
 /// UTC; any fixed value: the log's time stamps are on it).
