@@ -35,7 +35,7 @@ const PARTS: [&str; 5] = ["determinism", "chain", "lockstep", "paced-cpu", "pace
 
 /// Seed of the determinism runs (any fixed seed does).
 const DETERMINISM_SEED: u64 = 7;
-/// Start time both determinism runs are pinned to, ns since the Unix epoch (2026-11-24 01:00
+/// Start time both determinism runs are pinned to, ns since the Unix epoch (2026-11-24 07:00
 /// UTC; any fixed value: the log's time stamps are on it).
 const PINNED_START_NS: u64 = 1_795_503_600_000_000_000;
 
@@ -51,8 +51,8 @@ struct Args {
     /// run (30 s) is too short for a verdict unless it misses a deadline.
     #[arg(long)]
     quick: bool,
-    /// Parts to leave out: determinism, chain, lockstep, paced-cpu, paced-run. A part left out is judged
-    /// on the report an earlier run left in `--out`, if there is one.
+    /// Parts to leave out: determinism, chain, lockstep, paced-cpu, paced-run. A part left out
+    /// is judged on the report an earlier run left in `--out`, if there is one.
     #[arg(long, value_delimiter = ',')]
     skip: Vec<String>,
     /// CPU the chain is placed on, as the profiles place the tick [default: the launcher's
