@@ -61,22 +61,6 @@ struct Args {
     hot_path_cpu: Option<usize>,
 }
 
-/// Where each part leaves its report in the output directory.
-fn chain_dir(dir: &Path) -> PathBuf {
-    dir.join("chain")
-}
-fn paced_run_dir(dir: &Path) -> PathBuf {
-    dir.join("paced-run")
-}
-fn lockstep_json(dir: &Path) -> PathBuf {
-    dir.join("lockstep.json")
-}
-fn paced_cpu_json(dir: &Path) -> PathBuf {
-    dir.join("paced-cpu.json")
-}
-fn determinism_json(dir: &Path) -> PathBuf {
-    dir.join("determinism.json")
-}
 /// The chain's CPU, kept so that `--from` judges the chain placed where it was measured.
 fn hot_path_file(dir: &Path) -> PathBuf {
     dir.join("hot-path-cpu")
@@ -93,7 +77,10 @@ fn part_command(part: &str, dir: &Path, quick: bool, cpu: usize) -> (String, Vec
         "chain" => {
             let mut a = s(&["--skip", "sweep,paced,binaries", "--waits", "block"]);
             a.extend(["--chain-cpus".into(), cpu.to_string()]);
-            a.extend(["--out".into(), chain_dir(dir).display().to_string()]);
+            a.extend([
+                "--out".into(),
+                part_output("chain", dir).display().to_string(),
+            ]);
             if quick {
                 a.push("--quick".into());
             }
@@ -108,7 +95,10 @@ fn part_command(part: &str, dir: &Path, quick: bool, cpu: usize) -> (String, Vec
             ]);
             let duration = if quick { "30" } else { "600" };
             a.extend(["--paced-duration".into(), duration.into()]);
-            a.extend(["--out".into(), paced_run_dir(dir).display().to_string()]);
+            a.extend([
+                "--out".into(),
+                part_output("paced-run", dir).display().to_string(),
+            ]);
             ("latency".into(), a)
         }
         "lockstep" => {
@@ -131,16 +121,16 @@ fn part_command(part: &str, dir: &Path, quick: bool, cpu: usize) -> (String, Vec
     }
 }
 
-/// The report file or directory a part writes.
+/// The report file or directory a part writes in the output directory.
 fn part_output(part: &str, dir: &Path) -> PathBuf {
-    match part {
-        "chain" => chain_dir(dir),
-        "paced-run" => paced_run_dir(dir),
-        "lockstep" => lockstep_json(dir),
-        "paced-cpu" => paced_cpu_json(dir),
-        "determinism" => determinism_json(dir),
+    dir.join(match part {
+        "chain" => "chain",
+        "paced-run" => "paced-run",
+        "lockstep" => "lockstep.json",
+        "paced-cpu" => "paced-cpu.json",
+        "determinism" => "determinism.json",
         other => unreachable!("part {other} is checked against PARTS"),
-    }
+    })
 }
 
 /// A benchmark or pipeline binary beside this one.
@@ -210,7 +200,7 @@ fn determinism(dir: &Path, quick: bool) -> Result<()> {
         first_mismatch_t_s: targets::first_estimate_mismatch(&estimates, &trace),
     };
     let _ = std::fs::remove_dir_all(&scratch);
-    let file = determinism_json(dir);
+    let file = part_output("determinism", dir);
     std::fs::write(&file, serde_json::to_string_pretty(&found)?)
         .with_context(|| format!("writing {}", file.display()))
 }
