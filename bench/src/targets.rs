@@ -19,11 +19,10 @@
 
 use crate::latency::model::{Kind, Measurement, Report, round_ratios};
 use crate::latency::protocol::Transport;
-use crate::latency::tables::{floor_of, load_name, rounds_cell};
-use ipc_types::AttitudeEstimate;
+use crate::latency::stats::Percentiles;
+use crate::latency::tables::{floor_row, load_name, rounds_cell};
 use serde::{Deserialize, Serialize};
 use std::fmt::Write as _;
-use testbed_sim::closed_loop::Trace;
 
 /// Lockstep speed the issue asks of the `simulation` profile while it ticks, × real time.
 pub const LOCKSTEP_MIN_X: f64 = 1000.0;
@@ -109,26 +108,16 @@ pub fn chain(r: &Report, cpu: usize) -> Vec<Verdict> {
                 format!("no Unix-socket chain placed on CPU {cpu} in the report"),
             )),
         }
-        match floor_of(r, Kind::Chain, load, 0) {
-            Some((floor, idle_floor)) => {
-                let floor_rounds = r
-                    .find(
-                        Kind::Chain,
-                        Transport::IoxPoll,
-                        load && !idle_floor,
-                        0,
-                        false,
-                    )
-                    .map(|f| round_ratios(bus, f, |l| l.p50))
-                    .unwrap_or_default();
-                let p50 = bus.latency.p50;
+        match floor_row(r, Kind::Chain, load, 0) {
+            Some((floor_row, idle_floor)) => {
+                let (p50, floor) = (bus.latency.p50, floor_row.latency.p50);
                 out.push(Verdict::judged(
                     p50_target,
                     format!(
                         "{p50:.1} µs, {:.2}× the floor's {floor:.2} µs{}{}",
                         p50 / floor,
                         if idle_floor { " (idle floor)" } else { "" },
-                        rounds_note(&floor_rounds, FLOOR_FACTOR)
+                        rounds_note(&round_ratios(bus, floor_row, |l| l.p50), FLOOR_FACTOR)
                     ),
                     p50 <= FLOOR_FACTOR * floor,
                 ));
@@ -159,10 +148,7 @@ pub fn hop(r: &Report) -> Vec<Verdict> {
             continue;
         };
         for (name, value) in [
-            (
-                "p50",
-                (|l| l.p50) as fn(&crate::latency::stats::Percentiles) -> f64,
-            ),
+            ("p50", (|l| l.p50) as fn(&Percentiles) -> f64),
             ("p99", |l| l.p99),
         ] {
             let (b, u) = (value(&bus.latency), value(&uds.latency));
@@ -345,27 +331,6 @@ pub fn first_difference(a: &[u8], b: &[u8]) -> Option<u64> {
         None if a.len() == b.len() => None,
         None => Some(a.len().min(b.len()) as u64),
     }
-}
-
-/// Time of the first logged estimate whose attitude quaternion or gyro bias is not bit for bit
-/// the in-process loop's at the same tick, or of the first tick only one of them has; `None`
-/// when they are equal throughout.
-pub fn first_estimate_mismatch(estimates: &[AttitudeEstimate], trace: &Trace) -> Option<f64> {
-    for (i, tick) in trace.ticks.iter().enumerate() {
-        let Some(sample) = estimates.get(i) else {
-            return Some(tick.t_s);
-        };
-        let equal = tick.estimate.as_ref().is_some_and(|e| {
-            testbed_flight::convert::quaternion_from_array(&sample.quaternion) == Some(e.attitude)
-                && sample.gyro_bias == <[f64; 3]>::from(e.bias_rad_s)
-        });
-        if !equal {
-            return Some(tick.t_s);
-        }
-    }
-    estimates
-        .get(trace.ticks.len())
-        .map(|extra| extra.header.time_ns as f64 * 1e-9)
 }
 
 /// The determinism targets from [`Determinism`].
@@ -586,48 +551,6 @@ mod tests {
         assert_eq!(first_difference(b"abc", b"abd"), Some(2));
         assert_eq!(first_difference(b"abc", b"ab"), Some(2));
         assert_eq!(first_difference(b"", b""), None);
-    }
-
-    /// The estimates of `trace` as the estimator process publishes them.
-    fn published(trace: &Trace) -> Vec<AttitudeEstimate> {
-        trace
-            .ticks
-            .iter()
-            .map(|tick| {
-                let e = tick.estimate.as_ref().expect("initialised at t = 0");
-                AttitudeEstimate {
-                    header: ipc_types::SampleHeader {
-                        time_ns: (tick.t_s * 1e9).round() as u64,
-                        ..ipc_types::SampleHeader::default()
-                    },
-                    quaternion: testbed_flight::convert::quaternion_to_array(&e.attitude),
-                    gyro_bias: e.bias_rad_s.into(),
-                    ..AttitudeEstimate::default()
-                }
-            })
-            .collect()
-    }
-
-    #[test]
-    fn an_estimate_one_bit_off_the_in_process_loop_is_named_by_its_time() {
-        let mut scenario = testbed_sim::closed_loop::Scenario::paper_stabilisation(
-            testbed_model::ModelConfig::default(),
-            7,
-        );
-        scenario.duration_s = 2.0;
-        let trace = testbed_sim::closed_loop::run(&scenario).expect("the loop runs");
-        let mut estimates = published(&trace);
-        assert_eq!(first_estimate_mismatch(&estimates, &trace), None);
-        // The gyro bias of the sixth estimate, one unit in the last place off.
-        estimates[5].gyro_bias[1] = f64::from_bits(estimates[5].gyro_bias[1].to_bits() ^ 1);
-        assert_eq!(
-            first_estimate_mismatch(&estimates, &trace),
-            Some(trace.ticks[5].t_s)
-        );
-        // One estimate short: the tick it lacks.
-        let mut short = published(&trace);
-        let last = short.pop().map(|_| trace.ticks[trace.ticks.len() - 1].t_s);
-        assert_eq!(first_estimate_mismatch(&short, &trace), last);
     }
 
     #[test]

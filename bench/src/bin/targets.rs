@@ -197,7 +197,7 @@ fn determinism(dir: &Path, quick: bool) -> Result<()> {
         first_difference: targets::first_difference(&logs[0], &logs[1]),
         estimates: estimates.len(),
         in_process_ticks: trace.ticks.len(),
-        first_mismatch_t_s: targets::first_estimate_mismatch(&estimates, &trace),
+        first_mismatch_t_s: trace.first_estimate_mismatch(&estimates),
     };
     let _ = std::fs::remove_dir_all(&scratch);
     let file = part_output("determinism", dir);

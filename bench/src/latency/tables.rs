@@ -77,7 +77,12 @@ pub fn floor_of(r: &Report, kind: Kind, load: bool, size: usize) -> Option<(f64,
 
 /// The busy-poll row that is the floor of `load` (see [`floor_of`]), and whether it is the
 /// idle one standing in.
-fn floor_row(r: &Report, kind: Kind, load: bool, size: usize) -> Option<(&Measurement, bool)> {
+pub(crate) fn floor_row(
+    r: &Report,
+    kind: Kind,
+    load: bool,
+    size: usize,
+) -> Option<(&Measurement, bool)> {
     let is_floor = |load: bool| {
         let floor = r.find(kind, Transport::IoxPoll, load, size, false)?;
         let uds = r

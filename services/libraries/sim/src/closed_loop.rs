@@ -384,6 +384,34 @@ fn estimate_record(
     }
 }
 
+impl Trace {
+    /// Time of the first tick whose estimate a pipeline published (`estimates`, one a tick in
+    /// tick order) is not bit for bit this run's (attitude quaternion and gyro bias), or that
+    /// only one of the two has, s; `None` when they are equal throughout. The processes run
+    /// the same code on the same inputs in the same order, so any difference is a fault.
+    pub fn first_estimate_mismatch(
+        &self,
+        estimates: &[ipc_types::AttitudeEstimate],
+    ) -> Option<f64> {
+        for (i, tick) in self.ticks.iter().enumerate() {
+            let equal = estimates
+                .get(i)
+                .zip(tick.estimate.as_ref())
+                .is_some_and(|(sample, e)| {
+                    testbed_flight::convert::quaternion_from_array(&sample.quaternion)
+                        == Some(e.attitude)
+                        && sample.gyro_bias == <[f64; 3]>::from(e.bias_rad_s)
+                });
+            if !equal {
+                return Some(tick.t_s);
+            }
+        }
+        estimates
+            .get(self.ticks.len())
+            .map(|extra| extra.header.time_ns as f64 * 1e-9)
+    }
+}
+
 /// `eᵀ P⁻¹ e`; infinite if `P` is not positive definite.
 pub fn nees(error: &Vector6<f64>, covariance: &Matrix6<f64>) -> f64 {
     covariance
@@ -395,6 +423,55 @@ pub fn nees(error: &Vector6<f64>, covariance: &Matrix6<f64>) -> f64 {
 mod tests {
     use super::*;
     use crate::metrics;
+
+    /// The estimates of `trace` as the estimator process publishes them.
+    fn published(trace: &Trace) -> Vec<ipc_types::AttitudeEstimate> {
+        trace
+            .ticks
+            .iter()
+            .map(|tick| {
+                let e = tick.estimate.as_ref().expect("initialised at t = 0");
+                ipc_types::AttitudeEstimate {
+                    header: ipc_types::SampleHeader {
+                        time_ns: (tick.t_s * 1e9).round() as u64,
+                        ..ipc_types::SampleHeader::default()
+                    },
+                    quaternion: testbed_flight::convert::quaternion_to_array(&e.attitude),
+                    gyro_bias: e.bias_rad_s.into(),
+                    ..ipc_types::AttitudeEstimate::default()
+                }
+            })
+            .collect()
+    }
+
+    #[test]
+    fn an_estimate_one_bit_off_the_run_is_named_by_its_time() {
+        let mut scenario = Scenario::paper_stabilisation(ModelConfig::default(), 7);
+        scenario.duration_s = 2.0;
+        let trace = run(&scenario).unwrap();
+        let mut estimates = published(&trace);
+        assert_eq!(trace.first_estimate_mismatch(&estimates), None);
+        // The gyro bias of the sixth estimate, one unit in the last place off.
+        estimates[5].gyro_bias[1] = f64::from_bits(estimates[5].gyro_bias[1].to_bits() ^ 1);
+        assert_eq!(
+            trace.first_estimate_mismatch(&estimates),
+            Some(trace.ticks[5].t_s)
+        );
+        // One estimate short: the tick it lacks; one too many: the extra one's time.
+        let mut short = published(&trace);
+        short.pop();
+        let last = trace.ticks.last().map(|t| t.t_s);
+        assert_eq!(trace.first_estimate_mismatch(&short), last);
+        let mut long = published(&trace);
+        long.push(ipc_types::AttitudeEstimate {
+            header: ipc_types::SampleHeader {
+                time_ns: 9_000_000_000,
+                ..ipc_types::SampleHeader::default()
+            },
+            ..ipc_types::AttitudeEstimate::default()
+        });
+        assert_eq!(trace.first_estimate_mismatch(&long), Some(9.0));
+    }
 
     #[test]
     fn same_seed_gives_identical_runs_and_different_seeds_differ() {
