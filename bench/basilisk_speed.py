@@ -2,7 +2,7 @@
 """Basilisk's dynamics alone on the test bed's default simulation scenario: simulated seconds
 per wall second, as JSON on stdout.
 
-The baseline of `pipeline_speed` (issue 18): "faster than Basilisk's dynamics alone on the same
+The baseline of `pipeline_speed`, whose target is to be "faster than Basilisk's dynamics alone on the same
 scenario (Basilisk 2.12 from PyPI: `bsk` wheels + hub, 0.01 s step, 3 wheels with friction)".
 
 What is simulated (the test bed's defaults, docs/parameters.md and the manoeuvre's defaults):

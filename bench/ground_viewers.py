@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""What the ground link costs with five viewers (issue 13): a paced run of the simulation
+"""What the ground link costs with five viewers: a paced run of the simulation
 profile with five Foxglove WebSocket viewers connected for the whole run, against the same run
 without the ground link.
 
@@ -174,7 +174,7 @@ def markdown(report):
     d = report["duration_s"]
     link_cpu = b["cpu_s_per_process"].get("ground-link", 0.0)
     lines = [
-        "# The ground link with five viewers (issue 13)",
+        "# The ground link with five viewers",
         "",
         f"Paced `simulation` runs of {d:.0f} s, one after the other on this machine (2 shared "
         f"cores), measured by `python3 bench/ground_viewers.py --duration {d:.0f}`. "

@@ -1,6 +1,6 @@
 //! Shared measurement helpers: repeat, take the median, compare ratios (these machines are
 //! shared and noisy, so absolute times only mean something next to a baseline of the same run);
-//! the latency harness of `latency` ([`latency`]); and issue 18's targets judged from their
+//! the latency harness of `latency` ([`latency`]); and the pipeline's speed and latency targets judged from their
 //! reports ([`targets`]).
 
 pub mod latency;

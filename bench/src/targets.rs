@@ -1,4 +1,4 @@
-//! Issue 18's measured targets, each judged from what the benchmarks wrote: one verdict per
+//! The pipeline's measured speed and latency targets, each judged from what the benchmarks wrote: one verdict per
 //! target, with the numbers it rests on. The measuring is the benchmarks' own (`latency`,
 //! `pipeline_speed`, `paced_cpu`, run by `targets`); this module only reads their reports, so a
 //! saved set of reports can be judged again (`targets --from DIR`).

@@ -1,11 +1,12 @@
-//! `targets --from DIR` judges the reports a measuring run left: session 31's, kept in
-//! `bench/report-targets/session-31/`, copied to a scratch directory (the command writes
-//! `targets.md` beside them).
+//! `targets --from DIR` judges the reports a measuring run left: those of the run of 2026-11-29
+//! on the development machine, kept in `bench/tests/fixtures/targets/` (their `measured-by`
+//! names the directory they were written to then), copied to a scratch directory (the command
+//! writes `targets.md` beside them).
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-const SAVED: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/report-targets/session-31");
+const SAVED: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/fixtures/targets");
 
 /// The saved reports `targets` reads, copied into a fresh directory named after `test`.
 fn scratch_copy(test: &str) -> PathBuf {
@@ -47,7 +48,7 @@ fn judge(dir: &Path) -> (Option<i32>, String) {
 fn saved_reports_are_judged_again_one_verdict_per_target() {
     let dir = scratch_copy("all");
     let (code, md) = judge(&dir);
-    // Session 31 on this machine: the chain's idle median 3.04× the floor, the idle hop's p99
+    // The saved run: the chain's idle median 3.04× the floor, the idle hop's p99
     // above the socket's, the paced CPU 0.514 %; the determinism runs (measured by a second
     // run that left the other parts out) byte-identical and equal to the in-process loop.
     assert!(

@@ -1,9 +1,14 @@
 use crate::SampleHeader;
+#[cfg(feature = "zero-copy")]
 use iceoryx2::prelude::*;
 
 /// Telemetry of the three reaction wheels (wheel `i` spins about body axis `i`).
-#[derive(Debug, Clone, Copy, PartialEq, Default, ZeroCopySend)]
-#[type_name("testbed::WheelTelemetry.v1")]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(
+    feature = "zero-copy",
+    derive(ZeroCopySend),
+    type_name("testbed::WheelTelemetry.v1")
+)]
 #[repr(C)]
 pub struct WheelTelemetry {
     /// Common header; `time_ns` is the device's sampling instant.
@@ -27,8 +32,12 @@ impl WheelTelemetry {
 }
 
 /// Motor torque command to the three reaction wheels.
-#[derive(Debug, Clone, Copy, PartialEq, Default, ZeroCopySend)]
-#[type_name("testbed::WheelCommand.v1")]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(
+    feature = "zero-copy",
+    derive(ZeroCopySend),
+    type_name("testbed::WheelCommand.v1")
+)]
 #[repr(C)]
 pub struct WheelCommand {
     /// Common header; `time_ns` is the time of the input the command was computed from.
@@ -47,8 +56,12 @@ impl WheelCommand {
 }
 
 /// Telemetry of the four control moment gyros (pyramid, numbered 1–4 as index 0–3).
-#[derive(Debug, Clone, Copy, PartialEq, Default, ZeroCopySend)]
-#[type_name("testbed::CmgTelemetry.v1")]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(
+    feature = "zero-copy",
+    derive(ZeroCopySend),
+    type_name("testbed::CmgTelemetry.v1")
+)]
 #[repr(C)]
 pub struct CmgTelemetry {
     /// Common header; `time_ns` is the device's sampling instant.
@@ -71,8 +84,12 @@ impl CmgTelemetry {
 }
 
 /// Gimbal rate command to the four control moment gyros.
-#[derive(Debug, Clone, Copy, PartialEq, Default, ZeroCopySend)]
-#[type_name("testbed::CmgCommand.v1")]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(
+    feature = "zero-copy",
+    derive(ZeroCopySend),
+    type_name("testbed::CmgCommand.v1")
+)]
 #[repr(C)]
 pub struct CmgCommand {
     /// Common header; `time_ns` is the time of the input the command was computed from.

@@ -1,4 +1,5 @@
 use crate::SampleHeader;
+#[cfg(feature = "zero-copy")]
 use iceoryx2::prelude::*;
 
 /// Who put a frame on the software CAN bus ([`CanBusFrame`]) or whose link a
@@ -30,8 +31,12 @@ pub mod can_source {
 /// `len`, three zero bytes, `data` (zero past `len`). `check` is the sender's frame check
 /// sequence over those 16 bytes (CRC-15/CAN, see `testbed_gateways`); a receiver drops a frame
 /// whose check does not match, as every CAN controller drops a frame that fails its CRC.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, ZeroCopySend)]
-#[type_name("testbed::CanBusFrame.v1")]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[cfg_attr(
+    feature = "zero-copy",
+    derive(ZeroCopySend),
+    type_name("testbed::CanBusFrame.v1")
+)]
 #[repr(C)]
 pub struct CanBusFrame {
     /// Common header; `time_ns` is the run-clock time the sender put the frame on the bus,
@@ -58,8 +63,12 @@ pub struct CanBusFrame {
 ///
 /// The plant of a `run.actuation = "can_node"` run takes these instead of the controller's
 /// [`WheelCommand`](crate::WheelCommand): what reaches the wheels is what came over the bus.
-#[derive(Debug, Clone, Copy, PartialEq, Default, ZeroCopySend)]
-#[type_name("testbed::AppliedWheelCommand.v1")]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(
+    feature = "zero-copy",
+    derive(ZeroCopySend),
+    type_name("testbed::AppliedWheelCommand.v1")
+)]
 #[repr(C)]
 pub struct AppliedWheelCommand {
     /// Common header; `time_ns` is the tick the command is applied for. `STALE`: no complete,
@@ -72,8 +81,12 @@ pub struct AppliedWheelCommand {
 
 /// CMG gimbal rates as the smart CAN node applies them (CAN actuation path); see
 /// [`AppliedWheelCommand`].
-#[derive(Debug, Clone, Copy, PartialEq, Default, ZeroCopySend)]
-#[type_name("testbed::AppliedCmgCommand.v1")]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(
+    feature = "zero-copy",
+    derive(ZeroCopySend),
+    type_name("testbed::AppliedCmgCommand.v1")
+)]
 #[repr(C)]
 pub struct AppliedCmgCommand {
     /// Common header; as [`AppliedWheelCommand::header`].
@@ -87,8 +100,12 @@ pub struct AppliedCmgCommand {
 /// All counts are totals since start. Published by gateways and the simulated node when a
 /// count changed and at least once a second of run time, stamped with the latest tick (or
 /// sample) time, so a lockstep log holds them deterministically.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, ZeroCopySend)]
-#[type_name("testbed::CanLinkStatus.v1")]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[cfg_attr(
+    feature = "zero-copy",
+    derive(ZeroCopySend),
+    type_name("testbed::CanLinkStatus.v1")
+)]
 #[repr(C)]
 pub struct CanLinkStatus {
     /// Common header; `source_id` names the link ([`can_source`]).

@@ -1,4 +1,5 @@
 use crate::SampleHeader;
+#[cfg(feature = "zero-copy")]
 use iceoryx2::prelude::*;
 
 /// Output of the attitude estimator (MEKF), published after every propagation or update.
@@ -6,8 +7,12 @@ use iceoryx2::prelude::*;
 /// Error state order (covariance rows/columns, innovation components as noted below):
 /// `[dθ_x, dθ_y, dθ_z, db_x, db_y, db_z]`, with `dθ` the small-angle attitude error in body axes
 /// (rad) and `db` the gyro bias error (rad/s).
-#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
-#[type_name("testbed::AttitudeEstimate.v1")]
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(
+    feature = "zero-copy",
+    derive(ZeroCopySend),
+    type_name("testbed::AttitudeEstimate.v1")
+)]
 #[repr(C)]
 pub struct AttitudeEstimate {
     /// Common header; `time_ns` is the time the estimate refers to (the latest gyro sample).
@@ -103,7 +108,7 @@ pub enum ControllerMode {
     /// Safe mode: an input is lost or invalid, a wheel is near its speed limit, or the ground
     /// asked for it; wheels at a safe torque (zero or rate damping on the gyro), gimbals held.
     Safe = 5,
-    /// Wheel pointing while the thrusters unload the wheels (momentum dump, issue 14).
+    /// Wheel pointing while the thrusters unload the wheels (momentum dump).
     MomentumDump = 6,
     /// Rate damping on the thrusters alone, wheels off (the safe mode with thrusters).
     ThrusterRateDamping = 7,
@@ -127,8 +132,12 @@ impl ControllerMode {
 }
 
 /// Status of the attitude controller, published once per control cycle.
-#[derive(Debug, Clone, Copy, PartialEq, Default, ZeroCopySend)]
-#[type_name("testbed::ControllerStatus.v1")]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(
+    feature = "zero-copy",
+    derive(ZeroCopySend),
+    type_name("testbed::ControllerStatus.v1")
+)]
 #[repr(C)]
 pub struct ControllerStatus {
     /// Common header; `time_ns` is the time of the estimate the cycle used.

@@ -1,4 +1,4 @@
-//! Commands from the ground supervision station and their acknowledgements (issue 13).
+//! Commands from the ground supervision station and their acknowledgements.
 //!
 //! The ground link publishes every command it accepted from a viewer as a [`GroundCommand`]
 //! (`testbed/ground/command`); the controller, the only process that subscribes to it, applies
@@ -7,6 +7,7 @@
 //! a command: the link publishes only its rejection. Both topics are in the run log.
 
 use crate::SampleHeader;
+#[cfg(feature = "zero-copy")]
 use iceoryx2::prelude::*;
 
 /// What a [`GroundCommand`] asks for, stored as `u32` in [`GroundCommand::kind`].
@@ -52,8 +53,12 @@ impl GroundCommandKind {
 }
 
 /// One command from the ground, accepted by the ground link (token, limits and rate checked).
-#[derive(Debug, Clone, Copy, PartialEq, Default, ZeroCopySend)]
-#[type_name("testbed::GroundCommand.v1")]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(
+    feature = "zero-copy",
+    derive(ZeroCopySend),
+    type_name("testbed::GroundCommand.v1")
+)]
 #[repr(C)]
 pub struct GroundCommand {
     /// Common header; `time_ns` is the run's clock as the link last saw it (its newest
@@ -111,8 +116,12 @@ impl GroundAckStatus {
 
 /// The answer to one ground command: applied by the controller, or rejected (by the link or
 /// the controller) with the reason.
-#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
-#[type_name("testbed::GroundCommandAck.v1")]
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(
+    feature = "zero-copy",
+    derive(ZeroCopySend),
+    type_name("testbed::GroundCommandAck.v2")
+)]
 #[repr(C)]
 pub struct GroundCommandAck {
     /// Common header; `time_ns` is the run's clock of the decision (the controller's tick the
@@ -129,7 +138,7 @@ pub struct GroundCommandAck {
     /// Who decided: 1 the ground link, 2 the controller.
     pub decided_by: u32,
     /// Why it was rejected (or what was applied), UTF-8, NUL-padded.
-    pub reason: [u8; 64],
+    pub reason: [u8; GroundCommandAck::REASON_LEN],
 }
 
 impl Default for GroundCommandAck {
@@ -141,19 +150,23 @@ impl Default for GroundCommandAck {
             status: 0,
             client_id: 0,
             decided_by: 0,
-            reason: [0; 64],
+            reason: [0; Self::REASON_LEN],
         }
     }
 }
 
 impl GroundCommandAck {
+    /// Bytes of [`reason`](Self::reason): room for the longest reason the link and the
+    /// controller give, a malformed command's (about 110 bytes, up to 210 when it quotes 32
+    /// characters of the sender's multi-byte text) with margin. 64 (`.v1`) cut them short.
+    pub const REASON_LEN: usize = 256;
     /// [`decided_by`](Self::decided_by): the ground link.
     pub const BY_LINK: u32 = 1;
     /// [`decided_by`](Self::decided_by): the controller.
     pub const BY_CONTROLLER: u32 = 2;
 
-    /// An acknowledgement of `command_id`, its reason truncated at a character boundary to 64
-    /// bytes.
+    /// An acknowledgement of `command_id`, its reason truncated at a character boundary to
+    /// [`REASON_LEN`](Self::REASON_LEN) bytes.
     pub fn new(
         header: SampleHeader,
         command_id: u64,
@@ -170,7 +183,7 @@ impl GroundCommandAck {
             status: status as u32,
             client_id,
             decided_by,
-            reason: [0; 64],
+            reason: [0; Self::REASON_LEN],
         };
         let mut len = reason.len().min(ack.reason.len());
         while !reason.is_char_boundary(len) {
@@ -212,7 +225,7 @@ mod tests {
         assert_eq!(offset_of!(GroundCommand, target_heading_rad), 32);
         assert_eq!(offset_of!(GroundCommand, command_id), 56);
         assert_eq!(offset_of!(GroundCommand, _pad0), 68);
-        assert_eq!(size_of::<GroundCommandAck>(), 112);
+        assert_eq!(size_of::<GroundCommandAck>(), 304);
         assert_eq!(offset_of!(GroundCommandAck, command_id), 24);
         assert_eq!(offset_of!(GroundCommandAck, decided_by), 44);
         assert_eq!(offset_of!(GroundCommandAck, reason), 48);
@@ -220,7 +233,7 @@ mod tests {
 
     #[test]
     fn an_ack_keeps_its_reason_cut_at_a_character_boundary() {
-        let long = "é".repeat(40);
+        let long = "é".repeat(140);
         let ack = GroundCommandAck::new(
             SampleHeader::default(),
             7,
@@ -230,7 +243,7 @@ mod tests {
             GroundCommandAck::BY_LINK,
             &long,
         );
-        assert_eq!(ack.reason(), "é".repeat(32));
+        assert_eq!(ack.reason(), "é".repeat(128));
         assert_eq!(ack.status(), Some(GroundAckStatus::Rejected));
         for v in 0..6 {
             assert_eq!(

@@ -1,8 +1,13 @@
+#[cfg(feature = "zero-copy")]
 use iceoryx2::prelude::*;
 
 /// Header common to every sample (24 bytes).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, ZeroCopySend)]
-#[type_name("testbed::SampleHeader.v1")]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[cfg_attr(
+    feature = "zero-copy",
+    derive(ZeroCopySend),
+    type_name("testbed::SampleHeader.v1")
+)]
 #[repr(C)]
 pub struct SampleHeader {
     /// Time of validity: the instant the sample describes, ns on the run's clock (device time

@@ -1,11 +1,18 @@
 //! Fixed-layout sample types and topic names of the test bed pipeline.
 //!
 //! Every process of the test bed exchanges the types of this crate over iceoryx2
-//! publish/subscribe (shared memory, zero copy). Each type is `#[repr(C)]`, derives
-//! [`ZeroCopySend`](iceoryx2::prelude::ZeroCopySend) with a stable, versioned type name
-//! (`"testbed::<Type>.v<N>"`), holds no pointers, no heap data and no `bool`, and has explicit
-//! padding fields so that no implicit padding exists anywhere. The layout of every type is
-//! pinned by the tests of this crate: changing a layout must come with a new type-name version.
+//! publish/subscribe (shared memory, zero copy). Each type is `#[repr(C)]`, derives iceoryx2's
+//! `ZeroCopySend` with a stable, versioned type name (`"testbed::<Type>.v<N>"`), holds no
+//! pointers, no heap data and no `bool`, and has explicit padding fields so that no implicit
+//! padding exists anywhere. The layout of every type is pinned by the tests of this crate:
+//! changing a layout must come with a new type-name version.
+//!
+//! # Features
+//!
+//! - `zero-copy` (default): the iceoryx2 derive and type names, so the types can go on the bus
+//!   (`testbed-bus` enables it). Crates that only compute with the samples (flight, simulation,
+//!   identification, the log) depend on this crate without it and so do not link iceoryx2; the
+//!   layout is the same either way (`#[repr(C)]`, pinned by the tests).
 //!
 //! Every sample starts with a [`SampleHeader`] carrying the time the sample describes (device or
 //! simulation time, ns on the run's clock), a sequence number and validity flags.
@@ -30,7 +37,8 @@
 //! # Services
 //!
 //! Each topic is one iceoryx2 publish/subscribe service named by a constant of [`topic`]. The
-//! [`Topic`] trait ties each sample type to its service name.
+//! topic table there ([`TopicId`]) ties each sample type to its service name and implements
+//! [`Topic`]; [`for_each_topic!`] hands the table to code written once for every topic.
 
 mod actuators;
 mod can;
@@ -43,6 +51,7 @@ mod sim;
 mod system;
 pub mod thrusters;
 pub mod topic;
+mod wait;
 
 #[cfg(test)]
 mod tests;
@@ -60,15 +69,30 @@ pub use sensors::{GyroSample, InclinometerSample, MagnetometerSample};
 pub use sim::{SimClockTick, SimTruth};
 pub use system::{HealthEvent, HealthEventKind, Heartbeat, ProcessState};
 pub use thrusters::{AppliedThrusterCommand, ThrusterCommand, ThrusterStatus};
+pub use topic::{GroundView, TopicId};
+pub use wait::{ENV_WAIT, WaitStrategy, WaitStrategyError};
 
 /// The identity attitude quaternion `[x, y, z, w] = [0, 0, 0, 1]` (B coincides with L).
 pub const IDENTITY_QUATERNION: [f64; 4] = [0.0, 0.0, 0.0, 1.0];
 
+/// What a sample type must be to travel on the bus: with the `zero-copy` feature an iceoryx2
+/// `ZeroCopySend` payload (every sample type of this crate then derives it, so a [`Topic`]
+/// implemented outside this crate must too); without it, no requirement.
+#[cfg(feature = "zero-copy")]
+pub trait Payload: iceoryx2::prelude::ZeroCopySend {}
+#[cfg(feature = "zero-copy")]
+impl<T: iceoryx2::prelude::ZeroCopySend> Payload for T {}
+/// What a sample type must be to travel on the bus: without the `zero-copy` feature, no
+/// requirement (nothing here goes on the bus).
+#[cfg(not(feature = "zero-copy"))]
+pub trait Payload {}
+#[cfg(not(feature = "zero-copy"))]
+impl<T> Payload for T {}
+
 /// A sample type published on exactly one topic.
-pub trait Topic:
-    iceoryx2::prelude::ZeroCopySend + Copy + Default + core::fmt::Debug + 'static
-{
-    /// Name of the publish/subscribe service (one of the [`topic`] constants).
+pub trait Topic: Payload + Copy + Default + core::fmt::Debug + 'static {
+    /// Name of the publish/subscribe service (for the pipeline's topics one of the [`topic`]
+    /// constants, set by the topic table).
     const NAME: &'static str;
     /// Who publishes the topic and how it is delivered (sets the service's publisher slots and
     /// overflow policy).
@@ -101,37 +125,4 @@ impl TopicRole {
     pub const fn has_many_publishers(self) -> bool {
         !matches!(self, Self::Data)
     }
-}
-
-macro_rules! impl_topic {
-    ($($ty:ty => $name:ident $(as $role:ident)?),* $(,)?) => {$(
-        impl Topic for $ty {
-            const NAME: &'static str = topic::$name;
-            $(const ROLE: TopicRole = TopicRole::$role;)?
-            fn header(&self) -> &SampleHeader { &self.header }
-            fn header_mut(&mut self) -> &mut SampleHeader { &mut self.header }
-        }
-    )*};
-}
-
-impl_topic! {
-    GyroSample => GYRO,
-    InclinometerSample => INCLINOMETER,
-    MagnetometerSample => MAGNETOMETER,
-    WheelTelemetry => WHEEL_TELEMETRY,
-    WheelCommand => WHEEL_COMMAND,
-    CmgTelemetry => CMG_TELEMETRY,
-    CmgCommand => CMG_COMMAND,
-    AttitudeEstimate => ATTITUDE_ESTIMATE,
-    ControllerStatus => CONTROLLER_STATUS,
-    SimTruth => SIM_TRUTH,
-    SimClockTick => SIM_CLOCK,
-    Heartbeat => HEARTBEAT as Housekeeping,
-    CanBusFrame => CAN_BUS as Shared,
-    CanLinkStatus => CAN_STATUS as Shared,
-    AppliedWheelCommand => WHEEL_APPLIED,
-    AppliedCmgCommand => CMG_APPLIED,
-    HealthEvent => HEALTH as Housekeeping,
-    GroundCommand => GROUND_COMMAND,
-    GroundCommandAck => GROUND_COMMAND_ACK,
 }

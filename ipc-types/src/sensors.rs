@@ -1,9 +1,14 @@
 use crate::SampleHeader;
+#[cfg(feature = "zero-copy")]
 use iceoryx2::prelude::*;
 
 /// One sample of the three fibre-optic gyros (10 Hz).
-#[derive(Debug, Clone, Copy, PartialEq, Default, ZeroCopySend)]
-#[type_name("testbed::GyroSample.v1")]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(
+    feature = "zero-copy",
+    derive(ZeroCopySend),
+    type_name("testbed::GyroSample.v1")
+)]
 #[repr(C)]
 pub struct GyroSample {
     /// Common header; `time_ns` is the device's sampling instant.
@@ -21,8 +26,12 @@ impl GyroSample {
 }
 
 /// One sample of the two-axis inclinometer (2.5 Hz).
-#[derive(Debug, Clone, Copy, PartialEq, Default, ZeroCopySend)]
-#[type_name("testbed::InclinometerSample.v1")]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(
+    feature = "zero-copy",
+    derive(ZeroCopySend),
+    type_name("testbed::InclinometerSample.v1")
+)]
 #[repr(C)]
 pub struct InclinometerSample {
     /// Common header; `time_ns` is the device's sampling instant.
@@ -40,8 +49,12 @@ impl InclinometerSample {
 }
 
 /// One sample of the three-axis magnetometer (2.5 Hz).
-#[derive(Debug, Clone, Copy, PartialEq, Default, ZeroCopySend)]
-#[type_name("testbed::MagnetometerSample.v1")]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(
+    feature = "zero-copy",
+    derive(ZeroCopySend),
+    type_name("testbed::MagnetometerSample.v1")
+)]
 #[repr(C)]
 pub struct MagnetometerSample {
     /// Common header; `time_ns` is the device's sampling instant.

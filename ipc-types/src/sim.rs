@@ -1,9 +1,14 @@
 use crate::SampleHeader;
+#[cfg(feature = "zero-copy")]
 use iceoryx2::prelude::*;
 
 /// True state of the simulated platform (simulation only), published by the plant every tick.
-#[derive(Debug, Clone, Copy, PartialEq, Default, ZeroCopySend)]
-#[type_name("testbed::SimTruth.v1")]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(
+    feature = "zero-copy",
+    derive(ZeroCopySend),
+    type_name("testbed::SimTruth.v1")
+)]
 #[repr(C)]
 pub struct SimTruth {
     /// Common header; `time_ns` is the simulation time of the state.
@@ -41,8 +46,12 @@ impl SimTruth {
 ///
 /// In lockstep mode the plant publishes tick `n` and advances to `n + 1` only after the pipeline
 /// has answered tick `n`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, ZeroCopySend)]
-#[type_name("testbed::SimClockTick.v1")]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[cfg_attr(
+    feature = "zero-copy",
+    derive(ZeroCopySend),
+    type_name("testbed::SimClockTick.v1")
+)]
 #[repr(C)]
 pub struct SimClockTick {
     /// Common header; `time_ns` equals `sim_time_ns`.

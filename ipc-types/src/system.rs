@@ -1,4 +1,5 @@
 use crate::SampleHeader;
+#[cfg(feature = "zero-copy")]
 use iceoryx2::prelude::*;
 
 /// Lifecycle state of a process, stored as `u32` in [`Heartbeat::state`].
@@ -36,8 +37,12 @@ impl ProcessState {
 ///
 /// `pid` differs between runs: tools comparing logs for reproducibility should leave this topic
 /// out.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, ZeroCopySend)]
-#[type_name("testbed::Heartbeat.v1")]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[cfg_attr(
+    feature = "zero-copy",
+    derive(ZeroCopySend),
+    type_name("testbed::Heartbeat.v1")
+)]
 #[repr(C)]
 pub struct Heartbeat {
     /// Common header; `time_ns` is the run's clock when the report was made.
@@ -213,8 +218,12 @@ impl HealthEventKind {
 
 /// A fault or recovery seen by a process or the launcher: the run's event list (all
 /// reporters share the topic; published only when something happens).
-#[derive(Debug, Clone, Copy, PartialEq, Default, ZeroCopySend)]
-#[type_name("testbed::HealthEvent.v1")]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(
+    feature = "zero-copy",
+    derive(ZeroCopySend),
+    type_name("testbed::HealthEvent.v1")
+)]
 #[repr(C)]
 pub struct HealthEvent {
     /// Common header; `time_ns` is the run's clock when the event was seen (the reporter's

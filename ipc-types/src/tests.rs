@@ -2,6 +2,7 @@
 
 use crate::*;
 use core::mem::{align_of, offset_of, size_of};
+#[cfg(feature = "zero-copy")]
 use iceoryx2::prelude::*;
 use std::collections::HashSet;
 
@@ -77,49 +78,23 @@ fn layouts_are_pinned() {
     assert_eq!(size_of::<ProcessState>(), 4);
 }
 
-/// Type name and topic name of a sample type.
-fn names<T: Topic>() -> (&'static str, &'static str) {
-    // SAFETY: `type_name` only returns the string given to `#[type_name]`.
-    (unsafe { <T as ZeroCopySend>::type_name() }, T::NAME)
-}
-
-fn all_names() -> Vec<(&'static str, &'static str)> {
-    vec![
-        names::<GyroSample>(),
-        names::<InclinometerSample>(),
-        names::<MagnetometerSample>(),
-        names::<WheelTelemetry>(),
-        names::<WheelCommand>(),
-        names::<CmgTelemetry>(),
-        names::<CmgCommand>(),
-        names::<AttitudeEstimate>(),
-        names::<ControllerStatus>(),
-        names::<SimTruth>(),
-        names::<SimClockTick>(),
-        names::<Heartbeat>(),
-        names::<CanBusFrame>(),
-        names::<CanLinkStatus>(),
-        names::<AppliedWheelCommand>(),
-        names::<AppliedCmgCommand>(),
-        names::<HealthEvent>(),
-        names::<GroundCommand>(),
-        names::<GroundCommandAck>(),
-        names::<ThrusterCommand>(),
-        names::<ThrusterStatus>(),
-        names::<AppliedThrusterCommand>(),
-    ]
-}
-
+#[cfg(feature = "zero-copy")]
 #[test]
-fn type_names_are_versioned_and_unique() {
-    let all = all_names();
+fn type_names_are_versioned_unique_and_the_tables_schema_names() {
+    let all = topic::type_names();
+    assert_eq!(all.len(), TopicId::ALL.len());
     let mut seen = HashSet::new();
-    for (type_name, _) in &all {
+    for (id, type_name) in &all {
         assert!(type_name.starts_with("testbed::"), "{type_name}");
         assert!(type_name.contains(".v"), "{type_name}");
         assert!(seen.insert(*type_name), "duplicate type name {type_name}");
+        assert_eq!(*type_name, id.schema_name(), "{id:?}");
     }
-    assert_eq!(names::<GyroSample>().0, "testbed::GyroSample.v1");
+    // SAFETY: `type_name` only returns the string given to `#[type_name]`.
+    assert_eq!(
+        unsafe { <GyroSample as ZeroCopySend>::type_name() },
+        "testbed::GyroSample.v1"
+    );
     // SAFETY: as above.
     assert_eq!(
         unsafe { <SampleHeader as ZeroCopySend>::type_name() },
@@ -133,13 +108,27 @@ fn topic_names_are_unique_and_valid() {
     for name in topic::ALL {
         assert!(seen.insert(*name), "duplicate service name {name}");
         assert!(name.starts_with("testbed/"), "{name}");
+    }
+}
+
+#[cfg(feature = "zero-copy")]
+#[test]
+fn every_topic_is_a_service_with_one_sample_type() {
+    for name in topic::ALL {
         ServiceName::new(name).unwrap_or_else(|e| panic!("{name}: {e:?}"));
     }
-    // Every topic carries exactly one sample type.
-    let all = all_names();
-    assert_eq!(all.len(), topic::ALL.len());
-    let by_type: HashSet<_> = all.iter().map(|(_, name)| *name).collect();
-    assert_eq!(by_type, topic::ALL.iter().copied().collect::<HashSet<_>>());
+    let names: Vec<_> = TopicId::ALL.iter().map(|t| t.name()).collect();
+    assert_eq!(names, topic::ALL);
+    for (i, &t) in TopicId::ALL.iter().enumerate() {
+        assert_eq!(t.index(), i);
+        assert_eq!(TopicId::from_name(t.name()), Some(t));
+    }
+    assert_eq!(TopicId::from_name("testbed/no/such"), None);
+    // The impls come from the same entries.
+    assert_eq!(GyroSample::NAME, TopicId::Gyro.name());
+    assert_eq!(Heartbeat::ROLE, TopicRole::Housekeeping);
+    assert_eq!(CanBusFrame::ROLE, TopicRole::Shared);
+    assert_eq!(AppliedThrusterCommand::NAME, topic::THRUSTER_APPLIED);
 }
 
 #[test]
@@ -224,6 +213,7 @@ fn helpers() {
     }
 }
 
+#[cfg(feature = "zero-copy")]
 /// The types work as iceoryx2 payloads (process-local service, no shared memory needed).
 #[test]
 fn iceoryx2_round_trip() -> Result<(), Box<dyn core::error::Error>> {

@@ -1,20 +1,24 @@
-//! Thruster command and status samples (issue 14): the six on/off cold-gas thrusters.
+//! Thruster command and status samples: the six on/off cold-gas thrusters.
 //!
 //! Thruster `2a` gives `+` torque about body axis `a`, thruster `2a + 1` `−` torque (the default
-//! layout, `docs/thrusters.md`). Topics: [`THRUSTER_COMMAND`], [`THRUSTER_STATUS`] (in
-//! [`crate::topic::ALL`], logged).
+//! layout, `docs/thrusters.md`). Topics: [`THRUSTER_COMMAND`](crate::topic::THRUSTER_COMMAND),
+//! [`THRUSTER_STATUS`](crate::topic::THRUSTER_STATUS),
+//! [`THRUSTER_APPLIED`](crate::topic::THRUSTER_APPLIED) (in the topic table, logged).
 
-use crate::{SampleHeader, Topic};
+use crate::SampleHeader;
+#[cfg(feature = "zero-copy")]
 use iceoryx2::prelude::*;
 
 /// Number of thrusters.
 pub const THRUSTERS: usize = 6;
 
-pub use crate::topic::{THRUSTER_APPLIED, THRUSTER_COMMAND, THRUSTER_STATUS};
-
 /// Valve on-times for one control period, from the controller.
-#[derive(Debug, Clone, Copy, PartialEq, Default, ZeroCopySend)]
-#[type_name("testbed::ThrusterCommand.v1")]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(
+    feature = "zero-copy",
+    derive(ZeroCopySend),
+    type_name("testbed::ThrusterCommand.v1")
+)]
 #[repr(C)]
 pub struct ThrusterCommand {
     /// Common header; `time_ns` is the time of the input the command was computed from (the
@@ -26,8 +30,12 @@ pub struct ThrusterCommand {
 }
 
 /// What the thruster gateway applied and counted.
-#[derive(Debug, Clone, Copy, PartialEq, Default, ZeroCopySend)]
-#[type_name("testbed::ThrusterStatus.v1")]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(
+    feature = "zero-copy",
+    derive(ZeroCopySend),
+    type_name("testbed::ThrusterStatus.v1")
+)]
 #[repr(C)]
 pub struct ThrusterStatus {
     /// Common header; `time_ns` is the period the status describes.
@@ -47,8 +55,12 @@ pub struct ThrusterStatus {
 /// Valve on-times as the smart CAN node applies them (CAN actuation path): the plant of a
 /// `run.actuation = "can_node"` run with thrusters takes these instead of the controller's
 /// [`ThrusterCommand`], so what reaches the valves is what came over the bus.
-#[derive(Debug, Clone, Copy, PartialEq, Default, ZeroCopySend)]
-#[type_name("testbed::AppliedThrusterCommand.v1")]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(
+    feature = "zero-copy",
+    derive(ZeroCopySend),
+    type_name("testbed::AppliedThrusterCommand.v1")
+)]
 #[repr(C)]
 pub struct AppliedThrusterCommand {
     /// Common header; `time_ns` is the tick the pulses start at. `STALE`: no complete command
@@ -60,36 +72,6 @@ pub struct AppliedThrusterCommand {
     pub latch_shut: u32,
     /// Padding, always zero.
     pub _pad0: u32,
-}
-
-impl Topic for AppliedThrusterCommand {
-    const NAME: &'static str = THRUSTER_APPLIED;
-    fn header(&self) -> &SampleHeader {
-        &self.header
-    }
-    fn header_mut(&mut self) -> &mut SampleHeader {
-        &mut self.header
-    }
-}
-
-impl Topic for ThrusterCommand {
-    const NAME: &'static str = THRUSTER_COMMAND;
-    fn header(&self) -> &SampleHeader {
-        &self.header
-    }
-    fn header_mut(&mut self) -> &mut SampleHeader {
-        &mut self.header
-    }
-}
-
-impl Topic for ThrusterStatus {
-    const NAME: &'static str = THRUSTER_STATUS;
-    fn header(&self) -> &SampleHeader {
-        &self.header
-    }
-    fn header_mut(&mut self) -> &mut SampleHeader {
-        &mut self.header
-    }
 }
 
 #[cfg(test)]

@@ -28,7 +28,7 @@
 //!
 //! [[process]]
 //! name = "sim-gyro"          # unique; [A-Za-z0-9_-], at most 31 bytes
-//! command = "sim-gyro"       # binary next to the launcher, or an absolute path
+//! command = "sim-gyro"       # a role of `testbed` (see roles), or a program's absolute path
 //! args = []                  # default []
 //! env = { }                  # extra environment; TESTBED_BUS_* and TESTBED_RUN_* are refused
 //! required = true            # default true: its failure fails the run
@@ -484,7 +484,7 @@ impl Profile {
         }
         let key = |field: &str| format!("process.{}.{field}", p.name);
         if p.command.trim().is_empty() || p.command.contains('\0') {
-            return Err(self.invalid(key("command"), &p.command, "must name a binary"));
+            return Err(self.invalid(key("command"), &p.command, "must name a role or a program"));
         }
         for (k, v) in &p.env {
             if k.is_empty() || k.contains('=') || k.contains('\0') || v.contains('\0') {

@@ -6,14 +6,14 @@ use std::time::{Duration, Instant};
 
 use std::os::unix::process::CommandExt as _;
 
-use testbed_bus::{BusConfig, cleanup_dead_nodes};
+use testbed_bus::cleanup_dead_nodes;
 
 use ipc_types::HealthEventKind;
 
 use crate::placement;
-use crate::profile::{
-    ClockMode, Device, OnExit, ProcessSpec, Profile, RunSettings, Source, Supervision,
-};
+use crate::plan::Plan;
+use crate::profile::{ClockMode, OnExit, ProcessSpec};
+use crate::restart::{self, Restart, StartFailure};
 use crate::sys::{self, ExitHow, SignalSet};
 use crate::watchdog::{self, Watchdog};
 
@@ -43,125 +43,6 @@ pub const ENV_RESTART_COUNT: &str = ipc_types::ENV_RESTART_COUNT;
 /// Prefix of the per-device variables (`TESTBED_DEVICE_GYRO=real|simulated`).
 pub const ENV_DEVICE_PREFIX: &str = "TESTBED_DEVICE_";
 
-/// Everything a run needs: the profile with command-line overrides applied.
-#[derive(Debug, Clone)]
-pub struct Plan {
-    /// The validated profile.
-    pub profile: Profile,
-    /// `[run]` after overrides.
-    pub run: RunSettings,
-    /// `[supervision]` after overrides.
-    pub supervision: Supervision,
-    /// The run's bus (prefix, root; delivery from the mode).
-    pub bus: BusConfig,
-    /// Where binaries named without a path are found.
-    pub bin_dir: PathBuf,
-    /// How the CPUs are shared out for the profile's `cpus` roles; None: every process runs
-    /// wherever the scheduler puts it, whatever its `cpus` (`--unplaced`).
-    pub cpu_roles: Option<placement::CpuRoles>,
-}
-
-impl Plan {
-    /// The CPUs `spec` is pinned to in this run: its `cpus` with the roles shared out; None
-    /// when it may run anywhere (no `cpus`, or the run is unplaced).
-    pub fn affinity(&self, spec: &ProcessSpec) -> Option<Vec<usize>> {
-        let roles = self.cpu_roles.as_ref()?;
-        spec.cpus.as_ref().map(|cpus| cpus.resolve(roles))
-    }
-
-    /// CPUs named by a process's `cpus` that this launcher may not run on (so nor may its
-    /// children): `(process, CPU, the CPUs available)`. None in an unplaced run.
-    pub fn unavailable_cpus(&self) -> Vec<(String, usize, Vec<usize>)> {
-        let Some(roles) = &self.cpu_roles else {
-            return Vec::new();
-        };
-        let available = roles.available();
-        self.profile
-            .processes
-            .iter()
-            .flat_map(|spec| {
-                self.affinity(spec)
-                    .into_iter()
-                    .flatten()
-                    .filter(|cpu| !available.contains(cpu))
-                    .map(|cpu| (spec.name.clone(), cpu, available.to_vec()))
-                    .collect::<Vec<_>>()
-            })
-            .collect()
-    }
-
-    /// The executable of `spec`: absolute commands as written, others in [`Plan::bin_dir`].
-    pub fn program(&self, spec: &ProcessSpec) -> PathBuf {
-        let command = Path::new(&spec.command);
-        if command.is_absolute() {
-            command.to_path_buf()
-        } else {
-            self.bin_dir.join(command)
-        }
-    }
-
-    /// Processes whose executable does not exist or is not executable, with the path tried.
-    pub fn missing_programs(&self) -> Vec<(String, PathBuf)> {
-        use std::os::unix::fs::PermissionsExt as _;
-        self.profile
-            .ordered()
-            .filter_map(|spec| {
-                let program = self.program(spec);
-                let runnable = std::fs::metadata(&program)
-                    .map(|m| m.is_file() && m.permissions().mode() & 0o111 != 0)
-                    .unwrap_or(false);
-                (!runnable).then(|| (spec.name.clone(), program))
-            })
-            .collect()
-    }
-
-    /// The environment every child gets on top of the launcher's own (which passes `RUST_LOG`
-    /// through), before the process's own `env`.
-    pub fn run_env(&self) -> Vec<(String, String)> {
-        let mut env: Vec<(String, String)> = self
-            .bus
-            .env_vars()
-            .into_iter()
-            .map(|(k, v)| (k.to_owned(), v))
-            .collect();
-        env.push((ENV_RUN_MODE.to_owned(), self.run.mode.as_str().to_owned()));
-        env.push((ENV_RUN_SEED.to_owned(), self.run.seed.to_string()));
-        if let Some(d) = self.run.duration_s {
-            env.push((ENV_RUN_DURATION_S.to_owned(), d.to_string()));
-        }
-        if let Some(log) = &self.run.log {
-            env.push((ENV_RUN_LOG.to_owned(), log.display().to_string()));
-        }
-        if let Some(config) = &self.run.config {
-            let path = self.profile.relative_to_profile(config);
-            env.push((ENV_RUN_CONFIG.to_owned(), path.display().to_string()));
-        }
-        let profile =
-            std::fs::canonicalize(&self.profile.file).unwrap_or_else(|_| self.profile.file.clone());
-        env.push((ENV_RUN_PROFILE.to_owned(), profile.display().to_string()));
-        for device in Device::ALL {
-            if let Some(source) = self.profile.devices.get(&device) {
-                let key = format!("{ENV_DEVICE_PREFIX}{}", device.name().to_uppercase());
-                env.push((key, source.as_str().to_owned()));
-            }
-        }
-        env
-    }
-
-    /// Delivery mode for the run: lossless in lockstep, overflow when paced.
-    pub fn delivery_for(mode: ClockMode) -> testbed_bus::Delivery {
-        match mode {
-            ClockMode::Lockstep => testbed_bus::Delivery::Lossless,
-            ClockMode::Paced => testbed_bus::Delivery::Overflow,
-        }
-    }
-
-    /// Whether any device of the run is real.
-    pub fn has_real_devices(&self) -> bool {
-        self.profile.devices.values().any(|s| *s == Source::Real)
-    }
-}
-
 /// How a run ended.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Outcome {
@@ -182,6 +63,8 @@ struct Proc<'p> {
     cpu: sys::CpuTime,
     /// How often the process was started.
     starts: u32,
+    /// How its last life ended, if it failed its start-up ([`restart`]).
+    start_failure: Option<StartFailure>,
 }
 
 /// Supervises one run.
@@ -216,6 +99,7 @@ impl<'p> Supervisor<'p> {
                 restart_at: None,
                 cpu: sys::CpuTime::default(),
                 starts: 0,
+                start_failure: None,
             })
             .collect();
         Self {
@@ -504,7 +388,7 @@ impl<'p> Supervisor<'p> {
             }
         }
         // Most looks find no child ended: one system call says so, instead of one per process
-        // (each a few microseconds on a virtual machine, twice a second; issue 18). A failed
+        // (each a few microseconds on a virtual machine, twice a second). A failed
         // query falls back to asking each process.
         if matches!(sys::any_exited(), Ok(false)) {
             return;
@@ -564,9 +448,15 @@ impl<'p> Supervisor<'p> {
             self.request_stop(format!("{name:?} completed the run"));
             return;
         }
-        if let Some(w) = self.watchdog.as_mut() {
+        // Whether it ever reported Running, its last heartbeats included (taken now: the
+        // watchdog only looks every POLL_PERIOD).
+        let ran = self.watchdog.as_mut().map(|w| {
+            w.poll();
+            let ran = w.ran(pid as u32);
             w.forget(pid as u32);
-        }
+            ran
+        });
+        let start_failure = StartFailure::of(how, ran);
         let status = match how {
             ExitHow::Code(code) => code as u32,
             ExitHow::Signal(signal) => 128 + signal as u32,
@@ -602,7 +492,10 @@ impl<'p> Supervisor<'p> {
             }
             OnExit::Restart => {
                 let proc = &mut self.procs[index];
-                if proc.restarts < spec.max_restarts {
+                let previous = std::mem::replace(&mut proc.start_failure, start_failure);
+                let decision =
+                    restart::decide(proc.restarts, spec.max_restarts, previous, start_failure);
+                if decision == Restart::Again {
                     proc.restarts += 1;
                     let delay = secs(self.plan.supervision.restart_delay_s);
                     proc.restart_at = Some(Instant::now() + delay);
@@ -612,18 +505,22 @@ impl<'p> Supervisor<'p> {
                         spec.max_restarts
                     );
                     self.report(HealthEventKind::ProcessRestarted, name, restarts, 0.0);
-                } else if spec.required {
+                    return;
+                }
+                let why = match decision {
+                    Restart::SameStartFailure => {
+                        "before it ever ran, as its previous start did: not restarted (it would fail the same way again)".to_owned()
+                    }
+                    _ => format!("with no restarts left (max_restarts = {})", spec.max_restarts),
+                };
+                if spec.required {
                     tracing::error!(
-                        "required process {name:?} (pid {pid}) {how} with no restarts left (max_restarts = {}); stopping all",
-                        spec.max_restarts
+                        "required process {name:?} (pid {pid}) {how} {why}; stopping all"
                     );
                     self.failed = true;
-                    self.request_stop(format!("{name:?} {how} with no restarts left"));
+                    self.request_stop(format!("{name:?} {how} {why}"));
                 } else {
-                    tracing::warn!(
-                        "process {name:?} (pid {pid}) {how} with no restarts left (max_restarts = {}); left stopped",
-                        spec.max_restarts
-                    );
+                    tracing::warn!("process {name:?} (pid {pid}) {how} {why}; left stopped");
                 }
             }
             OnExit::Ignore => {

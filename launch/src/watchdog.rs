@@ -20,7 +20,7 @@ pub const LAUNCHER: &str = "launcher";
 /// beyond the timeout). Half a second: a third of the default 1.5 s timeout, so a hung process
 /// is killed 1.5 to 2 s after its last heartbeat. Each look (the heartbeats, every child's
 /// state) is a timer wake-up of some 80 µs of CPU here, which at four a second was most of the
-/// launcher's paced CPU (issue 18). A hung process's actuators do not wait for it: the
+/// launcher's paced CPU. A hung process's actuators do not wait for it: the
 /// gateways and the plant command zero after two silent control periods (0.2 s); the look
 /// period only delays the restart. Exits are noticed at once all the same (SIGCHLD ends the
 /// wait).
@@ -30,6 +30,8 @@ pub const POLL_PERIOD: Duration = Duration::from_millis(500);
 struct Seen {
     at: Instant,
     watched: bool,
+    /// Whether any of its heartbeats said `Running` or `Degraded`.
+    ran: bool,
 }
 
 /// Heartbeats in, health events out.
@@ -71,7 +73,15 @@ impl Watchdog {
                 hb.state(),
                 Some(ProcessState::Running | ProcessState::Degraded)
             );
-            seen.insert(hb.pid, Seen { at: now, watched });
+            let ran = watched || seen.get(&hb.pid).is_some_and(|s| s.ran);
+            seen.insert(
+                hb.pid,
+                Seen {
+                    at: now,
+                    watched,
+                    ran,
+                },
+            );
         });
         if let Err(e) = drained {
             tracing::warn!("reading heartbeats: {e}");
@@ -83,6 +93,11 @@ impl Watchdog {
         let seen = self.seen.get(&pid)?;
         let silent = now.saturating_duration_since(seen.at);
         (seen.watched && silent >= self.timeout).then_some(silent)
+    }
+
+    /// Whether process `pid` ever reported `Running` (or `Degraded`) in the heartbeats taken.
+    pub fn ran(&self, pid: u32) -> bool {
+        self.seen.get(&pid).is_some_and(|s| s.ran)
     }
 
     /// Forgets `pid` (it ended).

@@ -1,6 +1,7 @@
-//! The launcher binary with stand-in children (`launch-test-child`, `/bin/sh`).
+//! The launcher with stand-in children (`launch-test-child`, `/bin/sh`).
 //!
-//! Each test writes a profile into its own directory, runs `testbed-launch` on its own bus
+//! Each test writes a profile into its own directory, runs the launcher (`launch-test-child`
+//! started as `testbed-launch`, through a link, as `testbed` is) on its own bus
 //! (unique prefix, short root) and reads the launcher's log from stderr as it comes (blocking
 //! reads, no polling). Time limits are upper bounds against hangs, never assertions of speed.
 
@@ -52,7 +53,9 @@ impl Launch {
             .replace("{dir}", &dir.display().to_string());
         let path = dir.join("profile.toml");
         std::fs::write(&path, text).expect("write profile");
-        let mut child = Command::new(env!("CARGO_BIN_EXE_testbed-launch"))
+        let launcher = dir.join(testbed_launch::roles::LAUNCHER);
+        std::os::unix::fs::symlink(child_bin(), &launcher).expect("link to the launcher");
+        let mut child = Command::new(&launcher)
             .arg(&path)
             .args(extra_args)
             .env("TESTBED_BUS_PREFIX", &bus.prefix)
@@ -189,6 +192,10 @@ fn position(log: &[String], needles: &[&str]) -> usize {
         .position(|l| needles.iter().all(|n| l.contains(n)))
         .unwrap_or_else(|| panic!("no line with {needles:?} in:\n{}", log.join("\n")))
 }
+
+/// How long a child that says `Running` lives before it fails: longer than two of the
+/// watchdog's looks at the heartbeats (every 0.5 s), so the launcher has seen it run.
+const RAN_S: f64 = 1.2;
 
 fn supervision(stop: f64, term: f64) -> String {
     format!(
@@ -398,7 +405,7 @@ command = \"launch-test-child\"
 [[process]]
 name = \"flaky\"
 command = \"launch-test-child\"
-args = [\"--sleep-s\", \"0.05\", \"--exit\", \"4\", \"--mark\", \"{{dir}}/flaky\"]
+args = [\"--running\", \"--sleep-s\", \"{RAN_S}\", \"--exit\", \"4\", \"--mark\", \"{{dir}}/flaky\"]
 on_exit = \"restart\"
 max_restarts = 2
 ",
@@ -429,6 +436,91 @@ max_restarts = 2
 }
 
 #[test]
+fn a_start_up_that_fails_the_same_way_twice_is_not_restarted_again() {
+    // Exits with 3 before it ever says Running (no heartbeat at all), every time: retried once
+    // (a device may be slow to appear), then not again, whatever its budget.
+    let profile = format!(
+        "[run]\nmode = \"paced\"\n{}
+[[process]]
+name = \"worker\"
+command = \"launch-test-child\"
+[[process]]
+name = \"broken\"
+command = \"launch-test-child\"
+args = [\"--exit\", \"3\", \"--sleep-s\", \"0\", \"--mark\", \"{{dir}}/broken\"]
+on_exit = \"restart\"
+max_restarts = 3
+",
+        supervision(5.0, 5.0)
+    );
+    let mut launch = Launch::start(&profile, &[]);
+    let marks = launch.path("broken");
+    let (code, log) = launch.finish();
+    let all = log.join("\n");
+    assert_eq!(
+        code, 1,
+        "a required process that cannot start fails the run:\n{all}"
+    );
+    let starts = std::fs::read_to_string(marks).expect("marks");
+    assert_eq!(
+        starts.lines().count(),
+        2,
+        "first start and one restart:\n{starts}"
+    );
+    let retried = position(
+        &log,
+        &["\"broken\"", "exited with code 3", "restart 1 of 3"],
+    );
+    let given_up = position(
+        &log,
+        &[
+            "required process \"broken\"",
+            "exited with code 3 before it ever ran, as its previous start did: not restarted",
+            "stopping all",
+        ],
+    );
+    assert!(retried < given_up, "{all}");
+    assert!(!all.contains("restart 2 of 3"), "{all}");
+}
+
+#[test]
+fn a_process_that_ran_before_failing_is_restarted_each_time() {
+    // The same exit status every time, but after saying Running: not a start-up failure, so
+    // the whole budget applies.
+    let profile = format!(
+        "[run]\nmode = \"paced\"\n{}
+[[process]]
+name = \"worker\"
+command = \"launch-test-child\"
+[[process]]
+name = \"flaky\"
+command = \"launch-test-child\"
+args = [\"--running\", \"--sleep-s\", \"{RAN_S}\", \"--exit\", \"3\", \"--mark\", \"{{dir}}/flaky\"]
+required = false
+on_exit = \"restart\"
+max_restarts = 3
+",
+        supervision(5.0, 5.0)
+    );
+    let mut launch = Launch::start(&profile, &[]);
+    launch.wait_for(&[
+        "\"flaky\"",
+        "no restarts left (max_restarts = 3)",
+        "left stopped",
+    ]);
+    let marks = launch.path("flaky");
+    launch.signal(libc::SIGINT);
+    let (code, log) = launch.finish();
+    assert_eq!(code, 0, "{}", log.join("\n"));
+    let starts = std::fs::read_to_string(marks).expect("marks");
+    assert_eq!(
+        starts.lines().count(),
+        4,
+        "first start and three restarts:\n{starts}"
+    );
+}
+
+#[test]
 fn an_optional_process_out_of_restarts_is_left_stopped() {
     let profile = format!(
         "[run]\nmode = \"paced\"\n{}
@@ -438,7 +530,7 @@ command = \"launch-test-child\"
 [[process]]
 name = \"flaky\"
 command = \"launch-test-child\"
-args = [\"--sleep-s\", \"0.05\", \"--exit\", \"4\"]
+args = [\"--running\", \"--sleep-s\", \"{RAN_S}\", \"--exit\", \"4\"]
 required = false
 on_exit = \"restart\"
 max_restarts = 1

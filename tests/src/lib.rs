@@ -294,6 +294,14 @@ pub fn descendant(root: u32, program: &str) -> Option<u32> {
         })
 }
 
+/// The attitude estimates a run's log holds, in their order.
+pub fn logged_estimates(log: &testbed_log::RunLog) -> Vec<ipc_types::AttitudeEstimate> {
+    log.samples::<ipc_types::AttitudeEstimate>()
+        .expect("the log has the estimates' channel")
+        .map(|sample| sample.expect("a readable estimate"))
+        .collect()
+}
+
 /// Asserts that the logged `estimates` are, bit for bit, the in-process loop's `trace`: same
 /// count, and at every tick the same attitude and gyro bias (same code, same inputs, same
 /// order).
@@ -307,4 +315,23 @@ pub fn assert_estimates_equal_the_in_process_loop(
         None,
         "time (s) of the first estimate that is not the in-process loop's bit for bit"
     );
+}
+
+/// Asserts that a run's logged estimates are, bit for bit, what the in-process loop computes from
+/// the run configuration the log keeps; returns that configuration.
+pub fn assert_log_equals_the_in_process_loop(
+    run_log: &testbed_log::RunLog,
+) -> testbed_config::RunConfig {
+    let config = testbed_config::RunConfig::from_toml_str(run_log.config_toml(), "log")
+        .expect("the log keeps a valid run configuration");
+    let trace =
+        testbed_sim::closed_loop::run(&testbed_sim::closed_loop::Scenario::from_run(&config))
+            .expect("the in-process loop runs the logged configuration");
+    let estimates: Vec<ipc_types::AttitudeEstimate> = run_log
+        .samples::<ipc_types::AttitudeEstimate>()
+        .expect("the log has estimates")
+        .map(|s| s.expect("a readable estimate"))
+        .collect();
+    assert_estimates_equal_the_in_process_loop(&estimates, &trace);
+    config
 }

@@ -1,5 +1,5 @@
 //! The real platform path as it runs: the five CAN gateways on the software CAN bus, fed by the
-//! simulated smart CAN node (`testbed run --profile can-sim`), with and without bus faults, and
+//! simulated CAN board (`testbed run --profile can-sim`), with and without bus faults, and
 //! a recorded bus replayed through the gateways.
 
 use ipc_types::{
@@ -104,7 +104,7 @@ fn assert_candump_lines(path: &Path) -> usize {
 }
 
 #[test]
-fn can_sim_gateways_on_the_simulated_node_stabilise_like_the_simulated_gateways() {
+fn can_sim_gateways_on_the_simulated_can_board_stabilise_like_the_simulated_gateways() {
     let scratch = Scratch::new("can-sim150");
     let log = scratch.path().join("can.mcap");
     let can = testbed_run(&[
@@ -205,24 +205,24 @@ fn with_one_percent_of_frames_dropped_or_corrupted_the_loop_stabilises_and_every
     assert_eq!(number(&summary, "estimates"), 1501.0, "every tick answered");
 
     let status = last_status(&log);
-    let node = status[&can_source::NODE];
+    let board = status[&can_source::NODE];
     assert!(
-        node.injected_tx_drop > 30 && node.injected_tx_corrupt > 30,
-        "{node:?}"
+        board.injected_tx_drop > 30 && board.injected_tx_corrupt > 30,
+        "{board:?}"
     );
     assert!(
-        node.injected_tx_delay > 0 && node.injected_tx_duplicate > 0,
-        "{node:?}"
+        board.injected_tx_delay > 0 && board.injected_tx_duplicate > 0,
+        "{board:?}"
     );
     let gateways: Vec<&CanLinkStatus> = (can_source::GYRO..=can_source::CMG)
         .map(|s| &status[&s])
         .collect();
     let sum = |f: fn(&CanLinkStatus) -> u64| gateways.iter().map(|s| f(s)).sum::<u64>();
-    // Frames from the node: every gateway's frame check catches every corrupted frame; the
+    // Frames from the board: every gateway's frame check catches every corrupted frame; the
     // gateway of the frame's device sees each dropped or corrupted frame as a rolling-counter
     // gap, each duplicate, and each frame delayed past its tick's sync.
     for s in &gateways {
-        assert_eq!(s.crc_errors, node.injected_tx_corrupt, "{s:?}");
+        assert_eq!(s.crc_errors, board.injected_tx_corrupt, "{s:?}");
         assert_eq!(
             s.frames_bad,
             s.crc_errors + s.duplicates + s.late_frames + s.wrong_dlc + s.unknown_id,
@@ -231,23 +231,23 @@ fn with_one_percent_of_frames_dropped_or_corrupted_the_loop_stabilises_and_every
     }
     assert_eq!(
         sum(|s| s.lost_frames),
-        node.injected_tx_drop + node.injected_tx_corrupt
+        board.injected_tx_drop + board.injected_tx_corrupt
     );
-    assert_eq!(sum(|s| s.duplicates), node.injected_tx_duplicate);
-    assert_eq!(sum(|s| s.late_frames), node.injected_tx_delay);
+    assert_eq!(sum(|s| s.duplicates), board.injected_tx_duplicate);
+    assert_eq!(sum(|s| s.late_frames), board.injected_tx_delay);
     assert!(
         sum(|s| s.stale_samples) > 0,
         "incomplete samples were published stale"
     );
-    // Frames to the node (commands), counted by the node's receiver.
-    assert_eq!(node.crc_errors, node.injected_rx_corrupt, "{node:?}");
+    // Frames to the board (commands), counted by the board's receiver.
+    assert_eq!(board.crc_errors, board.injected_rx_corrupt, "{board:?}");
     assert_eq!(
-        node.lost_frames,
-        node.injected_rx_drop + node.injected_rx_corrupt,
-        "{node:?}"
+        board.lost_frames,
+        board.injected_rx_drop + board.injected_rx_corrupt,
+        "{board:?}"
     );
-    assert_eq!(node.duplicates, node.injected_rx_duplicate, "{node:?}");
-    assert_eq!(node.late_frames, node.injected_rx_delay, "{node:?}");
+    assert_eq!(board.duplicates, board.injected_rx_duplicate, "{board:?}");
+    assert_eq!(board.late_frames, board.injected_rx_delay, "{board:?}");
     // Every stale gyro sample was propagated with the held rate, not skipped.
     assert_eq!(samples::<AttitudeEstimate>(&log).len(), 1501);
 }
@@ -290,7 +290,7 @@ fn replaying_a_recorded_candump_file_through_the_gateways_reproduces_the_estimat
     assert_candump_lines(&candump);
 
     // The replay: can-replay puts the file back on the software bus, the three sensor gateways
-    // decode it, the estimator estimates; no plant, no node (`launch/profiles/can-replay.toml`).
+    // decode it, the estimator estimates; no plant, no board (`launch/profiles/can-replay.toml`).
     let replayed = scratch.path().join("replayed.mcap");
     let comparison = testbed_run(&[
         "--replay-candump",

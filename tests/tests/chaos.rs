@@ -131,7 +131,7 @@ fn ten_minutes_of_random_kills_and_hangs_keep_the_platform_within_a_degree() {
     assert!(health["restarts"].as_u64().unwrap() as usize >= injected.len());
 
     // Within 1° of the target from the settling time on.
-    let config = testbed_runtime::RunConfig::from_toml_str(run.config_toml(), "log").unwrap();
+    let config = testbed_config::RunConfig::from_toml_str(run.config_toml(), "log").unwrap();
     let target = config.manoeuvre.target();
     let worst = run
         .samples::<SimTruth>()

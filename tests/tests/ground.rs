@@ -1,4 +1,4 @@
-//! The ground station end to end (issue 13): a paced simulation run with the ground link, the
+//! The ground station end to end: a paced simulation run with the ground link, the
 //! ground page in headless Chromium (Debian's `chromium`, driven over the DevTools protocol), an
 //! independent client of the Foxglove WebSocket protocol (tungstenite), and random input.
 //!
@@ -7,7 +7,15 @@
 //! the log with its acknowledgement; a wrong token and an out-of-limit target are rejected
 //! with their reasons (in the page and in the log); closing and reopening the page reconnects;
 //! an independent client gets decimated data at the rate it asked for; random frames, wrong
-//! types and huge messages are counted and dropped and the link goes on serving.
+//! types and huge messages are counted and dropped and the link goes on serving; a huge
+//! message's sender and, at the end of the run, every viewer get a close frame (1009, 1001).
+//!
+//! Conformance with clients others wrote: Foxglove's own `FoxgloveClient`
+//! (`tests/js/foxglove_client.mjs`, `npm ci --prefix tests/js`) commands the controller the
+//! standard way and validates every channel against its advertised JSON Schema and the
+//! `foxglove.*` ones against `@foxglove/schemas`; over `wss://` too, with the page over
+//! `https://` in Chromium; a plain connection to the TLS link, a watcher's command and an
+//! earlier run's token are refused and logged with the peer's address.
 
 use ipc_types::{
     AttitudeEstimate, ControllerMode, ControllerStatus, GroundAckStatus, GroundCommand,
@@ -25,6 +33,7 @@ use std::time::{Duration, Instant};
 use testbed_e2e::{Scratch, binary, profile};
 use testbed_log::{LogEncode, RunLog};
 use tungstenite::client::IntoClientRequest;
+use tungstenite::protocol::frame::coding::CloseCode;
 use tungstenite::stream::MaybeTlsStream;
 use tungstenite::{Message, WebSocket};
 
@@ -51,12 +60,22 @@ struct Run {
 }
 
 fn start_run(dir: &Path, duration_s: u32) -> Run {
+    start_run_with(dir, duration_s, None)
+}
+
+/// [`start_run`] with the run configuration `config` (TOML) if given.
+fn start_run_with(dir: &Path, duration_s: u32, config: Option<&Path>) -> Run {
     let log = dir.join("ground.mcap");
-    let child = Command::new(binary("testbed"))
+    let mut command = Command::new(binary("testbed"));
+    command
         .args(["run", "--paced", "--no-progress", "--json", "--profile"])
         .arg(profile("simulation"))
         .args(["--duration", &duration_s.to_string(), "--log"])
-        .arg(&log)
+        .arg(&log);
+    if let Some(config) = config {
+        command.arg("--config").arg(config);
+    }
+    let child = command
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
@@ -68,6 +87,7 @@ fn start_run(dir: &Path, duration_s: u32) -> Run {
     let url = info["url"].as_str().unwrap();
     let addr = url
         .trim_start_matches("http://")
+        .trim_start_matches("https://")
         .trim_end_matches('/')
         .to_owned();
     Run {
@@ -175,6 +195,11 @@ struct Browser {
 
 impl Browser {
     fn start() -> Self {
+        Self::start_with(&[])
+    }
+
+    /// Chromium with the `extra` switches.
+    fn start_with(extra: &[&str]) -> Self {
         let profile = Scratch::new("ground-chromium");
         let mut child = Command::new("chromium")
             .args([
@@ -185,6 +210,7 @@ impl Browser {
                 "--remote-debugging-port=0",
                 "--window-size=1400,1000",
             ])
+            .args(extra)
             .arg(format!("--user-data-dir={}", profile.path().display()))
             .arg("about:blank")
             .stderr(Stdio::piped())
@@ -512,8 +538,8 @@ fn an_independent_client_gets_decimated_data_and_random_input_is_counted_and_dro
     // Random input: counted, dropped, and the link goes on.
     let bad_before = stats(&run.addr)["bad_messages"].as_u64().unwrap();
     let mut sent_bad = 0u64;
-    let (mut fuzz, _, _) = foxglove_client(&run.addr, "");
-    let advertise = json!({"op": "clientAdvertise", "channels": [
+    let (mut fuzz, _, _) = foxglove_client(&run.addr, &format!("?token={}", run.token));
+    let advertise = json!({"op": "advertise", "channels": [
         {"id": 1, "topic": "testbed/ground/command", "encoding": "json", "schemaName": ""}]});
     fuzz.send(Message::Text(advertise.to_string().into()))
         .unwrap();
@@ -570,7 +596,7 @@ fn an_independent_client_gets_decimated_data_and_random_input_is_counted_and_dro
         "every bad message counted once"
     );
 
-    // A huge message: counted as oversized, its sender disconnected.
+    // A huge message: counted as oversized, its sender closed with 1009 (message too big).
     let oversized_before = stats(&run.addr)["oversized"].as_u64().unwrap();
     let (mut huge, _, _) = foxglove_client(&run.addr, "");
     let _ = huge.send(Message::Text("x".repeat(1 << 20).into()));
@@ -579,13 +605,187 @@ fn an_independent_client_gets_decimated_data_and_random_input_is_counted_and_dro
         Duration::from_secs(10),
         || (stats(&run.addr)["oversized"].as_u64()? > oversized_before).then_some(()),
     );
+    let (code, reason) = close_frame(&mut huge);
+    assert_eq!(code, CloseCode::Size, "{reason}");
+    assert_eq!(reason, "message larger than 4096 bytes");
 
     // The link still serves the first client.
     let (t_after, _) = next_message(&mut ws, 100);
     assert!(t_after > times[times.len() - 1]);
-    drop((ws, fuzz, huge));
+    drop((fuzz, huge));
 
+    // At the end of the run the link says it is going away (1001) before it closes.
+    let (code, reason) = close_frame(&mut ws);
+    assert_eq!(code, CloseCode::Away, "{reason}");
     let status = run.child.wait().unwrap();
     assert!(status.success(), "the run failed: {status}");
     let _ = &mut run;
+}
+
+/// Reads `ws` until the server's close frame: its code and reason. Panics if the connection
+/// ends without one.
+fn close_frame(ws: &mut Ws) -> (CloseCode, String) {
+    if let MaybeTlsStream::Plain(s) = ws.get_mut() {
+        s.set_read_timeout(Some(Duration::from_secs(90))).unwrap();
+    }
+    loop {
+        match ws.read() {
+            Ok(Message::Close(Some(frame))) => return (frame.code, frame.reason.to_string()),
+            Ok(Message::Close(None)) => panic!("a close frame without a code"),
+            Ok(_) => {}
+            Err(e) => panic!("the connection ended without a close frame: {e}"),
+        }
+    }
+}
+
+/// Runs Foxglove's own client (`tests/js/foxglove_client.mjs`) against the link at `url`; its
+/// summary. Panics with the script's failures.
+fn foxglove_js(url: &str, token: &str, extra: &[&str]) -> Value {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("js");
+    assert!(
+        dir.join("node_modules/@foxglove/ws-protocol").exists(),
+        "tests/js has no node_modules: run `npm ci --prefix tests/js` (.ci/run does)"
+    );
+    let out = Command::new("node")
+        .arg(dir.join("foxglove_client.mjs"))
+        .args(["--url", url, "--token", token])
+        .args(extra)
+        .output()
+        .expect("running node (Node 20; .ci/run checks it)");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let summary: Value = stdout
+        .lines()
+        .rev()
+        .find_map(|l| serde_json::from_str(l).ok())
+        .unwrap_or_else(|| {
+            panic!(
+                "no summary from the client: {stdout}\n{}",
+                String::from_utf8_lossy(&out.stderr)
+            )
+        });
+    assert!(
+        out.status.success() && summary["failures"] == json!([]),
+        "FoxgloveClient against {url}: {:#}",
+        summary["failures"]
+    );
+    summary
+}
+
+/// A self-signed certificate for 127.0.0.1 and localhost in `dir`, and a run configuration
+/// serving TLS with it: (config, certificate).
+fn tls_config(dir: &Path) -> (PathBuf, PathBuf) {
+    let pair =
+        rcgen::generate_simple_self_signed(vec!["127.0.0.1".into(), "localhost".into()]).unwrap();
+    let cert = dir.join("ground-cert.pem");
+    let key = dir.join("ground-key.pem");
+    std::fs::write(&cert, pair.cert.pem()).unwrap();
+    std::fs::write(&key, pair.key_pair.serialize_pem()).unwrap();
+    let config = dir.join("tls.run.toml");
+    std::fs::write(
+        &config,
+        format!(
+            "[ground]\ntls_cert = {:?}\ntls_key = {:?}\n",
+            cert.display().to_string(),
+            key.display().to_string()
+        ),
+    )
+    .unwrap();
+    (config, cert)
+}
+
+#[test]
+fn foxgloves_own_client_commands_validates_and_tls_refuses_plain_watchers_and_old_tokens() {
+    // A plain run: FoxgloveClient commands the controller, every channel validates.
+    let scratch = Scratch::new("ground-foxglove");
+    let plain_dir = scratch.path().join("plain");
+    std::fs::create_dir_all(&plain_dir).unwrap();
+    let plain = start_run(&plain_dir, 25);
+    let summary = foxglove_js(&format!("ws://{}/", plain.addr), &plain.token, &[]);
+    assert!(summary["validated"].as_u64().unwrap() > 50, "{summary}");
+    let old_token = plain.token.clone();
+    let out = plain.child.wait_with_output().unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let acks = samples::<GroundCommandAck>(&plain.log);
+    let watch_only = acks
+        .iter()
+        .find(|a| a.command_id == 3)
+        .expect("the watcher's command refused in the log");
+    // Longer than the 64 bytes an acknowledgement once held: it arrives whole.
+    assert_eq!(
+        watch_only.reason(),
+        "watch-only connection: commanding needs the run's command token on the URL (?token=…)"
+    );
+    assert!(watch_only.reason().len() > 64);
+
+    // A TLS run with a self-signed certificate; the earlier run's token is replayed.
+    let tls_dir = scratch.path().join("tls");
+    std::fs::create_dir_all(&tls_dir).unwrap();
+    let (config, cert) = tls_config(&tls_dir);
+    let run = start_run_with(&tls_dir, 40, Some(&config));
+    let info: Value =
+        serde_json::from_slice(&std::fs::read(run.log.with_extension("ground.json")).unwrap())
+            .unwrap();
+    assert_eq!(info["ws"], format!("wss://{}/", run.addr));
+    assert_ne!(run.token, old_token, "each run has its own token");
+    let cert_arg = cert.display().to_string();
+    let summary = foxglove_js(
+        &format!("wss://{}/", run.addr),
+        &run.token,
+        &[
+            "--ca",
+            &cert_arg,
+            "--old-token",
+            &old_token,
+            "--seconds",
+            "3",
+        ],
+    );
+    assert_eq!(summary["old_token_refused"], 401, "{summary}");
+
+    // A plain request to the TLS link: refused, saying why.
+    let refused = http_get(&run.addr, "/");
+    assert_eq!(
+        refused,
+        "this ground link serves https:// and wss:// only\n"
+    );
+
+    // The page over https:// (the test's self-signed certificate accepted by the browser).
+    let mut browser = Browser::start_with(&["--ignore-certificate-errors"]);
+    browser.open(&format!("https://{}/#token={}", run.addr, run.token));
+    let first = wait_for(
+        "an estimate in the page over https",
+        Duration::from_secs(30),
+        || browser.estimate(),
+    );
+    wait_for("a newer estimate over wss", Duration::from_secs(10), || {
+        browser.estimate().filter(|(t, _)| *t > first.0)
+    });
+    let applied = browser.command(
+        "document.getElementById('cmd-mode').value = 'idle'",
+        "send-mode",
+        "applied",
+    );
+    assert!(applied.contains("Idle"), "{applied}");
+    drop(browser);
+
+    let out = run.child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    // Each refusal is in the log with the peer's address.
+    for what in [
+        "handshake refused: a plain (not TLS) connection to the TLS link",
+        "handshake refused: wrong command token",
+        "ground command refused",
+    ] {
+        assert!(
+            stderr
+                .lines()
+                .any(|l| l.contains(what) && l.contains("peer=127.0.0.1:")),
+            "no {what:?} with the peer's address in the run's output:\n{stderr}"
+        );
+    }
 }

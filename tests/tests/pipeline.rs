@@ -7,12 +7,10 @@ use std::os::unix::process::CommandExt;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 use testbed_e2e::{
-    Scratch, assert_estimates_equal_the_in_process_loop, binary, pinned_lockstep_run, profile,
+    Scratch, assert_log_equals_the_in_process_loop, binary, pinned_lockstep_run, profile,
     testbed_run,
 };
 use testbed_log::{LogRecord, RunLog};
-use testbed_runtime::RunConfig;
-use testbed_sim::closed_loop;
 
 fn number(json: &serde_json::Value, key: &str) -> f64 {
     json[key]
@@ -43,18 +41,9 @@ fn simulation_profile_stabilises_and_its_estimates_equal_the_in_process_loop() {
     assert_eq!(number(&summary, "deadline_misses"), 0.0);
     assert_eq!(summary["log_complete"], true);
 
-    // The same run in one process, from the configuration the log carries.
-    let run_log = RunLog::open(&log).unwrap();
-    let config = RunConfig::from_toml_str(run_log.config_toml(), "log").unwrap();
-    let trace = closed_loop::run(&closed_loop::Scenario::from_run(&config)).unwrap();
-    let estimates: Vec<AttitudeEstimate> = run_log
-        .samples::<AttitudeEstimate>()
-        .unwrap()
-        .map(Result::unwrap)
-        .collect();
-    // Same code, same inputs, same order: the processes compute bit for bit what the
-    // in-process loop computes.
-    assert_estimates_equal_the_in_process_loop(&estimates, &trace);
+    // The same run in one process, from the configuration the log carries. Same code, same
+    // inputs, same order: the processes compute bit for bit what the in-process loop computes.
+    assert_log_equals_the_in_process_loop(&RunLog::open(&log).unwrap());
 }
 
 #[test]
@@ -253,6 +242,46 @@ fn a_paced_run_shows_its_progress_read_from_the_growing_log() {
     assert_eq!(degrees.len(), 3, "{line}");
     // The run starts 20° off in heading and 5° in pitch and roll, and is still turning.
     assert!(degrees.iter().any(|d| d.abs() > 1.0), "{line}");
+
+    // Every message is stamped with the time it describes. A paced log holds the heartbeats
+    // (a lockstep one leaves them out): once its process has handled samples, none is stamped
+    // 0, the logger's and the ground link's included.
+    let run_log = RunLog::open(&log).unwrap();
+    let mut stamped = std::collections::BTreeSet::new();
+    for hb in run_log.samples::<ipc_types::Heartbeat>().unwrap() {
+        let hb = hb.unwrap();
+        if hb.header.sequence >= 3 {
+            assert!(
+                hb.header.time_ns > 0,
+                "heartbeat {} of {} stamped 0",
+                hb.header.sequence,
+                hb.name()
+            );
+            stamped.insert(hb.name().to_owned());
+        }
+    }
+    for process in ["logger", "ground-link"] {
+        assert!(
+            stamped.iter().any(|n| n.contains(process)),
+            "no later heartbeat of {process}: {stamped:?}"
+        );
+    }
+    // So the chunks are disjoint in time, within one flush interval each, none before the
+    // run's start.
+    let start = run_log.info().start_time_ns;
+    let ranges = testbed_log::chunk_time_ranges(&log).unwrap();
+    assert!(ranges.len() >= 2, "{ranges:?}");
+    for (i, &(begin, end)) in ranges.iter().enumerate() {
+        assert!(begin >= start, "chunk {i} before the start: {ranges:?}");
+        assert!(
+            end - begin < testbed_log::CHUNK_INTERVAL_NS,
+            "chunk {i} longer than one interval: {ranges:?}"
+        );
+        assert!(
+            i == 0 || begin > ranges[i - 1].1,
+            "chunk {i} overlaps the one before: {ranges:?}"
+        );
+    }
 }
 
 #[test]

@@ -1,20 +1,20 @@
-//! The thrusters in the process pipeline (issue 14): the `thrusters` profile's controller
+//! The thrusters in the process pipeline: the `thrusters` profile's controller
 //! commands the valves every tick, the plant (the simulated thruster drive) checks and applies
 //! them, and the logger records both. The processes must compute what the in-process loop
 //! computes, bit for bit, and two lockstep runs must give the same bytes. The `thrusters-can`
 //! profile sends the same commands through the thruster gateway and the CAN bus to the
-//! simulated smart CAN node.
+//! simulated CAN board.
 
 use ipc_types::{
     AppliedThrusterCommand, AttitudeEstimate, HealthEventKind, SampleHeader, ThrusterCommand,
     ThrusterStatus,
 };
 use std::path::Path;
+use testbed_config::RunConfig;
 use testbed_e2e::{
     Scratch, assert_estimates_equal_the_in_process_loop, profile, testbed_run, workspace_root,
 };
 use testbed_log::{LogEncode, RunLog};
-use testbed_runtime::RunConfig;
 use testbed_sim::closed_loop;
 
 fn samples<T: LogEncode>(log: &RunLog) -> Vec<T> {
@@ -255,7 +255,7 @@ fn over_can_the_node_applies_what_the_controller_commanded_and_runs_are_byte_ide
     let applied: Vec<AppliedThrusterCommand> = samples(&log);
     let statuses: Vec<ThrusterStatus> = samples(&log);
     // One command, one applied command and one status per tick (0 to 60 s in 0.1-s ticks, the
-    // last tick answered too); the node's status at tick k reports the period before it.
+    // last tick answered too); the board's status at tick k reports the period before it.
     assert_eq!(commands.len(), 601);
     assert_eq!(applied.len(), commands.len());
     assert_eq!(statuses.len(), 601);
@@ -273,7 +273,7 @@ fn over_can_the_node_applies_what_the_controller_commanded_and_runs_are_byte_ide
             );
         }
     }
-    // The node reports the period's applied on-times with the period's end, and the gateway
+    // The board reports the period's applied on-times with the period's end, and the gateway
     // adds up the propellant: it grows exactly when a valve was driven.
     let mut last_used = 0.0;
     for (status, a) in statuses[1..].iter().zip(&applied) {
@@ -288,7 +288,7 @@ fn over_can_the_node_applies_what_the_controller_commanded_and_runs_are_byte_ide
 
 #[test]
 fn over_can_a_stuck_open_valve_is_detected_and_the_latch_valve_shut() {
-    // The thruster gateway senses the valves through the node's status frames; from the next
+    // The thruster gateway senses the valves through the board's status frames; from the next
     // command on every command carries the latch flag and no valve is driven.
     let scratch = Scratch::new("thrusters-can-stuck");
     let (log, first_disabled) = run_with_a_stuck_valve(&scratch, "thrusters-can", 40.0);

@@ -1,4 +1,4 @@
-//! The platform path on a real Linux CAN stack: the gateways, the simulated smart node and the
+//! The platform path on a real Linux CAN stack: the gateways, the simulated CAN board and the
 //! logger on `vcan0` through SocketCAN, in a VM (`tests/vm/run.sh`: this machine's kernel has
 //! no CAN). Without KVM these tests say so and pass, except under CI (`CI=true`), where they
 //! fail (see `testbed_e2e::vm`).
@@ -349,7 +349,7 @@ fn garbage_link_flaps_and_a_flood_on_vcan0_are_counted_and_survived() {
         let s = last
             .get(&source)
             .unwrap_or_else(|| panic!("no status of CAN link {source}"));
-        // Each gateway got frames of wrong length in its block and the node's; counted, dropped.
+        // Each gateway got frames of wrong length in its block and the board's; counted, dropped.
         assert!(s.frames_bad > 0 && s.wrong_dlc > 0, "{s:?}");
         garbage += s.frames_bad;
         // Two flaps: each reported (a status without VALID) and recovered (VALID again after).
@@ -484,10 +484,10 @@ fn garbage_link_flaps_and_a_flood_on_vcan0_are_counted_and_survived() {
 }
 
 /// The `platform` profile itself (gateways, estimator, controller; no plant) on vcan0, with the
-/// plant and the simulated node of `vcan-node` as the far side of the interface: two runs on
-/// two iceoryx2 buses that meet only on vcan0, as the computer and the smart node do on can0.
+/// plant and the simulated CAN board of `vcan-node` as the far side of the interface: two runs
+/// on two iceoryx2 buses that meet only on vcan0, as the computer and the CAN board do on can0.
 #[test]
-fn the_platform_profile_runs_against_a_simulated_node_on_the_far_side_of_vcan0() {
+fn the_platform_profile_runs_against_a_simulated_can_board_on_the_far_side_of_vcan0() {
     if !vm::ready_or_skip("platform on vcan0") {
         return;
     }
@@ -515,7 +515,7 @@ fn the_platform_profile_runs_against_a_simulated_node_on_the_far_side_of_vcan0()
     let dir = scratch.path();
     let errors = std::fs::read_to_string(dir.join("platform.err")).unwrap_or_default()
         + &std::fs::read_to_string(dir.join("node.err")).unwrap_or_default();
-    // The node's run ends first (25 s of its clock against the platform's 30 s of wall time),
+    // The board's run ends first (25 s of its clock against the platform's 30 s of wall time),
     // and start-up takes a while under an emulated CPU: the controller may well go to safe
     // mode when its inputs stop, and `testbed run` then fails after its summary, saying so.
     let safe_mode = "the controller entered safe mode";
@@ -533,7 +533,7 @@ fn the_platform_profile_runs_against_a_simulated_node_on_the_far_side_of_vcan0()
     assert!(!errors.contains("panicked"), "{errors}");
     let platform = dir.join("platform.mcap");
     // The estimator ran on what came over vcan0, and the controller's commands reached the
-    // plant through the node.
+    // plant through the board.
     let estimates = samples::<AttitudeEstimate>(&platform);
     assert!(estimates.len() > 50, "{} estimates", estimates.len());
     let applied = samples::<ipc_types::AppliedWheelCommand>(&dir.join("node.mcap"));
@@ -551,7 +551,7 @@ fn the_platform_profile_runs_against_a_simulated_node_on_the_far_side_of_vcan0()
     }
     let recorded = candump_lines(&dir.join("platform.candump.log"));
     eprintln!(
-        "platform on vcan0: {} estimates, {} wheel commands applied by the node, {} frames recorded",
+        "platform on vcan0: {} estimates, {} wheel commands applied by the board, {} frames recorded",
         estimates.len(),
         applied.len(),
         recorded.len()

@@ -7,8 +7,8 @@ use std::io::Read;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 use testbed_bus::{Bus, BusConfig, Delivery, SubscriberOptions, remove_all};
+use testbed_config::RunConfig;
 use testbed_e2e::{Scratch, cargo_profile_args, profile_dir, workspace_root};
-use testbed_runtime::RunConfig;
 
 /// The example binary, built in the test's own profile.
 fn example_binary() -> std::path::PathBuf {
@@ -43,7 +43,7 @@ fn the_worked_example_counts_estimates_and_reports_them_when_stopped() {
 
     let mut child = Command::new(example_binary())
         .envs(bus_config.env_vars())
-        .env(testbed_runtime::ENV_RUN_CONFIG, &run_config)
+        .env(testbed_config::ENV_RUN_CONFIG, &run_config)
         .env("RUST_LOG", "info")
         .env("NO_COLOR", "1")
         .stderr(Stdio::piped())

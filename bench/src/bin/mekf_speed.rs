@@ -19,9 +19,9 @@ use std::path::PathBuf;
 use std::process::Command;
 use std::time::Instant;
 use testbed_bench::median;
+use testbed_config::RunConfig;
 use testbed_flight::mekf::{Mekf, MekfConfig, VectorMeasurements};
-use testbed_runtime::RunConfig;
-use testbed_sim::plant_node::PlantNode;
+use testbed_sim::plant_task::PlantTask;
 use testbed_sim::sim_devices::{SimGyro, SimInclinometer, SimMagnetometer};
 
 #[derive(Parser)]
@@ -60,7 +60,7 @@ fn samples(duration_s: f64) -> Result<(MekfConfig, Vec<Tick>)> {
     let mut config = RunConfig::default();
     config.run.duration_s = duration_s;
     let schedule = config.schedule()?;
-    let mut plant = PlantNode::new(&config)?;
+    let mut plant = PlantTask::new(&config)?;
     let mut gyro = SimGyro::new(&config, schedule);
     let mut tilt = SimInclinometer::new(&config, schedule);
     let mut field = SimMagnetometer::new(&config, schedule);
@@ -82,7 +82,12 @@ fn samples(duration_s: f64) -> Result<(MekfConfig, Vec<Tick>)> {
             vectors,
         });
         if plant.at_end() {
-            return Ok((config.estimator_config(), ticks));
+            return Ok((
+                config
+                    .estimator
+                    .filter_params::<testbed_flight::mekf::Mekf>("mekf", &config.model)?,
+                ticks,
+            ));
         }
         plant.advance()?;
     }

@@ -1,5 +1,5 @@
-//! Where the CPU of a paced (1× wall time) run goes, process by process (issue 18, item 5:
-//! target ≤ 0.5 % of one core per second of run, all processes):
+//! Where the CPU of a paced (1× wall time) run goes, process by process (target: at most 0.5 %
+//! of one core per second of run, all processes):
 //! - per-process CPU of a short and a long paced `testbed run`, from the launcher's `wait4`
 //!   accounting (`TESTBED_CPU_REPORT`): the marginal cost per second of run (the slope between
 //!   the two runs) and the long run's total over its wall time, medians of `--repeats` pairs;
@@ -28,8 +28,8 @@
 //!   terminal's refresh), medians;
 //! - the logger's per-record cost, side by side in one process: the log writer on records as
 //!   it has them (the transform taken from the record) against the same records encoded first
-//!   and decoded back for their transform (what every record paid before session 18, and a
-//!   lockstep run's sorted records until session 21), records per second, medians.
+//!   and decoded back for their transform (what every record paid in the logger's
+//!   earlier design), records per second, medians.
 //!
 //! `cargo build --profile deploy --workspace --bins && target/deploy/paced_cpu [--repeats 3]
 //!  [--short 5 --long 60] [--profile P] [--baseline-bin-dir DIR | --cpu-latency-us N |
@@ -64,9 +64,9 @@ struct Args {
     /// Pairs of runs per build (medians are reported).
     #[arg(long, default_value_t = 3)]
     repeats: usize,
-    /// Directory with the binaries of a baseline build (`testbed`, `testbed-launch`, the
-    /// processes) to measure side by side: its own launcher if it has one (it must write the
-    /// CPU report, `TESTBED_CPU_REPORT`, as builds since 2026-11-25 do), else this build's.
+    /// Directory with the executables of a baseline build to measure side by side: `testbed`
+    /// (and, in builds from before the pipeline was one executable, `testbed-launch` and the
+    /// processes beside it); its launcher must write the CPU report, `TESTBED_CPU_REPORT`.
     #[arg(long)]
     baseline_bin_dir: Option<PathBuf>,
     /// Compare this build run with a PM QoS CPU latency request of this many µs (held by the
@@ -144,8 +144,9 @@ fn steady_window(seconds: f64) -> Option<(Duration, Duration)> {
     })
 }
 
-/// Run time (ns, all threads) of every process descended from `root`, by program name
-/// (`testbed-launch` as "launcher", `testbed` as "testbed run", as the CPU report names them).
+/// Run time (ns, all threads) of every process descended from `root`, by the name it was
+/// started under (its role: `testbed-launch` as "launcher", `testbed` as "testbed run", as the
+/// CPU report names them).
 fn schedstat_tree(root: u32) -> BTreeMap<String, u64> {
     let parent_of: Vec<(u32, u32)> = testbed_bench::proc_pids()
         .into_iter()
@@ -391,8 +392,8 @@ fn writer_speed(records: &[LogRecord], repeats: usize) -> Result<(f64, f64)> {
         let mut w = RunLogWriter::new(std::io::Cursor::new(Vec::new()), &info, options)
             .expect("in-memory writer");
         for r in records {
-            // As the writer took every record before session 18, and a lockstep run's (sorted)
-            // records until session 21: encoded first, then decoded back for its transform.
+            // As the writer's earlier design took every record: encoded first, then decoded back for
+            // its transform.
             let encoded = EncodedRecord::new(r);
             if matches!(r, LogRecord::AttitudeEstimate(_) | LogRecord::SimTruth(_)) {
                 std::hint::black_box(LogRecord::decode_json(encoded.topic(), encoded.data()));
@@ -479,11 +480,9 @@ fn progress_look(records: &[LogRecord], run_s: f64, scratch: &Path) -> Result<Pr
     })
 }
 
-/// A directory with the baseline's executables, and this build's launcher (the one that writes
-/// the CPU report) if the baseline has none: `testbed` and the launcher find their programs
-/// beside themselves. A baseline's own launcher is kept: it opens the bus its processes
-/// expect (a bus layout change makes the two builds' processes refuse each other's tables).
-fn baseline_bins(dir: &Path, launcher: &Path, scratch: &Path) -> Result<PathBuf> {
+/// A copy of the baseline's executables (`testbed` finds the programs of its run beside itself
+/// or in itself), so that a rebuild during the measurement does not change the baseline.
+fn baseline_bins(dir: &Path, scratch: &Path) -> Result<PathBuf> {
     use std::os::unix::fs::PermissionsExt as _;
     let out = scratch.join("baseline-bin");
     std::fs::create_dir_all(&out)?;
@@ -497,8 +496,11 @@ fn baseline_bins(dir: &Path, launcher: &Path, scratch: &Path) -> Result<PathBuf>
         }
         std::fs::copy(entry.path(), out.join(entry.file_name()))?;
     }
-    if !out.join("testbed-launch").exists() {
-        std::fs::copy(launcher, out.join("testbed-launch"))?;
+    if !out.join("testbed").exists() {
+        bail!(
+            "--baseline-bin-dir {}: no testbed executable",
+            dir.display()
+        );
     }
     Ok(out)
 }
@@ -506,14 +508,11 @@ fn baseline_bins(dir: &Path, launcher: &Path, scratch: &Path) -> Result<PathBuf>
 fn main() -> Result<()> {
     let args = Args::parse();
     let bin_dir = binary_dir()?;
-    let launcher = bin_dir.join("testbed-launch");
-    for needed in ["testbed", "testbed-launch", "logger"] {
-        if !bin_dir.join(needed).exists() {
-            bail!(
-                "{} not found: cargo build --profile deploy --workspace --bins first",
-                bin_dir.join(needed).display()
-            );
-        }
+    if !bin_dir.join("testbed").exists() {
+        bail!(
+            "{} not found: cargo build --profile deploy --workspace --bins first",
+            bin_dir.join("testbed").display()
+        );
     }
     let scratch = std::env::temp_dir().join(format!("paced-cpu-{}", std::process::id()));
     std::fs::create_dir_all(&scratch)?;
@@ -546,7 +545,7 @@ fn main() -> Result<()> {
     if let Some(dir) = &args.baseline_bin_dir {
         builds.push(Build {
             name: "baseline",
-            bin_dir: baseline_bins(dir, &launcher, &scratch)?,
+            bin_dir: baseline_bins(dir, &scratch)?,
             extra_args: profile_args(&args.profile),
         });
     }

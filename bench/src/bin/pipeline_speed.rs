@@ -139,8 +139,8 @@ fn testbed_run(
         .arg(log)
         .env("RUST_LOG", RUN_LOG_FILTER);
     match wait {
-        Some(wait) => command.env(testbed_bus::ENV_WAIT, wait),
-        None => command.env_remove(testbed_bus::ENV_WAIT),
+        Some(wait) => command.env(ipc_types::ENV_WAIT, wait),
+        None => command.env_remove(ipc_types::ENV_WAIT),
     };
     let out = command
         .output()

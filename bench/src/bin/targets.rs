@@ -1,4 +1,4 @@
-//! Issue 18's targets on this machine, measured and judged in one command: the benchmarks that
+//! The pipeline's speed and latency targets on this machine, measured and judged in one command: the benchmarks that
 //! measure them (two pinned lockstep runs and the in-process loop for determinism and
 //! bit-identity, `latency` for the chain, the hop and the 10-minute paced run under load,
 //! `pipeline_speed` for the lockstep speed and Basilisk, `paced_cpu` for the paced CPU), one
@@ -26,8 +26,8 @@ use std::process::{Command, Stdio};
 use testbed_bench::binary_dir;
 use testbed_bench::latency::model::Report;
 use testbed_bench::targets::{self, Verdict};
+use testbed_config::RunConfig;
 use testbed_log::RunLog;
-use testbed_runtime::RunConfig;
 use testbed_sim::closed_loop;
 
 /// The parts, in the order they run.
@@ -380,7 +380,7 @@ fn main() -> Result<()> {
     };
     let verdicts = judge(&dir, cpu, &unmeasured);
     let mut md = format!(
-        "# Issue 18's targets on this machine\n\n{header}; the chain placed on CPU {cpu}. Each \
+        "# The pipeline's speed and latency targets on this machine\n\n{header}; the chain placed on CPU {cpu}. Each \
          benchmark's own report is beside this file.\n\n"
     );
     md.push_str(&targets::markdown(&verdicts));

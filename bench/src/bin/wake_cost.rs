@@ -1,5 +1,5 @@
 //! What one wake-up of a sleeping process costs on this machine, with no bus at all: the floor
-//! under the paced pipeline's CPU (issue 18). Each case runs a process that sleeps and wakes
+//! under the paced pipeline's CPU. Each case runs a process that sleeps and wakes
 //! `--wakes` times, one wake-up every `--period-ms` (the pipeline's 10 Hz by default), and
 //! reports the CPU (user + system, `getrusage`) per wake-up:
 //!

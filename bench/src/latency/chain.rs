@@ -1,5 +1,5 @@
 //! The control chain as separate processes: gyro gateway → estimator → controller → wheel
-//! gateway, with the pipeline's own logic ([`EstimatorNode`], [`ControllerNode`]) on the
+//! gateway, with the pipeline's own logic ([`EstimatorTask`], [`ControllerTask`]) on the
 //! pipeline's sample types.
 //!
 //! The gyro gateway replays a recorded closed-loop run (gyro, and the inclinometer and
@@ -17,14 +17,12 @@ use crate::latency::protocol::{
 };
 use crate::latency::recording::{Recording, TICK_NS, run_config};
 use crate::latency::system::{now_ns, sleep_until};
-use crate::latency::topics::{Kind, Msg, Ports};
+use crate::latency::topics::{self, Kind, Msg, Ports};
 use crate::latency::transport::{Events, Polling, Sock, poll_until, wait_for_events};
 use anyhow::{Context, Result, anyhow, bail};
 use std::time::{Duration, Instant};
 use testbed_bus::{Bus, EventLoop, WaitStats, Waiter};
-use testbed_flight::controller_node::ControllerNode;
-use testbed_flight::estimator_node::EstimatorNode;
-use testbed_flight::tasks::ControllerTask;
+use testbed_flight::tasks::{ControllerTask, EstimatorTask};
 
 /// `source_id` of the sample that ends the chain.
 pub const STOP_SOURCE: u32 = u32::MAX;
@@ -96,10 +94,10 @@ struct SockChain {
 
 impl ChainLink for SockChain {
     fn send(&mut self, msg: &Msg) -> Result<()> {
-        let Some((_, addr)) = self.routes.iter().find(|(k, _)| *k == msg.kind()) else {
+        let Some((_, addr)) = self.routes.iter().find(|(k, _)| *k == msg.topic_id()) else {
             return Ok(());
         };
-        msg.encode(&mut self.out);
+        topics::encode(msg, &mut self.out)?;
         // A full queue drops the sample (the receiver counts it missing), except the stop
         // marker, which waits for room.
         let stop = msg.header().source_id == STOP_SOURCE;
@@ -118,7 +116,7 @@ impl ChainLink for SockChain {
         while let Some(len) = n {
             let t = now_ns();
             out.push((
-                Msg::decode(&self.buf[..len]).context("undecodable message")?,
+                topics::decode(&self.buf[..len]).context("undecodable message")?,
                 t,
             ));
             n = sock.try_recv(&mut self.buf)?;
@@ -129,7 +127,10 @@ impl ChainLink for SockChain {
 
 /// What a chain process publishes and subscribes to.
 fn topics(role: Role) -> (&'static [Kind], &'static [Kind]) {
-    use Kind::*;
+    use crate::latency::topics::Kind::{AttitudeEstimate as Estimate, ControllerStatus as Status};
+    use crate::latency::topics::Kind::{CmgCommand as CmgCmd, CmgTelemetry as CmgTm, Gyro};
+    use crate::latency::topics::Kind::{Inclinometer as Tilt, Magnetometer as Field};
+    use crate::latency::topics::Kind::{WheelCommand as WheelCmd, WheelTelemetry as WheelTm};
     match role {
         Role::Gyro => (&[Gyro, Tilt, Field], &[]),
         Role::Estimator => (&[Estimate], &[Gyro, Tilt, Field]),
@@ -173,16 +174,15 @@ pub fn worker(spec: &WorkerSpec) -> Result<()> {
                 Role::Wheels => Some(Sock::bind(&wheels)?),
                 _ => None,
             };
-            use Kind::*;
             let routes = [
-                (Gyro, &estimator),
-                (Tilt, &estimator),
-                (Field, &estimator),
-                (Estimate, &controller),
-                (WheelTm, &controller),
-                (CmgTm, &controller),
-                (WheelCmd, &wheels),
-                (CmgCmd, &wheels),
+                (Kind::Gyro, &estimator),
+                (Kind::Inclinometer, &estimator),
+                (Kind::Magnetometer, &estimator),
+                (Kind::AttitudeEstimate, &controller),
+                (Kind::WheelTelemetry, &controller),
+                (Kind::CmgTelemetry, &controller),
+                (Kind::WheelCommand, &wheels),
+                (Kind::CmgCommand, &wheels),
             ];
             let routes = routes.into_iter().map(|(k, a)| (k, a.clone())).collect();
             let sender = Sock::sender(&wheels)?;
@@ -209,22 +209,18 @@ fn role(spec: &WorkerSpec, link: &mut dyn ChainLink) -> Result<()> {
         Role::Estimator => stage(
             spec,
             link,
-            &mut EstimatorNode::new(config.estimator_config(), config.schedule()?),
+            &mut EstimatorTask::new(config.estimator_setup()?, config.schedule()?),
         ),
-        Role::Controller => {
-            let task =
-                ControllerTask::new(&config.controller, &config.model, config.manoeuvre.target())?;
-            stage(
-                spec,
-                link,
-                &mut ControllerNode::new(
-                    task,
-                    &config.controller,
-                    &config.model.wheels,
-                    config.schedule()?,
-                ),
-            )
-        }
+        Role::Controller => stage(
+            spec,
+            link,
+            &mut ControllerTask::new(
+                &config.controller,
+                &config.model,
+                config.manoeuvre.target(),
+                config.schedule()?,
+            )?,
+        ),
         _ => wheel_gateway(spec, link),
     }
 }
@@ -270,9 +266,12 @@ fn gyro_gateway(spec: &WorkerSpec, link: &mut dyn ChainLink) -> Result<()> {
         if k == spec.warmup {
             say(Signal::Measuring);
         }
-        for msg in [rec.tilt(k).map(Msg::Tilt), rec.field(k).map(Msg::Field)]
-            .into_iter()
-            .flatten()
+        for msg in [
+            rec.tilt(k).map(Msg::Inclinometer),
+            rec.field(k).map(Msg::Magnetometer),
+        ]
+        .into_iter()
+        .flatten()
         {
             link.send(&msg)?;
         }
@@ -297,7 +296,7 @@ fn measured(spec: &WorkerSpec, time_ns: u64) -> Option<usize> {
     (k >= spec.warmup && k < spec.warmup + spec.count).then(|| k - spec.warmup)
 }
 
-/// The pipeline's node logic between the chain's topics: the estimator and the controller.
+/// The pipeline's task logic between the chain's topics: the estimator and the controller.
 trait Stage {
     /// The topic whose sample starts the measured stage (and, marked, stops the chain).
     const TRIGGER: Kind;
@@ -307,47 +306,47 @@ trait Stage {
     fn emit(&mut self, out: &mut Vec<Msg>);
 }
 
-impl Stage for EstimatorNode {
+impl Stage for EstimatorTask {
     const TRIGGER: Kind = Kind::Gyro;
-    const OUTPUT: Kind = Kind::Estimate;
+    const OUTPUT: Kind = Kind::AttitudeEstimate;
     fn take(&mut self, msg: &Msg) {
         match msg {
             Msg::Gyro(s) => self.on_gyro(s),
-            Msg::Tilt(s) => self.on_inclinometer(s),
-            Msg::Field(s) => self.on_magnetometer(s),
+            Msg::Inclinometer(s) => self.on_inclinometer(s),
+            Msg::Magnetometer(s) => self.on_magnetometer(s),
             _ => {}
         }
     }
     fn emit(&mut self, out: &mut Vec<Msg>) {
-        out.extend(self.ready().into_iter().map(Msg::Estimate));
+        out.extend(self.ready().into_iter().map(Msg::AttitudeEstimate));
     }
 }
 
-impl Stage for ControllerNode {
-    const TRIGGER: Kind = Kind::Estimate;
-    const OUTPUT: Kind = Kind::WheelCmd;
+impl Stage for ControllerTask {
+    const TRIGGER: Kind = Kind::AttitudeEstimate;
+    const OUTPUT: Kind = Kind::WheelCommand;
     fn take(&mut self, msg: &Msg) {
         match msg {
-            Msg::Estimate(e) => self.on_estimate(e),
-            Msg::WheelTm(t) => self.on_wheel_telemetry(t),
-            Msg::CmgTm(t) => self.on_cmg_telemetry(t),
+            Msg::AttitudeEstimate(e) => self.on_estimate(e),
+            Msg::WheelTelemetry(t) => self.on_wheel_telemetry(t),
+            Msg::CmgTelemetry(t) => self.on_cmg_telemetry(t),
             _ => {}
         }
     }
     fn emit(&mut self, out: &mut Vec<Msg>) {
         for cycle in self.ready() {
             out.extend([
-                Msg::Status(cycle.status),
-                Msg::WheelCmd(cycle.wheels),
-                Msg::CmgCmd(cycle.cmg),
+                Msg::ControllerStatus(cycle.status),
+                Msg::WheelCommand(cycle.wheels),
+                Msg::CmgCommand(cycle.cmg),
             ]);
         }
     }
 }
 
-/// A node process: takes every arrived sample, publishes what the node has ready, and times
+/// A task's process: takes every arrived sample, publishes what the task has ready, and times
 /// each measured tick from its trigger taken to its output published.
-fn stage<S: Stage>(spec: &WorkerSpec, link: &mut dyn ChainLink, node: &mut S) -> Result<()> {
+fn stage<S: Stage>(spec: &WorkerSpec, link: &mut dyn ChainLink, task: &mut S) -> Result<()> {
     let (mut batch, mut outputs) = (Vec::with_capacity(16), Vec::with_capacity(16));
     let (mut received, mut sent) = (vec![0_u64; spec.count], vec![0_u64; spec.count]);
     loop {
@@ -358,8 +357,8 @@ fn stage<S: Stage>(spec: &WorkerSpec, link: &mut dyn ChainLink, node: &mut S) ->
         }
         let mut stop = None;
         for (msg, t) in &batch {
-            let header = msg.header();
-            if msg.kind() == S::TRIGGER {
+            let header = *msg.header();
+            if msg.topic_id() == S::TRIGGER {
                 if header.source_id == STOP_SOURCE {
                     stop = Some(header);
                     continue;
@@ -368,20 +367,22 @@ fn stage<S: Stage>(spec: &WorkerSpec, link: &mut dyn ChainLink, node: &mut S) ->
                     received[i] = *t;
                 }
             }
-            node.take(msg);
+            task.take(msg);
         }
         outputs.clear();
-        node.emit(&mut outputs);
+        task.emit(&mut outputs);
         for msg in &outputs {
             if let Some(i) =
-                measured(spec, msg.header().time_ns).filter(|_| msg.kind() == S::OUTPUT)
+                measured(spec, msg.header().time_ns).filter(|_| msg.topic_id() == S::OUTPUT)
             {
                 sent[i] = now_ns();
             }
             link.send(msg)?;
         }
         if let Some(header) = stop {
-            link.send(&Msg::empty(S::OUTPUT, header))?;
+            link.send(
+                &topics::empty(S::OUTPUT, header).context("the output is a topic of the chain")?,
+            )?;
             break;
         }
     }
@@ -403,9 +404,9 @@ fn wheel_gateway(spec: &WorkerSpec, link: &mut dyn ChainLink) -> Result<()> {
     let mut out_of_range = 0;
     let mut batch = Vec::with_capacity(16);
     wait_for_go()?;
-    wait_for_peer(link, Kind::WheelTm)?;
-    link.send(&Msg::WheelTm(rec.wheels(0, [0.0; 3])))?;
-    link.send(&Msg::CmgTm(rec.cmg(0, [0.0; 4])))?;
+    wait_for_peer(link, Kind::WheelTelemetry)?;
+    link.send(&Msg::WheelTelemetry(rec.wheels(0, [0.0; 3])))?;
+    link.send(&Msg::CmgTelemetry(rec.cmg(0, [0.0; 4])))?;
     let mut cmg_rate = [0.0; 4];
     let mut said_done = false;
     'run: loop {
@@ -417,7 +418,7 @@ fn wheel_gateway(spec: &WorkerSpec, link: &mut dyn ChainLink) -> Result<()> {
         }
         for &(msg, t) in &batch {
             match msg {
-                Msg::WheelCmd(c) => {
+                Msg::WheelCommand(c) => {
                     let k = (c.header.time_ns / TICK_NS) as usize;
                     if c.header.source_id == STOP_SOURCE || k >= total {
                         break 'run;
@@ -434,8 +435,8 @@ fn wheel_gateway(spec: &WorkerSpec, link: &mut dyn ChainLink) -> Result<()> {
                     }
                     if k + 1 < rec.len() {
                         let telemetry = [
-                            Msg::WheelTm(rec.wheels(k + 1, c.torque)),
-                            Msg::CmgTm(rec.cmg(k + 1, cmg_rate)),
+                            Msg::WheelTelemetry(rec.wheels(k + 1, c.torque)),
+                            Msg::CmgTelemetry(rec.cmg(k + 1, cmg_rate)),
                         ];
                         for m in &telemetry {
                             let sent = link.send(m);
@@ -450,7 +451,7 @@ fn wheel_gateway(spec: &WorkerSpec, link: &mut dyn ChainLink) -> Result<()> {
                         said_done = true;
                     }
                 }
-                Msg::CmgCmd(c) => cmg_rate = c.gimbal_rate,
+                Msg::CmgCommand(c) => cmg_rate = c.gimbal_rate,
                 _ => {}
             }
         }

@@ -1,7 +1,7 @@
 //! The command line and the run: plan every configuration, measure them in interleaved
 //! rounds, then the paced runs, saving the report after every phase.
 
-use crate::latency::measure::{Ctx, pipeline_binary, warmup};
+use crate::latency::measure::{Ctx, testbed_binary, warmup};
 use crate::latency::model::{Kind, Measurement, Plan, Report};
 use crate::latency::protocol::{Transport, WorkerSpec};
 use crate::latency::recording::Recording;
@@ -9,9 +9,10 @@ use crate::latency::system::{self, Machine};
 use crate::latency::{figure, report, worker};
 use anyhow::{Context, Result, bail};
 use clap::Parser;
+use ipc_types::WaitStrategy;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
-use testbed_bus::WaitStrategy;
+use testbed_bus::WaitFromEnv;
 
 #[derive(Parser, Debug, Clone)]
 #[command(about = "Latency of the pipeline against sockets and busy-polling, idle and under load")]
@@ -225,7 +226,7 @@ fn run(args: &Args, command: String) -> Result<()> {
         eprintln!("recording a {total}-tick closed-loop run for the gateways to replay ...");
         Recording::record(&ctx.recording, total)?;
         add(Kind::Chain, &all, 0, cycles, args.period_us, false, None);
-        if !skip("binaries") && pipeline_binary("estimator").is_some() {
+        if !skip("binaries") && testbed_binary().is_some() {
             // Every bus wait strategy: the decision on the pipeline's default weighs these rows.
             add(Kind::Chain, &bus, 0, cycles, args.period_us, true, None);
         }

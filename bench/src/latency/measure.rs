@@ -8,6 +8,7 @@ use crate::latency::runner::{Group, Who};
 use crate::latency::stats::differences;
 use crate::latency::system::{Hog, MachineCpu, pin_process};
 use anyhow::{Context, Result, bail};
+use std::os::unix::process::CommandExt as _;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::{Duration, Instant};
@@ -17,9 +18,10 @@ pub fn warmup(n: usize) -> usize {
     (n / 20).clamp(50, 2_000)
 }
 
-/// A pipeline binary next to this one (target/<profile>/).
-pub fn pipeline_binary(name: &str) -> Option<PathBuf> {
-    let path = std::env::current_exe().ok()?.parent()?.join(name);
+/// The `testbed` executable next to this one (target/<profile>/): the pipeline's processes are
+/// its roles.
+pub fn testbed_binary() -> Option<PathBuf> {
+    let path = std::env::current_exe().ok()?.parent()?.join("testbed");
     path.exists().then_some(path)
 }
 
@@ -170,7 +172,7 @@ impl Ctx {
         Ok(part)
     }
 
-    /// The chain (with the real estimator and controller binaries if `p.binaries`).
+    /// The chain (with the real estimator and controller processes if `p.binaries`).
     fn chain(&mut self, p: &Plan, cycles: usize) -> Result<Part> {
         let setup = self.setup()?;
         let spec = setup.spec(
@@ -188,16 +190,19 @@ impl Ctx {
             };
             let config_path = setup.sock_dir.join("run.toml");
             let mut config = run_config();
-            config.run.mode = testbed_runtime::ClockMode::Paced;
+            config.run.mode = ipc_types::ClockMode::Paced;
             std::fs::write(&config_path, config.to_toml_string())?;
+            let testbed = testbed_binary().context("the testbed executable")?;
             for name in ["estimator", "controller"] {
-                let mut command = Command::new(pipeline_binary(name).context("pipeline binary")?);
+                let mut command = Command::new(&testbed);
+                // The role is the name the executable is started under (`argv[0]`).
                 command
+                    .arg0(name)
                     .env(testbed_bus::ENV_PREFIX, &setup.prefix)
                     .env(testbed_bus::ENV_ROOT, &setup.root)
                     .env(testbed_bus::ENV_DELIVERY, "overflow")
-                    .env(testbed_bus::ENV_WAIT, wait.to_string())
-                    .env(testbed_runtime::ENV_RUN_CONFIG, &config_path)
+                    .env(ipc_types::ENV_WAIT, wait.to_string())
+                    .env(testbed_config::ENV_RUN_CONFIG, &config_path)
                     .env("RUST_LOG", "warn");
                 programs.push(group.program(name, command)?);
             }

@@ -1,7 +1,7 @@
 //! The 10 Hz loop: a paced `testbed run` (the whole pipeline) under load, watched by an
 //! observer process that time-stamps every tick's samples on arrival.
 
-use crate::latency::measure::{Ctx, pipeline_binary};
+use crate::latency::measure::{Ctx, testbed_binary};
 use crate::latency::model::{PacedRun, ProcessCost};
 use crate::latency::protocol::{Role, STARTUP, Transport, WorkerSpec};
 use crate::latency::recording::TICK_NS;
@@ -65,7 +65,7 @@ impl Ctx {
     }
 
     fn paced_run(&mut self, run: &mut PacedRun) -> Result<()> {
-        let testbed = pipeline_binary("testbed").context(
+        let testbed = testbed_binary().context(
             "`testbed` not found next to this binary: cargo build --profile deploy --workspace --bins",
         )?;
         let log = self.scratch.join(format!("paced-{}.mcap", self.n));
@@ -97,7 +97,7 @@ impl Ctx {
                 "--log",
             ])
             .arg(&log)
-            .env(testbed_bus::ENV_WAIT, wait)
+            .env(ipc_types::ENV_WAIT, wait)
             .env("RUST_LOG", "warn")
             .stdout(Stdio::piped())
             .spawn()

@@ -12,12 +12,13 @@
 //!   said `ready`. Nobody sends before that, so nobody sends to a socket that is not bound yet.
 
 use anyhow::{Context, Result, bail};
+use ipc_types::WaitStrategy;
 use serde::{Deserialize, Serialize};
 use std::io::{BufRead, Write};
 use std::net::SocketAddr;
 use std::path::PathBuf;
 use std::time::Duration;
-use testbed_bus::{BusConfig, Delivery, WaitStats, WaitStrategy};
+use testbed_bus::{BusConfig, Delivery, WaitStats};
 
 /// How long a worker may take to start (to open its ports and say `ready`), and how long a
 /// receiver waits for its first sample, on a loaded machine: generous, since processes start

@@ -5,7 +5,7 @@
 use anyhow::{Context, Result};
 use ipc_types::*;
 use std::path::Path;
-use testbed_runtime::RunConfig;
+use testbed_config::RunConfig;
 
 /// Device-time period of the recorded run's ticks (10 Hz).
 pub const TICK_NS: u64 = 100_000_000;

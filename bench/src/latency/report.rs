@@ -265,7 +265,7 @@ mod tests {
     use super::*;
     use crate::latency::model::RoundStats;
     use crate::latency::protocol::Transport;
-    use testbed_bus::WaitStrategy;
+    use ipc_types::WaitStrategy;
 
     fn row(
         kind: Kind,

@@ -1,6 +1,6 @@
-//! The chain's topics: which samples flow between its processes ([`Kind`], [`Msg`]), how a
-//! socket carries them (a tag and the sample's `Pod` twin), and a process's ports on a bus of
-//! either family ([`Ports`]).
+//! The chain's topics: which samples flow between its processes (a [`Msg`] is the run log's
+//! record of the topic table, a [`Kind`] the table's topic), how a socket carries them (a tag
+//! and the sample's `Pod` twin), and a process's ports on a bus of either family ([`Ports`]).
 
 use crate::latency::payload::Payload;
 use crate::latency::system::now_ns;
@@ -9,50 +9,45 @@ use anyhow::{Context, Result};
 use ipc_types::*;
 use testbed_bus::{Bus, EventLoop};
 
+/// Which topic: the table's.
+pub use ipc_types::TopicId as Kind;
+
+/// A sample of one of the chain's topics (by value, as the bus hands them out).
+pub type Msg = testbed_log::LogRecord;
+
 macro_rules! chain_topics {
-    ($(($v:ident, $t:ty, $f:ident)),* $(,)?) => {
-        /// Which topic.
-        #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-        pub enum Kind { $($v),* }
+    ($(($v:ident, $t:ident, $f:ident)),* $(,)?) => {
+        /// An empty sample of `kind` with `header` (the chain's stop marker); `None` for a
+        /// topic outside the chain.
+        pub fn empty(kind: Kind, header: SampleHeader) -> Option<Msg> {
+            match kind {
+                $(Kind::$v => Some(Msg::$v($t { header, ..Default::default() })),)*
+                _ => None,
+            }
+        }
 
-        /// A sample of one of the chain's topics (by value, as the bus hands them out).
-        #[derive(Debug, Clone, Copy)]
-        #[allow(clippy::large_enum_variant)]
-        pub enum Msg { $($v($t)),* }
+        /// Tag and the sample's plain-bytes twin, as a socket sends them.
+        pub fn encode(msg: &Msg, out: &mut Vec<u8>) -> Result<()> {
+            out.clear();
+            out.extend_from_slice(&(msg.topic_id() as u32).to_le_bytes());
+            out.extend_from_slice(&[0; 4]);
+            match msg {
+                $(Msg::$v(s) => out.extend_from_slice(bytemuck::bytes_of(&s.to_wire())),)*
+                _ => anyhow::bail!("{} is not a topic of the chain", msg.topic()),
+            }
+            Ok(())
+        }
 
-        impl Msg {
-            pub fn kind(&self) -> Kind {
-                match self { $(Self::$v(_) => Kind::$v),* }
-            }
-            pub fn header(&self) -> SampleHeader {
-                match self { $(Self::$v(s) => s.header),* }
-            }
-            /// An empty sample of `kind` with `header` (the chain's stop marker).
-            pub fn empty(kind: Kind, header: SampleHeader) -> Self {
-                match kind { $(Kind::$v => Self::$v(<$t>::default()).with_header(header)),* }
-            }
-            fn with_header(mut self, header: SampleHeader) -> Self {
-                match &mut self { $(Self::$v(s) => s.header = header),* }
-                self
-            }
-            /// Tag and the sample's plain-bytes twin, as a socket sends them.
-            pub fn encode(&self, out: &mut Vec<u8>) {
-                out.clear();
-                out.extend_from_slice(&(self.kind() as u32).to_le_bytes());
-                out.extend_from_slice(&[0; 4]);
-                match self { $(Self::$v(s) => out.extend_from_slice(bytemuck::bytes_of(&s.to_wire()))),* }
-            }
-            pub fn decode(bytes: &[u8]) -> Option<Self> {
-                let tag = u32::from_le_bytes(bytes.get(..4)?.try_into().ok()?);
-                let body = bytes.get(8..)?;
-                $(
-                    if tag == Kind::$v as u32 {
-                        let ok = body.len() == size_of::<<$t as Payload>::Wire>();
-                        return ok.then(|| Self::$v(<$t>::from_wire(&bytemuck::pod_read_unaligned(body))));
-                    }
-                )*
-                None
-            }
+        pub fn decode(bytes: &[u8]) -> Option<Msg> {
+            let tag = u32::from_le_bytes(bytes.get(..4)?.try_into().ok()?);
+            let body = bytes.get(8..)?;
+            $(
+                if tag == Kind::$v as u32 {
+                    let ok = body.len() == size_of::<<$t as Payload>::Wire>();
+                    return ok.then(|| Msg::$v(<$t>::from_wire(&bytemuck::pod_read_unaligned(body))));
+                }
+            )*
+            None
         }
 
         /// The ports of one chain process on a bus, of one family.
@@ -73,12 +68,17 @@ macro_rules! chain_topics {
                 Ok(())
             }
             pub fn send(&self, msg: &Msg) -> Result<()> {
+                let no_publisher = || format!("no publisher for {}", msg.topic());
                 match msg {
-                    $(Msg::$v(v) => F::send(self.$f.0.as_ref().with_context(|| format!("no publisher for {:?}", msg.kind()))?, v),)*
+                    $(Msg::$v(v) => F::send(self.$f.0.as_ref().with_context(no_publisher)?, v),)*
+                    _ => Err(anyhow::anyhow!(no_publisher())),
                 }
             }
             pub fn subscribers(&self, kind: Kind) -> usize {
-                match kind { $(Kind::$v => self.$f.0.as_ref().map_or(0, F::subscribers)),* }
+                match kind {
+                    $(Kind::$v => self.$f.0.as_ref().map_or(0, F::subscribers),)*
+                    _ => 0,
+                }
             }
         }
 
@@ -93,12 +93,12 @@ macro_rules! chain_topics {
 
 chain_topics! {
     (Gyro, GyroSample, gyro),
-    (Tilt, InclinometerSample, tilt),
-    (Field, MagnetometerSample, field),
-    (Estimate, AttitudeEstimate, estimate),
-    (WheelTm, WheelTelemetry, wheel_tm),
-    (CmgTm, CmgTelemetry, cmg_tm),
-    (Status, ControllerStatus, status),
-    (WheelCmd, WheelCommand, wheel_cmd),
-    (CmgCmd, CmgCommand, cmg_cmd),
+    (Inclinometer, InclinometerSample, tilt),
+    (Magnetometer, MagnetometerSample, field),
+    (AttitudeEstimate, AttitudeEstimate, estimate),
+    (WheelTelemetry, WheelTelemetry, wheel_tm),
+    (CmgTelemetry, CmgTelemetry, cmg_tm),
+    (ControllerStatus, ControllerStatus, status),
+    (WheelCommand, WheelCommand, wheel_cmd),
+    (CmgCommand, CmgCommand, cmg_cmd),
 }

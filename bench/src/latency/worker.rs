@@ -10,11 +10,12 @@ use crate::latency::protocol::{
 use crate::latency::system::{now_ns, precise_timers, sleep_until};
 use crate::latency::transport::{PollPub, PollSub, Sock, poll_until, wait_for_events};
 use anyhow::{Context, Result, bail};
-use ipc_types::{AttitudeEstimate, ControllerStatus, GyroSample, SimTruth, Topic, WheelCommand};
+use ipc_types::{
+    AttitudeEstimate, ControllerStatus, GyroSample, SimTruth, Topic, WaitStrategy, WheelCommand,
+};
 use std::time::{Duration, Instant};
 use testbed_bus::{
-    Bus, EventLoop, Flow, SubscriberOptions, TopicPublisher, TopicSubscriber, WaitStats,
-    WaitStrategy, Waiter,
+    Bus, EventLoop, Flow, SubscriberOptions, TopicPublisher, TopicSubscriber, WaitStats, Waiter,
 };
 
 /// Runs the worker `spec` describes.

@@ -1,4 +1,6 @@
-//! Stand-in child for the launcher's tests (not part of the pipeline).
+//! Stand-in for the `testbed` executable in the launcher's tests (not part of the pipeline):
+//! started under the launcher's name (`testbed-launch`, through a link) it is the launcher, with
+//! one role, `launch-test-child`, which is this stand-in child.
 //!
 //! Runs for `--sleep-s` seconds (forever without it), then exits with `--exit` (default 0) or
 //! dies by signal `--die-by`. On SIGINT/SIGTERM it exits 0 at once, like a pipeline process,
@@ -6,7 +8,8 @@
 //! Prints `<name>: ready` on stderr once its signal handling is set up.
 //! `--mark FILE` appends `<TESTBED_PROCESS_NAME> <pid>` to FILE at start; `--env-out FILE`
 //! writes the `TESTBED_*` and `RUST_LOG` variables it got; `--open-bus` opens an iceoryx2 node
-//! (named after the process) on the run's bus and keeps it open.
+//! (named after the process) on the run's bus and keeps it open; `--running` also says
+//! `Running` in its heartbeat (a process past its start-up, for the restart rule).
 
 use std::io::Write as _;
 use std::path::PathBuf;
@@ -32,6 +35,8 @@ struct Args {
     env_out: Option<PathBuf>,
     #[arg(long)]
     open_bus: bool,
+    #[arg(long)]
+    running: bool,
 }
 
 /// One line on stderr in a single write, so that it does not interleave with the launcher's.
@@ -39,7 +44,17 @@ fn say(line: &str) {
     let _ = std::io::stderr().write_all(format!("{line}\n").as_bytes());
 }
 
-fn main() -> anyhow::Result<()> {
+/// The stand-in child's one role.
+const CHILD: &str = "launch-test-child";
+
+fn main() -> std::process::ExitCode {
+    if testbed_launch::roles::invoked_as().as_deref() == Some(testbed_launch::roles::LAUNCHER) {
+        return testbed_launch::main(&[CHILD]);
+    }
+    std::process::Termination::report(child())
+}
+
+fn child() -> anyhow::Result<()> {
     let args = Args::parse();
     let signals = if args.ignore_signals {
         // SAFETY: setting dispositions to SIG_IGN before any thread exists.
@@ -71,10 +86,13 @@ fn main() -> anyhow::Result<()> {
         std::fs::write(path, vars.concat())
             .with_context(|| format!("writing {}", path.display()))?;
     }
-    let bus = if args.open_bus {
+    let bus = if args.open_bus || args.running {
         let config = testbed_bus::BusConfig::from_env().context("bus configuration")?;
         let bus = testbed_bus::Bus::open(&name, &config).context("opening the bus")?;
         let heartbeat = bus.heartbeat(Duration::from_secs(1)).context("heartbeat")?;
+        if args.running {
+            heartbeat.set_state(ipc_types::ProcessState::Running);
+        }
         heartbeat.publish().context("publishing a heartbeat")?;
         say(&format!("{name}: bus open"));
         Some((bus, heartbeat))

@@ -8,10 +8,6 @@ const WINDOW_S = 60;            // plot window, simulated s
 const STALE_AFTER_S = 1.0;      // no message for this long: the link is stale
 const MODES = ["Idle", "RateDamping", "WheelPointing", "CmgSlew", "Fault", "Safe", "MomentumDump", "ThrusterRateDamping"];
 const STATES = ["Starting", "Running", "Degraded", "Stopping", "Faulted"];
-const HEALTH_KINDS = ["unknown", "input lost", "input restored", "process hung", "process exited",
-  "process restarted", "safe mode entered", "safe mode left", "commands zeroed",
-  "commands resumed", "run aborted", "thrusters disabled"];
-const FAULT_KINDS = new Set([1, 3, 4, 6, 8, 10, 11]);
 const COMMAND_KINDS = ["unknown", "mode", "target", "experiment start", "experiment abort"];
 const CAN_NAMES = { 1: "CAN node", 2: "gyro gw", 3: "inclinometer gw", 4: "magnetometer gw", 5: "wheel gw", 6: "CMG gw", 8: "thruster gw" };
 const COLORS = ["#d32f2f", "#388e3c", "#1976d2", "#f57c00"];
@@ -171,8 +167,6 @@ const handlers = {
   },
   "testbed/system/health"(m) {
     if (m.kind === 5) state.restarts.set(m.subject, m.detail);
-    event(`${m.reporter}: ${HEALTH_KINDS[m.kind] || m.kind} — ${m.subject}` +
-      (m.value ? ` (${m.value.toFixed(2)} s)` : ""), FAULT_KINDS.has(m.kind) ? "fault" : "");
   },
   "testbed/can/status"(m) { state.can.set(m.header.source_id, m); },
   "testbed/ground/command"(m) {
@@ -182,10 +176,13 @@ const handlers = {
     const applied = m.status === 1;
     const by = m.decided_by === 2 ? "controller" : "ground link";
     const text = `command ${m.command_id} ${applied ? "applied" : "rejected"} by the ${by}: ${m.reason}`;
-    event(`viewer ${m.client_id}: ${text}`, applied ? "applied" : "rejected");
     if (m.client_id === state.viewerId) commandResult(text, applied ? "ok" : "rejected");
   },
-  "testbed/ground/events"(m) { event(m.text); },
+  // The run's events as foxglove.Log: health events, mode changes, acknowledgements.
+  "testbed/events"(m) {
+    const cls = m.level >= 4 ? "fault" : m.level === 3 ? "rejected" : /applied/.test(m.message) ? "applied" : "";
+    event(`${m.name}: ${m.message}`, cls);
+  },
   "testbed/ground/link"(m) {
     const d = m.target_deg;
     state.target = [d.heading, d.tilt_x, d.tilt_y];
@@ -246,6 +243,8 @@ function onText(text) {
   try { m = JSON.parse(text); } catch { return; }
   if (m.op === "serverInfo") {
     state.viewerId = m.metadata && m.metadata.viewer_id;
+    // A connection without the command token watches: the link declares no clientPublish.
+    state.canPublish = (m.capabilities || []).includes("clientPublish");
     state.startNs = BigInt((m.metadata && m.metadata.start_time_ns) || "0");
   } else if (m.op === "advertise") {
     const subs = [];
@@ -254,7 +253,9 @@ function onText(text) {
       if (handlers[c.topic]) subs.push({ id: c.id, channelId: c.id });
     }
     send(JSON.stringify({ op: "subscribe", subscriptions: subs }));
-    send(JSON.stringify({ op: "clientAdvertise", channels: [{ id: COMMAND_CHANNEL, topic: "testbed/ground/command", encoding: "json", schemaName: "testbed::ground::CommandRequest" }] }));
+    if (state.canPublish) {
+      send(JSON.stringify({ op: "advertise", channels: [{ id: COMMAND_CHANNEL, topic: "testbed/ground/command", encoding: "json", schemaName: "testbed::ground::CommandRequest" }] }));
+    }
   } else if (m.op === "status" && typeof m.id === "string" && m.id.startsWith("cmd-")) {
     commandResult(m.message, m.level >= 2 ? "rejected" : "ok");
     if (m.level >= 2) event(m.message, "rejected");
@@ -264,7 +265,11 @@ function onText(text) {
 function send(data) { if (state.ws && state.ws.readyState === WebSocket.OPEN) state.ws.send(data); }
 
 function connect() {
-  const ws = new WebSocket(`ws://${location.host}/`, ["foxglove.websocket.v1"]);
+  // The token on the URL gives the connection the command role (without it, it watches).
+  const token = $("token").value;
+  const query = token ? `?token=${encodeURIComponent(token)}` : "";
+  const scheme = location.protocol === "https:" ? "wss" : "ws";
+  const ws = new WebSocket(`${scheme}://${location.host}/${query}`, ["foxglove.websocket.v1"]);
   ws.binaryType = "arraybuffer";
   state.ws = ws;
   state.channels.clear();
@@ -288,6 +293,7 @@ function command(body) {
   new DataView(frame.buffer).setUint32(1, COMMAND_CHANNEL, true);
   frame.set(payload, 5);
   if (!state.ws || state.ws.readyState !== WebSocket.OPEN) { commandResult("not connected", "rejected"); return; }
+  if (!state.canPublish) { commandResult("rejected: watching only (open the page with #token=<the run's command token>)", "rejected"); return; }
   commandResult(`command ${id} sent…`, "");
   state.ws.send(frame);
 }

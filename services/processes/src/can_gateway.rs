@@ -3,15 +3,18 @@
 //! limited (thrusters: checked by [`ThrusterGuard`]) and encoded onto the link. A gateway on a
 //! candump file stops cleanly at its end.
 //!
-//! The thruster gateway completes the node's thruster status with what only it knows before
+//! The thruster gateway completes the board's thruster status with what only it knows before
 //! publishing it: the commands it refused, the propellant it estimates from the applied
-//! on-times ([`PropellantEstimate`]) and whether the thrusters are disabled. A valve the node
+//! on-times ([`PropellantEstimate`]) and whether the thrusters are disabled. A valve the board
 //! senses open after its pulse ended, `stuck_open_confirm_periods` periods in a row, disables
 //! them: reported once as the health event `ThrustersDisabled`, every later command refused
-//! and sent with the latch flag, so the node shuts the latch valve.
+//! and sent with the latch flag, so the board shuts the latch valve.
 
+use crate::can_link::HeartbeatCounters;
 use crate::can_link::Link;
+use crate::software_bus::SoftwareBusTransport;
 use anyhow::{Context as _, bail};
+use ipc_types::ClockMode;
 use ipc_types::{
     CanLinkStatus, CmgCommand, CmgTelemetry, GyroSample, HealthEventKind, InclinometerSample,
     MagnetometerSample, ProcessState, SampleHeader, ThrusterCommand, ThrusterStatus, WheelCommand,
@@ -20,21 +23,20 @@ use ipc_types::{
 use std::time::{Duration, Instant};
 use testbed_bus::{Bus, BusError, Flow, LoopExit, SourceId, TopicPublisher, TopicSubscriber, Wake};
 use testbed_can::{EncodeError, FrameBatch, Sample, TransportError};
-use testbed_gateways::bus_transport::SoftwareBusTransport;
+use testbed_gateways::can_board;
 use testbed_gateways::gateway::{Gateway, GatewayDevice, Served};
-use testbed_gateways::node;
-use testbed_gateways::status::{HeartbeatCounters, StatusTracker};
+use testbed_gateways::status::StatusTracker;
 use testbed_gateways::thrusters::{PropellantEstimate, ThrusterGuard};
-use testbed_runtime::{ClockMode, Context, Io, Node, WakeOn};
+use testbed_runtime::{Context, Io, Node, WakeOn};
 
 /// How often a gateway polls a link that cannot wake its event loop (SocketCAN, serial,
 /// candump file).
 pub const POLL_PERIOD: Duration = Duration::from_millis(2);
 /// How often a gateway on SocketCAN checks that its interface is up.
 pub const LINK_CHECK_PERIOD: Duration = Duration::from_millis(100);
-/// Without a node heartbeat for this long a free-running gateway reports itself `Degraded`
-/// (PROTOCOL.md: the node is lost after 3 s).
-pub const NODE_LOST_AFTER: Duration = Duration::from_secs(3);
+/// Without a board heartbeat for this long a free-running gateway reports itself `Degraded`
+/// (PROTOCOL.md: the board is lost after 3 s).
+pub const BOARD_LOST_AFTER: Duration = Duration::from_secs(3);
 
 /// The publisher of a gateway's samples.
 enum SamplePublisher {
@@ -74,7 +76,7 @@ impl SamplePublisher {
 
 /// A gateway's ports. The software CAN bus wakes the event loop (which borrows its subscriber)
 /// and works through `&self`, so it is a port; the other links are polled through `&mut` and
-/// belong to the node.
+/// belong to the board.
 pub struct CanGatewayPorts {
     bus_link: Option<Box<SoftwareBusTransport>>,
     samples: SamplePublisher,
@@ -91,7 +93,7 @@ struct ThrusterSide {
 }
 
 impl ThrusterSide {
-    /// Completes the node's status (refusals, propellant, disabled) and senses the valves:
+    /// Completes the board's status (refusals, propellant, disabled) and senses the valves:
     /// returns the valve newly found stuck open.
     fn on_status(&mut self, status: &mut ThrusterStatus) -> Option<usize> {
         let stuck = if status.header.is_valid() && status.header.flags & SampleHeader::STALE == 0 {
@@ -119,8 +121,8 @@ pub struct CanGateway {
     counters: HeartbeatCounters,
     latest_ns: u64,
     ended: bool,
-    /// The CAN node's heartbeats: how many, when they last grew, whether the node is lost.
-    node_seen: (u64, Instant, bool),
+    /// The CAN board's heartbeats: how many, when they last grew, whether the board is lost.
+    board_seen: (u64, Instant, bool),
     /// The control period: commands are expected once per period.
     period: Duration,
     /// The command stream's attachment (paced runs: its silence wakes the gateway).
@@ -171,13 +173,12 @@ impl CanGateway {
             Served::Device(_) => None,
         };
         let protocol =
-            node::protocol(config).context("the CAN protocol of the model configuration")?;
+            can_board::protocol(config).context("the CAN protocol of the model configuration")?;
         let tick_sync = config.run.mode == ClockMode::Lockstep;
-        let link =
-            Link::open(bus, config, device).with_context(|| format!("{name}: opening its link"))?;
+        let link = Link::open(bus, config, device).context("opening its link")?;
         let describe = link.describe();
-        // A bus (software or SocketCAN, e.g. vcan0 with the simulated node on it) delivers the
-        // node's tick syncs in order with the frames; a file or a serial line cannot wait for the
+        // A bus (software or SocketCAN, e.g. vcan0 with the simulated CAN board on it) delivers the
+        // board's tick syncs in order with the frames; a file or a serial line cannot wait for the
         // simulation clock.
         if tick_sync && !matches!(link, Link::Bus(_) | Link::SocketCan(_)) {
             bail!(
@@ -204,7 +205,7 @@ impl CanGateway {
                 .then(|| bus.subscriber())
                 .transpose()?,
         };
-        let node = Self {
+        let gateway = Self {
             gateway,
             other_link,
             describe,
@@ -214,7 +215,7 @@ impl CanGateway {
             counters: HeartbeatCounters::default(),
             latest_ns: 0,
             ended: false,
-            node_seen: (0, Instant::now(), false),
+            board_seen: (0, Instant::now(), false),
             period: Duration::from_nanos(schedule.period_ns),
             command_source: None,
             zeroed: false,
@@ -227,7 +228,7 @@ impl CanGateway {
             },
             thrusters,
         };
-        Ok((node, ports))
+        Ok((gateway, ports))
     }
 
     fn publish_status(
@@ -515,18 +516,20 @@ impl Node for CanGateway {
         }
         self.check_link(ports, io)?;
         let name = io.name;
-        if self.gateway.node_heartbeats() != self.node_seen.0 {
-            if self.node_seen.2 {
-                tracing::info!("{name}: the CAN node is back");
+        if self.gateway.node_heartbeats() != self.board_seen.0 {
+            if self.board_seen.2 {
+                tracing::info!("{name}: the CAN board is back");
                 io.heartbeat.set_state(ProcessState::Running);
             }
-            self.node_seen = (self.gateway.node_heartbeats(), Instant::now(), false);
+            self.board_seen = (self.gateway.node_heartbeats(), Instant::now(), false);
         }
         if self.status_interval.is_some_and(|s| wake == Wake::Tick(s)) {
-            if !self.node_seen.2 && self.node_seen.1.elapsed() > NODE_LOST_AFTER {
-                tracing::warn!("{name}: no CAN node heartbeat for {NODE_LOST_AFTER:?}: node lost");
+            if !self.board_seen.2 && self.board_seen.1.elapsed() > BOARD_LOST_AFTER {
+                tracing::warn!(
+                    "{name}: no CAN board heartbeat for {BOARD_LOST_AFTER:?}: board lost"
+                );
                 io.heartbeat.set_state(ProcessState::Degraded);
-                self.node_seen.2 = true;
+                self.board_seen.2 = true;
             }
             self.publish_status(ports, io, self.latest_ns)?;
         }
@@ -593,7 +596,7 @@ mod tests {
         }
     }
 
-    /// The gateway's side of a thruster run: bad commands refused and counted, what the node
+    /// The gateway's side of a thruster run: bad commands refused and counted, what the board
     /// reports completed, a stuck valve disabling the thrusters and the latch flag sent.
     #[test]
     fn the_thruster_gateway_refuses_counts_and_disables() {
@@ -616,12 +619,12 @@ mod tests {
         }
         let (on_time, refusal) = side.guard.check(&command([0.05, 0.0, 0.0, 0.0, 0.0, 0.0]));
         assert_eq!((on_time[0], refusal), (0.05, None));
-        // The node reports the pulse; the gateway adds its propellant and its refusals.
+        // The board reports the pulse; the gateway adds its propellant and its refusals.
         let mut s = status(on_time, 0);
         assert_eq!(side.on_status(&mut s), None);
         assert_eq!(s.refused, 4);
         assert!(s.propellant_used > 0.0 && s.disabled == 0);
-        // A stale status (the node's frames did not all come) adds nothing.
+        // A stale status (the board's frames did not all come) adds nothing.
         let used = s.propellant_used;
         let mut stale = status(on_time, 0);
         stale.header.flags |= SampleHeader::STALE;

@@ -2,19 +2,21 @@
 //! file or a serial line, as the run configuration says.
 
 use anyhow::Context as _;
+use ipc_types::CanLinkStatus;
 use ipc_types::SampleHeader;
 use std::fs::File;
 use std::io::BufReader;
 use std::time::Duration;
-use testbed_bus::Bus;
+use testbed_bus::{Bus, HeartbeatPublisher};
 use testbed_can::transport::{
     CandumpReplay, Pacing, SerialConfig, SerialTransport, SocketCanTransport,
 };
 use testbed_can::{CanFrame, CanTransport, Device, TimestampedFrame, TransportError};
-use testbed_gateways::bus_transport::SoftwareBusTransport;
+use testbed_gateways::can_board;
 use testbed_gateways::gateway::{GatewayDevice, Served};
-use testbed_gateways::node;
-use testbed_runtime::run_config::{CanLink, RunConfig};
+
+use crate::software_bus::SoftwareBusTransport;
+use testbed_config::{CanLink, RunConfig};
 
 /// Frames a software-bus receiver buffers (a tick holds about 20).
 pub const BUS_BUFFER: usize = 128;
@@ -23,7 +25,7 @@ pub const BUS_BUFFER: usize = 128;
 pub enum Link {
     /// The software CAN bus.
     Bus(Box<SoftwareBusTransport>),
-    /// A SocketCAN interface, filtered to the device's and the node's identifiers.
+    /// A SocketCAN interface, filtered to the device's and the board's identifiers.
     SocketCan(SocketCanTransport),
     /// A `candump -L` file.
     Candump(CandumpReplay<BufReader<File>>),
@@ -55,7 +57,7 @@ impl Link {
             CanLink::Socketcan => {
                 let mut transport = SocketCanTransport::open(&can.interface)
                     .with_context(|| format!("can.interface = {:?}", can.interface))?;
-                let protocol = node::protocol(config)?;
+                let protocol = can_board::protocol(config)?;
                 transport
                     .set_device_filters(protocol.ids(), &[device.can_device(), Device::Node])
                     .with_context(|| format!("filters on {}", can.interface))?;
@@ -149,5 +151,29 @@ impl Link {
             Link::Candump(_) => "candump file",
             Link::Serial(_) => "serial line",
         }
+    }
+}
+
+/// Carries a link's counters into its process's heartbeat (`frames_ok`, `frames_bad`,
+/// `errors` = lost frames + abandoned samples + stale samples + transport errors).
+#[derive(Debug, Default, Clone, Copy)]
+pub struct HeartbeatCounters {
+    ok: u64,
+    bad: u64,
+    errors: u64,
+}
+
+impl HeartbeatCounters {
+    /// Adds what changed since the last call to `heartbeat`.
+    pub fn update(&mut self, heartbeat: &HeartbeatPublisher, s: &CanLinkStatus) {
+        let errors = s.lost_frames + s.incomplete_samples + s.stale_samples + s.transport_errors;
+        heartbeat.add_frames_ok(s.frames_ok.saturating_sub(self.ok));
+        heartbeat.add_frames_bad(s.frames_bad.saturating_sub(self.bad));
+        heartbeat.add_errors(errors.saturating_sub(self.errors));
+        *self = Self {
+            ok: s.frames_ok,
+            bad: s.frames_bad,
+            errors,
+        };
     }
 }

@@ -6,7 +6,9 @@
 
 use crate::can_gateway::POLL_PERIOD;
 use crate::can_link::BUS_BUFFER;
+use crate::software_bus::SoftwareBusTransport;
 use anyhow::Context as _;
+use ipc_types::ClockMode;
 use ipc_types::{AttitudeEstimate, SampleHeader, can_source};
 use std::fs::File;
 use std::io::BufReader;
@@ -15,11 +17,11 @@ use std::time::{Duration, Instant};
 use testbed_bus::{Flow, LoopExit, TopicSubscriber, Wake};
 use testbed_can::transport::CandumpReader;
 use testbed_can::{Decoder, Device, DeviceSet, Message, NodeClock, TimestampedFrame};
+use testbed_config::RunConfig;
 use testbed_flight::schedule::Schedule;
-use testbed_gateways::bus_transport::SoftwareBusTransport;
+use testbed_gateways::can_board;
 use testbed_gateways::gateway::run_time_ns;
-use testbed_gateways::node;
-use testbed_runtime::{ClockMode, Context, Io, Node, RunConfig, WakeOn};
+use testbed_runtime::{Context, Io, Node, WakeOn};
 
 /// The replay's ports: the software CAN bus and the estimates that release each tick.
 pub struct CanReplayPorts {
@@ -56,7 +58,7 @@ impl CanReplayProcess {
             .context("can-replay: can.candump names no file to replay")?;
         let file =
             File::open(&path).with_context(|| format!("can-replay: opening {}", path.display()))?;
-        let protocol = node::protocol(config)?;
+        let protocol = can_board::protocol(config)?;
         let lockstep = config.run.mode == ClockMode::Lockstep;
         let answered_by_estimator = lockstep
             && Self::participants(config, cx.name)

@@ -11,9 +11,8 @@ use ipc_types::{
 };
 use std::time::Duration;
 use testbed_bus::{Flow, LoopExit, SourceId, TopicPublisher, TopicSubscriber, Wake};
-use testbed_flight::controller_node::{ControlCycle, ControllerNode};
 use testbed_flight::safe_mode::SafeTransition;
-use testbed_flight::tasks::ControllerTask;
+use testbed_flight::tasks::{ControlCycle, ControllerTask};
 use testbed_runtime::{Context, Io, Node, WakeOn};
 
 /// The controller's ports: estimate and actuator telemetry in; status and commands out.
@@ -35,9 +34,9 @@ pub struct ControllerPorts {
     thruster_command: Option<TopicPublisher<ThrusterCommand>>,
 }
 
-/// The controller process: [`ControllerNode`] on the bus.
+/// The controller process: [`ControllerTask`] on the bus.
 pub struct ControllerProcess {
-    node: ControllerNode,
+    task: ControllerTask,
     /// How late an estimate may be (paced runs): the tick period plus `run.deadline_slack_s`.
     deadline: Duration,
     /// The tick period.
@@ -58,9 +57,12 @@ impl ControllerProcess {
     pub fn open(cx: &Context) -> anyhow::Result<(Self, ControllerPorts)> {
         let config = cx.config;
         let schedule = config.schedule()?;
-        let task =
-            ControllerTask::new(&config.controller, &config.model, config.manoeuvre.target())?;
-        let node = ControllerNode::new(task, &config.controller, &config.model.wheels, schedule);
+        let task = ControllerTask::new(
+            &config.controller,
+            &config.model,
+            config.manoeuvre.target(),
+            schedule,
+        )?;
         let period = Duration::from_nanos(schedule.period_ns);
         let deadline = Duration::from_secs_f64(schedule.period_s() + config.run.deadline_slack_s);
         let ports = ControllerPorts {
@@ -80,7 +82,7 @@ impl ControllerProcess {
         };
         Ok((
             Self {
-                node,
+                task,
                 deadline,
                 period,
                 estimate_source: None,
@@ -111,27 +113,27 @@ impl Node for ControllerProcess {
     }
 
     fn on_wake(&mut self, ports: &ControllerPorts, wake: Wake, io: &Io) -> anyhow::Result<Flow> {
-        let node = &mut self.node;
+        let task = &mut self.task;
         let deadline_missed =
             matches!(wake, Wake::DeadlineMissed(source) if Some(source) == self.estimate_source);
         if deadline_missed {
-            node.count_deadline_miss();
+            task.count_deadline_miss();
             tracing::warn!(
-                misses = node.deadline_misses(),
+                misses = task.deadline_misses(),
                 "control cycle missed its deadline"
             );
         }
-        let received = ports.estimate.drain(|e| node.on_estimate(e))?
-            + ports.wheels.drain(|t| node.on_wheel_telemetry(t))?
-            + ports.cmg.drain(|t| node.on_cmg_telemetry(t))?
-            + ports.gyro.drain(|g| node.on_gyro(g))?;
+        let received = ports.estimate.drain(|e| task.on_estimate(e))?
+            + ports.wheels.drain(|t| task.on_wheel_telemetry(t))?
+            + ports.cmg.drain(|t| task.on_cmg_telemetry(t))?
+            + ports.gyro.drain(|g| task.on_gyro(g))?;
         io.heartbeat.add_samples_in(received as u64);
         // Ground commands take effect from the next cycle on.
         let mut commands = Vec::new();
         ports.ground.drain_into(&mut commands)?;
         for command in commands {
-            let outcome = node.ground_command(&command);
-            let t_ns = node.last_cycle_ns().unwrap_or(0);
+            let outcome = task.ground_command(&command);
+            let t_ns = task.last_cycle_ns().unwrap_or(0);
             let (status, reason) = match &outcome {
                 Ok(what) => (GroundAckStatus::Applied, what.as_str()),
                 Err(why) => (GroundAckStatus::Rejected, why.as_str()),
@@ -160,29 +162,29 @@ impl Node for ControllerProcess {
             _ => 0,
         };
         let silence = if deadline_missed {
-            node.on_silence(self.silent_deadlines, self.run_end_ns)
+            task.on_silence(self.silent_deadlines, self.run_end_ns)
         } else {
             None
         };
         let cycles = &mut self.cycles;
         cycles.clear();
-        node.ready_into(cycles);
+        task.ready_into(cycles);
         cycles.extend(silence);
         // Telemetry the controller does not wait for wakes nothing (see
         // `telemetry_wake_from_ns`). Set before the commands go out, so that the telemetry
         // they cause finds it; then looked at once more, since telemetry sent before the
         // publisher could see a lower time did not ring.
         loop {
-            let from = node.telemetry_wake_from_ns();
+            let from = task.telemetry_wake_from_ns();
             ports.wheels.wake_from(from);
             ports.cmg.wake_from(from);
-            let late = ports.wheels.drain(|t| node.on_wheel_telemetry(t))?
-                + ports.cmg.drain(|t| node.on_cmg_telemetry(t))?;
+            let late = ports.wheels.drain(|t| task.on_wheel_telemetry(t))?
+                + ports.cmg.drain(|t| task.on_cmg_telemetry(t))?;
             if late == 0 {
                 break;
             }
             io.heartbeat.add_samples_in(late as u64);
-            node.ready_into(cycles);
+            task.ready_into(cycles);
         }
         for cycle in cycles.drain(..) {
             io.heartbeat.set_time_ns(cycle.status.header.time_ns);
@@ -197,7 +199,7 @@ impl Node for ControllerProcess {
             ports.cmg_command.publish(&cycle.cmg)?;
             io.heartbeat.add_samples_out(3);
         }
-        for (t_ns, transition) in node.take_transitions() {
+        for (t_ns, transition) in task.take_transitions() {
             match transition {
                 SafeTransition::Entered(reasons) => io.health.report(
                     t_ns,
@@ -217,9 +219,9 @@ impl Node for ControllerProcess {
 
     fn stop(&mut self, _ports: &ControllerPorts, _io: &Io, _exit: LoopExit) -> anyhow::Result<()> {
         tracing::info!(
-            deadline_misses = self.node.deadline_misses(),
-            errors = self.node.errors(),
-            safe_mode_entries = self.node.safe_mode().entries(),
+            deadline_misses = self.task.deadline_misses(),
+            errors = self.task.errors(),
+            safe_mode_entries = self.task.safe_mode().entries(),
             "controller stopping"
         );
         Ok(())

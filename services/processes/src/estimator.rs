@@ -4,7 +4,7 @@
 use ipc_types::{AttitudeEstimate, GyroSample, InclinometerSample, MagnetometerSample};
 use std::time::Duration;
 use testbed_bus::{Flow, TopicPublisher, TopicSubscriber, Wake};
-use testbed_flight::estimator_node::EstimatorNode;
+use testbed_flight::tasks::EstimatorTask;
 use testbed_runtime::{Context, Io, Node, WakeOn};
 
 /// The estimator's ports: the three sensor streams in, the estimate out.
@@ -15,9 +15,9 @@ pub struct EstimatorPorts {
     estimate: TopicPublisher<AttitudeEstimate>,
 }
 
-/// The estimator process: [`EstimatorNode`] on the bus.
+/// The estimator process: [`EstimatorTask`] on the bus.
 pub struct EstimatorProcess {
-    node: EstimatorNode,
+    task: EstimatorTask,
     /// Sample periods of the gyro, inclinometer and magnetometer (liveness of the inputs).
     periods: [Duration; 3],
     /// The estimates of one wake-up, a buffer kept for the run (a tick allocates nothing).
@@ -27,7 +27,7 @@ pub struct EstimatorProcess {
 impl EstimatorProcess {
     pub fn open(cx: &Context) -> anyhow::Result<(Self, EstimatorPorts)> {
         let schedule = cx.config.schedule()?;
-        let node = EstimatorNode::new(cx.config.estimator_config(), schedule);
+        let task = EstimatorTask::new(cx.config.estimator_setup()?, schedule);
         let tick = Duration::from_nanos(schedule.period_ns);
         let every = |ticks: u64| tick * u32::try_from(ticks).unwrap_or(u32::MAX);
         let periods = [
@@ -43,7 +43,7 @@ impl EstimatorProcess {
         };
         Ok((
             Self {
-                node,
+                task,
                 periods,
                 estimates: Vec::with_capacity(4),
             },
@@ -68,12 +68,12 @@ impl Node for EstimatorProcess {
     }
 
     fn on_wake(&mut self, ports: &EstimatorPorts, _wake: Wake, io: &Io) -> anyhow::Result<Flow> {
-        let node = &mut self.node;
-        let received = ports.gyro.drain(|s| node.on_gyro(s))?
-            + ports.tilt.drain(|s| node.on_inclinometer(s))?
-            + ports.field.drain(|s| node.on_magnetometer(s))?;
+        let task = &mut self.task;
+        let received = ports.gyro.drain(|s| task.on_gyro(s))?
+            + ports.tilt.drain(|s| task.on_inclinometer(s))?
+            + ports.field.drain(|s| task.on_magnetometer(s))?;
         io.heartbeat.add_samples_in(received as u64);
-        node.ready_into(&mut self.estimates);
+        task.ready_into(&mut self.estimates);
         for estimate in self.estimates.drain(..) {
             io.heartbeat.set_time_ns(estimate.header.time_ns);
             ports.estimate.publish(&estimate)?;
@@ -85,7 +85,7 @@ impl Node for EstimatorProcess {
     /// A tick's gyro, inclinometer and magnetometer samples wake the estimator once, not once
     /// per sensor.
     fn samples_awaited(&self) -> u32 {
-        self.node.samples_awaited()
+        self.task.samples_awaited()
     }
 
     fn stop(
@@ -94,7 +94,7 @@ impl Node for EstimatorProcess {
         _io: &Io,
         _exit: testbed_bus::LoopExit,
     ) -> anyhow::Result<()> {
-        let counters = self.node.counters();
+        let counters = self.task.counters();
         tracing::info!(?counters, "estimator stopping");
         Ok(())
     }

@@ -1,24 +1,23 @@
 //! Every process of the pipeline, each a [`testbed_runtime::Node`]: a small struct that holds
 //! the process's logic (a plain struct of the flight or simulation crates, tested without
-//! iceoryx2) and its bus ports. The binaries in `src/bin/` only name the node they run:
+//! iceoryx2) and its bus ports. [`roles::ROLES`] names each process and the node it runs; the
+//! `testbed` executable started under that name runs it:
 //!
 //! ```ignore
-//! fn main() -> anyhow::Result<()> {
-//!     testbed_runtime::run("estimator", EstimatorProcess::open)
-//! }
+//! Role::new("estimator", |name| testbed_runtime::run(name, EstimatorProcess::open))
 //! ```
 //!
 //! | process | node | logic |
 //! |---|---|---|
-//! | `plant` | [`plant::PlantProcess`] | `testbed_sim::plant_node` |
+//! | `plant` | [`plant::PlantProcess`] | `testbed_sim::plant_task::PlantTask` |
 //! | `sim-gyro`, `sim-inclinometer`, `sim-magnetometer`, `sim-wheels`, `sim-cmg` | [`sim_gateway::SimGateway`] | `testbed_sim::sim_devices` |
 //! | `sim-devices` (several of them in one process: the profile's `device` list) | [`sim_gateway::SimGateway`] | `testbed_sim::sim_devices` |
-//! | `estimator` | [`estimator::EstimatorProcess`] | `testbed_flight::estimator_node` |
-//! | `controller` | [`controller::ControllerProcess`] | `testbed_flight::controller_node` |
+//! | `estimator` | [`estimator::EstimatorProcess`] | `testbed_flight::tasks::EstimatorTask` |
+//! | `controller` | [`controller::ControllerProcess`] | `testbed_flight::tasks::ControllerTask` |
 //! | `logger` | [`logger::LoggerProcess`] | `testbed_log` |
 //! | `replay` | [`replay::ReplayProcess`] | [`replay_log`] |
 //! | `gyro-gateway`, …, `cmg-gateway` | [`can_gateway::CanGateway`] | `testbed_gateways::gateway` |
-//! | `sim-can-node` | [`can_node::CanNodeProcess`] | `testbed_gateways::node` |
+//! | `sim-can-node` (the simulated CAN board) | [`can_board::CanBoardProcess`] | `testbed_gateways::can_board` |
 //! | `can-replay` | [`can_replay::CanReplayProcess`] | `testbed_can::transport` |
 //! | `ground-link` | [`ground_link::GroundLinkProcess`] | [`ground_link::command`], [`ground_link::protocol`] |
 //!
@@ -40,9 +39,9 @@
 
 #![forbid(unsafe_code)]
 
+pub mod can_board;
 pub mod can_gateway;
 pub mod can_link;
-pub mod can_node;
 pub mod can_replay;
 pub mod controller;
 pub mod estimator;
@@ -51,4 +50,7 @@ pub mod logger;
 pub mod plant;
 pub mod replay;
 pub mod replay_log;
+pub mod roles;
+pub mod scene;
 pub mod sim_gateway;
+pub mod software_bus;

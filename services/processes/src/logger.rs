@@ -18,21 +18,22 @@
 //! receive time stamp (the run's frames and anything else on the bus).
 
 use anyhow::Context as _;
+use ipc_types::ClockMode;
 use ipc_types::*;
 use std::collections::BTreeMap;
 use std::io::BufWriter;
-use testbed_bus::{Bus, Flow, LoopExit, SubscriberOptions, TopicSubscriber, Wake};
+use testbed_bus::{AnySubscribers, Flow, LoopExit, SubscriberOptions, Wake};
 use testbed_can::transport::{CandumpWriter, SocketCanTransport};
 use testbed_can::{CanFrame, CanTransport};
-use testbed_log::{LogEncode, LogRecord, RunInfo, RunLogWriter, WriterOptions};
-use testbed_runtime::run_config::CanLink;
-use testbed_runtime::{ClockMode, Context, Io, Node, WakeOn};
+use testbed_config::CanLink;
+use testbed_log::{LogRecord, RunInfo, RunLogWriter, WriterOptions};
+use testbed_runtime::{Context, Io, Node, WakeOn};
 
 /// The longest a paced logger waits between two drains: while every topic is slow (the
 /// simulation's fastest topics are 10 Hz, its heartbeats some 20 a second in all). Paced, it
 /// wakes on an interval rather than on every sample: each wake-up costs a timer wake-up, a look
 /// at all 22 subscribers and a `write` of the log whatever it carries, and one per sample (some
-/// 150 per second, most alone) was the largest CPU cost of the paced pipeline (issue 18); at
+/// 150 per second, most alone) was the largest CPU cost of the paced pipeline; at
 /// 250 ms its wake-ups were still half of its CPU (measured: `bench/README.md`, "The paced
 /// logger drains once a second"). It is the runtime's
 /// [`QUIET_PERIOD`](testbed_runtime::process::QUIET_PERIOD) (700 ms): the logger's heartbeat
@@ -76,34 +77,9 @@ const LOGGED_BUFFER: usize = 256;
 /// depend on when it drains (see `on_wake`).
 pub const LOCKSTEP_DRAIN_PERIOD: std::time::Duration = std::time::Duration::from_millis(1);
 
-/// A subscriber whose samples go to the log, whatever their type.
-pub trait LoggedTopic {
-    fn drain(&self, sink: &mut dyn FnMut(LogRecord)) -> anyhow::Result<usize>;
-}
-
-struct Logged<T: Topic> {
-    subscriber: TopicSubscriber<T>,
-}
-
-impl<T: Topic + LogEncode> LoggedTopic for Logged<T> {
-    fn drain(&self, sink: &mut dyn FnMut(LogRecord)) -> anyhow::Result<usize> {
-        Ok(self.subscriber.drain(|s| sink(s.into_record()))?)
-    }
-}
-
-/// A logged topic, drained on [`LOCKSTEP_DRAIN_PERIOD`] or [`paced_drain_period`] and never
-/// woken for: it rings no doorbell, so a publish to the logger costs its publisher no system
-/// call.
-fn logged<T: Topic + LogEncode + 'static>(bus: &Bus) -> anyhow::Result<Box<dyn LoggedTopic>> {
-    // Deep buffers absorb bursts; in lockstep, publishers wait rather than drop when full.
-    Ok(Box::new(Logged {
-        subscriber: bus.subscriber_with::<T>(SubscriberOptions::buffer(LOGGED_BUFFER).polled())?,
-    }))
-}
-
 /// The logger's ports: one subscriber per logged topic.
 pub struct LoggerPorts {
-    topics: Vec<Box<dyn LoggedTopic>>,
+    topics: AnySubscribers<LogRecord>,
     /// The paced drain interval's period ([`paced_drain_period`]; [`BUSY_DRAIN_PERIOD`] until the
     /// first drain).
     drain_period: std::cell::Cell<std::time::Duration>,
@@ -121,38 +97,24 @@ pub struct LoggerProcess {
     interface: Option<InterfaceRecording>,
     /// When the last paced drain was (the rate of the fastest topic since then sets the next).
     last_drain: Option<std::time::Instant>,
+    /// The latest run-clock time of the samples logged (heartbeats aside): the time the
+    /// logger's heartbeat reports.
+    latest_ns: u64,
 }
 
 impl LoggerProcess {
     pub fn open(cx: &Context) -> anyhow::Result<(Self, LoggerPorts)> {
         let (config, bus) = (cx.config, cx.bus);
         let lockstep = config.run.mode == ClockMode::Lockstep;
-        let mut topics: Vec<Box<dyn LoggedTopic>> = vec![
-            logged::<SimClockTick>(bus)?,
-            logged::<SimTruth>(bus)?,
-            logged::<GyroSample>(bus)?,
-            logged::<InclinometerSample>(bus)?,
-            logged::<MagnetometerSample>(bus)?,
-            logged::<WheelTelemetry>(bus)?,
-            logged::<CmgTelemetry>(bus)?,
-            logged::<AttitudeEstimate>(bus)?,
-            logged::<ControllerStatus>(bus)?,
-            logged::<WheelCommand>(bus)?,
-            logged::<CmgCommand>(bus)?,
-            logged::<CanBusFrame>(bus)?,
-            logged::<CanLinkStatus>(bus)?,
-            logged::<AppliedWheelCommand>(bus)?,
-            logged::<AppliedCmgCommand>(bus)?,
-            logged::<HealthEvent>(bus)?,
-            logged::<GroundCommand>(bus)?,
-            logged::<GroundCommandAck>(bus)?,
-            logged::<ThrusterCommand>(bus)?,
-            logged::<ThrusterStatus>(bus)?,
-            logged::<AppliedThrusterCommand>(bus)?,
-        ];
-        if !lockstep {
-            topics.push(logged::<Heartbeat>(bus)?);
-        }
+        // Every topic of the table, but heartbeats in lockstep: they carry pids and wall
+        // times, and a lockstep log is reproducible. Deep buffers absorb bursts (in lockstep,
+        // publishers wait rather than drop when full); drained on `LOCKSTEP_DRAIN_PERIOD` or
+        // `paced_drain_period` and never woken for, a subscriber rings no doorbell, so a
+        // publish to the logger costs its publisher no system call.
+        let topics = bus
+            .subscribe_each(SubscriberOptions::buffer(LOGGED_BUFFER).polled(), |topic| {
+                !(lockstep && topic == TopicId::Heartbeat)
+            })?;
         let info = RunInfo {
             profile: config.run.profile.clone(),
             seed: config.run.seed,
@@ -180,8 +142,9 @@ impl LoggerProcess {
         } else {
             WriterOptions::default()
         };
-        let writer = RunLogWriter::create_with(&path, &info, options)
+        let mut writer = RunLogWriter::create_with(&path, &info, options)
             .with_context(|| format!("creating the log {}", path.display()))?;
+        writer.set_scene(crate::scene::platform_scene(&config.model, "body"));
         let candump_path = path.with_extension("candump.log");
         let (candump, interface) = match (config.can.record_candump, config.can.link) {
             (true, CanLink::Socketcan) => (
@@ -206,6 +169,7 @@ impl LoggerProcess {
                 previous_tick_ns: None,
                 interface,
                 last_drain: None,
+                latest_ns: 0,
             },
             LoggerPorts {
                 topics,
@@ -225,10 +189,17 @@ impl LoggerProcess {
         let mut newest_tick = None;
         let mut failure = None;
         let mut most = 0;
+        let latest_ns = &mut self.latest_ns;
         for topic in &ports.topics {
-            let taken = topic.drain(&mut |record| {
+            let taken = topic.drain_as(&mut |record| {
                 if let LogRecord::SimClock(tick) = &record {
                     newest_tick = Some(tick.header.time_ns);
+                }
+                // Other processes' heartbeats carry their own times; the logger's own
+                // heartbeat is stamped with the newest sample it logged, so it sits among the
+                // records of its time in the log rather than at the run's start.
+                if !matches!(record, LogRecord::Heartbeat(_)) {
+                    *latest_ns = (*latest_ns).max(record.header().time_ns);
                 }
                 io.heartbeat.add_samples_in(1);
                 if let (LogRecord::CanBus(frame), Some(candump)) = (&record, candump.as_mut()) {
@@ -240,6 +211,7 @@ impl LoggerProcess {
             })?;
             most = most.max(taken);
         }
+        io.heartbeat.set_time_ns(self.latest_ns);
         failure.map_or(Ok((newest_tick, most)), |e| Err(e.into()))
     }
 }
@@ -348,6 +320,17 @@ pub fn segment_path(log: &std::path::Path, restarts: u32) -> std::path::PathBuf 
     log.with_file_name(format!("{stem}.segment-{restarts}{ext}"))
 }
 
+/// A new `candump -L` file at `path` of the frames of `iface`.
+fn candump_file(
+    path: &std::path::Path,
+    iface: &str,
+) -> anyhow::Result<CandumpWriter<BufWriter<std::fs::File>>> {
+    let file =
+        std::fs::File::create(path).with_context(|| format!("creating {}", path.display()))?;
+    CandumpWriter::new(BufWriter::new(file), iface)
+        .with_context(|| format!("can.interface for {}", path.display()))
+}
+
 /// The software CAN bus written as a `candump -L` file.
 struct BusRecording {
     path: std::path::PathBuf,
@@ -360,13 +343,9 @@ struct BusRecording {
 
 impl BusRecording {
     fn create(path: &std::path::Path, iface: &str) -> anyhow::Result<Self> {
-        let file =
-            std::fs::File::create(path).with_context(|| format!("creating {}", path.display()))?;
-        let writer = CandumpWriter::new(BufWriter::new(file), iface)
-            .with_context(|| format!("can.interface for {}", path.display()))?;
         Ok(Self {
             path: path.to_path_buf(),
-            writer,
+            writer: candump_file(path, iface)?,
             pending: BTreeMap::new(),
             written: 0,
             corrupted: 0,
@@ -433,14 +412,10 @@ impl InterfaceRecording {
             .set_receive_buffer(RECORDING_QUEUE_BYTES)
             .with_context(|| format!("recording can.interface = {iface:?}"))?;
         tracing::debug!(granted, "receive queue of the {iface} recording");
-        let file =
-            std::fs::File::create(path).with_context(|| format!("creating {}", path.display()))?;
-        let writer = CandumpWriter::new(BufWriter::new(file), iface)
-            .with_context(|| format!("can.interface for {}", path.display()))?;
         Ok(Self {
             path: path.to_path_buf(),
             socket,
-            writer,
+            writer: candump_file(path, iface)?,
             written: 0,
             receive_errors: 0,
         })

@@ -5,7 +5,7 @@
 //! stops when the run's duration is reached; the launcher then stops the rest.
 //!
 //! The commands it integrates are the controller's (`run.actuation = "direct"`), or, with
-//! `run.actuation = "can_node"`, the ones the smart CAN node applies after the wheel and CMG
+//! `run.actuation = "can_node"`, the ones the CAN board applies after the wheel and CMG
 //! gateways and the CAN bus (`AppliedWheelCommand`, `AppliedCmgCommand`, same time stamps).
 //!
 //! With thrusters (`[model.thrusters]` and `[controller.thrusters]`) and direct actuation the
@@ -15,9 +15,10 @@
 //! stuck-open valve shuts the latch valve and is reported as
 //! [`HealthEventKind::ThrustersDisabled`]), and a [`ThrusterStatus`] goes out every tick. With
 //! `run.actuation = "can_node"` the thruster gateway does the checking, the sensing and the
-//! status over the bus, and the plant takes the node's [`AppliedThrusterCommand`] (its latch
+//! status over the bus, and the plant takes the board's [`AppliedThrusterCommand`] (its latch
 //! flag shuts the latch valve).
 
+use ipc_types::ClockMode;
 use ipc_types::{
     AppliedCmgCommand, AppliedThrusterCommand, AppliedWheelCommand, CmgCommand, HealthEventKind,
     SampleHeader, SimClockTick, SimTruth, ThrusterCommand, ThrusterStatus, WheelCommand,
@@ -26,12 +27,13 @@ use std::time::{Duration, Instant};
 use testbed_bus::{
     Flow, LoopExit, SourceId, SubscriberOptions, TopicPublisher, TopicSubscriber, Wake,
 };
+use testbed_config::Actuation;
+use testbed_config::RunConfig;
 use testbed_flight::convert::Sequence;
 use testbed_gateways::thrusters::ThrusterGuard;
 use testbed_model::thruster_config::THRUSTER_COUNT;
-use testbed_runtime::run_config::Actuation;
-use testbed_runtime::{ClockMode, Context, Io, Node, RunConfig, WakeOn};
-use testbed_sim::plant_node::PlantNode;
+use testbed_runtime::{Context, Io, Node, WakeOn};
+use testbed_sim::plant_task::PlantTask;
 
 /// Buffer of the command subscribers: commands of the current tick wait there while the plant
 /// integrates.
@@ -44,7 +46,7 @@ pub enum CommandPorts {
         wheels: TopicSubscriber<WheelCommand>,
         cmg: TopicSubscriber<CmgCommand>,
     },
-    /// What the smart CAN node applies (`run.actuation = "can_node"`).
+    /// What the CAN board applies (`run.actuation = "can_node"`).
     Applied {
         wheels: TopicSubscriber<AppliedWheelCommand>,
         cmg: TopicSubscriber<AppliedCmgCommand>,
@@ -60,7 +62,7 @@ pub enum ThrusterPorts {
         commands: TopicSubscriber<ThrusterCommand>,
         status: TopicPublisher<ThrusterStatus>,
     },
-    /// CAN actuation: what the node applies (the thruster gateway checked it and publishes the
+    /// CAN actuation: what the board applies (the thruster gateway checked it and publishes the
     /// status).
     Applied {
         applied: TopicSubscriber<AppliedThrusterCommand>,
@@ -93,10 +95,10 @@ impl ThrusterDrive {
     }
 
     /// A command from the bus: checked, and what passes (all valves shut if refused) goes to
-    /// the plant. Only the current tick's command counts (as in the node): a stale one would
+    /// the plant. Only the current tick's command counts (as on the CAN board): a stale one would
     /// otherwise be checked, and counted if refused, twice.
-    fn on_command(&mut self, c: &ThrusterCommand, node: &mut PlantNode) {
-        if c.header.time_ns != node.time_ns() {
+    fn on_command(&mut self, c: &ThrusterCommand, plant: &mut PlantTask) {
+        if c.header.time_ns != plant.time_ns() {
             return;
         }
         let (on_time, refusal) = self.guard.check(c);
@@ -107,32 +109,32 @@ impl ThrusterDrive {
             );
         }
         self.applied = on_time;
-        node.on_thruster_command(&ThrusterCommand { on_time, ..*c });
+        plant.on_thruster_command(&ThrusterCommand { on_time, ..*c });
     }
 
     /// After the plant's step: senses the valves (a valve newly found stuck open shuts the
     /// latch valve and is returned) and gives the period's status.
-    fn end_of_period(&mut self, node: &mut PlantNode) -> (ThrusterStatus, Option<usize>) {
-        let valves_open = node.valves_open();
+    fn end_of_period(&mut self, plant: &mut PlantTask) -> (ThrusterStatus, Option<usize>) {
+        let valves_open = plant.valves_open();
         let stuck = self.guard.on_valves_sensed(valves_open);
         if stuck.is_some() {
-            node.shut_thruster_latch();
+            plant.shut_thruster_latch();
         }
         let status = ThrusterStatus {
-            header: self.status_seq.header(node.time_ns(), SampleHeader::VALID),
+            header: self.status_seq.header(plant.time_ns(), SampleHeader::VALID),
             applied_on_time: std::mem::take(&mut self.applied),
             valves_open,
-            disabled: u32::from(node.thruster_latch_shut()),
+            disabled: u32::from(plant.thruster_latch_shut()),
             refused: self.guard.refused().total(),
-            propellant_used: node.propellant_used_kg(),
+            propellant_used: plant.propellant_used_kg(),
         };
         (status, stuck)
     }
 }
 
-/// The plant process: [`PlantNode`] as the clock owner of the run.
+/// The plant process: [`PlantTask`] as the clock owner of the run.
 pub struct PlantProcess {
-    node: PlantNode,
+    plant: PlantTask,
     period: Duration,
     /// The pacing interval (paced runs).
     pace: Option<SourceId>,
@@ -150,7 +152,7 @@ impl PlantProcess {
             restarts == 0,
             "the plant owns the run's clock and cannot restart mid-run (restart {restarts}): time would start again at 0"
         );
-        let node = PlantNode::new(cx.config)?;
+        let plant = PlantTask::new(cx.config)?;
         let period = Duration::from_secs_f64(cx.config.schedule()?.period_s());
         let bus = cx.bus;
         let truth = bus.publisher()?;
@@ -192,7 +194,7 @@ impl PlantProcess {
                 },
             };
         let process = Self {
-            node,
+            plant,
             period,
             pace: None,
             started: Instant::now(),
@@ -211,7 +213,7 @@ impl PlantProcess {
     }
 
     fn publish(&mut self, ports: &PlantPorts) -> anyhow::Result<()> {
-        let (truth, clock) = self.node.outputs();
+        let (truth, clock) = self.plant.outputs();
         ports.truth.publish(&truth)?;
         ports.clock.publish(&clock)?;
         Ok(())
@@ -265,27 +267,27 @@ impl Node for PlantProcess {
     }
 
     fn on_wake(&mut self, ports: &PlantPorts, wake: Wake, io: &Io) -> anyhow::Result<Flow> {
-        let node = &mut self.node;
+        let plant = &mut self.plant;
         match &ports.commands {
             CommandPorts::Direct { wheels, cmg } => {
-                wheels.drain(|c| node.on_wheel_command(c))?;
-                cmg.drain(|c| node.on_cmg_command(c))?;
+                wheels.drain(|c| plant.on_wheel_command(c))?;
+                cmg.drain(|c| plant.on_cmg_command(c))?;
             }
             CommandPorts::Applied { wheels, cmg } => {
-                wheels.drain(|c| node.on_wheel_command(&WheelCommand::new(c.header, c.torque)))?;
-                cmg.drain(|c| node.on_cmg_command(&CmgCommand::new(c.header, c.gimbal_rate)))?;
+                wheels.drain(|c| plant.on_wheel_command(&WheelCommand::new(c.header, c.torque)))?;
+                cmg.drain(|c| plant.on_cmg_command(&CmgCommand::new(c.header, c.gimbal_rate)))?;
             }
         }
         match (&ports.thrusters, &mut self.thrusters) {
             (Some(ThrusterPorts::Direct { commands, .. }), Some(drive)) => {
-                commands.drain(|c| drive.on_command(c, node))?;
+                commands.drain(|c| drive.on_command(c, plant))?;
             }
             (Some(ThrusterPorts::Applied { applied }), _) => {
                 applied.drain(|c| {
                     if c.latch_shut != 0 {
-                        node.shut_thruster_latch();
+                        plant.shut_thruster_latch();
                     }
-                    node.on_thruster_command(&ThrusterCommand {
+                    plant.on_thruster_command(&ThrusterCommand {
                         header: c.header,
                         on_time: c.on_time,
                     });
@@ -294,18 +296,18 @@ impl Node for PlantProcess {
             _ => {}
         }
         let advance_now = match self.pace {
-            None => node.answered(),
+            None => plant.answered(),
             Some(pace) => wake == Wake::Tick(pace),
         };
         if !advance_now {
             return Ok(Flow::Continue);
         }
-        if node.at_end() {
+        if plant.at_end() {
             return Ok(Flow::Stop);
         }
-        let was_zeroed = node.commands_zeroed();
-        node.advance()?;
-        let t_ns = self.node.time_ns();
+        let was_zeroed = plant.commands_zeroed();
+        plant.advance()?;
+        let t_ns = self.plant.time_ns();
         if let (
             Some(ThrusterPorts::Direct {
                 status: publisher, ..
@@ -313,7 +315,7 @@ impl Node for PlantProcess {
             Some(drive),
         ) = (&ports.thrusters, &mut self.thrusters)
         {
-            let (status, stuck) = drive.end_of_period(&mut self.node);
+            let (status, stuck) = drive.end_of_period(&mut self.plant);
             if let Some(stuck) = stuck {
                 tracing::error!(
                     "thruster {stuck}: valve stuck open; latch valve shut, thrusters disabled"
@@ -328,7 +330,7 @@ impl Node for PlantProcess {
             }
             publisher.publish(&status)?;
         }
-        match (was_zeroed, self.node.commands_zeroed()) {
+        match (was_zeroed, self.plant.commands_zeroed()) {
             (false, true) => {
                 tracing::warn!(
                     "no wheel and CMG commands for run.command_timeout_s: applying zero torque and gimbal rate"
@@ -351,20 +353,20 @@ impl Node for PlantProcess {
             _ => {}
         }
         self.publish(ports)?;
-        io.heartbeat.set_time_ns(self.node.time_ns());
+        io.heartbeat.set_time_ns(self.plant.time_ns());
         Ok(Flow::Continue)
     }
 
     fn stop(&mut self, _ports: &PlantPorts, _io: &Io, exit: LoopExit) -> anyhow::Result<()> {
         let wall = self.started.elapsed().as_secs_f64();
-        let simulated = self.node.time_ns() as f64 * 1e-9;
+        let simulated = self.plant.time_ns() as f64 * 1e-9;
         tracing::info!(
             ?exit,
             simulated_s = simulated,
             wall_s = wall,
             x_real_time = simulated / wall.max(1e-9),
-            deadline_misses = self.node.deadline_misses(),
-            ticks_with_commands_zeroed = self.node.zeroed_ticks(),
+            deadline_misses = self.plant.deadline_misses(),
+            ticks_with_commands_zeroed = self.plant.zeroed_ticks(),
             "plant done"
         );
         Ok(())
@@ -387,9 +389,9 @@ mod tests {
         config
     }
 
-    fn command(node: &PlantNode, on_time: [f64; THRUSTER_COUNT]) -> ThrusterCommand {
+    fn command(plant: &PlantTask, on_time: [f64; THRUSTER_COUNT]) -> ThrusterCommand {
         ThrusterCommand {
-            header: SampleHeader::new(node.time_ns(), node.tick(), SampleHeader::VALID),
+            header: SampleHeader::new(plant.time_ns(), plant.tick(), SampleHeader::VALID),
             on_time,
         }
     }
@@ -404,7 +406,7 @@ mod tests {
     #[test]
     fn bad_commands_are_refused_counted_and_shut_every_valve() {
         let config = config(None);
-        let mut node = PlantNode::new(&config).unwrap();
+        let mut plant = PlantTask::new(&config).unwrap();
         let mut drive = drive_for(&config);
         let bad = [
             [f64::NAN, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -413,14 +415,14 @@ mod tests {
             [0.0, 0.0, 0.0, 0.01, 0.0, 0.0], // shorter than the 20 ms minimum
         ];
         for (k, on_time) in bad.into_iter().enumerate() {
-            let c = command(&node, on_time);
-            drive.on_command(&c, &mut node);
+            let c = command(&plant, on_time);
+            drive.on_command(&c, &mut plant);
             assert!(
-                !node.answered(),
+                !plant.answered(),
                 "no wheel/CMG command, so not answered yet"
             );
-            node.advance().unwrap();
-            let (status, stuck) = drive.end_of_period(&mut node);
+            plant.advance().unwrap();
+            let (status, stuck) = drive.end_of_period(&mut plant);
             assert_eq!(stuck, None);
             assert_eq!(status.applied_on_time, [0.0; THRUSTER_COUNT], "{on_time:?}");
             assert_eq!(status.valves_open, 0);
@@ -428,19 +430,19 @@ mod tests {
             assert_eq!(status.propellant_used, 0.0, "no valve opened");
         }
         // A good command passes and uses propellant.
-        let c = command(&node, [0.05, 0.0, 0.0, 0.0, 0.0, 0.0]);
-        drive.on_command(&c, &mut node);
-        node.advance().unwrap();
-        let (status, _) = drive.end_of_period(&mut node);
+        let c = command(&plant, [0.05, 0.0, 0.0, 0.0, 0.0, 0.0]);
+        drive.on_command(&c, &mut plant);
+        plant.advance().unwrap();
+        let (status, _) = drive.end_of_period(&mut plant);
         assert_eq!(status.applied_on_time[0], 0.05);
         assert_eq!(status.refused, 4);
         assert!(status.propellant_used > 0.0);
         // A command for another tick is ignored, not counted.
-        let mut stale = command(&node, [f64::NAN; THRUSTER_COUNT]);
+        let mut stale = command(&plant, [f64::NAN; THRUSTER_COUNT]);
         stale.header.time_ns += 1;
-        drive.on_command(&stale, &mut node);
-        node.advance().unwrap();
-        assert_eq!(drive.end_of_period(&mut node).0.refused, 4);
+        drive.on_command(&stale, &mut plant);
+        plant.advance().unwrap();
+        assert_eq!(drive.end_of_period(&mut plant).0.refused, 4);
     }
 
     #[test]
@@ -451,28 +453,28 @@ mod tests {
             thruster: 2,
             from_s: 0.25,
         }));
-        let mut node = PlantNode::new(&config).unwrap();
+        let mut plant = PlantTask::new(&config).unwrap();
         let mut drive = drive_for(&config);
         let mut disabled_at = None;
         for _ in 0..10 {
-            let c = command(&node, [0.0; THRUSTER_COUNT]);
-            drive.on_command(&c, &mut node);
-            node.advance().unwrap();
-            let (status, stuck) = drive.end_of_period(&mut node);
+            let c = command(&plant, [0.0; THRUSTER_COUNT]);
+            drive.on_command(&c, &mut plant);
+            plant.advance().unwrap();
+            let (status, stuck) = drive.end_of_period(&mut plant);
             if let Some(thruster) = stuck {
                 assert_eq!(thruster, 2);
                 assert!(disabled_at.is_none(), "reported once");
-                disabled_at = Some(node.time_ns());
+                disabled_at = Some(plant.time_ns());
                 assert_eq!(status.disabled, 1);
             }
         }
         assert_eq!(disabled_at, Some(500_000_000));
-        assert!(node.thruster_latch_shut());
+        assert!(plant.thruster_latch_shut());
         // From then on every command that opens a valve is refused.
-        let c = command(&node, [0.05, 0.0, 0.0, 0.0, 0.0, 0.0]);
-        drive.on_command(&c, &mut node);
-        node.advance().unwrap();
-        let (status, _) = drive.end_of_period(&mut node);
+        let c = command(&plant, [0.05, 0.0, 0.0, 0.0, 0.0, 0.0]);
+        drive.on_command(&c, &mut plant);
+        plant.advance().unwrap();
+        let (status, _) = drive.end_of_period(&mut plant);
         assert_eq!(status.applied_on_time, [0.0; THRUSTER_COUNT]);
         assert_eq!(status.refused, 1);
     }

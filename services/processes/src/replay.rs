@@ -7,7 +7,8 @@ use crate::replay_log::{self, ReplayTick};
 use anyhow::Context as _;
 use ipc_types::*;
 use testbed_bus::{Flow, LoopExit, SubscriberOptions, TopicPublisher, TopicSubscriber, Wake};
-use testbed_runtime::{Context, Io, Node, RunConfig, WakeOn};
+use testbed_config::RunConfig;
+use testbed_runtime::{Context, Io, Node, WakeOn};
 
 /// The replay's ports: everything the plant and the gateways would publish, and the commands.
 pub struct ReplayPorts {

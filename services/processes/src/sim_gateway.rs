@@ -17,8 +17,9 @@
 
 use ipc_types::{CmgCommand, Device, SimTruth, Topic, WheelCommand};
 use testbed_bus::{Bus, BusError, Flow, TopicPublisher, TopicSubscriber, Wake};
+use testbed_config::RunConfig;
 use testbed_flight::schedule::Schedule;
-use testbed_runtime::{Context, Io, Node, RunConfig, WakeOn};
+use testbed_runtime::{Context, Io, Node, WakeOn};
 use testbed_sim::sim_devices::{SimCmg, SimGyro, SimInclinometer, SimMagnetometer, SimWheels};
 
 /// A device model behind a simulated gateway.

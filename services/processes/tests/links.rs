@@ -2,22 +2,22 @@
 //! for a directly wired sensor, a candump file, and SocketCAN (or a clear skip where the kernel
 //! has none).
 
+use ipc_types::ClockMode;
 use ipc_types::{SampleHeader, can_source};
 use std::io::Write;
 use std::time::{Duration, Instant};
 use testbed_bus::{Bus, BusConfig, Delivery, remove_all};
 use testbed_can::transport::{SerialTransport, SocketCanSupport, probe_socketcan};
 use testbed_can::{CanFrame, CanTransport, DeviceStatus, Encoder, GyroMsg, Message, Sample};
-use testbed_gateways::SoftwareBusTransport;
-use testbed_gateways::gateway::{Gateway, node_stamp_us};
-use testbed_gateways::node;
+use testbed_config::{CanLink, RunConfig, SerialLinkConfig};
+use testbed_gateways::can_board;
+use testbed_gateways::gateway::{Gateway, board_stamp_us};
 use testbed_processes::can_link::Link;
-use testbed_runtime::ClockMode;
-use testbed_runtime::run_config::{CanLink, RunConfig, SerialLinkConfig};
+use testbed_processes::software_bus::SoftwareBusTransport;
 
 fn gyro_frames(encoder: &mut Encoder, k: u64) -> Vec<CanFrame> {
     let m = Message::Gyro(GyroMsg {
-        node_time_us: node_stamp_us(k * 100_000_000),
+        node_time_us: board_stamp_us(k * 100_000_000),
         status: DeviceStatus::default(),
         rate_rad_s: [1e-3 * k as f64, 0.0, -1e-3],
     });
@@ -34,7 +34,7 @@ fn paced_config() -> RunConfig {
 fn gyro_samples(link: &mut Link, config: &RunConfig, n: usize) -> Vec<Sample> {
     let mut gateway = Gateway::new(
         ipc_types::Device::Gyro,
-        node::protocol(config).unwrap(),
+        can_board::protocol(config).unwrap(),
         config.schedule().unwrap(),
         false,
     );
@@ -55,15 +55,15 @@ fn the_software_bus_skips_own_frames_and_drops_corrupted_ones() {
     let bus_config = BusConfig::isolated().with_delivery(Delivery::Lossless);
     {
         let bus = Bus::open("links-test", &bus_config).unwrap();
-        let node =
+        let board =
             SoftwareBusTransport::open(&bus, can_source::NODE, SampleHeader::VALID, 32).unwrap();
         let gateway =
             SoftwareBusTransport::open(&bus, can_source::GYRO, SampleHeader::VALID, 32).unwrap();
         let frame = CanFrame::standard(0x120, &[1, 2, 3, 4, 5, 6, 7, 8]).unwrap();
-        node.set_time_ns(300_000_000);
-        node.send_frame(&frame).unwrap();
-        node.send_corrupted(&frame, 77).unwrap();
-        node.send_frame(&frame).unwrap();
+        board.set_time_ns(300_000_000);
+        board.send_frame(&frame).unwrap();
+        board.send_corrupted(&frame, 77).unwrap();
+        board.send_frame(&frame).unwrap();
         let mut rx = &gateway;
         let got = rx.recv(Duration::from_secs(2)).unwrap().unwrap();
         assert_eq!((got.frame, got.time_ns), (frame, 300_000_000));
@@ -75,8 +75,8 @@ fn the_software_bus_skips_own_frames_and_drops_corrupted_ones() {
         let s = gateway.stats();
         assert_eq!((s.received, s.check_errors), (2, 1));
         // The sender does not hear itself.
-        assert!(node.poll().unwrap().is_none());
-        assert_eq!(node.stats().own, 3);
+        assert!(board.poll().unwrap().is_none());
+        assert_eq!(board.stats().own, 3);
     }
     remove_all(&bus_config).unwrap();
 }
@@ -101,7 +101,7 @@ fn a_directly_wired_sensor_on_a_serial_line() {
         let mut link = Link::open(&bus, &config, ipc_types::Device::Gyro).unwrap();
         assert!(matches!(link, Link::Serial(_)));
         let mut device = SerialTransport::from_port(Box::new(master), "sensor");
-        let mut encoder = Encoder::new(node::protocol(&config).unwrap());
+        let mut encoder = Encoder::new(can_board::protocol(&config).unwrap());
         for k in 1..=5 {
             for f in gyro_frames(&mut encoder, k) {
                 device.send(&f).unwrap();

@@ -173,7 +173,7 @@ impl BusConfig {
     /// Reads [`ENV_PREFIX`], [`ENV_ROOT`] and [`ENV_DELIVERY`], each defaulting to
     /// [`DEFAULT_PREFIX`], [`DEFAULT_ROOT`] and [`Delivery::Overflow`] when unset or empty. The
     /// result is validated (see [`validate`](Self::validate)), and so is
-    /// [`ENV_WAIT`](crate::ENV_WAIT) if set (the event loops read it).
+    /// [`ENV_WAIT`](ipc_types::ENV_WAIT) if set (the event loops read it).
     pub fn from_env() -> Result<Self, BusError> {
         Self::from_lookup(|key| std::env::var(key).ok())
     }
@@ -190,7 +190,7 @@ impl BusConfig {
         }
         // Read by every `EventLoop::new` of the process; refused here, with its name, so that
         // a process with an invalid value does not start.
-        crate::WaitStrategy::from_lookup(&lookup)?;
+        <ipc_types::WaitStrategy as crate::WaitFromEnv>::from_lookup(&lookup)?;
         config.validate()?;
         Ok(config)
     }
@@ -283,7 +283,7 @@ impl BusConfig {
         // A subscriber keeps the connections of publishers that left with samples unread, so
         // that it can still take them; each receive visits every slot, kept and active. iceoryx2
         // keeps 128 by default, whose visits were 46 % of the estimator's and 29 % of the
-        // controller's instructions a tick (bench/README.md, session 28).
+        // controller's instructions a tick (bench/README.md).
         // No topic has more publishers than `max_publishers`, so that many departed ones fit:
         // a run's end, when every process leaves with its last health events unread by the
         // logger, loses none.

@@ -11,7 +11,8 @@ use ipc_types::Topic;
 use crate::doorbell::{Bell, LocalBell, Woken};
 use crate::ports::SubscriberPort;
 use crate::wait::Arrivals;
-use crate::{BusError, HeartbeatPublisher, TopicSubscriber, WaitStats, WaitStrategy};
+use crate::{BusError, HeartbeatPublisher, TopicSubscriber, WaitFromEnv, WaitStats};
+use ipc_types::WaitStrategy;
 
 /// What an [`EventLoop`] without subscribers sleeps on (a process-private futex word that
 /// nothing rings: a sleep that a signal interrupts). A loop with subscribers sleeps on the
@@ -196,7 +197,7 @@ impl<'a> Attachment<'a> {
 /// order; it sleeps only when a round found nothing, and only while the doorbell still has the
 /// count it read (so a sample published during the round is never slept through). The other
 /// strategies poll the subscribers in short windows (see [`WaitStrategy`]); the process's
-/// [`ENV_WAIT`](crate::ENV_WAIT) chooses the strategy of [`EventLoop::new`].
+/// [`ENV_WAIT`](ipc_types::ENV_WAIT) chooses the strategy of [`EventLoop::new`].
 pub struct EventLoop<'w, 'a> {
     waiter: &'w Waiter,
     /// The doorbell of the subscribers' bus (all must come from one bus).
@@ -215,7 +216,7 @@ pub struct EventLoop<'w, 'a> {
 }
 
 impl<'w, 'a> EventLoop<'w, 'a> {
-    /// An empty loop on `waiter`, waiting as [`ENV_WAIT`](crate::ENV_WAIT) says
+    /// An empty loop on `waiter`, waiting as [`ENV_WAIT`](ipc_types::ENV_WAIT) says
     /// ([`WaitStrategy::Block`] when unset; an invalid value is logged and ignored —
     /// [`BusConfig::from_env`](crate::BusConfig::from_env) refuses it with its name).
     pub fn new(waiter: &'w Waiter) -> Self {

@@ -59,8 +59,8 @@
 //!   be woken only from a time stamp on ([`TopicSubscriber::wake_from`]).
 //! - [`EventLoop`]: waits on the process's doorbell with its subscribers, intervals and
 //!   deadlines; returns [`LoopExit::TerminationRequested`] on SIGINT/SIGTERM. How it waits is its
-//!   [`WaitStrategy`]: sleep until rung (default), or also poll the subscribers in short windows
-//!   where a sample is expected (`TESTBED_BUS_WAIT`, [`ENV_WAIT`]).
+//!   [`ipc_types::WaitStrategy`]: sleep until rung (default), or also poll the subscribers in
+//!   short windows where a sample is expected ([`ipc_types::ENV_WAIT`], [`WaitFromEnv`]).
 //! - [`HeartbeatPublisher`]: the periodic [`ipc_types::Heartbeat`] of a process. An event loop
 //!   sends it with the first wake-up from [`HEARTBEAT_EARLY`] of a period before it is due,
 //!   and wakes for it alone only [`HEARTBEAT_SLACK`] of a period after; the next is due a
@@ -81,6 +81,7 @@
 //! between the loop's termination check and its sleep is seen at the next wake-up, at most
 //! [`MAX_SLEEP`] later (the launcher follows up with SIGTERM).
 
+mod any_topic;
 mod cleanup;
 mod config;
 mod doorbell;
@@ -96,6 +97,7 @@ use std::time::Duration;
 use iceoryx2::prelude::*;
 use ipc_types::Topic;
 
+pub use any_topic::{AnySubscriber, AnySubscribers};
 pub use cleanup::{CleanupReport, cleanup_dead_nodes, remove_all};
 pub use config::{
     BusConfig, DEFAULT_PREFIX, DEFAULT_ROOT, Delivery, ENV_DELIVERY, ENV_PREFIX, ENV_ROOT,
@@ -108,7 +110,7 @@ pub use event_loop::{
 pub use heartbeat::HeartbeatPublisher;
 pub use ports::{SubscriberOptions, TopicPublisher, TopicSubscriber};
 pub use private::{CollectReport, PrivateRun, collect_dead_runs};
-pub use wait::{ENV_WAIT, WaitStats, WaitStrategy};
+pub use wait::{WaitFromEnv, WaitStats};
 
 /// Boxed iceoryx2 error.
 pub type Source = Box<dyn StdError + Send + Sync + 'static>;

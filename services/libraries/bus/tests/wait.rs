@@ -8,9 +8,9 @@ use std::sync::mpsc;
 use std::thread;
 use std::time::{Duration, Instant};
 
-use ipc_types::{GyroSample, InclinometerSample, SampleHeader};
+use ipc_types::{GyroSample, InclinometerSample, SampleHeader, WaitStrategy};
 use testbed_bus::{
-    Bus, BusConfig, BusError, Delivery, EventLoop, Flow, LoopExit, TopicPublisher, WaitStrategy,
+    Bus, BusConfig, BusError, Delivery, EventLoop, Flow, LoopExit, TopicPublisher, WaitFromEnv,
     Waiter, Wake, remove_all,
 };
 
@@ -213,7 +213,7 @@ fn a_callback_stops_a_polling_loop() {
 #[test]
 fn the_environment_chooses_the_strategy_and_bad_values_are_refused_by_name() {
     let lookup = |value: &'static str| {
-        move |key: &str| (key == testbed_bus::ENV_WAIT).then(|| value.to_owned())
+        move |key: &str| (key == ipc_types::ENV_WAIT).then(|| value.to_owned())
     };
     let config = BusConfig::from_lookup(lookup("anticipate:100,200")).expect("valid");
     assert_eq!(config.delivery, Delivery::Overflow);
@@ -227,7 +227,7 @@ fn the_environment_chooses_the_strategy_and_bad_values_are_refused_by_name() {
     let err = BusConfig::from_lookup(lookup("fast")).expect_err("invalid");
     let msg = err.to_string();
     assert!(
-        msg.contains(testbed_bus::ENV_WAIT) && msg.contains("fast"),
+        msg.contains(ipc_types::ENV_WAIT) && msg.contains("fast"),
         "{msg}"
     );
 }

@@ -2,9 +2,8 @@
 
 use crate::frame::CanFrame;
 use crate::message::{Message, NodeHeartbeatMsg, NodeState, Record};
-use crate::protocol::{
-    Channel, DeviceSet, FieldKind, MAX_CHANNELS, MAX_PARTS, MessageKind, Protocol, Quantity,
-};
+use crate::protocol::{DeviceSet, MAX_CHANNELS, MAX_PARTS, MessageKind, Protocol, Quantity};
+use crate::wire::{Channel, FieldKind};
 
 /// Why a message could not be encoded.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

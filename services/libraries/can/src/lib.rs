@@ -17,7 +17,7 @@
 //!   (replay and recording), RS-232 serial, in-memory — and the extension point for the
 //!   software bus. [`CanFrame::to_bus_frame`] / [`CanFrame::from_bus_frame`] convert to and
 //!   from the software bus's sample (`ipc_types::CanBusFrame`) with its frame check; the
-//!   transport itself is `testbed_gateways::SoftwareBusTransport`.
+//!   transport itself is `testbed_processes::software_bus::SoftwareBusTransport`.
 //!
 //! A gateway's loop is: `transport.recv(timeout)` → `decoder.decode(&frame)` → for each
 //! completed [`Received`], map [`Message::node_time_us`] through a [`NodeClock`] to the run
@@ -51,6 +51,7 @@ mod message;
 pub mod protocol;
 pub mod protocol_doc;
 pub mod transport;
+mod wire;
 
 pub use bus_frame::{BusFrameError, crc15, frame_check};
 pub use codec::{

@@ -22,7 +22,7 @@
 //! # Friction compensation near zero speed
 //!
 //! `sign(n)` is replaced by `tanh(n / n_s)` with the speed scale
-//! [`WheelControlConfig::friction_speed_scale_rad_s`] (default `n_s = 0.2 rad/s ≈ 1.9 rpm`, about
+//! [`PdFrictionConfig::friction_speed_scale_rad_s`] (default `n_s = 0.2 rad/s ≈ 1.9 rpm`, about
 //! 20× the tachometer's 1σ noise of 0.1 rpm): the compensation is continuous through `n = 0`
 //! (no ±T_f0 switching on noise, so no chatter) and within 4 % of the full Coulomb term for
 //! `|n| > 2 n_s`. The residual uncompensated friction only acts while `|n| ≲ n_s`, which — with no
@@ -35,7 +35,7 @@
 //!   the direction of the body torque is kept; only if that is not enough (it never is, as long as
 //!   the friction model is below the torque limit) is each wheel clipped.
 //! * Momentum: no command may drive a wheel beyond its speed limit `n_max`. With the control
-//!   period `T` ([`WheelControlConfig::control_period_s`]) the wheel speed after one period,
+//!   period `T` ([`PdFrictionConfig::control_period_s`]) the wheel speed after one period,
 //!   neglecting friction (which only brakes the wheel, so this is conservative) and the platform's
 //!   own acceleration (`I ≫ J_w`), is `n + τ_m T / J_w`; each wheel's command is clamped to
 //!   `J_w (−n_max − n)/T ≤ τ_m ≤ J_w (n_max − n)/T`. This acts per wheel (a full wheel cannot give
@@ -47,7 +47,7 @@
 //!
 //! Per axis, linearised (`q_v ≈ φ/2`, rigid body, principal inertia `I_i`):
 //! `I_i φ'' + D_i φ' + (P_i/2) φ = 0`, so `ω_n = sqrt(P_i / (2 I_i))` and `ζ = D_i / (2 I_i ω_n)`
-//! (see [`closed_loop_modes`]). The defaults ([`WheelControlConfig::design`] with
+//! (see [`closed_loop_modes`]). The defaults ([`PdFrictionConfig::design`] with
 //! `I = diag(45.2, 46.1, 62.7) kg m²`, `ω_n = 0.07 rad/s`, `ζ = 0.9`) are
 //! `P = (0.4430, 0.4518, 0.6145) Nm`, `D = (5.695, 5.809, 7.900) Nms`.
 //! Checks against the envelope: the largest initial demand, 20° heading error, is
@@ -118,7 +118,7 @@ pub(crate) fn check_finite_vector(
 /// Gains and options of the wheel PD controller.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
-pub struct WheelControlConfig {
+pub struct PdFrictionConfig {
     /// Proportional gain per body axis, Nm per unit of error quaternion vector part `q_v`
     /// (dimensionless; `q_v ≈ φ/2`, so the angle stiffness is `P/2` Nm/rad).
     pub p_nm: [f64; 3],
@@ -134,13 +134,13 @@ pub struct WheelControlConfig {
     pub control_period_s: f64,
 }
 
-impl Default for WheelControlConfig {
+impl Default for PdFrictionConfig {
     fn default() -> Self {
         Self::design([45.2, 46.1, 62.7], 0.07, 0.9)
     }
 }
 
-impl WheelControlConfig {
+impl PdFrictionConfig {
     /// Gains for natural frequency `natural_frequency_rad_s` (rad/s) and damping ratio
     /// `damping_ratio` on every axis, for principal moments `inertia_kgm2` (kg m²) of the linearised
     /// loop `I φ'' + D φ' + (P/2) φ = 0`: `P = 2 I ω_n²`, `D = 2 ζ ω_n I`. Friction compensation
@@ -228,6 +228,45 @@ pub fn rotation_vector(q_v: &Vector3<f64>) -> Vector3<f64> {
     }
 }
 
+/// The wheels' friction model as a compensation uses it, per wheel, N·m (torque braking the
+/// wheel): `T_f0 tanh(n / n_s) + K n` (paper eq. 3 with a smooth sign), Coulomb `T_f0` (N·m)
+/// and viscous `K` (N·m per rad/s) per wheel, speed scale `n_s` (rad/s), `n` the wheel speeds
+/// relative to the platform (rad/s).
+pub fn friction_model_nm(
+    coulomb_nm: &Vector3<f64>,
+    viscous_nm_per_rad_s: &Vector3<f64>,
+    speed_scale_rad_s: f64,
+    wheel_speed_rad_s: &Vector3<f64>,
+) -> Vector3<f64> {
+    Vector3::from_fn(|i, _| {
+        let n = wheel_speed_rad_s[i];
+        coulomb_nm[i] * (n / speed_scale_rad_s).tanh() + viscous_nm_per_rad_s[i] * n
+    })
+}
+
+/// Motor torques (N·m, wheel `i` on body axis `i`) giving the platform the body torque `u_body`
+/// (N·m) on top of compensating `friction` (N·m, each within `±t_max`): `τ_m = −s u_body + f`
+/// with the largest `s ∈ [0, 1]` that keeps every `|τ_m,i| ≤ t_max`, so the body torque keeps
+/// its direction. Also whether `s < 1`.
+pub fn motor_torque_for(
+    u_body: &Vector3<f64>,
+    friction: &Vector3<f64>,
+    t_max: f64,
+) -> (Vector3<f64>, bool) {
+    // Largest s in [0, 1] with |−s u_i + f_i| ≤ t_max for every wheel (s = 0 is feasible).
+    let mut scale: f64 = 1.0;
+    for i in 0..3 {
+        let (u, f) = (u_body[i], friction[i]);
+        if u > 0.0 {
+            scale = scale.min((f + t_max) / u);
+        } else if u < 0.0 {
+            scale = scale.min((t_max - f) / -u);
+        }
+    }
+    let scale = scale.clamp(0.0, 1.0);
+    (-u_body * scale + friction, scale < 1.0)
+}
+
 /// One wheel command.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct WheelCommand {
@@ -256,14 +295,14 @@ struct WheelParams {
 /// PD attitude controller on three body-axis reaction wheels with friction compensation.
 #[derive(Debug, Clone, PartialEq)]
 pub struct WheelController {
-    config: WheelControlConfig,
+    config: PdFrictionConfig,
     wheels: WheelParams,
 }
 
 impl WheelController {
     /// Controller from its gains and the wheels' configuration (torque and speed limits, rotor
     /// inertia, friction model of paper eq. 3).
-    pub fn new(config: &WheelControlConfig, wheels: &WheelConfig) -> Result<Self, ControlError> {
+    pub fn new(config: &PdFrictionConfig, wheels: &WheelConfig) -> Result<Self, ControlError> {
         config.validate()?;
         check_positive("wheels.inertia_kgm2", wheels.inertia_kgm2)?;
         check_positive("wheels.max_torque_nm", wheels.max_torque_nm)?;
@@ -298,7 +337,7 @@ impl WheelController {
     }
 
     /// The controller's gains and options.
-    pub fn config(&self) -> &WheelControlConfig {
+    pub fn config(&self) -> &PdFrictionConfig {
         &self.config
     }
 
@@ -306,11 +345,12 @@ impl WheelController {
     /// platform feels `+T̂_f`): `T_f0 tanh(n / n_s) + K n`, `n` the wheel speed relative to the
     /// platform in rad/s.
     pub fn friction_model(&self, wheel_speed_rad_s: &Vector3<f64>) -> Vector3<f64> {
-        let ns = self.config.friction_speed_scale_rad_s;
-        Vector3::from_fn(|i, _| {
-            let n = wheel_speed_rad_s[i];
-            self.wheels.coulomb_nm[i] * (n / ns).tanh() + self.wheels.viscous_nm_per_rad_s[i] * n
-        })
+        friction_model_nm(
+            &self.wheels.coulomb_nm,
+            &self.wheels.viscous_nm_per_rad_s,
+            self.config.friction_speed_scale_rad_s,
+            wheel_speed_rad_s,
+        )
     }
 
     /// Motor torque command for the estimated attitude `q_est` (L→B), body rate `rate_b` (rad/s,
@@ -340,19 +380,7 @@ impl WheelController {
             Vector3::zeros()
         };
 
-        // Largest s in [0, 1] with |−s u_i + f_i| ≤ t_max for every wheel (s = 0 is feasible).
-        let mut scale: f64 = 1.0;
-        for i in 0..3 {
-            let (u, f) = (u_body[i], friction[i]);
-            if u > 0.0 {
-                scale = scale.min((f + t_max) / u);
-            } else if u < 0.0 {
-                scale = scale.min((t_max - f) / -u);
-            }
-        }
-        let scale = scale.clamp(0.0, 1.0);
-        let mut saturated = scale < 1.0;
-        let mut torque = -u_body * scale + friction;
+        let (mut torque, mut saturated) = motor_torque_for(&u_body, &friction, t_max);
 
         // Momentum limit (per wheel) and a final per-wheel torque clip.
         let (j, n_max, period) = (
@@ -388,9 +416,9 @@ mod tests {
     use testbed_model::config::DEG;
 
     fn controller(compensation: bool) -> WheelController {
-        let config = WheelControlConfig {
+        let config = PdFrictionConfig {
             friction_compensation: compensation,
-            ..WheelControlConfig::default()
+            ..PdFrictionConfig::default()
         };
         WheelController::new(&config, &WheelConfig::default()).unwrap()
     }
@@ -402,7 +430,7 @@ mod tests {
 
     #[test]
     fn defaults_have_the_documented_modes() {
-        let c = WheelControlConfig::default();
+        let c = PdFrictionConfig::default();
         c.validate().unwrap();
         let modes = closed_loop_modes(&c.p_nm, &c.d_nms, &[45.2, 46.1, 62.7]);
         for m in modes {
@@ -601,7 +629,7 @@ mod tests {
             c.command(&q, &z, &q, &Vector3::repeat(f64::INFINITY))
                 .is_err()
         );
-        let mut config = WheelControlConfig::default();
+        let mut config = PdFrictionConfig::default();
         config.p_nm[1] = -1.0;
         let msg = WheelController::new(&config, &WheelConfig::default())
             .unwrap_err()
@@ -803,7 +831,7 @@ mod tests {
             on.settle_time_s,
             off.settle_time_s
         );
-        let c = WheelControlConfig::default();
+        let c = PdFrictionConfig::default();
         // Without compensation the wheel's Coulomb friction holds the platform inside the dead
         // band |φ| ≲ 2 T_f0 / P (rad).
         for i in 0..3 {

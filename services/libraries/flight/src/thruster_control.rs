@@ -1,4 +1,4 @@
-//! Thruster control (issue 14): a pulse modulator turning a commanded torque into valve on-times,
+//! Thruster control: a pulse modulator turning a commanded torque into valve on-times,
 //! wheel momentum dumping with hysteresis, and rate damping on the thrusters alone.
 //!
 //! **Pulse modulator** (pulse-width modulation with impulse-error feedback, a discrete

@@ -1,8 +1,8 @@
-//! Seeded bus-fault injection of the simulated smart CAN node.
+//! Seeded bus-fault injection of the simulated CAN board.
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use testbed_runtime::run_config::CanFaults;
+use testbed_config::CanFaults;
 
 /// What happens to one frame.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -17,7 +17,7 @@ pub enum Fault {
         /// Bit index, 0 to 127.
         bit: u32,
     },
-    /// Delivered after the tick's deadline (after the node's tick sync frame).
+    /// Delivered after the tick's deadline (after the board's tick sync frame).
     Delay,
     /// Delivered twice in a row.
     Duplicate,

@@ -9,7 +9,7 @@
 //!
 //! - **Free-running** (hardware, paced runs): a sample is published as soon as its last frame
 //!   arrives, if it is newer than the last one published.
-//! - **Tick sync** (lockstep): the smart node sends its heartbeat after the frames of every
+//! - **Tick sync** (lockstep): the CAN board sends its heartbeat after the frames of every
 //!   tick (the *tick sync*, see the crate documentation). At the sync of tick `T` the gateway
 //!   publishes exactly one sample for `T` if the schedule has its device sampling at `T`: the
 //!   complete sample if it arrived, otherwise the last good values flagged `STALE` without
@@ -45,7 +45,7 @@ use testbed_flight::schedule::Schedule;
 pub trait GatewayDevice: Copy {
     /// The gateway process's name.
     fn process_name(self) -> &'static str;
-    /// The device's identifier block in the node's protocol.
+    /// The device's identifier block in the board's protocol.
     fn can_device(self) -> CanDevice;
     /// The message the device sends.
     fn telemetry(self) -> MessageKind;
@@ -67,7 +67,7 @@ impl GatewayDevice for Device {
         }
     }
 
-    /// The device's identifier block in the node's protocol.
+    /// The device's identifier block in the board's protocol.
     fn can_device(self) -> CanDevice {
         match self {
             Self::Gyro => CanDevice::Gyro,
@@ -169,7 +169,7 @@ impl GatewayDevice for Served {
     fn due(self, schedule: &Schedule, k: u64) -> bool {
         match self {
             Served::Device(d) => d.due(schedule, k),
-            // The node reports the valves after every period.
+            // The board reports the valves after every period.
             Served::Thrusters => true,
         }
     }
@@ -219,13 +219,13 @@ fn sample_header_mut(sample: &mut Sample) -> &mut SampleHeader {
 /// What one frame led to.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct FrameOutcome {
-    /// The frame was the node's tick sync for this run-clock time (tick-sync mode).
+    /// The frame was the board's tick sync for this run-clock time (tick-sync mode).
     pub tick: Option<u64>,
     /// The sample to publish, if any (a frame completes or closes at most one).
     pub sample: Option<Sample>,
 }
 
-/// The node's µs stamp on the run clock: extended to 64 bits, in ns, and snapped to the
+/// The board's µs stamp on the run clock: extended to 64 bits, in ns, and snapped to the
 /// schedule's tick when within 1 µs of one (the stamp's resolution).
 pub fn run_time_ns(clock: &mut NodeClock, schedule: &Schedule, stamp_us: u32) -> Option<u64> {
     let us = u64::try_from(clock.extend(stamp_us)).ok()?;
@@ -240,8 +240,8 @@ pub fn run_time_ns(clock: &mut NodeClock, schedule: &Schedule, stamp_us: u32) ->
     })
 }
 
-/// The node's µs stamp for run-clock time `t_ns` (wraps every 2³² µs, as the node's clock).
-pub fn node_stamp_us(t_ns: u64) -> u32 {
+/// The board's µs stamp for run-clock time `t_ns` (wraps every 2³² µs, as the board's clock).
+pub fn board_stamp_us(t_ns: u64) -> u32 {
     (t_ns / 1000) as u32
 }
 
@@ -293,7 +293,7 @@ pub struct Gateway {
 }
 
 impl Gateway {
-    /// A gateway for `device` speaking `protocol`. `tick_sync`: publish at the node's tick sync
+    /// A gateway for `device` speaking `protocol`. `tick_sync`: publish at the board's tick sync
     /// (lockstep), else as samples complete.
     pub fn new(
         device: impl Into<Served>,
@@ -338,12 +338,12 @@ impl Gateway {
         self.device
     }
 
-    /// The node's state from its latest heartbeat.
+    /// The board's state from its latest heartbeat.
     pub fn node_state(&self) -> Option<NodeState> {
         self.node_state
     }
 
-    /// Node heartbeats received so far (the node is alive while this grows).
+    /// Board heartbeats received so far (the board is alive while this grows).
     pub fn node_heartbeats(&self) -> u64 {
         self.node_heartbeats
     }
@@ -433,7 +433,7 @@ impl Gateway {
                 if hb.state == NodeState::Booting
                     && self.node_state.is_some_and(|s| s != NodeState::Booting)
                 {
-                    // The node restarted: its counters and clock start again.
+                    // The board restarted: its counters and clock start again.
                     self.decoder.reset();
                     self.clock.reset();
                     self.current_counter = None;
@@ -492,7 +492,7 @@ impl Gateway {
         sample
     }
 
-    /// The node's tick sync for `t_ns`: close the tick.
+    /// The board's tick sync for `t_ns`: close the tick.
     fn on_sync(&mut self, t_ns: u64) -> FrameOutcome {
         let mut out = FrameOutcome {
             tick: Some(t_ns),
@@ -559,7 +559,7 @@ impl Gateway {
 
     /// Encodes valve on-times already checked by the thruster gateway's
     /// [`ThrusterGuard`](crate::thrusters::ThrusterGuard) (thruster gateway); `latch_shut` asks
-    /// the node to shut the latch valve. An encoding error (an on-time beyond the wire field)
+    /// the board to shut the latch valve. An encoding error (an on-time beyond the wire field)
     /// counts as a refused command.
     pub fn thruster_command(
         &mut self,
@@ -596,7 +596,7 @@ mod tests {
     }
 
     fn gyro(encoder: &mut Encoder, k: u64, rate: f64) -> Vec<CanFrame> {
-        let t_us = node_stamp_us(k * 100_000_000);
+        let t_us = board_stamp_us(k * 100_000_000);
         let m = Message::Gyro(GyroMsg {
             node_time_us: t_us,
             status: DeviceStatus::default(),
@@ -607,7 +607,7 @@ mod tests {
 
     fn sync(encoder: &mut Encoder, k: u64) -> CanFrame {
         let m = Message::NodeHeartbeat(NodeHeartbeatMsg {
-            node_time_us: node_stamp_us(k * 100_000_000),
+            node_time_us: board_stamp_us(k * 100_000_000),
             state: NodeState::Running,
             links: DeviceSet::ALL,
             serial_errors: 0,
@@ -622,11 +622,11 @@ mod tests {
     #[test]
     fn tick_sync_publishes_complete_stale_and_drops_late_frames() {
         let p = Protocol::default();
-        let mut node = Encoder::new(p);
+        let mut board = Encoder::new(p);
         let mut g = Gateway::new(Device::Gyro, p, schedule(), true);
         // Tick 0 complete.
-        let mut frames = gyro(&mut node, 0, 0.01);
-        frames.push(sync(&mut node, 0));
+        let mut frames = gyro(&mut board, 0, 0.01);
+        frames.push(sync(&mut board, 0));
         let out = published(&mut g, &frames);
         let [Sample::Gyro(s)] = out.as_slice() else {
             panic!("{out:?}")
@@ -638,8 +638,8 @@ mod tests {
         let good = s.rate;
         assert!((good[0] - 0.01).abs() <= testbed_can::Quantity::GyroRate.lsb_si());
         // Tick 1: frame B delayed past the sync → stale, then the late frame is dropped.
-        let t1 = gyro(&mut node, 1, 0.02);
-        let out = published(&mut g, &[t1[0], sync(&mut node, 1), t1[1]]);
+        let t1 = gyro(&mut board, 1, 0.02);
+        let out = published(&mut g, &[t1[0], sync(&mut board, 1), t1[1]]);
         let [Sample::Gyro(s)] = out.as_slice() else {
             panic!("{out:?}")
         };
@@ -647,12 +647,12 @@ mod tests {
         assert!(!s.header.is_valid() && s.header.has(SampleHeader::STALE));
         assert_eq!(s.rate, good, "stale repeats the last good values");
         // Tick 2: both frames lost (no frame at all) → stale again, counter predicted.
-        let _lost = gyro(&mut node, 2, 0.03);
-        let out = published(&mut g, &[sync(&mut node, 2)]);
+        let _lost = gyro(&mut board, 2, 0.03);
+        let out = published(&mut g, &[sync(&mut board, 2)]);
         assert!(matches!(out.as_slice(), [Sample::Gyro(s)] if s.header.has(SampleHeader::STALE)));
         // Tick 3 complete, and a duplicate.
-        let t3 = gyro(&mut node, 3, 0.04);
-        let out = published(&mut g, &[t3[0], t3[0], t3[1], sync(&mut node, 3)]);
+        let t3 = gyro(&mut board, 3, 0.04);
+        let out = published(&mut g, &[t3[0], t3[0], t3[1], sync(&mut board, 3)]);
         assert!(
             matches!(out.as_slice(), [Sample::Gyro(s)] if s.header.is_valid() && (s.rate[2] - 0.04).abs() < 1e-6)
         );
@@ -674,11 +674,11 @@ mod tests {
     #[test]
     fn free_running_publishes_on_completion_in_time_order() {
         let p = Protocol::default();
-        let mut node = Encoder::new(p);
+        let mut board = Encoder::new(p);
         let mut g = Gateway::new(Device::Gyro, p, schedule(), false);
-        let out = published(&mut g, &gyro(&mut node, 5, 0.1));
+        let out = published(&mut g, &gyro(&mut board, 5, 0.1));
         assert!(matches!(out.as_slice(), [Sample::Gyro(s)] if s.header.time_ns == 500_000_000));
-        assert!(published(&mut g, &[sync(&mut node, 5)]).is_empty());
+        assert!(published(&mut g, &[sync(&mut board, 5)]).is_empty());
     }
 
     #[test]
@@ -727,7 +727,7 @@ mod tests {
         };
         let mut clock = NodeClock::new();
         assert_eq!(
-            run_time_ns(&mut clock, &s, node_stamp_us(3 * 33_333_333)),
+            run_time_ns(&mut clock, &s, board_stamp_us(3 * 33_333_333)),
             Some(99_999_999)
         );
         assert_eq!(
@@ -741,7 +741,7 @@ mod tests {
             run_time_ns(&mut clock, &s, before_wrap),
             Some(u64::from(before_wrap) * 1000)
         );
-        // 100 ms later the node's 32-bit µs clock has wrapped; the run clock goes on.
+        // 100 ms later the board's 32-bit µs clock has wrapped; the run clock goes on.
         assert_eq!(
             run_time_ns(&mut clock, &s, 0),
             Some((u64::from(u32::MAX) + 1) * 1000)

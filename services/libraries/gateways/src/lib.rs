@@ -1,6 +1,10 @@
-//! The real platform path: the device gateways' logic, the software CAN bus, the
-//! simulated smart CAN node and the replay of recorded bus traffic (their processes are nodes in
-//! `testbed-processes`).
+//! The real platform path: the device gateways' logic, the simulated CAN board and the replay
+//! of recorded bus traffic, without the bus: their processes are in `testbed-processes`, and so
+//! is the software CAN bus over iceoryx2 (`software_bus`).
+//!
+//! The CAN board is the platform's microcontroller board that reads the sensors, drives the
+//! actuators and talks to the computer over the one CAN bus (PROTOCOL.md's "smart CAN node");
+//! its simulated stand-in runs as the process `sim-can-node`.
 //!
 //! ```text
 //!              SimTruth                       testbed/can/bus (CanBusFrame)
@@ -17,11 +21,10 @@
 //!   publish out (same topics, types and time stamps); commands limited (clamped, or refused
 //!   and replaced by zero) and encoded; every frame counted ([`ipc_types::CanLinkStatus`], and
 //!   `frames_ok` / `frames_bad` / `errors` in the process heartbeat).
-//! - [`node`]: the simulated smart CAN node — the simulated gateways' device models on the
-//!   plant's truth, encoded with the node's protocol; commands decoded and handed to the plant
+//! - [`can_board`]: the simulated CAN board — the simulated gateways' device models on the
+//!   plant's truth, encoded with the board's protocol; commands decoded and handed to the plant
 //!   as [`ipc_types::AppliedWheelCommand`] / [`ipc_types::AppliedCmgCommand`]
 //!   (`run.actuation = "can_node"`); seeded fault injection ([`faults`]).
-//! - [`bus_transport`]: [`SoftwareBusTransport`], a `testbed_can::CanTransport` over iceoryx2.
 //! - [`run`]: the processes (`gyro-gateway`, `inclinometer-gateway`, `magnetometer-gateway`,
 //!   `wheel-gateway`, `cmg-gateway`, `sim-can-node`, `can-replay`). A gateway's link comes from
 //!   the run configuration (`[can]`): SocketCAN, the software bus, a `candump -L` file, or a
@@ -31,7 +34,7 @@
 //!
 //! In lockstep the estimator, controller and plant each wait for the samples of tick `k`; a
 //! lost frame must not leave them waiting forever, and what happens must not depend on timing.
-//! The node therefore ends every tick's frames with its heartbeat, stamped with the tick's
+//! The board therefore ends every tick's frames with its heartbeat, stamped with the tick's
 //! time: the **tick sync**. The sync is the tick's deadline on the bus:
 //!
 //! 1. A sensor gateway publishes at the sync, and only then: the complete sample of the tick
@@ -41,29 +44,27 @@
 //! 2. A frame of an already closed tick (delayed past the sync) is *late*: counted, and the
 //!    sample it completes is not used (see [`gateway`]).
 //! 3. The estimator propagates an invalid gyro sample with the last valid rate and skips
-//!    invalid vector updates (`testbed_flight::estimator_node`); the controller uses the
+//!    invalid vector updates (`testbed_flight::tasks::EstimatorTask`); the controller uses the
 //!    repeated actuator telemetry.
-//! 4. The node closes a tick when it has *received* the tick's three command frames (the
+//! 4. The board closes a tick when it has *received* the tick's three command frames (the
 //!    gateways always send one command per tick: a refused command is replaced by zero), and
 //!    only then applies its faults to them: a lost or corrupted command holds the previous one,
 //!    and the plant always gets exactly one applied command of each kind per tick.
-//! 5. The sync itself is never faulted: it stands for the node's deadline timer, which on the
+//! 5. The sync itself is never faulted: it stands for the board's deadline timer, which on the
 //!    platform does not travel over the bus.
 //!
 //! Every decision depends only on the order of one sender's frames (iceoryx2 keeps it) and on
 //! seeded fault draws, so a lockstep run with faults is as reproducible as one without.
 //! On hardware (paced runs) the gateways publish each sample as it completes instead, and the
-//! node's heartbeat only tells them the node is alive.
+//! board's heartbeat only tells them the board is alive.
 
 #![forbid(unsafe_code)]
 
-pub mod bus_transport;
+pub mod can_board;
 pub mod faults;
 pub mod gateway;
-pub mod node;
 pub mod status;
 pub mod thrusters;
 
-pub use bus_transport::SoftwareBusTransport;
+pub use can_board::SimCanBoard;
 pub use gateway::{Gateway, GatewayDevice};
-pub use node::SimCanNode;

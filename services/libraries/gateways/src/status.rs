@@ -1,7 +1,6 @@
-//! When a link's counters are published ([`CanLinkStatus`]) and how they reach the heartbeat.
+//! When a link's counters are published ([`CanLinkStatus`]).
 
 use ipc_types::{CanLinkStatus, SampleHeader};
-use testbed_bus::HeartbeatPublisher;
 
 /// Run-clock time between two status samples when nothing changes, ns.
 pub const STATUS_PERIOD_NS: u64 = 1_000_000_000;
@@ -52,30 +51,6 @@ impl StatusTracker {
             SampleHeader::new(t_ns, self.sequence, SampleHeader::VALID).with_source(self.source);
         self.sequence += 1;
         Some(CanLinkStatus { header, ..counts })
-    }
-}
-
-/// Carries a link's counters into its process's heartbeat (`frames_ok`, `frames_bad`,
-/// `errors` = lost frames + abandoned samples + stale samples + transport errors).
-#[derive(Debug, Default, Clone, Copy)]
-pub struct HeartbeatCounters {
-    ok: u64,
-    bad: u64,
-    errors: u64,
-}
-
-impl HeartbeatCounters {
-    /// Adds what changed since the last call to `heartbeat`.
-    pub fn update(&mut self, heartbeat: &HeartbeatPublisher, s: &CanLinkStatus) {
-        let errors = s.lost_frames + s.incomplete_samples + s.stale_samples + s.transport_errors;
-        heartbeat.add_frames_ok(s.frames_ok.saturating_sub(self.ok));
-        heartbeat.add_frames_bad(s.frames_bad.saturating_sub(self.bad));
-        heartbeat.add_errors(errors.saturating_sub(self.errors));
-        *self = Self {
-            ok: s.frames_ok,
-            bad: s.frames_bad,
-            errors,
-        };
     }
 }
 

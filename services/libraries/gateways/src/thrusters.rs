@@ -1,4 +1,4 @@
-//! Thruster gateway logic (issue 14): what reaches the valves and what is refused, and the
+//! Thruster gateway logic: what reaches the valves and what is refused, and the
 //! stuck-open valve monitor that disables the thrusters.
 //!
 //! **Refusal.** A [`ThrusterCommand`] is refused as a whole (every valve stays shut for the
@@ -148,7 +148,7 @@ impl ThrusterGuard {
     }
 }
 
-/// The propellant the gateway estimates from the on-times the node applied: each pulse of
+/// The propellant the gateway estimates from the on-times the board applied: each pulse of
 /// electrical on-time `t` (stretched to the minimum on-time) lets gas through for
 /// `t + close_delay − open_delay` at the nominal flow `F / (Isp g0)` of the configuration.
 /// A gateway sees no thrust noise, scale error or empty tank: this is the nominal budget, and

@@ -4,8 +4,8 @@
 //! running a cycle, handing out what it computed) makes no heap allocation. A heap allocation
 //! per cycle is a latency risk on the platform (the allocator may take a lock or ask the kernel
 //! for pages), so this is checked, not assumed: a counting global allocator, switched on only
-//! around the calls into the gateways and the flight nodes, counts the allocations of 50 s of
-//! the default run over the CAN path in memory (the plant and the simulated CAN node are not
+//! around the calls into the gateways and the flight tasks, counts the allocations of 50 s of
+//! the default run over the CAN path in memory (the plant and the simulated CAN board are not
 //! counted; nor is the bus, whose publish allocates inside iceoryx2 0.10).
 //!
 //! Its own test binary, because the global allocator is the whole program's.
@@ -15,13 +15,11 @@ use std::cell::Cell;
 
 use ipc_types::{AttitudeEstimate, Device};
 use testbed_can::Sample;
-use testbed_flight::controller_node::{ControlCycle, ControllerNode};
-use testbed_flight::estimator_node::EstimatorNode;
-use testbed_flight::tasks::ControllerTask;
+use testbed_config::{Actuation, RunConfig};
+use testbed_flight::tasks::{ControlCycle, ControllerTask, EstimatorTask};
+use testbed_gateways::can_board::{self, SimCanBoard, TxFrame};
 use testbed_gateways::gateway::Gateway;
-use testbed_gateways::node::{self, SimCanNode, TxFrame};
-use testbed_runtime::run_config::{Actuation, RunConfig};
-use testbed_sim::plant_node::PlantNode;
+use testbed_sim::plant_task::PlantTask;
 
 /// The system allocator, counting the allocations (and reallocations) of the current thread
 /// while its count is switched on.
@@ -87,26 +85,30 @@ struct Allocations {
     vector_updates: u64,
 }
 
-/// The CAN path in memory, as `in_memory_lockstep.rs` wires it (plant → simulated node → five
-/// gateways → estimator → controller → wheel and CMG gateways → node → plant), counting the
-/// allocations of the gateways', estimator's and controller's calls from `warm_up_s` on.
+/// The CAN path in memory, as `in_memory_lockstep.rs` wires it (plant → simulated CAN board →
+/// five gateways → estimator → controller → wheel and CMG gateways → CAN board → plant),
+/// counting the allocations of the gateways', estimator's and controller's calls from
+/// `warm_up_s` on.
 fn steady_state_allocations(duration_s: f64, warm_up_s: f64) -> Allocations {
     let mut config = RunConfig::default();
     config.run.duration_s = duration_s;
     config.run.actuation = Actuation::CanNode;
     let schedule = config.schedule().expect("default schedule");
-    let protocol = node::protocol(&config).expect("protocol");
-    let mut plant = PlantNode::new(&config).expect("plant");
-    let mut can_node = SimCanNode::new(&config).expect("CAN node");
+    let protocol = can_board::protocol(&config).expect("protocol");
+    let mut plant = PlantTask::new(&config).expect("plant");
+    let mut board = SimCanBoard::new(&config).expect("CAN board");
     let mut gateways: Vec<Gateway> = Device::ALL
         .iter()
         .map(|&d| Gateway::new(d, protocol, schedule, true))
         .collect();
-    let mut estimator = EstimatorNode::new(config.estimator_config(), schedule);
-    let task = ControllerTask::new(&config.controller, &config.model, config.manoeuvre.target())
-        .expect("controller task");
-    let mut controller =
-        ControllerNode::new(task, &config.controller, &config.model.wheels, schedule);
+    let mut estimator = EstimatorTask::new(config.estimator_setup().unwrap(), schedule);
+    let mut controller = ControllerTask::new(
+        &config.controller,
+        &config.model,
+        config.manoeuvre.target(),
+        schedule,
+    )
+    .expect("controller task");
     // The callers' buffers, sized once: the processes keep theirs the same way.
     let mut samples: Vec<Sample> = Vec::with_capacity(16);
     let mut estimates: Vec<AttitudeEstimate> = Vec::with_capacity(4);
@@ -117,7 +119,7 @@ fn steady_state_allocations(duration_s: f64, warm_up_s: f64) -> Allocations {
     loop {
         let (truth, _) = plant.outputs();
         let counting = truth.header.time_ns as f64 * 1e-9 >= warm_up_s;
-        let frames = can_node.on_truth(&truth);
+        let frames = board.on_truth(&truth);
 
         samples.clear();
         let ((), in_gateways) = counted(|| {
@@ -178,10 +180,10 @@ fn steady_state_allocations(duration_s: f64, warm_up_s: f64) -> Allocations {
         let mut applied = None;
         for batch in command_frames.into_iter().flatten() {
             for f in &batch.expect("a limited command encodes") {
-                applied = can_node.on_frame(f).or(applied);
+                applied = board.on_frame(f).or(applied);
             }
         }
-        let applied = applied.expect("the node answers every tick");
+        let applied = applied.expect("the board answers every tick");
         let (wheel_command, cmg_command) = applied.commands();
         plant.on_wheel_command(&wheel_command);
         plant.on_cmg_command(&cmg_command);

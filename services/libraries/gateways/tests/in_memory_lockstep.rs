@@ -1,53 +1,54 @@
 //! The CAN path wired in memory, tick by tick, exactly as the processes pass frames and samples
-//! in lockstep: plant → simulated node → bus → five gateways → estimator → controller → wheel
-//! and CMG gateways → bus → node → plant. Faults included: no tick may go unanswered, every
-//! injected fault must show up in exactly one receiver counter, and the platform must still
-//! level.
+//! in lockstep: plant → simulated CAN board → bus → five gateways → estimator → controller →
+//! wheel and CMG gateways → bus → CAN board → plant. Faults included: no tick may go unanswered,
+//! every injected fault must show up in exactly one receiver counter, and the platform must
+//! still level.
 
 use ipc_types::{CanLinkStatus, SampleHeader};
 use testbed_can::Sample;
-use testbed_flight::controller_node::ControllerNode;
+use testbed_config::{Actuation, CanFaults, RunConfig};
 use testbed_flight::convert::quaternion_from_array;
-use testbed_flight::estimator_node::{EstimatorCounters, EstimatorNode};
-use testbed_flight::tasks::ControllerTask;
+use testbed_flight::tasks::{ControllerTask, EstimatorCounters, EstimatorTask};
+use testbed_gateways::can_board::{self, SimCanBoard, TxFrame};
 use testbed_gateways::gateway::Gateway;
-use testbed_gateways::node::{self, SimCanNode, TxFrame};
 use testbed_model::attitude;
 use testbed_model::config::DEG;
-use testbed_runtime::run_config::{Actuation, CanFaults, RunConfig};
 use testbed_sim::metrics;
-use testbed_sim::plant_node::PlantNode;
+use testbed_sim::plant_task::PlantTask;
 
 struct Outcome {
     /// (t, attitude error per axis, degrees)
     errors: Vec<(f64, [f64; 3])>,
     estimates: Vec<ipc_types::AttitudeEstimate>,
     gateways: Vec<(testbed_gateways::gateway::Served, CanLinkStatus)>,
-    node: CanLinkStatus,
+    board: CanLinkStatus,
     estimator: EstimatorCounters,
     stale_applied: u64,
 }
 
 fn run(config: &RunConfig) -> Outcome {
     let schedule = config.schedule().unwrap();
-    let protocol = node::protocol(config).unwrap();
-    let mut plant = PlantNode::new(config).unwrap();
-    let mut can_node = SimCanNode::new(config).unwrap();
+    let protocol = can_board::protocol(config).unwrap();
+    let mut plant = PlantTask::new(config).unwrap();
+    let mut board = SimCanBoard::new(config).unwrap();
     let mut gateways: Vec<(Gateway, u64)> = ipc_types::Device::ALL
         .iter()
         .map(|&d| (Gateway::new(d, protocol, schedule, true), 0))
         .collect();
-    let mut estimator = EstimatorNode::new(config.estimator_config(), schedule);
-    let task =
-        ControllerTask::new(&config.controller, &config.model, config.manoeuvre.target()).unwrap();
-    let mut controller =
-        ControllerNode::new(task, &config.controller, &config.model.wheels, schedule);
+    let mut estimator = EstimatorTask::new(config.estimator_setup().unwrap(), schedule);
+    let mut controller = ControllerTask::new(
+        &config.controller,
+        &config.model,
+        config.manoeuvre.target(),
+        schedule,
+    )
+    .unwrap();
     let target = config.manoeuvre.target();
     let mut out = Outcome {
         errors: Vec::new(),
         estimates: Vec::new(),
         gateways: Vec::new(),
-        node: CanLinkStatus::default(),
+        board: CanLinkStatus::default(),
         estimator: EstimatorCounters::default(),
         stale_applied: 0,
     };
@@ -57,8 +58,8 @@ fn run(config: &RunConfig) -> Outcome {
         let e = attitude::attitude_error(&q, &target) / DEG;
         out.errors
             .push((truth.header.time_ns as f64 * 1e-9, [e.x, e.y, e.z]));
-        // The node's frames reach every gateway in sending order.
-        let frames = can_node.on_truth(&truth);
+        // The board's frames reach every gateway in sending order.
+        let frames = board.on_truth(&truth);
         let mut samples = Vec::new();
         for (gateway, check_errors) in &mut gateways {
             for frame in &frames {
@@ -89,13 +90,13 @@ fn run(config: &RunConfig) -> Outcome {
         for cycle in controller.ready() {
             let wheel_frames = gateways[3].0.wheel_command(&cycle.wheels).unwrap();
             let cmg_frames = gateways[4].0.cmg_command(&cycle.cmg).unwrap();
-            // The CMG gateway's frames first: the node must not depend on the order.
+            // The CMG gateway's frames first: the board must not depend on the order.
             for f in cmg_frames.iter().chain(wheel_frames.iter()) {
-                applied = can_node.on_frame(f).or(applied);
+                applied = board.on_frame(f).or(applied);
             }
         }
         let applied =
-            applied.unwrap_or_else(|| panic!("tick {} not answered by the node", plant.tick()));
+            applied.unwrap_or_else(|| panic!("tick {} not answered by the board", plant.tick()));
         assert_eq!(applied.wheel.header.time_ns, truth.header.time_ns);
         out.stale_applied += u64::from(applied.wheel.header.has(SampleHeader::STALE));
         let (wheel_command, cmg_command) = applied.commands();
@@ -111,7 +112,7 @@ fn run(config: &RunConfig) -> Outcome {
         .iter()
         .map(|(g, _)| (g.device(), g.status()))
         .collect();
-    out.node = can_node.status();
+    out.board = board.status();
     out.estimator = estimator.counters();
     out
 }
@@ -137,7 +138,11 @@ fn without_faults_every_frame_is_good_and_the_platform_levels() {
         assert!(s.frames_ok > 1500, "{device:?}: {s:?}");
     }
     assert_eq!(
-        (out.node.frames_bad, out.node.lost_frames, out.stale_applied),
+        (
+            out.board.frames_bad,
+            out.board.lost_frames,
+            out.stale_applied
+        ),
         (0, 0, 0)
     );
     assert_eq!(out.estimator.gyro_held, 0);
@@ -160,9 +165,9 @@ fn with_faults_every_tick_is_answered_every_fault_counted_and_the_platform_level
     };
     let config = config(150.0, faults);
     let out = run(&config);
-    let n = &out.node;
+    let n = &out.board;
     let sum = |f: fn(&CanLinkStatus) -> u64| out.gateways.iter().map(|(_, s)| f(s)).sum::<u64>();
-    println!("node {n:?}");
+    println!("board {n:?}");
     for (d, s) in &out.gateways {
         println!("{d:?}: {s:?}");
     }
@@ -191,7 +196,7 @@ fn with_faults_every_tick_is_answered_every_fault_counted_and_the_platform_level
     assert_eq!(sum(|s| s.duplicates), n.injected_tx_duplicate);
     assert_eq!(sum(|s| s.late_frames), n.injected_tx_delay);
     assert!(sum(|s| s.stale_samples) > 0);
-    // Command direction, at the node.
+    // Command direction, at the board.
     assert_eq!(n.crc_errors, n.injected_rx_corrupt);
     assert_eq!(n.lost_frames, n.injected_rx_drop + n.injected_rx_corrupt);
     assert_eq!(n.duplicates, n.injected_rx_duplicate);

@@ -262,14 +262,37 @@ impl Dataset {
         }
     }
 
+    /// Every file's time stamps, s, with its name: the gyro first, then the inclinometer, the
+    /// magnetometer, the wheels, the CMGs and the thrusters (empty where absent).
+    pub fn time_stamps(&self) -> [(&'static str, Vec<f64>); 6] {
+        fn stamps<R>(rows: &[R], t: impl Fn(&R) -> f64) -> Vec<f64> {
+            rows.iter().map(t).collect()
+        }
+        [
+            (files::GYRO, stamps(&self.gyro, |r| r.t_s)),
+            (files::INCLINOMETER, stamps(&self.inclinometer, |r| r.t_s)),
+            (files::MAGNETOMETER, stamps(&self.magnetometer, |r| r.t_s)),
+            (files::WHEELS, stamps(&self.wheels, |r| r.t_s)),
+            (files::CMG, stamps(&self.cmg, |r| r.t_s)),
+            (files::THRUSTERS, stamps(&self.thrusters, |r| r.t_s)),
+        ]
+    }
+
     fn file(&self, name: &str) -> PathBuf {
         self.source.join(name)
     }
 
-    /// Check what identification needs: finite values, times strictly increasing in every
-    /// series, a gyro record of at least [`MIN_DURATION_S`], and at least one vector sensor.
-    /// Errors name the file and the row (rows counted from 1).
+    /// Check what identification needs: [`Dataset::check_rows`] and
+    /// [`Dataset::check_coverage`]. Errors name the file and the row (rows counted from 1).
+    /// (`identify` checks the time stamps' unit between the two: [`crate::sanity`].)
     pub fn check(&self) -> Result<(), DataError> {
+        self.check_rows()?;
+        self.check_coverage()
+    }
+
+    /// The rows: finite values, times strictly increasing in every series, no negative valve
+    /// on-time, the gyro and at least one vector sensor present.
+    pub fn check_rows(&self) -> Result<(), DataError> {
         check_series(
             &self.file(files::GYRO),
             &self.gyro,
@@ -356,6 +379,12 @@ impl Dataset {
                 ),
             });
         }
+        Ok(())
+    }
+
+    /// The coverage: a gyro record of at least [`MIN_DURATION_S`], every other file on its
+    /// clock (overlapping it by half its duration at least), a sample period.
+    pub fn check_coverage(&self) -> Result<(), DataError> {
         let duration = self.duration_s();
         if duration < MIN_DURATION_S {
             return Err(DataError::TooShort {
@@ -370,22 +399,7 @@ impl Dataset {
         let period = median_period(self.gyro.iter().map(|r| r.t_s));
         let t0 = self.gyro[0].t_s;
         let t1 = t0 + duration;
-        for (name, times) in [
-            (
-                files::INCLINOMETER,
-                self.inclinometer.iter().map(|r| r.t_s).collect::<Vec<_>>(),
-            ),
-            (
-                files::MAGNETOMETER,
-                self.magnetometer.iter().map(|r| r.t_s).collect(),
-            ),
-            (files::WHEELS, self.wheels.iter().map(|r| r.t_s).collect()),
-            (files::CMG, self.cmg.iter().map(|r| r.t_s).collect()),
-            (
-                files::THRUSTERS,
-                self.thrusters.iter().map(|r| r.t_s).collect(),
-            ),
-        ] {
+        for (name, times) in self.time_stamps().into_iter().skip(1) {
             if let (Some(a), Some(b)) = (times.first(), times.last()) {
                 let overlap = b.min(t1) - a.max(t0);
                 if overlap < 0.5 * duration {

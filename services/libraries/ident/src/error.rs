@@ -40,6 +40,10 @@ pub enum DataError {
     Content { file: PathBuf, message: String },
     #[error("{file}: {message}")]
     TooShort { file: PathBuf, message: String },
+    /// A channel disagrees with the others or with physics by a gross factor, a sign, a
+    /// permutation or as a record of another run: an export mistake (see [`crate::sanity`]).
+    #[error("{0}")]
+    Implausible(Box<crate::sanity::Finding>),
     #[error("{file}: run log: {source}")]
     Log {
         file: PathBuf,

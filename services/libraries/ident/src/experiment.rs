@@ -18,8 +18,8 @@ use crate::error::IdentError;
 use nalgebra::Vector4;
 use serde::Serialize;
 use std::path::PathBuf;
+use testbed_flight::estimators::EstimatorConfig;
 use testbed_flight::manoeuvre::Manoeuvre;
-use testbed_flight::mekf::MekfConfig;
 use testbed_flight::tasks::ControllerConfig;
 use testbed_model::ModelConfig;
 use testbed_model::config::RPM;
@@ -256,13 +256,12 @@ pub fn scenario(model: &ModelConfig, options: &ExperimentOptions) -> Result<Scen
         target_pitch_deg: 0.0,
         target_roll_deg: 0.0,
     };
+    let mut controller = ControllerConfig::default();
+    controller.thrusters = options.thrusters.then(Default::default);
     Ok(Scenario {
-        estimator: MekfConfig::from_model(model),
+        estimator: EstimatorConfig::default(),
         model: model.clone(),
-        controller: ControllerConfig {
-            thrusters: options.thrusters.then(Default::default),
-            ..ControllerConfig::default()
-        },
+        controller,
         feedback: Feedback::Estimate,
         manoeuvre,
         duration_s: options.duration_s,

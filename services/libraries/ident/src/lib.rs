@@ -4,6 +4,8 @@
 //! * [`data`], [`csv`], [`runlog`]: measured data (the CSV directory contract of
 //!   `docs/measured-data.md`, or an MCAP run log) and its alignment on the gyro's clock; `csv`
 //!   reads and writes the files' plain records, `data` builds the [`Dataset`] from them.
+//! * [`sanity`]: the data's mistakes (units, signs, exchanged columns, another run's channel)
+//!   found before any cause is fitted.
 //! * [`reconstruct`]: the estimated state (the project's MEKF over the data).
 //! * [`channels`]: equation-error channels (platform momentum, wheels) and their regressors.
 //! * [`effects`]: the library of candidate causes (the model's effect tables).
@@ -15,13 +17,17 @@
 //! * [`experiment`]: an excitation schedule for the closed loop and its data as a CSV directory.
 //! * [`design`]: D-optimal choice of that schedule's amplitudes and timing within the tilt and
 //!   wheel-speed limits.
-//! * [`stats`]: least squares and residual statistics.
+//! * [`stats`]: least squares and residual statistics; [`spectral`]: the Whittle test of a
+//!   coloured (Gauss–Markov) component in a residual.
 //! * [`thrusters`]: the thrust time and propellant use of the recorded valve on-times.
+//! * [`balance`]: the balance masses' moves that bring an identified centre of mass to its
+//!   target, with the predicted residual and its uncertainty.
 
 #![forbid(unsafe_code)]
 // Index loops over the 3 axes and the parameter columns read as the maths they implement.
 #![allow(clippy::needless_range_loop)]
 
+pub mod balance;
 pub mod channels;
 pub mod csv;
 pub mod data;
@@ -35,7 +41,9 @@ pub mod identify;
 pub mod predict;
 pub mod reconstruct;
 pub mod runlog;
+pub mod sanity;
 pub mod sparse;
+pub mod spectral;
 pub mod stats;
 pub mod thrusters;
 

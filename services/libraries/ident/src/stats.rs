@@ -243,7 +243,9 @@ pub struct SeriesStats {
     /// Not in the report: the residuals described (multi-step prediction errors over a window,
     /// the integrated momentum residual, filter innovations) are serially correlated by
     /// construction, so the white-noise null is the wrong one for them (clean data gave
-    /// `white_p` = 0). Structure is judged by the unexplained-effect search instead.
+    /// `white_p` = 0). Structure is judged by the unexplained-effect search instead, and
+    /// whiteness on what should be white (the increments of the momentum residual, the
+    /// normalised innovations alone) by `identify`'s whiteness report.
     #[serde(skip)]
     pub ljung_box: f64,
     /// Lags of the Ljung–Box statistic.

@@ -1,4 +1,4 @@
-//! Experiment design (`testbed_ident::design`, issue 17 item 5): the designed programme against
+//! Experiment design (`testbed_ident::design`): the designed programme against
 //! the default one, predicted and measured.
 //!
 //! The measured comparisons hide causes in the truth (four torque and wheel causes; or three

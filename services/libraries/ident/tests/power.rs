@@ -1,4 +1,4 @@
-//! Detection power of a 20-minute experiment (issue 17, item 4): each cause hidden at
+//! Detection power of a 20-minute experiment: each cause hidden at
 //! increasing fractions of the magnitude the library tests use, 10 seeds each, identified blind;
 //! the table gives the share of seeds in which the cause is named (alone or with others).
 //! Ignored (about 280 identifications): run with

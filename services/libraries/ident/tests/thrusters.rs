@@ -1,4 +1,4 @@
-//! Identification from data with thruster firings (issue 14, item 5): a simulated run in which
+//! Identification from data with thruster firings: a simulated run in which
 //! the thrusters dump the wheels' momentum against a constant disturbance, with a hidden
 //! per-thruster thrust scale error or a hidden tank-position error, identified blind against the
 //! model without it (the model knows the thrusters and the disturbance). Clean data must give

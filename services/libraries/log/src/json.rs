@@ -2,7 +2,7 @@
 //!
 //! Encoding writes fields in declaration order with no whitespace. Finite `f64` values are
 //! written in the shortest form that parses back to the same value; non-finite values
-//! (which JSON numbers cannot hold) as the strings `"NaN"`, `"Infinity"` and `"-Infinity"`.
+//! (which JSON numbers cannot hold) as `null`, read back as NaN.
 //! Integers are written exactly (`u64` may exceed 2^53, where JavaScript tools lose precision).
 
 use ipc_types::SampleHeader;
@@ -70,117 +70,75 @@ fn write_serde<T: serde::Serialize + ?Sized>(value: &T, out: &mut Vec<u8>) {
     let _ = serde_json::to_writer(out, value);
 }
 
+/// What the schemas say of non-finite values.
+const NON_FINITE: &str = "Non-finite values (NaN, ±infinity), which JSON numbers cannot hold, \
+    are written as null and read back as NaN.";
+
 impl Field for f64 {
     fn write(&self, out: &mut Vec<u8>) {
         if self.is_finite() {
             write_serde(self, out);
-        } else if self.is_nan() {
-            out.extend_from_slice(b"\"NaN\"");
-        } else if *self > 0.0 {
-            out.extend_from_slice(b"\"Infinity\"");
         } else {
-            out.extend_from_slice(b"\"-Infinity\"");
+            // JSON has no NaN or infinity; `null` is what JSON tools (Foxglove, serde_json,
+            // JavaScript's JSON.stringify) make of them.
+            out.extend_from_slice(b"null");
         }
     }
 
     fn read(value: &Value, field: &str) -> Result<Self, DecodeError> {
         let bad = || DecodeError::Type {
             field: field.to_owned(),
-            expected: "a number or \"NaN\"/\"Infinity\"/\"-Infinity\"",
+            expected: "a number or null",
         };
         match value {
             Value::Number(n) => n.as_f64().ok_or_else(bad),
-            Value::String(s) => match s.as_str() {
-                "NaN" => Ok(f64::NAN),
-                "Infinity" => Ok(f64::INFINITY),
-                "-Infinity" => Ok(f64::NEG_INFINITY),
-                _ => Err(bad()),
-            },
+            Value::Null => Ok(f64::NAN),
             _ => Err(bad()),
         }
     }
 
     fn schema(description: &str) -> Value {
         json!({
-            "type": ["number", "string"],
-            "description": format!(
-                "{description} Non-finite values are written as the strings \"NaN\", \
-                 \"Infinity\", \"-Infinity\"."
-            ),
+            "type": ["number", "null"],
+            "description": format!("{description} {NON_FINITE}"),
         })
     }
 }
 
-impl Field for u64 {
-    fn write(&self, out: &mut Vec<u8>) {
-        write_serde(self, out);
-    }
+/// The unsigned integer fields: written as serde writes them, read back only if in range.
+macro_rules! unsigned_fields {
+    ($($ty:ty: $expected:literal;)*) => {$(
+        impl Field for $ty {
+            fn write(&self, out: &mut Vec<u8>) {
+                write_serde(self, out);
+            }
 
-    fn read(value: &Value, field: &str) -> Result<Self, DecodeError> {
-        value.as_u64().ok_or_else(|| DecodeError::Type {
-            field: field.to_owned(),
-            expected: "an integer from 0 to 2^64 - 1",
-        })
-    }
+            fn read(value: &Value, field: &str) -> Result<Self, DecodeError> {
+                value
+                    .as_u64()
+                    .and_then(|v| <$ty>::try_from(v).ok())
+                    .ok_or_else(|| DecodeError::Type {
+                        field: field.to_owned(),
+                        expected: $expected,
+                    })
+            }
 
-    fn schema(description: &str) -> Value {
-        json!({
-            "type": "integer",
-            "minimum": 0,
-            "maximum": u64::MAX,
-            "description": description,
-        })
-    }
+            fn schema(description: &str) -> Value {
+                json!({
+                    "type": "integer",
+                    "minimum": 0,
+                    "maximum": <$ty>::MAX,
+                    "description": description,
+                })
+            }
+        }
+    )*};
 }
 
-impl Field for u32 {
-    fn write(&self, out: &mut Vec<u8>) {
-        write_serde(self, out);
-    }
-
-    fn read(value: &Value, field: &str) -> Result<Self, DecodeError> {
-        value
-            .as_u64()
-            .and_then(|v| u32::try_from(v).ok())
-            .ok_or_else(|| DecodeError::Type {
-                field: field.to_owned(),
-                expected: "an integer from 0 to 2^32 - 1",
-            })
-    }
-
-    fn schema(description: &str) -> Value {
-        json!({
-            "type": "integer",
-            "minimum": 0,
-            "maximum": u32::MAX,
-            "description": description,
-        })
-    }
-}
-
-impl Field for u8 {
-    fn write(&self, out: &mut Vec<u8>) {
-        write_serde(self, out);
-    }
-
-    fn read(value: &Value, field: &str) -> Result<Self, DecodeError> {
-        value
-            .as_u64()
-            .and_then(|v| u8::try_from(v).ok())
-            .ok_or_else(|| DecodeError::Type {
-                field: field.to_owned(),
-                expected: "an integer from 0 to 255",
-            })
-    }
-
-    fn schema(description: &str) -> Value {
-        json!({
-            "type": "integer",
-            "minimum": 0,
-            "maximum": u8::MAX,
-            "description": description,
-        })
-    }
+unsigned_fields! {
+    u64: "an integer from 0 to 2^64 - 1";
+    u32: "an integer from 0 to 2^32 - 1";
+    u8: "an integer from 0 to 255";
 }
 
 /// Eight raw bytes (a CAN frame's payload), as an array of integers.
@@ -253,13 +211,10 @@ impl<const N: usize> Field for [f64; N] {
     fn schema(description: &str) -> Value {
         json!({
             "type": "array",
-            "items": {"type": ["number", "string"]},
+            "items": {"type": ["number", "null"]},
             "minItems": N,
             "maxItems": N,
-            "description": format!(
-                "{description} Non-finite elements are written as the strings \"NaN\", \
-                 \"Infinity\", \"-Infinity\"."
-            ),
+            "description": format!("{description} {NON_FINITE}"),
         })
     }
 }
@@ -344,7 +299,7 @@ impl Field for [u8; $n] {
 
 name_field!(32);
 // The reason of a ground command's acknowledgement.
-name_field!(64);
+name_field!(256);
 
 /// The flag bits of [`SampleHeader::flags`], for the schema description.
 const FLAGS_DESCRIPTION: &str = "Bit set of validity flags: bit 0 VALID (data may be used), \
@@ -487,9 +442,14 @@ mod tests {
         ] {
             assert_eq!(round(&v).to_bits(), v.to_bits(), "{v:e}");
         }
-        assert!(round(&f64::NAN).is_nan());
-        assert_eq!(round(&f64::INFINITY), f64::INFINITY);
-        assert_eq!(round(&f64::NEG_INFINITY), f64::NEG_INFINITY);
+        for v in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+            let mut out = Vec::new();
+            v.write(&mut out);
+            assert_eq!(out, b"null", "{v}");
+            assert!(round(&v).is_nan(), "{v}");
+        }
+        let string: Value = serde_json::from_str("\"NaN\"").expect("json");
+        assert!(f64::read(&string, "x").is_err(), "a string is not a number");
     }
 
     #[test]

@@ -12,31 +12,39 @@
 //!
 //! Standard MCAP, readable by the `mcap` CLI, Foxglove and the Python/C++/Go readers:
 //!
-//! - One channel per topic of [`ipc_types::topic::ALL`] (topic = the iceoryx2 service name),
-//!   message encoding `json`, schema encoding `jsonschema` (Foxglove's JSON convention).
+//! - One channel per topic of the topic table ([`ipc_types::TopicId`]; topic = the iceoryx2
+//!   service name), in table order ([`channel_id`]), message encoding `json`, schema encoding
+//!   `jsonschema` (Foxglove's JSON convention).
 //! - One schema per sample type, named after its versioned iceoryx2 type name
 //!   (`testbed::GyroSample.v1`, …); field names are the Rust field names (padding fields left
 //!   out), descriptions give units and frames.
 //! - Messages are compact JSON with fields in declaration order; `f64` values in the shortest
-//!   form that reads back to the same bits, non-finite values as `"NaN"`, `"Infinity"`,
-//!   `"-Infinity"`; [`Heartbeat::name`](ipc_types::Heartbeat::name) as a string (or as its 32
-//!   raw bytes if they are not NUL-padded UTF-8). Decoding gives back the exact sample, except
-//!   that NaN payloads are not kept.
+//!   form that reads back to the same bits; non-finite values (NaN, ±infinity: JSON numbers
+//!   cannot hold them) as `null`, which decodes to NaN (schema type `["number", "null"]`);
+//!   [`Heartbeat::name`](ipc_types::Heartbeat::name) as a string (or as its 32 raw bytes if
+//!   they are not NUL-padded UTF-8). Decoding gives back the exact sample, except that a
+//!   non-finite value comes back as NaN (the sign of an infinity and NaN payloads are lost).
 //! - `log_time = publish_time = start_time_ns + header.time_ns`: the run's wall-clock start
 //!   ([`RunInfo::start_time_ns`]) plus the run clock, so viewers show the real date; the
 //!   sample's header keeps the run clock.
 //! - Attitude as Foxglove's well-known `foxglove.FrameTransform` (JSON), derived from the
 //!   estimate and the simulation truth ([`foxglove`]), so the 3D panel shows the platform.
-//! - Indexed when the run ends ([`index`]): chunks, message indexes and a chunk index, so
-//!   viewers seek by time.
-//! - The configuration text is the attachment [`CONFIG_ATTACHMENT`] (`application/toml`);
-//!   profile, seed and mode are the string map of the metadata record [`RUN_METADATA`].
+//! - Indexed when the run ends ([`index`]): zstd-compressed chunks, one per
+//!   [`CHUNK_INTERVAL_NS`] (10 s) of log time, the flush interval: chunks do not overlap in
+//!   time, so a viewer seeking to a time reads one chunk. Each has its message indexes, and
+//!   the summary a chunk index. Within a chunk the messages are grouped by channel (it
+//!   compresses better); readers that sort by log time give them back in time order.
+//! - The configuration text is the attachment [`CONFIG_ATTACHMENT`] (`application/toml`),
+//!   dated the run's start (`log_time` = `create_time` = [`RunInfo::start_time_ns`]); profile,
+//!   seed and mode are the string map of the metadata record [`RUN_METADATA`].
+//! - Every message is stamped with the time it describes: a sample's `header.time_ns`, a
+//!   heartbeat's the newest sample time its process had handled.
 //!
 //! # Crash safety
 //!
-//! See [`RunLogWriter`]: during the run records are unchunked, so a file cut at any byte keeps
-//! every complete record, and [`RunLog`] reports where the file was cut; the indexed rewrite at
-//! the end replaces the file atomically.
+//! See [`RunLogWriter`]: during the run records are unchunked and uncompressed, so a file cut
+//! at any byte keeps every complete record, and [`RunLog`] reports where the file was cut; the
+//! indexed, compressed rewrite at the end replaces the file atomically.
 
 pub mod foxglove;
 mod json;
@@ -49,11 +57,16 @@ mod writer;
 
 pub use json::DecodeError;
 pub use reader::{LogEnd, Records, RunLog, Samples};
-pub use record::{LogEncode, LogRecord};
-pub use repair::{INDEXED_CHUNK_BYTES, RepairReport, index, repair};
+pub use record::{LogEncode, LogRecord, TopicJson};
+pub use repair::{
+    CHUNK_INTERVAL_NS, CHUNK_ZSTD_LEVEL, RepairReport, chunk_time_ranges, index, index_with_level,
+    repair,
+};
 pub use sorter::{EncodedRecord, TickSorter};
 pub use tail::LogTail;
-pub use writer::{LogStats, RecordOrder, RunLogWriter, WriterOptions};
+pub use writer::{
+    LogStats, RecordOrder, RunLogWriter, WriterOptions, channel_id, derived_channel_id,
+};
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -171,12 +184,20 @@ pub enum LogError {
         source: mcap::McapError,
     },
     /// The file uses an MCAP feature this reader does not read.
-    #[error("record at byte {offset}: {what} is not supported (testbed-log writes unchunked logs)")]
+    #[error("record at byte {offset}: {what} is not supported")]
     Unsupported {
         /// Byte offset of the record.
         offset: u64,
         /// What is not supported.
         what: &'static str,
+    },
+    /// A compressed chunk could not be decompressed.
+    #[error("chunk at byte {offset}: zstd decompression failed: {source}")]
+    Decompress {
+        /// Byte offset of the chunk record.
+        offset: u64,
+        /// The decompressor's error.
+        source: std::io::Error,
     },
     /// The log lacks the run information (configuration attachment or run metadata).
     #[error("no {missing} in the log ({end})")]

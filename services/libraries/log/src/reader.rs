@@ -1,9 +1,10 @@
 //! [`RunLog`]: reads a run log back, tolerating a file cut at any byte.
 
-use crate::record::{LogEncode, LogRecord, TopicKind};
+use crate::record::{LogEncode, LogRecord, TopicJson as _};
 use crate::{
     CONFIG_ATTACHMENT, LogError, MESSAGE_ENCODING, RUN_METADATA, RunInfo, SCHEMA_ENCODING, keys,
 };
+use ipc_types::TopicId;
 use mcap::records::{Record, op};
 use std::collections::BTreeMap;
 use std::fs::File;
@@ -45,7 +46,7 @@ impl std::fmt::Display for LogEnd {
 #[derive(Debug, Clone)]
 pub(crate) struct ChannelEntry {
     pub(crate) topic: String,
-    pub(crate) kind: Result<TopicKind, String>,
+    pub(crate) kind: Result<TopicId, String>,
 }
 
 /// The schemas and channels a file's records define. The first definition of an id is kept.
@@ -96,7 +97,8 @@ impl ChannelEntry {
 ///
 /// [`open`](Self::open) scans the file's record structure once (message bodies are skipped),
 /// so it knows the channels, the run information and whether and where the file was cut;
-/// the iterators then decode messages in file order, up to the end of the data section or the
+/// the iterators then decode messages in file order (within a chunk by log time, see
+/// [`index`](crate::index)), up to the end of the data section or the
 /// cut.
 #[derive(Debug, Clone)]
 pub struct RunLog {
@@ -112,16 +114,27 @@ pub struct RunLog {
 
 /// Outcome of reading the next record's framing.
 pub(crate) enum Next {
-    /// A complete record: opcode, offset of its opcode byte, body length.
-    Record { opcode: u8, offset: u64, len: u64 },
+    /// A complete record.
+    Record(Frame),
     /// The bytes from `offset` on do not hold a complete record.
     Cut { offset: u64 },
 }
 
+/// The framing of one complete record.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Frame {
+    pub(crate) opcode: u8,
+    /// Offset of the opcode byte.
+    pub(crate) offset: u64,
+    /// Body length.
+    pub(crate) len: u64,
+}
+
 /// Reads MCAP record framing (opcode, length) from a file of known length.
 ///
-/// Chunks are opened transparently: the records inside an (uncompressed) chunk are returned
-/// one by one as if they were in the data section, each with the chunk's offset.
+/// Chunks (uncompressed or zstd) are opened transparently: the records inside a chunk are
+/// returned one by one as if they were in the data section, each with the chunk's offset, its
+/// messages in log-time order ([`chunk_order`]).
 pub(crate) struct Framing {
     reader: BufReader<File>,
     pos: u64,
@@ -133,15 +146,73 @@ pub(crate) struct Framing {
 struct ChunkCursor {
     /// Offset of the chunk record in the file.
     offset: u64,
-    /// The chunk's records.
+    /// The chunk's records (decompressed).
     records: Vec<u8>,
-    /// Start of the next record in `records`.
+    /// Where each record is in `records` (opcode, body), in the order they are returned: the
+    /// definitions first, then the messages by log time (see [`chunk_order`]).
+    order: Vec<(u8, std::ops::Range<usize>)>,
+    /// Index in `order` of the next record to return.
     next: usize,
     /// Body of the record last returned by [`Framing::next`], if it came from this chunk.
     body: Option<std::ops::Range<usize>>,
 }
 
+/// The records of a chunk's `records` (opcode, body range), in the order a reader of samples
+/// wants them: schemas, channels and other records in chunk order, then the messages by
+/// `log_time` (stable: messages of one time keep their chunk order). The indexed log groups a
+/// chunk's messages by channel ([`index`](crate::index)), which compresses better; ordered by
+/// time again, a lockstep log's samples come in the order the logger sorted them (time, then
+/// topic order: the channel ids follow the topic table), as in the unchunked file.
+fn chunk_order(offset: u64, records: &[u8]) -> Result<Vec<(u8, std::ops::Range<usize>)>, LogError> {
+    let mut definitions = Vec::new();
+    let mut messages = Vec::new();
+    let mut next = 0;
+    while next < records.len() {
+        let frame = records.get(next..next + 9).ok_or(LogError::Unsupported {
+            offset,
+            what: "a chunk whose last record is cut",
+        })?;
+        let opcode = frame[0];
+        let mut len_bytes = [0u8; 8];
+        len_bytes.copy_from_slice(&frame[1..9]);
+        let start = next + 9;
+        let end = usize::try_from(u64::from_le_bytes(len_bytes))
+            .ok()
+            .and_then(|len| start.checked_add(len))
+            .filter(|end| *end <= records.len())
+            .ok_or(LogError::Unsupported {
+                offset,
+                what: "a chunk whose records overrun it",
+            })?;
+        // A message body: channel id (2), sequence (4), log time (8), …
+        match records.get(start + 6..start + 14) {
+            Some(time) if opcode == op::MESSAGE => {
+                let mut t = [0u8; 8];
+                t.copy_from_slice(time);
+                messages.push((u64::from_le_bytes(t), (opcode, start..end)));
+            }
+            _ => definitions.push((opcode, start..end)),
+        }
+        next = end;
+    }
+    messages.sort_by_key(|(time, _)| *time);
+    definitions.extend(messages.into_iter().map(|(_, record)| record));
+    Ok(definitions)
+}
+
 impl Framing {
+    /// Opens the log at `path` and checks the leading magic; a file too short to hold it is a
+    /// log without its header.
+    pub(crate) fn open_log(path: &Path) -> Result<Self, LogError> {
+        Self::open(path)?.map_err(|file_len| LogError::MissingRunInfo {
+            missing: "header",
+            end: LogEnd::Truncated {
+                offset: 0,
+                file_len,
+            },
+        })
+    }
+
     /// Opens `path` and checks the leading magic. `Err(file_len)`: the file is shorter than
     /// the magic but a prefix of it.
     pub(crate) fn open(path: &Path) -> Result<Result<Self, u64>, LogError> {
@@ -225,56 +296,54 @@ impl Framing {
         loop {
             if let Some(chunk) = &mut self.chunk {
                 chunk.body = None;
-                let rest = chunk.records.get(chunk.next..).unwrap_or_default();
-                if !rest.is_empty() {
-                    let frame = rest.get(..9).ok_or(LogError::Unsupported {
-                        offset: chunk.offset,
-                        what: "a chunk whose last record is cut",
-                    })?;
-                    let opcode = frame[0];
-                    let mut len_bytes = [0u8; 8];
-                    len_bytes.copy_from_slice(&frame[1..9]);
-                    let len = u64::from_le_bytes(len_bytes);
-                    let start = chunk.next + 9;
-                    let end = usize::try_from(len)
-                        .ok()
-                        .and_then(|len| start.checked_add(len))
-                        .filter(|end| *end <= chunk.records.len())
-                        .ok_or(LogError::Unsupported {
-                            offset: chunk.offset,
-                            what: "a chunk whose records overrun it",
-                        })?;
-                    chunk.next = end;
-                    chunk.body = Some(start..end);
-                    return Ok(Next::Record {
+                if let Some((opcode, range)) = chunk.order.get(chunk.next).cloned() {
+                    chunk.next += 1;
+                    let len = (range.end - range.start) as u64;
+                    chunk.body = Some(range);
+                    return Ok(Next::Record(Frame {
                         opcode,
                         offset: chunk.offset,
                         len,
-                    });
+                    }));
                 }
                 self.chunk = None;
             }
             let next = self.next_in_file()?;
             match next {
-                Next::Record {
+                Next::Record(Frame {
                     opcode: op::CHUNK,
                     offset,
                     len,
-                } => {
+                }) => {
                     let mut body = Vec::new();
                     self.body(len, &mut body)?;
                     let Record::Chunk { header, data } = parse(op::CHUNK, offset, &body)? else {
                         continue;
                     };
-                    if !header.compression.is_empty() {
-                        return Err(LogError::Unsupported {
-                            offset,
-                            what: "a compressed chunk",
-                        });
-                    }
+                    let records = match header.compression.as_str() {
+                        "" => data.into_owned(),
+                        "zstd" => {
+                            let size = usize::try_from(header.uncompressed_size).map_err(|_| {
+                                LogError::Unsupported {
+                                    offset,
+                                    what: "a chunk larger than memory",
+                                }
+                            })?;
+                            zstd::bulk::decompress(&data, size)
+                                .map_err(|source| LogError::Decompress { offset, source })?
+                        }
+                        _ => {
+                            return Err(LogError::Unsupported {
+                                offset,
+                                what: "a chunk compressed other than with zstd",
+                            });
+                        }
+                    };
+                    let order = chunk_order(offset, &records)?;
                     self.chunk = Some(ChunkCursor {
                         offset,
-                        records: data.into_owned(),
+                        records,
+                        order,
                         next: 0,
                         body: None,
                     });
@@ -299,11 +368,11 @@ impl Framing {
             return Ok(Next::Cut { offset });
         }
         self.pos = offset + 9 + len;
-        Ok(Next::Record {
+        Ok(Next::Record(Frame {
             opcode,
             offset,
             len,
-        })
+        }))
     }
 
     pub(crate) fn body(&mut self, len: u64, buf: &mut Vec<u8>) -> Result<(), LogError> {
@@ -350,18 +419,7 @@ impl RunLog {
     /// [`end`](Self::end)).
     pub fn open(path: impl AsRef<Path>) -> Result<Self, LogError> {
         let path = path.as_ref();
-        let mut framing = match Framing::open(path)? {
-            Ok(framing) => framing,
-            Err(file_len) => {
-                return Err(LogError::MissingRunInfo {
-                    missing: "header",
-                    end: LogEnd::Truncated {
-                        offset: 0,
-                        file_len,
-                    },
-                });
-            }
-        };
+        let mut framing = Framing::open_log(path)?;
         let file_len = framing.file_len;
         let mut definitions = Definitions::default();
         let mut library = String::new();
@@ -374,11 +432,7 @@ impl RunLog {
 
         while end.is_none() {
             let (opcode, offset, len) = match framing.next()? {
-                Next::Record {
-                    opcode,
-                    offset,
-                    len,
-                } => (opcode, offset, len),
+                Next::Record(f) => (f.opcode, f.offset, f.len),
                 Next::Cut { offset } => {
                     end = Some(LogEnd::Truncated { offset, file_len });
                     break;
@@ -519,7 +573,7 @@ impl RunLog {
     pub fn records_on(&self, topics: &[&str]) -> Result<Records<'_>, LogError> {
         let kinds = topics
             .iter()
-            .filter_map(|t| TopicKind::from_topic(t))
+            .filter_map(|t| TopicId::from_name(t))
             .collect();
         self.records_filtered(Some(kinds))
     }
@@ -532,7 +586,7 @@ impl RunLog {
         })
     }
 
-    fn records_filtered(&self, filter: Option<Vec<TopicKind>>) -> Result<Records<'_>, LogError> {
+    fn records_filtered(&self, filter: Option<Vec<TopicId>>) -> Result<Records<'_>, LogError> {
         let framing = Framing::open(&self.path)?.map_err(|_| LogError::NotMcap)?;
         Ok(Records {
             log: self,
@@ -548,9 +602,9 @@ impl RunLog {
 fn channel_kind(
     channel: &mcap::records::Channel,
     schemas: &BTreeMap<u16, (String, String)>,
-) -> Result<TopicKind, String> {
+) -> Result<TopicId, String> {
     let kind =
-        TopicKind::from_topic(&channel.topic).ok_or_else(|| "not an ipc-types topic".to_owned())?;
+        TopicId::from_name(&channel.topic).ok_or_else(|| "not an ipc-types topic".to_owned())?;
     if channel.message_encoding != MESSAGE_ENCODING {
         return Err(format!(
             "message encoding {:?}, expected json",
@@ -613,7 +667,7 @@ fn run_info(
 pub struct Records<'a> {
     log: &'a RunLog,
     framing: Framing,
-    filter: Option<Vec<TopicKind>>,
+    filter: Option<Vec<TopicId>>,
     body: Vec<u8>,
     stopped: bool,
 }
@@ -625,11 +679,7 @@ impl Records<'_> {
                 return Ok(None);
             }
             let (opcode, offset, len) = match self.framing.next()? {
-                Next::Record {
-                    opcode,
-                    offset,
-                    len,
-                } => (opcode, offset, len),
+                Next::Record(f) => (f.opcode, f.offset, f.len),
                 Next::Cut { .. } => return Ok(None),
             };
             if opcode != op::MESSAGE {

@@ -5,31 +5,46 @@ use ipc_types::{
     AppliedCmgCommand, AppliedThrusterCommand, AppliedWheelCommand, AttitudeEstimate, CanBusFrame,
     CanLinkStatus, CmgCommand, CmgTelemetry, ControllerStatus, GroundCommand, GroundCommandAck,
     GyroSample, HealthEvent, Heartbeat, InclinometerSample, MagnetometerSample, SampleHeader,
-    SimClockTick, SimTruth, ThrusterCommand, ThrusterStatus, Topic, WheelCommand, WheelTelemetry,
+    SimClockTick, SimTruth, ThrusterCommand, ThrusterStatus, Topic, TopicId, WheelCommand,
+    WheelTelemetry,
 };
 use serde_json::Value;
 
 mod sealed {
-    pub trait Sealed {}
+    /// The JSON side of a logged type (implemented by [`log_schemas!`] only, which seals
+    /// [`LogEncode`](super::LogEncode)).
+    pub trait Json: Sized {
+        fn json_schema() -> String;
+        fn encode_json(&self, out: &mut Vec<u8>);
+        fn decode_json(data: &[u8]) -> Result<Self, super::DecodeError>;
+    }
 }
 
-/// A sample type the run log can hold: every [`Topic`] type of `ipc-types`.
+/// A sample type the run log can hold: every type of the topic table of `ipc-types`.
 ///
 /// Implemented for exactly the types of [`LogRecord`]'s variants (sealed).
-pub trait LogEncode: Topic + sealed::Sealed {
+pub trait LogEncode: Topic + sealed::Json {
+    /// The type's topic in the table.
+    const ID: TopicId;
     /// Name of the type's schema in the log: the iceoryx2 type name (`"testbed::<Type>.v<N>"`),
     /// so a layout change (new version) is a new schema.
-    const SCHEMA_NAME: &'static str;
+    const SCHEMA_NAME: &'static str = Self::ID.schema_name();
 
     /// The JSON Schema (draft 2020-12) of the type's messages, with units in the descriptions.
-    fn json_schema() -> String;
+    fn json_schema() -> String {
+        <Self as sealed::Json>::json_schema()
+    }
 
     /// Appends the message's JSON (deterministic: fields in declaration order, no whitespace,
     /// padding fields left out) to `out`.
-    fn encode_json(&self, out: &mut Vec<u8>);
+    fn encode_json(&self, out: &mut Vec<u8>) {
+        sealed::Json::encode_json(self, out)
+    }
 
     /// Decodes a JSON message written by [`encode_json`](Self::encode_json).
-    fn decode_json(data: &[u8]) -> Result<Self, DecodeError>;
+    fn decode_json(data: &[u8]) -> Result<Self, DecodeError> {
+        <Self as sealed::Json>::decode_json(data)
+    }
 
     /// The sample as a [`LogRecord`].
     fn into_record(self) -> LogRecord;
@@ -38,95 +53,51 @@ pub trait LogEncode: Topic + sealed::Sealed {
     fn from_record(record: &LogRecord) -> Option<Self>;
 }
 
-/// Describes one field of a logged type: name, and description with unit.
-macro_rules! log_types {
-    ($(
-        $(#[$vdoc:meta])*
-        $variant:ident($ty:ident) = $schema:literal, $desc:literal {
-            header: $hdesc:literal,
-            $($field:ident: $fdesc:literal,)*
-        } pad [$($pad:ident),*];
-    )*) => {
+/// [`LogRecord`] and the [`LogEncode`] impls, one variant per topic of the table, in table
+/// order (called by [`ipc_types::for_each_topic!`]).
+macro_rules! log_records {
+    ($($id:ident($ty:ty, $path:literal),)*) => {
         /// One sample of any topic, as held in the run log.
         ///
-        /// Variants are in the order of [`ipc_types::topic::ALL`], which is also the topic order
-        /// used to sort records of equal time (see [`TickSorter`](crate::TickSorter)).
+        /// Variants are in the order of the topic table ([`TopicId`]), which is also the topic
+        /// order used to sort records of equal time (see [`TickSorter`](crate::TickSorter)).
         // Samples are plain fixed-size values (480 bytes at most); boxing would cost an
         // allocation per record and the `Copy`.
         #[allow(clippy::large_enum_variant)]
         #[derive(Debug, Clone, Copy, PartialEq)]
         pub enum LogRecord {
-            $($(#[$vdoc])* $variant($ty),)*
+            $(
+                #[doc = concat!("A sample on `", $path, "`.")]
+                $id($ty),
+            )*
         }
 
-        /// Topic of a record, in [`ipc_types::topic::ALL`] order.
-        #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
-        pub(crate) enum TopicKind {
-            $($variant,)*
-        }
-
-        impl TopicKind {
-            /// Every topic, in order.
-            pub(crate) const ALL: &[TopicKind] = &[$(TopicKind::$variant),*];
-
-            /// The topic (service) name.
-            pub(crate) const fn name(self) -> &'static str {
+        impl TopicJson for TopicId {
+            fn json_schema(self) -> String {
                 match self {
-                    $(Self::$variant => <$ty as Topic>::NAME,)*
+                    $(Self::$id => <$ty as LogEncode>::json_schema(),)*
                 }
             }
 
-            /// The schema name.
-            pub(crate) const fn schema_name(self) -> &'static str {
-                match self {
-                    $(Self::$variant => $schema,)*
-                }
-            }
-
-            /// The JSON Schema text.
-            pub(crate) fn json_schema(self) -> String {
-                match self {
-                    $(Self::$variant => <$ty as LogEncode>::json_schema(),)*
-                }
-            }
-
-            /// The kind whose topic name is `topic`.
-            pub(crate) fn from_topic(topic: &str) -> Option<Self> {
-                Self::ALL.iter().copied().find(|k| k.name() == topic)
-            }
-
-            /// Decodes a JSON message of this topic.
-            pub(crate) fn decode(self, data: &[u8]) -> Result<LogRecord, DecodeError> {
+            fn decode(self, data: &[u8]) -> Result<LogRecord, DecodeError> {
                 Ok(match self {
-                    $(Self::$variant => LogRecord::$variant(<$ty as LogEncode>::decode_json(data)?),)*
+                    $(Self::$id => LogRecord::$id(<$ty as LogEncode>::decode_json(data)?),)*
                 })
             }
         }
 
         impl LogRecord {
-            /// Every topic name, in the order of the variants (= [`ipc_types::topic::ALL`]).
-            pub const TOPICS: &[&str] = &[$(<$ty as Topic>::NAME),*];
-
-            pub(crate) const fn kind(&self) -> TopicKind {
+            /// The record's topic.
+            pub const fn topic_id(&self) -> TopicId {
                 match self {
-                    $(Self::$variant(_) => TopicKind::$variant,)*
+                    $(Self::$id(_) => TopicId::$id,)*
                 }
-            }
-
-            /// The topic (service) name of the record.
-            pub const fn topic(&self) -> &'static str {
-                self.kind().name()
-            }
-
-            /// The schema name of the record's type (see [`LogEncode::SCHEMA_NAME`]).
-            pub const fn schema_name(&self) -> &'static str {
-                self.kind().schema_name()
             }
 
             /// The record's sample header.
             pub fn header(&self) -> &SampleHeader {
                 match self {
-                    $(Self::$variant(s) => s.header(),)*
+                    $(Self::$id(s) => s.header(),)*
                 }
             }
 
@@ -134,88 +105,35 @@ macro_rules! log_types {
             /// [`REPLAYED`](SampleHeader::REPLAYED) when replaying).
             pub fn header_mut(&mut self) -> &mut SampleHeader {
                 match self {
-                    $(Self::$variant(s) => s.header_mut(),)*
+                    $(Self::$id(s) => s.header_mut(),)*
                 }
             }
 
             /// Appends the record's JSON message to `out` (see [`LogEncode::encode_json`]).
             pub fn encode_json(&self, out: &mut Vec<u8>) {
                 match self {
-                    $(Self::$variant(s) => s.encode_json(out),)*
+                    $(Self::$id(s) => LogEncode::encode_json(s, out),)*
                 }
-            }
-
-            /// Decodes a JSON message published on `topic`; `None` if `topic` is not an
-            /// `ipc-types` topic.
-            pub fn decode_json(topic: &str, data: &[u8]) -> Option<Result<Self, DecodeError>> {
-                TopicKind::from_topic(topic).map(|kind| kind.decode(data))
             }
         }
 
         $(
-            impl sealed::Sealed for $ty {}
-
             impl From<$ty> for LogRecord {
                 fn from(sample: $ty) -> Self {
-                    Self::$variant(sample)
+                    Self::$id(sample)
                 }
             }
 
             impl LogEncode for $ty {
-                const SCHEMA_NAME: &'static str = $schema;
-
-                fn json_schema() -> String {
-                    let mut schema = object_schema(
-                        $schema,
-                        $desc,
-                        &[
-                            ("header", <SampleHeader as Field>::schema($hdesc)),
-                            $((
-                                stringify!($field),
-                                field_schema(&|s: &$ty| &s.$field, $fdesc),
-                            ),)*
-                        ],
-                    );
-                    if let Value::Object(map) = &mut schema {
-                        map.insert(
-                            "$schema".to_owned(),
-                            Value::from("https://json-schema.org/draft/2020-12/schema"),
-                        );
-                    }
-                    schema.to_string()
-                }
-
-                fn encode_json(&self, out: &mut Vec<u8>) {
-                    // Exhaustive: a field added to the type without being logged fails to build.
-                    let $ty { header, $($field,)* $($pad: _,)* } = self;
-                    out.extend_from_slice(b"{\"header\":");
-                    header.write(out);
-                    $(
-                        out.extend_from_slice(concat!(",\"", stringify!($field), "\":").as_bytes());
-                        $field.write(out);
-                    )*
-                    out.push(b'}');
-                }
-
-                fn decode_json(data: &[u8]) -> Result<Self, DecodeError> {
-                    let value: Value = serde_json::from_slice(data)?;
-                    let obj = as_object(&value, "")?;
-                    let sample = $ty {
-                        header: member(obj, "", "header")?,
-                        $($field: member(obj, "", stringify!($field))?,)*
-                        $($pad: 0,)*
-                    };
-                    check_no_extra(obj, "", &["header", $(stringify!($field)),*])?;
-                    Ok(sample)
-                }
+                const ID: TopicId = TopicId::$id;
 
                 fn into_record(self) -> LogRecord {
-                    LogRecord::$variant(self)
+                    LogRecord::$id(self)
                 }
 
                 fn from_record(record: &LogRecord) -> Option<Self> {
                     match record {
-                        LogRecord::$variant(s) => Some(*s),
+                        LogRecord::$id(s) => Some(*s),
                         #[allow(unreachable_patterns)]
                         _ => None,
                     }
@@ -225,22 +143,107 @@ macro_rules! log_types {
     };
 }
 
+ipc_types::for_each_topic!(log_records);
+
+/// What the log knows of each topic beyond the table: its JSON Schema and decoder.
+pub trait TopicJson {
+    /// The JSON Schema text.
+    fn json_schema(self) -> String;
+    /// Decodes a JSON message of this topic.
+    fn decode(self, data: &[u8]) -> Result<LogRecord, DecodeError>;
+}
+
+impl LogRecord {
+    /// The topic (service) name of the record.
+    pub const fn topic(&self) -> &'static str {
+        self.topic_id().name()
+    }
+
+    /// The schema name of the record's type (see [`LogEncode::SCHEMA_NAME`]).
+    pub const fn schema_name(&self) -> &'static str {
+        self.topic_id().schema_name()
+    }
+
+    /// Decodes a JSON message published on `topic`; `None` if `topic` is not a topic of the
+    /// table.
+    pub fn decode_json(topic: &str, data: &[u8]) -> Option<Result<Self, DecodeError>> {
+        TopicId::from_name(topic).map(|id| id.decode(data))
+    }
+}
+
+/// The JSON encoding and Schema of each logged type: a description of the type, then of each
+/// field (with its unit), in declaration order, and the padding fields left out. The field
+/// list is exhaustive: a field added to the type without being described fails to build.
+macro_rules! log_schemas {
+    ($(
+        $ty:ident $desc:literal {
+            header: $hdesc:literal,
+            $($field:ident: $fdesc:literal,)*
+        } pad [$($pad:ident),*];
+    )*) => {$(
+        impl sealed::Json for $ty {
+            fn json_schema() -> String {
+                let mut schema = object_schema(
+                    <$ty as LogEncode>::SCHEMA_NAME,
+                    $desc,
+                    &[
+                        ("header", <SampleHeader as Field>::schema($hdesc)),
+                        $((
+                            stringify!($field),
+                            field_schema(&|s: &$ty| &s.$field, $fdesc),
+                        ),)*
+                    ],
+                );
+                if let Value::Object(map) = &mut schema {
+                    map.insert(
+                        "$schema".to_owned(),
+                        Value::from("https://json-schema.org/draft/2020-12/schema"),
+                    );
+                }
+                schema.to_string()
+            }
+
+            fn encode_json(&self, out: &mut Vec<u8>) {
+                // Exhaustive: a field added to the type without being logged fails to build.
+                let $ty { header, $($field,)* $($pad: _,)* } = self;
+                out.extend_from_slice(b"{\"header\":");
+                header.write(out);
+                $(
+                    out.extend_from_slice(concat!(",\"", stringify!($field), "\":").as_bytes());
+                    $field.write(out);
+                )*
+                out.push(b'}');
+            }
+
+            fn decode_json(data: &[u8]) -> Result<Self, DecodeError> {
+                let value: Value = serde_json::from_slice(data)?;
+                let obj = as_object(&value, "")?;
+                let sample = $ty {
+                    header: member(obj, "", "header")?,
+                    $($field: member(obj, "", stringify!($field))?,)*
+                    $($pad: 0,)*
+                };
+                check_no_extra(obj, "", &["header", $(stringify!($field)),*])?;
+                Ok(sample)
+            }
+        }
+    )*};
+}
+
 /// The schema of the field `get` returns (type inference helper for the macro).
 fn field_schema<S, F: Field>(_get: &dyn Fn(&S) -> &F, description: &str) -> Value {
     F::schema(description)
 }
 
-log_types! {
-    /// [`GyroSample`] on [`topic::GYRO`](ipc_types::topic::GYRO).
-    Gyro(GyroSample) = "testbed::GyroSample.v1",
+log_schemas! {
+    GyroSample
     "One sample of the three fibre-optic gyros (10 Hz)." {
         header: "Common header; time_ns is the device's sampling instant.",
         rate: "Measured angular rate of B against inertial space, body axes x, y, z, rad/s \
                (as the gyros sense it: including bias, noise and the Earth's rotation).",
     } pad [];
 
-    /// [`InclinometerSample`] on [`topic::INCLINOMETER`](ipc_types::topic::INCLINOMETER).
-    Inclinometer(InclinometerSample) = "testbed::InclinometerSample.v1",
+    InclinometerSample
     "One sample of the two-axis inclinometer (2.5 Hz)." {
         header: "Common header; time_ns is the device's sampling instant.",
         tilt: "Measured tilt angles [theta, phi] of body x and body y against the level plane, \
@@ -248,15 +251,13 @@ log_types! {
                G_B = [sin theta, sin phi, -sqrt(1 - sin^2 theta - sin^2 phi)].",
     } pad [];
 
-    /// [`MagnetometerSample`] on [`topic::MAGNETOMETER`](ipc_types::topic::MAGNETOMETER).
-    Magnetometer(MagnetometerSample) = "testbed::MagnetometerSample.v1",
+    MagnetometerSample
     "One sample of the three-axis magnetometer (2.5 Hz)." {
         header: "Common header; time_ns is the device's sampling instant.",
         field: "Measured magnetic flux density, body axes x, y, z, T (tesla; 1 gauss = 1e-4 T).",
     } pad [];
 
-    /// [`WheelTelemetry`] on [`topic::WHEEL_TELEMETRY`](ipc_types::topic::WHEEL_TELEMETRY).
-    WheelTelemetry(WheelTelemetry) = "testbed::WheelTelemetry.v1",
+    WheelTelemetry
     "Telemetry of the three reaction wheels (wheel i spins about body axis i)." {
         header: "Common header; time_ns is the device's sampling instant.",
         speed: "Wheel speeds relative to the platform, about each wheel's own axis, rad/s.",
@@ -264,8 +265,7 @@ log_types! {
                  N m. The platform feels the opposite torque.",
     } pad [];
 
-    /// [`WheelCommand`] on [`topic::WHEEL_COMMAND`](ipc_types::topic::WHEEL_COMMAND).
-    WheelCommand(WheelCommand) = "testbed::WheelCommand.v1",
+    WheelCommand
     "Motor torque command to the three reaction wheels." {
         header: "Common header; time_ns is the time of the input the command was computed \
                  from. SATURATED flags mark channels clipped to the torque limit.",
@@ -273,25 +273,21 @@ log_types! {
                  the opposite torque.",
     } pad [];
 
-    /// [`CmgTelemetry`] on [`topic::CMG_TELEMETRY`](ipc_types::topic::CMG_TELEMETRY).
-    CmgTelemetry(CmgTelemetry) = "testbed::CmgTelemetry.v1",
+    CmgTelemetry
     "Telemetry of the four control moment gyros (pyramid, CMG 1-4 at index 0-3)." {
         header: "Common header; time_ns is the device's sampling instant.",
         gimbal_angle: "Gimbal angles from the encoders, rad.",
         gimbal_rate: "Gimbal rates, rad/s.",
     } pad [];
 
-    /// [`CmgCommand`] on [`topic::CMG_COMMAND`](ipc_types::topic::CMG_COMMAND).
-    CmgCommand(CmgCommand) = "testbed::CmgCommand.v1",
+    CmgCommand
     "Gimbal rate command to the four control moment gyros." {
         header: "Common header; time_ns is the time of the input the command was computed \
                  from. SATURATED flags mark gimbals clipped to the rate limit.",
         gimbal_rate: "Commanded gimbal rates, rad/s.",
     } pad [];
 
-    /// [`AttitudeEstimate`] on
-    /// [`topic::ATTITUDE_ESTIMATE`](ipc_types::topic::ATTITUDE_ESTIMATE).
-    AttitudeEstimate(AttitudeEstimate) = "testbed::AttitudeEstimate.v1",
+    AttitudeEstimate
     "Output of the attitude estimator (MEKF). Error-state order: [dtheta_x, dtheta_y, dtheta_z, \
      db_x, db_y, db_z], dtheta the small-angle attitude error in body axes (rad), db the gyro \
      bias error (rad/s)." {
@@ -319,9 +315,7 @@ log_types! {
         updates_rejected: "Updates rejected by innovation gating since start (count).",
     } pad [_pad0];
 
-    /// [`ControllerStatus`] on
-    /// [`topic::CONTROLLER_STATUS`](ipc_types::topic::CONTROLLER_STATUS).
-    ControllerStatus(ControllerStatus) = "testbed::ControllerStatus.v1",
+    ControllerStatus
     "Status of the attitude controller, published once per control cycle." {
         header: "Common header; time_ns is the time of the estimate the cycle used.",
         mode: "Controller mode: 0 Idle, 1 RateDamping, 2 WheelPointing, 3 CmgSlew, 4 Fault, \
@@ -336,8 +330,7 @@ log_types! {
                           in lockstep simulation.",
     } pad [_pad0];
 
-    /// [`SimTruth`] on [`topic::SIM_TRUTH`](ipc_types::topic::SIM_TRUTH).
-    SimTruth(SimTruth) = "testbed::SimTruth.v1",
+    SimTruth
     "True state of the simulated platform (simulation only), published every tick." {
         header: "Common header; time_ns is the simulation time of the state.",
         quaternion: "True attitude quaternion [x, y, z, w] (scalar last, Hamilton), rotation \
@@ -354,8 +347,7 @@ log_types! {
         tilt_stop: "Bit 0: at the air bearing's tilt stop about body x; bit 1: about body y.",
     } pad [_pad0];
 
-    /// [`SimClockTick`] on [`topic::SIM_CLOCK`](ipc_types::topic::SIM_CLOCK).
-    SimClock(SimClockTick) = "testbed::SimClockTick.v1",
+    SimClockTick
     "One tick of the simulation clock (simulation only)." {
         header: "Common header; time_ns equals sim_time_ns, sequence equals tick.",
         tick: "Tick index, 0 at the start of the run.",
@@ -363,8 +355,7 @@ log_types! {
         step_ns: "Length of the step from this tick to the next, ns.",
     } pad [];
 
-    /// [`Heartbeat`] on [`topic::HEARTBEAT`](ipc_types::topic::HEARTBEAT).
-    Heartbeat(Heartbeat) = "testbed::Heartbeat.v1",
+    Heartbeat
     "Periodic liveness and counter report of one process (all processes share the topic; pid \
      differs between runs)." {
         header: "Common header; time_ns is the run's clock when the report was made.",
@@ -378,8 +369,7 @@ log_types! {
         frames_bad: "Device frames rejected since start (gateways; 0 elsewhere).",
     } pad [];
 
-    /// [`CanBusFrame`] on [`topic::CAN_BUS`](ipc_types::topic::CAN_BUS).
-    CanBus(CanBusFrame) = "testbed::CanBusFrame.v1",
+    CanBusFrame
     "One classic CAN frame on the software CAN bus, as its sender put it on the bus." {
         header: "Common header; time_ns is the run-clock time the frame was sent, sequence \
                  counts the sender's frames, source_id is the sender: 1 CAN node, 2 gyro, \
@@ -392,8 +382,7 @@ log_types! {
                 check does not match was corrupted on the bus.",
     } pad [_pad0, _pad1, _pad2];
 
-    /// [`CanLinkStatus`] on [`topic::CAN_STATUS`](ipc_types::topic::CAN_STATUS).
-    CanStatus(CanLinkStatus) = "testbed::CanLinkStatus.v1",
+    CanLinkStatus
     "Frame and error counters of one CAN link (a gateway or the CAN node), totals since start." {
         header: "Common header; time_ns is the latest tick of the link, source_id the link: \
                  1 CAN node, 2 gyro, 3 inclinometer, 4 magnetometer, 5 wheel, 6 CMG gateway.",
@@ -422,8 +411,7 @@ log_types! {
         injected_rx_duplicate: "Simulated node: received command frames duplicated (count).",
     } pad [];
 
-    /// [`AppliedWheelCommand`] on [`topic::WHEEL_APPLIED`](ipc_types::topic::WHEEL_APPLIED).
-    WheelApplied(AppliedWheelCommand) = "testbed::AppliedWheelCommand.v1",
+    AppliedWheelCommand
     "Reaction wheel motor torques as the CAN node applies them (CAN actuation path)." {
         header: "Common header; time_ns is the tick the command is applied for; STALE: the \
                  node holds the previous command (none complete and valid for this tick).",
@@ -431,16 +419,14 @@ log_types! {
                  opposite torque.",
     } pad [];
 
-    /// [`AppliedCmgCommand`] on [`topic::CMG_APPLIED`](ipc_types::topic::CMG_APPLIED).
-    CmgApplied(AppliedCmgCommand) = "testbed::AppliedCmgCommand.v1",
+    AppliedCmgCommand
     "CMG gimbal rates as the CAN node applies them (CAN actuation path)." {
         header: "Common header; time_ns is the tick the command is applied for; STALE: the \
                  node holds the previous command.",
         gimbal_rate: "Gimbal rates, rad/s.",
     } pad [];
 
-    /// [`HealthEvent`] on [`topic::HEALTH`](ipc_types::topic::HEALTH).
-    Health(HealthEvent) = "testbed::HealthEvent.v1",
+    HealthEvent
     "A fault or recovery seen by a process or the launcher (the run's event list)." {
         header: "Common header; time_ns is the run's clock when the event was seen (the \
                  reporter's latest sample time), sequence counts the reporter's events.",
@@ -457,8 +443,7 @@ log_types! {
         value: "Kind-specific: time since the last sample or heartbeat, or outage length, s.",
     } pad [];
 
-    /// [`GroundCommand`] on [`topic::GROUND_COMMAND`](ipc_types::topic::GROUND_COMMAND).
-    GroundCommand(GroundCommand) = "testbed::GroundCommand.v1",
+    GroundCommand
     "A command from the ground station, accepted by the ground link (token, limits, rate) for \
      the controller." {
         header: "Common header; time_ns is the run's clock as the link last saw it, sequence \
@@ -473,9 +458,7 @@ log_types! {
         client_id: "The link's number for the viewer's connection.",
     } pad [_pad0];
 
-    /// [`GroundCommandAck`] on
-    /// [`topic::GROUND_COMMAND_ACK`](ipc_types::topic::GROUND_COMMAND_ACK).
-    GroundCommandAck(GroundCommandAck) = "testbed::GroundCommandAck.v1",
+    GroundCommandAck
     "The outcome of a ground command: applied by the controller or rejected, with the reason." {
         header: "Common header; time_ns is the run's clock of the decision.",
         command_id: "The command's identifier (0 if the message had none).",
@@ -483,11 +466,10 @@ log_types! {
         status: "1 applied, 2 rejected.",
         client_id: "The viewer's connection.",
         decided_by: "1 the ground link, 2 the controller.",
-        reason: "Why it was rejected, or what was applied (UTF-8, at most 64 bytes).",
+        reason: "Why it was rejected, or what was applied (UTF-8, at most 256 bytes).",
     } pad [];
 
-    /// [`ThrusterCommand`] on [`topic::THRUSTER_COMMAND`](ipc_types::topic::THRUSTER_COMMAND).
-    ThrusterCommand(ThrusterCommand) = "testbed::ThrusterCommand.v1",
+    ThrusterCommand
     "Valve on-times of the six thrusters for one control period, from the controller. Thruster \
      2a gives + torque about body axis a, thruster 2a+1 - torque." {
         header: "Common header; time_ns is the time of the input the command was computed \
@@ -495,8 +477,7 @@ log_types! {
         on_time: "Electrical on-time of each valve from the start of the period, s (0: shut).",
     } pad [];
 
-    /// [`ThrusterStatus`] on [`topic::THRUSTER_STATUS`](ipc_types::topic::THRUSTER_STATUS).
-    ThrusterStatus(ThrusterStatus) = "testbed::ThrusterStatus.v1",
+    ThrusterStatus
     "What the thruster drive applied and counted, once per period." {
         header: "Common header; time_ns is the period the status describes (its end).",
         applied_on_time: "Valve on-times applied in the period, s.",
@@ -506,8 +487,7 @@ log_types! {
         propellant_used: "Propellant used since start, kg.",
     } pad [];
 
-    /// [`AppliedThrusterCommand`] on [`topic::THRUSTER_APPLIED`](ipc_types::topic::THRUSTER_APPLIED).
-    ThrusterApplied(AppliedThrusterCommand) = "testbed::AppliedThrusterCommand.v1",
+    AppliedThrusterCommand
     "Valve on-times as the smart CAN node applies them (CAN actuation with thrusters)." {
         header: "Common header; time_ns is the tick the pulses start at; flag STALE: no \
                  complete command came for the tick and every valve stays shut.",
@@ -519,96 +499,52 @@ log_types! {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use ipc_types::topic;
 
-    #[test]
-    fn topic_order_is_the_ipc_types_order() {
-        assert_eq!(LogRecord::TOPICS, topic::ALL);
-        let names: Vec<_> = TopicKind::ALL.iter().map(|k| k.name()).collect();
-        assert_eq!(names, topic::ALL);
+    /// A default sample of every topic, in table order.
+    fn defaults() -> Vec<LogRecord> {
+        macro_rules! defaults {
+            ($($id:ident($ty:ty, $path:literal),)*) => {
+                vec![$(LogRecord::$id(<$ty>::default()),)*]
+            };
+        }
+        ipc_types::for_each_topic!(defaults)
     }
 
     #[test]
-    fn schema_names_are_the_iceoryx2_type_names() {
-        fn check<T: LogEncode>() {
-            // SAFETY: `type_name` only returns the string given to `#[type_name]`.
-            let type_name = unsafe { <T as iceoryx2::prelude::ZeroCopySend>::type_name() };
-            assert_eq!(T::SCHEMA_NAME, type_name);
-        }
-        check::<GyroSample>();
-        check::<InclinometerSample>();
-        check::<MagnetometerSample>();
-        check::<WheelTelemetry>();
-        check::<WheelCommand>();
-        check::<CmgTelemetry>();
-        check::<CmgCommand>();
-        check::<AttitudeEstimate>();
-        check::<ControllerStatus>();
-        check::<SimTruth>();
-        check::<SimClockTick>();
-        check::<Heartbeat>();
-        check::<CanBusFrame>();
-        check::<CanLinkStatus>();
-        check::<AppliedWheelCommand>();
-        check::<AppliedCmgCommand>();
-        check::<HealthEvent>();
-        check::<GroundCommand>();
-        check::<GroundCommandAck>();
-        check::<ThrusterCommand>();
-        check::<ThrusterStatus>();
-        check::<AppliedThrusterCommand>();
+    fn records_are_in_table_order() {
+        let ids: Vec<_> = defaults().iter().map(LogRecord::topic_id).collect();
+        assert_eq!(ids, TopicId::ALL);
+        let names: Vec<_> = defaults().iter().map(LogRecord::topic).collect();
+        assert_eq!(names, ipc_types::topic::ALL);
+        assert_eq!(GyroSample::ID, TopicId::Gyro);
+        assert_eq!(
+            AppliedThrusterCommand::SCHEMA_NAME,
+            "testbed::AppliedThrusterCommand.v1"
+        );
     }
 
     #[test]
     fn schemas_are_json_objects_listing_every_encoded_field() {
-        for &kind in TopicKind::ALL {
-            let schema: Value = serde_json::from_str(&kind.json_schema()).expect("valid JSON");
+        for record in defaults() {
+            let id = record.topic_id();
+            let schema: Value = serde_json::from_str(&id.json_schema()).expect("valid JSON");
+            assert_eq!(schema["title"], id.schema_name(), "{}", id.name());
             let props = schema["properties"].as_object().expect("properties");
-            let sample = kind.decode(&default_json(kind)).expect("default decodes");
             let mut encoded = Vec::new();
-            sample.encode_json(&mut encoded);
+            record.encode_json(&mut encoded);
+            assert_eq!(id.decode(&encoded).expect("default decodes"), record);
             let value: Value = serde_json::from_slice(&encoded).expect("valid JSON");
             let keys: Vec<_> = value.as_object().expect("object").keys().collect();
             let schema_keys: Vec<_> = props.keys().collect();
-            assert_eq!(keys, schema_keys, "{}", kind.name());
+            assert_eq!(keys, schema_keys, "{}", id.name());
             for (name, prop) in props {
                 assert!(
                     prop["description"].is_string(),
                     "{}.{name} has no description",
-                    kind.name()
+                    id.name()
                 );
             }
         }
-    }
-
-    fn default_json(kind: TopicKind) -> Vec<u8> {
-        let record = match kind {
-            TopicKind::Gyro => LogRecord::Gyro(Default::default()),
-            TopicKind::Inclinometer => LogRecord::Inclinometer(Default::default()),
-            TopicKind::Magnetometer => LogRecord::Magnetometer(Default::default()),
-            TopicKind::WheelTelemetry => LogRecord::WheelTelemetry(Default::default()),
-            TopicKind::WheelCommand => LogRecord::WheelCommand(Default::default()),
-            TopicKind::CmgTelemetry => LogRecord::CmgTelemetry(Default::default()),
-            TopicKind::CmgCommand => LogRecord::CmgCommand(Default::default()),
-            TopicKind::AttitudeEstimate => LogRecord::AttitudeEstimate(Default::default()),
-            TopicKind::ControllerStatus => LogRecord::ControllerStatus(Default::default()),
-            TopicKind::SimTruth => LogRecord::SimTruth(Default::default()),
-            TopicKind::SimClock => LogRecord::SimClock(Default::default()),
-            TopicKind::Heartbeat => LogRecord::Heartbeat(Default::default()),
-            TopicKind::CanBus => LogRecord::CanBus(Default::default()),
-            TopicKind::CanStatus => LogRecord::CanStatus(Default::default()),
-            TopicKind::WheelApplied => LogRecord::WheelApplied(Default::default()),
-            TopicKind::CmgApplied => LogRecord::CmgApplied(Default::default()),
-            TopicKind::Health => LogRecord::Health(Default::default()),
-            TopicKind::GroundCommand => LogRecord::GroundCommand(Default::default()),
-            TopicKind::GroundCommandAck => LogRecord::GroundCommandAck(Default::default()),
-            TopicKind::ThrusterCommand => LogRecord::ThrusterCommand(Default::default()),
-            TopicKind::ThrusterStatus => LogRecord::ThrusterStatus(Default::default()),
-            TopicKind::ThrusterApplied => LogRecord::ThrusterApplied(Default::default()),
-        };
-        let mut out = Vec::new();
-        record.encode_json(&mut out);
-        out
     }
 
     #[test]

@@ -1,8 +1,9 @@
 //! Deterministic record order for lockstep runs: [`EncodedRecord`] and [`TickSorter`].
 
 use crate::LogError;
-use crate::foxglove::{self, Transform};
-use crate::record::{LogRecord, TopicKind};
+use crate::foxglove::{self, Derived};
+use crate::record::LogRecord;
+use ipc_types::TopicId;
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 
@@ -16,14 +17,15 @@ use std::collections::BinaryHeap;
 #[derive(Debug, Clone)]
 pub struct EncodedRecord {
     time_ns: u64,
-    kind: TopicKind,
+    kind: TopicId,
     sequence: u64,
     source_id: u32,
     data: Vec<u8>,
-    /// The record's derived frame transform, taken when it was encoded: the writer needs it
-    /// when the record leaves the sorter, and decoding the message back for it was most of a
-    /// lockstep logger's CPU. A function of the record, as `data` is, so not part of the order.
-    transform: Option<Transform>,
+    /// What the record derives ([`foxglove::derived_of`]), taken when it was encoded: the
+    /// writer needs it when the record leaves the sorter, and decoding the message back for it
+    /// was most of a lockstep logger's CPU. A function of the record, as `data` is, so not part
+    /// of the order.
+    derived: Derived,
 }
 
 impl EncodedRecord {
@@ -34,16 +36,16 @@ impl EncodedRecord {
         let header = record.header();
         Self {
             time_ns: header.time_ns,
-            kind: record.kind(),
+            kind: record.topic_id(),
             sequence: header.sequence,
             source_id: header.source_id,
             data,
-            transform: foxglove::transform_of(record),
+            derived: foxglove::derived_of(record),
         }
     }
 
     /// What orders records (see the type's documentation).
-    fn order_key(&self) -> (u64, TopicKind, u64, u32, &[u8]) {
+    fn order_key(&self) -> (u64, TopicId, u64, u32, &[u8]) {
         (
             self.time_ns,
             self.kind,
@@ -73,13 +75,13 @@ impl EncodedRecord {
         &self.data
     }
 
-    pub(crate) fn kind(&self) -> TopicKind {
+    pub(crate) fn topic_id(&self) -> TopicId {
         self.kind
     }
 
-    /// The derived frame transform, if the record has one ([`foxglove::transform_of`]).
-    pub(crate) fn transform(&self) -> Option<Transform> {
-        self.transform
+    /// What the record derives ([`foxglove::derived_of`]).
+    pub(crate) fn derived(&self) -> &Derived {
+        &self.derived
     }
 }
 

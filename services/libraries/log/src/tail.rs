@@ -11,7 +11,8 @@
 
 use crate::LogError;
 use crate::reader::{Definitions, Framing, Next, parse};
-use crate::record::{LogEncode, LogRecord, TopicKind};
+use crate::record::{LogEncode, LogRecord, TopicJson as _};
+use ipc_types::TopicId;
 use mcap::records::{Record, op};
 use std::fs::File;
 use std::os::unix::fs::{FileExt, MetadataExt};
@@ -100,20 +101,16 @@ impl LogTail {
         let Ok(mut framing) = Framing::on(&self.path, file, self.pos)? else {
             return Ok(Vec::new());
         };
-        let wanted: Vec<TopicKind> = topics
+        let wanted: Vec<TopicId> = topics
             .iter()
-            .filter_map(|t| TopicKind::from_topic(t))
+            .filter_map(|t| TopicId::from_name(t))
             .collect();
         let mut body = Vec::new();
         // Per wanted topic, the newest message so far: its offset and body.
         let mut newest: Vec<Option<(u64, Vec<u8>)>> = vec![None; wanted.len()];
         loop {
             let (opcode, offset, len) = match framing.next()? {
-                Next::Record {
-                    opcode,
-                    offset,
-                    len,
-                } => (opcode, offset, len),
+                Next::Record(f) => (f.opcode, f.offset, f.len),
                 Next::Cut { offset } => {
                     self.pos = offset;
                     self.finished = false;

@@ -1,12 +1,13 @@
 //! [`RunLogWriter`]: writes one run's MCAP log.
 
 use crate::foxglove;
-use crate::record::{LogEncode, LogRecord, TopicKind};
+use crate::record::{LogEncode, LogRecord, TopicJson as _};
 use crate::sorter::{EncodedRecord, TickSorter};
 use crate::{
     CONFIG_ATTACHMENT, CONFIG_MEDIA_TYPE, FORMAT, LogError, MESSAGE_ENCODING, RESERVED_KEYS,
     RUN_METADATA, RunInfo, SCHEMA_ENCODING, keys,
 };
+use ipc_types::TopicId;
 use mcap::records::{MessageHeader, Metadata};
 use std::borrow::Cow;
 use std::collections::BTreeMap;
@@ -67,11 +68,23 @@ impl WriterOptions {
 pub struct LogStats {
     /// Messages written.
     pub messages: u64,
-    /// Messages written per topic, in [`LogRecord::TOPICS`] order (every topic listed).
+    /// Messages written per topic, in table order ([`TopicId::ALL`], every topic listed).
     pub per_topic: Vec<(&'static str, u64)>,
     /// In [`RecordOrder::Sorted`]: records that arrived after their time was completed,
     /// written at once (out of time order) rather than lost.
     pub late_records: u64,
+}
+
+/// The channel id of `topic` in every run log: the table's topics come first, in table order,
+/// from 1. The ground link gives its viewers the same ids.
+pub const fn channel_id(topic: TopicId) -> u16 {
+    topic.index() as u16 + 1
+}
+
+/// The channel id of the `i`-th of [`foxglove::DERIVED_TOPICS`](crate::foxglove::DERIVED_TOPICS)
+/// in every run log: after the table's topics.
+pub const fn derived_channel_id(i: usize) -> u16 {
+    (TopicId::ALL.len() + 1 + i) as u16
 }
 
 /// Writes one run's log: an MCAP file with every topic, the run's configuration and metadata.
@@ -79,17 +92,21 @@ pub struct LogStats {
 /// # File layout
 ///
 /// Header, then one JSON Schema (`jsonschema`) and one channel (`json` messages) per topic of
-/// [`LogRecord::TOPICS`], in that order (channel ids 1 to 19), the configuration as attachment
+/// the topic table, in table order (channel ids [`channel_id`]: 1, 2, …), the configuration as
+/// attachment
 /// [`CONFIG_ATTACHMENT`], the run metadata record [`RUN_METADATA`], then the messages, and on
 /// [`finish`](Self::finish) the summary section (schemas, channels, statistics, attachment and
 /// metadata indexes) and footer. Every message's `log_time` and `publish_time` is
 /// [`RunInfo::start_time_ns`] plus the sample's `header.time_ns`, its MCAP `sequence` the low
 /// 32 bits of `header.sequence`. After the sample topics come the derived channels
-/// [`foxglove::TF_ESTIMATE_TOPIC`](crate::foxglove::TF_ESTIMATE_TOPIC) and
-/// [`TF_TRUTH_TOPIC`](crate::foxglove::TF_TRUTH_TOPIC): each valid attitude estimate and each
-/// truth sample is followed by its `foxglove.FrameTransform`. Nothing in the file comes from
-/// the wall clock but the start time given (the attachment's times are 0), so the same records
-/// in the same order with the same start time give the same bytes.
+/// ([`derived_channel_id`], [`foxglove::DERIVED_TOPICS`](crate::foxglove::DERIVED_TOPICS)):
+/// each valid attitude estimate is followed by its `foxglove.FrameTransform` and
+/// `foxglove.PoseInFrame`, each truth sample by its transform, each health event, ground
+/// command acknowledgement and controller mode change by a `foxglove.Log`, and, once a scene is
+/// set ([`set_scene`](Self::set_scene)), a `foxglove.SceneUpdate` precedes the first record of
+/// every second. Nothing in the file comes from the wall clock but the start time given (the
+/// attachment's `log_time` and `create_time` are that start time too), so the same records in
+/// the same order with the same start time give the same bytes.
 ///
 /// # Crash safety
 ///
@@ -99,14 +116,19 @@ pub struct LogStats {
 /// `mcap recover`). A record is safe once it has reached the OS: on
 /// [`flush`](Self::flush), [`complete_until`](Self::complete_until), when the write buffer
 /// fills, or per record with [`WriterOptions::buffer_bytes`] = 0; [`sync`](Self::sync)
-/// also survives power loss. Unchunked records have no index; with
+/// also survives power loss. Unchunked records have no index and no compression; with
 /// [`WriterOptions::indexed`] (the default), [`finish`](Self::finish) rewrites the complete
-/// file with chunks, message indexes and a chunk index ([`index`](crate::index)), atomically.
+/// file with zstd-compressed chunks of [`CHUNK_INTERVAL_NS`](crate::CHUNK_INTERVAL_NS) each,
+/// message indexes and a chunk index ([`index`](crate::index)), atomically: some a sixth of
+/// the unchunked size.
 pub struct RunLogWriter<W: Write + Seek = BufWriter<File>> {
     mcap: Option<mcap::Writer<W>>,
     channel_ids: Vec<u16>,
-    /// Channels of the estimate and truth transforms.
-    tf_channel_ids: [u16; 2],
+    /// The controller's mode changes, for the events channel.
+    modes: foxglove::events::ModeChanges,
+    /// The platform's scene, written every [`SCENE_PERIOD_NS`](foxglove::scene::SCENE_PERIOD_NS)
+    /// of log time, and when the next is due.
+    scene: Option<(foxglove::scene::Scene, u64)>,
     start_time_ns: u64,
     /// The file to index on finish (a file made by `create` with `indexed`).
     index_path: Option<std::path::PathBuf>,
@@ -162,31 +184,33 @@ impl<W: Write + Seek> RunLogWriter<W> {
             .library(format!("testbed-log/{}", env!("CARGO_PKG_VERSION")));
         let mut mcap = mcap_options.create(writer)?;
 
-        let mut channel_ids = Vec::with_capacity(TopicKind::ALL.len());
-        for &kind in TopicKind::ALL {
+        let mut channel_ids = Vec::with_capacity(TopicId::ALL.len());
+        for &kind in TopicId::ALL {
             let schema = kind.json_schema();
             let schema_id =
                 mcap.add_schema(kind.schema_name(), SCHEMA_ENCODING, schema.as_bytes())?;
             let channel_id =
                 mcap.add_channel(schema_id, kind.name(), MESSAGE_ENCODING, &BTreeMap::new())?;
+            debug_assert_eq!(channel_id, self::channel_id(kind));
             channel_ids.push(channel_id);
         }
-        let tf_schema = mcap.add_schema(
-            foxglove::FRAME_TRANSFORM,
-            SCHEMA_ENCODING,
-            foxglove::frame_transform_schema().as_bytes(),
-        )?;
-        let mut tf_channel_ids = [0u16; 2];
-        for (id, topic) in tf_channel_ids
-            .iter_mut()
-            .zip([foxglove::TF_ESTIMATE_TOPIC, foxglove::TF_TRUTH_TOPIC])
+        for (i, (topic, (name, schema))) in foxglove::DERIVED_TOPICS
+            .iter()
+            .zip(foxglove::derived_schemas())
+            .enumerate()
         {
-            *id = mcap.add_channel(tf_schema, topic, MESSAGE_ENCODING, &BTreeMap::new())?;
+            // One schema per name (the two transforms share theirs).
+            let schema_id = mcap.add_schema(name, SCHEMA_ENCODING, schema.as_bytes())?;
+            let channel_id =
+                mcap.add_channel(schema_id, topic, MESSAGE_ENCODING, &BTreeMap::new())?;
+            debug_assert_eq!(channel_id, derived_channel_id(i));
         }
 
+        // Dated the run's start, the instant the configuration took effect (not 1970, and no
+        // wall-clock reading of its own, so the file stays reproducible).
         mcap.attach(&mcap::Attachment {
-            log_time: 0,
-            create_time: 0,
+            log_time: info.start_time_ns,
+            create_time: info.start_time_ns,
             name: CONFIG_ATTACHMENT.to_owned(),
             media_type: CONFIG_MEDIA_TYPE.to_owned(),
             data: Cow::Borrowed(info.config_toml.as_bytes()),
@@ -218,7 +242,8 @@ impl<W: Write + Seek> RunLogWriter<W> {
             mcap: Some(mcap),
             counts: vec![0; channel_ids.len()],
             channel_ids,
-            tf_channel_ids,
+            modes: Default::default(),
+            scene: None,
             start_time_ns: info.start_time_ns,
             index_path: None,
             sorter: (options.order == RecordOrder::Sorted).then(TickSorter::new),
@@ -248,7 +273,7 @@ impl<W: Write + Seek> RunLogWriter<W> {
             // out of order (MCAP allows any order; readers that sort by time still place it).
             self.late_records += 1;
             tracing::warn!(
-                topic = record.kind().name(),
+                topic = record.topic_id().name(),
                 time_ns = header.time_ns,
                 "late record written out of time order"
             );
@@ -259,11 +284,11 @@ impl<W: Write + Seek> RunLogWriter<W> {
         record.encode_json(&mut data);
         let header = record.header();
         let result = self.put(
-            record.kind(),
+            record.topic_id(),
             header.time_ns,
             header.sequence,
             &data,
-            foxglove::transform_of(record),
+            &foxglove::derived_of(record),
         );
         self.scratch = data;
         result
@@ -273,24 +298,29 @@ impl<W: Write + Seek> RunLogWriter<W> {
     /// (bypasses this writer's sorter).
     pub fn write_encoded(&mut self, record: &EncodedRecord) -> Result<(), LogError> {
         self.put(
-            record.kind(),
+            record.topic_id(),
             record.time_ns(),
             record.sequence(),
             record.data(),
-            record.transform(),
+            record.derived(),
         )
     }
 
-    /// Writes one message, and `transform`, the record's derived transform, if it has one
-    /// (taken from the record, never decoded back from `data`: that was most of the cost of
-    /// logging an estimate or a truth sample).
+    /// Draws `scene` (the platform's shape) on the scene channel from the next record on,
+    /// every [`SCENE_PERIOD_NS`](foxglove::scene::SCENE_PERIOD_NS) of log time.
+    pub fn set_scene(&mut self, scene: foxglove::scene::Scene) {
+        self.scene = Some((scene, 0));
+    }
+
+    /// Writes one message, and what it derives (taken from the record, never decoded back
+    /// from `data`: that was most of the cost of logging an estimate or a truth sample).
     fn put(
         &mut self,
-        kind: TopicKind,
+        kind: TopicId,
         time_ns: u64,
         sequence: u64,
         data: &[u8],
-        transform: Option<foxglove::Transform>,
+        derived: &foxglove::Derived,
     ) -> Result<(), LogError> {
         let index = kind as usize;
         let (Some(mcap), Some(&channel_id)) = (&mut self.mcap, self.channel_ids.get(index)) else {
@@ -304,24 +334,50 @@ impl<W: Write + Seek> RunLogWriter<W> {
             log_time,
             publish_time: log_time,
         };
-        mcap.write_to_known_channel(&header, data)?;
-        if let Some(count) = self.counts.get_mut(index) {
-            *count += 1;
-        }
-        if let Some((topic, child, q)) = transform {
-            let channel_id = if topic == foxglove::TF_ESTIMATE_TOPIC {
-                self.tf_channel_ids[0]
-            } else {
-                self.tf_channel_ids[1]
-            };
-            let text = foxglove::frame_transform_json(log_time, child, &q);
+        if let Some((scene, due)) = &mut self.scene
+            && log_time >= *due
+        {
+            let text = scene.update_json(log_time);
+            *due = log_time.saturating_add(foxglove::scene::SCENE_PERIOD_NS);
             mcap.write_to_known_channel(
                 &MessageHeader {
-                    channel_id,
+                    channel_id: derived_channel_id(4),
                     ..header
                 },
                 text.as_bytes(),
             )?;
+        }
+        mcap.write_to_known_channel(&header, data)?;
+        if let Some(count) = self.counts.get_mut(index) {
+            *count += 1;
+        }
+        let mut derive = |i: usize, text: &str| {
+            mcap.write_to_known_channel(
+                &MessageHeader {
+                    channel_id: derived_channel_id(i),
+                    ..header
+                },
+                text.as_bytes(),
+            )
+        };
+        match derived {
+            foxglove::Derived::Nothing => {}
+            foxglove::Derived::Transform((topic, child, q)) => {
+                let estimate = *topic == foxglove::TF_ESTIMATE_TOPIC;
+                derive(
+                    if estimate { 0 } else { 1 },
+                    &foxglove::frame_transform_json(log_time, child, q),
+                )?;
+                if estimate {
+                    derive(2, &foxglove::pose_in_frame_json(log_time, q))?;
+                }
+            }
+            foxglove::Derived::Event(event) => derive(3, &event.log_json(log_time))?,
+            foxglove::Derived::Mode(mode) => {
+                if let Some(event) = self.modes.event(*mode) {
+                    derive(3, &event.log_json(log_time))?;
+                }
+            }
         }
         Ok(())
     }
@@ -385,7 +441,7 @@ impl<W: Write + Seek> RunLogWriter<W> {
         if let Some(path) = &self.index_path {
             crate::index(path)?;
         }
-        let per_topic: Vec<_> = TopicKind::ALL
+        let per_topic: Vec<_> = TopicId::ALL
             .iter()
             .map(|k| k.name())
             .zip(self.counts.iter().copied())

@@ -2,7 +2,7 @@
 
 mod common;
 
-use common::{python_read_log, run_info, run_records, temp_path};
+use common::{expected_messages, python_read_log, run_info, run_records, temp_path};
 use ipc_types::topic;
 use serde_json::{Value, json};
 use std::collections::BTreeMap;
@@ -32,13 +32,18 @@ fn python_mcap_reads_topics_schemas_messages_and_configuration() {
         .map(|id| channels[&id.to_string()]["topic"].as_str().expect("topic"))
         .collect();
     assert_eq!(topics, topic::ALL);
-    // Then the attitude as Foxglove frame transforms (estimate, truth).
+    // Then the channels derived for Foxglove's panels, on Foxglove's schemas.
     let schemas = report["schemas"].as_object().expect("schemas");
-    for (offset, topic) in foxglove::DERIVED_TOPICS.iter().enumerate() {
+    for (offset, (topic, (name, _))) in foxglove::DERIVED_TOPICS
+        .iter()
+        .zip(foxglove::derived_schemas())
+        .enumerate()
+    {
         let channel = &channels[&(topic::ALL.len() + 1 + offset).to_string()];
         assert_eq!(channel["topic"], *topic);
         let schema = &schemas[&channel["schema_id"].to_string()];
-        assert_eq!(schema["name"], "foxglove.FrameTransform");
+        assert_eq!(schema["name"], name);
+        assert!(name.starts_with("foxglove."), "{name}");
     }
     assert_eq!(
         channels.len(),
@@ -53,7 +58,10 @@ fn python_mcap_reads_topics_schemas_messages_and_configuration() {
         assert_eq!(schema["encoding"], "jsonschema");
         let name = schema["name"].as_str().expect("name");
         assert!(
-            name.starts_with("testbed::") && name.ends_with(".v1"),
+            name.starts_with("testbed::")
+                && name
+                    .rsplit_once(".v")
+                    .is_some_and(|(_, v)| v.parse::<u32>().is_ok()),
             "{name}"
         );
         assert_eq!(schema["data"]["type"], "object");
@@ -69,19 +77,17 @@ fn python_mcap_reads_topics_schemas_messages_and_configuration() {
     assert!(rate.contains("rad/s"), "units in the description: {rate}");
 
     // Messages: every one decoded as JSON by the script (its log time = start time + the
-    // header's run time); counts match, with one transform per valid estimate and per truth.
-    let mut expected: BTreeMap<String, u64> = BTreeMap::new();
-    for r in &records {
-        *expected.entry(r.topic().to_owned()).or_default() += 1;
-        if let Some((topic, ..)) = foxglove::transform_of(r) {
-            *expected.entry(topic.to_owned()).or_default() += 1;
-        }
-    }
-    let transforms: u64 = foxglove::DERIVED_TOPICS
+    // header's run time); counts match, with one transform per valid estimate and per truth,
+    // a pose per valid estimate, an event per health event, acknowledgement and mode change.
+    let expected: BTreeMap<String, u64> = expected_messages(&records, |_| true)
+        .into_iter()
+        .map(|(t, n)| (t.to_owned(), n))
+        .collect();
+    let derived: u64 = foxglove::DERIVED_TOPICS
         .iter()
         .map(|t| expected.get(*t).copied().unwrap_or(0))
         .sum();
-    assert!(transforms > 0, "the synthetic run has estimates and truth");
+    assert!(derived > 0, "the synthetic run has estimates and truth");
     let counted: BTreeMap<String, u64> = report["messages"]
         .as_object()
         .expect("messages")
@@ -91,7 +97,7 @@ fn python_mcap_reads_topics_schemas_messages_and_configuration() {
     assert_eq!(counted, expected);
     assert_eq!(
         report["statistics"]["message_count"],
-        json!(records.len() as u64 + transforms)
+        json!(records.len() as u64 + derived)
     );
     // Indexed: chunks with a chunk index, and a reader seeks to the middle of the run through
     // it, reading exactly the messages from there on.
@@ -110,8 +116,9 @@ fn python_mcap_reads_topics_schemas_messages_and_configuration() {
             "name": "config.toml",
             "media_type": "application/toml",
             "data": info.config_toml,
-            "log_time": 0,
-            "create_time": 0,
+            // Dated the run's start.
+            "log_time": info.start_time_ns,
+            "create_time": info.start_time_ns,
         }])
     );
     let metadata: &Value = &report["metadata"][0];

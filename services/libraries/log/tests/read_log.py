@@ -15,7 +15,7 @@ import json
 import sys
 
 from mcap.reader import make_reader
-from mcap.records import Channel, Message
+from mcap.records import Channel, Message, Schema
 from mcap.stream_reader import StreamReader
 
 
@@ -23,11 +23,12 @@ def check_message(schema, channel, message, start_time_ns):
     data = json.loads(message.data)
     schema_doc = json.loads(schema.data)
     props = schema_doc["properties"]
-    if schema.name == "foxglove.FrameTransform":
-        # Derived from a sample: stamped with the log time, fields as the schema lists them.
+    if schema.name.startswith("foxglove."):
+        # Derived from a sample: stamped with the log time, fields as Foxglove's schema lists them.
         if set(data) != set(props):
             raise SystemExit(f"{channel.topic}: fields {sorted(data)} != schema {sorted(props)}")
-        stamp = data["timestamp"]["sec"] * 10**9 + data["timestamp"]["nsec"]
+        stamped = data["entities"][0] if schema.name == "foxglove.SceneUpdate" else data
+        stamp = stamped["timestamp"]["sec"] * 10**9 + stamped["timestamp"]["nsec"]
         if not (stamp == message.log_time == message.publish_time):
             raise SystemExit(f"{channel.topic}: timestamp {stamp} != log_time")
         return
@@ -97,17 +98,21 @@ def summary(path):
 
 
 def stream(path):
+    schemas = {}
     channels = {}
     messages = []
     ended = "footer"
     with open(path, "rb") as f:
         try:
             for record in StreamReader(f).records:
-                if isinstance(record, Channel):
-                    channels[record.id] = record.topic
+                if isinstance(record, Schema):
+                    schemas[record.id] = record.name
+                elif isinstance(record, Channel):
+                    channels[record.id] = (record.topic, schemas.get(record.schema_id, ""))
                 elif isinstance(record, Message):
-                    if channels[record.channel_id].startswith("testbed/tf/"):
-                        continue  # a derived Foxglove transform, not a sample
+                    topic, schema = channels[record.channel_id]
+                    if schema.startswith("foxglove."):
+                        continue  # derived for Foxglove's panels, not a sample
                     try:
                         header = json.loads(record.data)["header"]
                     except ValueError:
@@ -115,7 +120,7 @@ def stream(path):
                         # record always holds valid JSON.
                         ended = "partial message"
                         break
-                    messages.append([channels[record.channel_id], header["time_ns"],
+                    messages.append([topic, header["time_ns"],
                                      header["sequence"]])
         except Exception as e:  # EndOfFile, or struct.error on a cut record header
             ended = type(e).__name__

@@ -10,6 +10,7 @@
 #![forbid(unsafe_code)]
 
 pub mod attitude;
+pub mod balance_config;
 pub mod config;
 pub mod devices;
 pub mod physics;

@@ -1,4 +1,4 @@
-//! Configuration of the six cold-gas thrusters (`[thrusters]`; issue 14). Off unless the table is
+//! Configuration of the six cold-gas thrusters (`[thrusters]`). Off unless the table is
 //! present: without it the plant, the controller and every output are exactly as before.
 //!
 //! Every default is **assumed** (the paper lists six thrusters among the platform's actuators and

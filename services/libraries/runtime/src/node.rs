@@ -16,22 +16,23 @@
 //!    file), and the first error, with the process name, as the process's result.
 //!
 //! ```ignore
-//! fn main() -> anyhow::Result<()> {
-//!     testbed_runtime::run("estimator", EstimatorProcess::open)
+//! fn main() -> std::process::ExitCode {
+//!     testbed_runtime::exit_status(testbed_runtime::run("estimator", EstimatorProcess::open))
 //! }
 //! ```
 
 use crate::health::{HealthReporter, InputWatch, LOST_AFTER_PERIODS};
 use crate::process::{self, HEARTBEAT_PERIOD};
-use crate::{ClockMode, RunConfig};
 use anyhow::Context as _;
-use ipc_types::{ProcessState, Topic};
+use ipc_types::{ClockMode, ProcessState, Topic, WaitStrategy};
 use std::cell::Cell;
+use std::process::ExitCode;
 use std::time::{Duration, Instant};
 use testbed_bus::{
     Bus, BusError, EventLoop, Flow, HeartbeatPublisher, LoopExit, SourceId, TopicSubscriber,
-    WaitStrategy, Waiter, Wake,
+    Waiter, Wake,
 };
+use testbed_config::RunConfig;
 
 /// What a node is opened with.
 pub struct Context<'a> {
@@ -178,7 +179,30 @@ pub trait Node {
     }
 }
 
+/// The exit status of a process's result; an error is printed as `error: <what failed>: <its
+/// causes>` on one line of stderr, written at once, so that the errors of processes failing
+/// together (five gateways without their CAN interface) do not run into each other's lines.
+/// No backtrace, even with `RUST_BACKTRACE` set (which `anyhow`'s `{:?}`, and so a `main`
+/// returning `anyhow::Result`, would print): these are the run's or the user's errors, not
+/// bugs. A panic keeps its backtrace.
+pub fn exit_status(result: anyhow::Result<()>) -> ExitCode {
+    use std::io::Write as _;
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            let _ = std::io::stderr().write_all(error_line(&e).as_bytes());
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// `error: {e:#}` with its newline: the error and its causes, `: `-separated, on one line.
+pub fn error_line(e: &anyhow::Error) -> String {
+    format!("error: {e:#}\n")
+}
+
 /// Runs the process `name`: the node `open` makes, through the lifecycle of the [module](self).
+/// A process's `main` ends with [`exit_status`] of the result.
 pub fn run<N: Node>(
     name: &str,
     open: impl FnOnce(&Context) -> anyhow::Result<(N, N::Ports)>,
@@ -258,5 +282,23 @@ pub fn run<N: Node>(
         (Some(e), _) => Err(e.context(format!("{name} failed"))),
         (None, Err(e)) => Err(e.context(format!("{name}: stopping"))),
         (None, Ok(())) => Ok(()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_error_is_one_line_with_its_causes_and_no_backtrace() {
+        let io = std::io::Error::from_raw_os_error(97);
+        let e = anyhow::Error::new(io)
+            .context("can.interface = \"can0\"")
+            .context("gyro-gateway: starting");
+        let line = error_line(&e);
+        assert!(line.starts_with("error: gyro-gateway: starting: can.interface = \"can0\": "));
+        assert!(line.ends_with("(os error 97)\n"), "{line}");
+        assert_eq!(line.lines().count(), 1, "{line}");
+        assert!(!line.to_lowercase().contains("backtrace"), "{line}");
     }
 }

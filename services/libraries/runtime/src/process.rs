@@ -1,6 +1,5 @@
 //! What every process of the pipeline does first: logging, arguments, run configuration, bus.
 
-use crate::run_config::RunConfig;
 use anyhow::Context;
 use ipc_types::{Heartbeat, ProcessState};
 use std::collections::BTreeSet;
@@ -10,6 +9,7 @@ use std::time::Instant;
 use testbed_bus::{
     Bus, BusConfig, EventLoop, Flow, LoopExit, SubscriberOptions, TopicSubscriber, Waiter,
 };
+use testbed_config::RunConfig;
 
 /// How long the participants of a run have to come up.
 pub const START_TIMEOUT: Duration = Duration::from_secs(60);

@@ -1,4 +1,4 @@
-//! The thruster shows of issue 14 in the in-process closed loop, printed:
+//! The thruster shows in the in-process closed loop, printed:
 //! `cargo run --release -p testbed-sim --example thrusters [-- DURATION_S]`.
 
 use anyhow::Context;

@@ -12,14 +12,16 @@
 
 use nalgebra::{Matrix6, Vector3, Vector4, Vector6};
 use serde::{Deserialize, Serialize};
-use testbed_flight::mekf::{MekfConfig, MekfError, VectorMeasurements};
-use testbed_flight::tasks::{ActuatorTelemetry, ControllerConfig, ControllerTask, EstimatorTask};
+use testbed_config::RunConfig;
+use testbed_flight::choice::ChoiceError;
+use testbed_flight::estimators::EstimatorConfig;
+use testbed_flight::mekf::{MekfError, VectorMeasurements};
+use testbed_flight::tasks::{ActuatorTelemetry, ControllerConfig, EstimatorTask};
 use testbed_model::ModelConfig;
 use testbed_model::attitude::{self, Attitude};
 use testbed_model::config::DEG;
 use testbed_model::devices::DeviceSet;
 use testbed_model::physics::{ActuatorCommand, Plant, PlatformState, TiltStopEvent};
-use testbed_runtime::RunConfig;
 
 use crate::thruster_trace::ThrusterTrace;
 use testbed_flight::manoeuvre::Manoeuvre;
@@ -36,6 +38,8 @@ pub enum LoopError {
     Estimator(#[from] MekfError),
     #[error("controller: {0}")]
     Control(#[from] testbed_flight::control::ControlError),
+    #[error("configuration: {0}")]
+    Choice(#[from] ChoiceError),
     #[error("scenario: {0}")]
     Scenario(String),
     #[error("schedule: {0}")]
@@ -58,7 +62,8 @@ pub struct Scenario {
     /// The plant's and the devices' truth (effects included).
     pub model: ModelConfig,
     pub controller: ControllerConfig,
-    pub estimator: MekfConfig,
+    /// The attitude filter by name and its parameters (derived from `model` where absent).
+    pub estimator: EstimatorConfig,
     pub feedback: Feedback,
     pub manoeuvre: Manoeuvre,
     /// Simulated duration, s.
@@ -122,7 +127,7 @@ impl Scenario {
         Self {
             model: config.model.clone(),
             controller: config.controller.clone(),
-            estimator: config.estimator_config(),
+            estimator: config.estimator.clone(),
             feedback: Feedback::Estimate,
             manoeuvre: config.manoeuvre.clone(),
             duration_s: config.run.duration_s,
@@ -134,7 +139,7 @@ impl Scenario {
     /// The paper's stabilisation scenario on the given model, estimator from the same model.
     pub fn paper_stabilisation(model: ModelConfig, seed: u64) -> Self {
         Self {
-            estimator: MekfConfig::from_model(&model),
+            estimator: EstimatorConfig::default(),
             model,
             controller: ControllerConfig::default(),
             feedback: Feedback::Estimate,
@@ -231,9 +236,11 @@ pub fn run_with_thrusters(
 
     let mut plant = Plant::new(model, scenario.manoeuvre.initial_state())?;
     let mut devices = DeviceSet::new(model, scenario.seed);
-    let mut estimator = EstimatorTask::new(scenario.estimator.clone());
+    // The estimator task and the controller's law: this loop makes the ticks itself, and has
+    // no safe mode nor ground commands.
+    let mut estimator = EstimatorTask::new(scenario.estimator.setup(model)?, schedule);
     let mut target = scenario.manoeuvre.target();
-    let mut controller = ControllerTask::new(&scenario.controller, model, target)?;
+    let mut controller = scenario.controller.law(model, target)?;
     let mut next_change = 0;
     let mut thruster_trace = ThrusterTrace::default();
     let mut measurements = Vec::with_capacity(tick_count as usize + 1);
@@ -259,7 +266,7 @@ pub fn run_with_thrusters(
         }
 
         let gyro = devices.gyro.sample(&truth.q, &truth.rate_b);
-        estimator.on_gyro(t_ns, &gyro.rate_rad_s)?;
+        estimator.propagate(t_ns, &gyro.rate_rad_s)?;
         let mut vectors = VectorMeasurements::default();
         let mut record = MeasurementRecord {
             t_s,
@@ -280,7 +287,7 @@ pub fn run_with_thrusters(
             record.field_t = Some(reading.field_t);
         }
         if vectors.tilt_rad.is_some() || vectors.field_b_t.is_some() {
-            estimator.on_vectors(t_ns, &vectors)?;
+            estimator.update(t_ns, &vectors)?;
         }
         let telemetry = ActuatorTelemetry {
             wheel_speed_rad_s: devices.tachometer.sample(&truth.wheel_speed),
@@ -355,7 +362,7 @@ fn truth_wheels(trace: &Trace) -> Vector3<f64> {
 }
 
 fn estimate_record(
-    e: &testbed_flight::mekf::MekfEstimate,
+    e: &testbed_flight::estimators::FilterEstimate,
     truth: &PlatformState,
     bias_true: &Vector3<f64>,
 ) -> EstimateRecord {
@@ -423,6 +430,7 @@ pub fn nees(error: &Vector6<f64>, covariance: &Matrix6<f64>) -> f64 {
 mod tests {
     use super::*;
     use crate::metrics;
+    use testbed_flight::laws::pd_friction::PdFrictionConfig;
 
     /// The estimates of `trace` as the estimator process publishes them.
     fn published(trace: &Trace) -> Vec<ipc_types::AttitudeEstimate> {
@@ -503,9 +511,15 @@ mod tests {
     #[test]
     fn without_friction_compensation_the_steady_error_is_worse() {
         let mut scenario = Scenario::paper_stabilisation(ModelConfig::default(), 1);
-        scenario.controller.wheels.friction_compensation = false;
+        scenario
+            .controller
+            .edit_law_params(|p: &mut PdFrictionConfig| p.friction_compensation = false)
+            .unwrap();
         let without = metrics::steady_error_deg(&run(&scenario).unwrap(), 50.0);
-        scenario.controller.wheels.friction_compensation = true;
+        scenario
+            .controller
+            .edit_law_params(|p: &mut PdFrictionConfig| p.friction_compensation = true)
+            .unwrap();
         let with = metrics::steady_error_deg(&run(&scenario).unwrap(), 50.0);
         // Coulomb friction 1.5 mNm against P/2 ≈ 0.22 Nm/rad leaves a dead band of tenths of a
         // degree without compensation; with it the error is at the sensor level.

@@ -2,13 +2,11 @@
 //! stage delivered in a caller-chosen order. Used to test the lockstep protocol (and that the
 //! process split computes exactly what the in-process loop computes) without iceoryx2.
 
-use crate::plant_node::PlantNode;
+use crate::plant_task::PlantTask;
 use crate::sim_devices::{SimCmg, SimGyro, SimInclinometer, SimMagnetometer, SimWheels};
 use ipc_types::{AttitudeEstimate, SimTruth};
-use testbed_flight::controller_node::ControllerNode;
-use testbed_flight::estimator_node::EstimatorNode;
-use testbed_flight::tasks::ControllerTask;
-use testbed_runtime::run_config::RunConfig;
+use testbed_config::RunConfig;
+use testbed_flight::tasks::{ControllerTask, EstimatorTask};
 
 /// Everything the estimator and the plant published, in tick order.
 pub struct InMemoryRun {
@@ -23,16 +21,19 @@ pub fn run(
     mut shuffle: impl FnMut(u64, usize) -> Vec<usize>,
 ) -> anyhow::Result<InMemoryRun> {
     let schedule = config.schedule()?;
-    let mut plant = PlantNode::new(config)?;
+    let mut plant = PlantTask::new(config)?;
     let mut gyro = SimGyro::new(config, schedule);
     let mut tilt = SimInclinometer::new(config, schedule);
     let mut field = SimMagnetometer::new(config, schedule);
     let mut wheels = SimWheels::new(config, schedule);
     let mut cmg = SimCmg::new(config, schedule);
-    let mut estimator = EstimatorNode::new(config.estimator_config(), schedule);
-    let task = ControllerTask::new(&config.controller, &config.model, config.manoeuvre.target())?;
-    let mut controller =
-        ControllerNode::new(task, &config.controller, &config.model.wheels, schedule);
+    let mut estimator = EstimatorTask::new(config.estimator_setup()?, schedule);
+    let mut controller = ControllerTask::new(
+        &config.controller,
+        &config.model,
+        config.manoeuvre.target(),
+        schedule,
+    )?;
     let mut run = InMemoryRun {
         estimates: Vec::new(),
         truths: Vec::new(),

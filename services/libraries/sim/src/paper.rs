@@ -6,8 +6,8 @@ use crate::closed_loop::{self, Feedback, LoopError, Scenario, Trace};
 use crate::metrics::{self, EstimationStats};
 use nalgebra::Vector3;
 use serde::Serialize;
+use testbed_flight::laws::pd_friction::PdFrictionConfig;
 use testbed_flight::manoeuvre::Manoeuvre;
-use testbed_flight::tasks::Actuators;
 use testbed_model::ModelConfig;
 use testbed_model::config::DEG;
 use testbed_model::physics::CmgPyramid;
@@ -255,9 +255,13 @@ fn stabilisation(
 ) -> Result<(ControlResult, Trace, Trace), LoopError> {
     let mut scenario = Scenario::paper_stabilisation(model.clone(), options.seed);
     scenario.duration_s = options.control_duration_s;
-    scenario.controller.wheels.friction_compensation = true;
+    scenario
+        .controller
+        .edit_law_params(|p: &mut PdFrictionConfig| p.friction_compensation = true)?;
     let with = closed_loop::run(&scenario)?;
-    scenario.controller.wheels.friction_compensation = false;
+    scenario
+        .controller
+        .edit_law_params(|p: &mut PdFrictionConfig| p.friction_compensation = false)?;
     let without = closed_loop::run(&scenario)?;
     let band = options.settle_band_deg * DEG;
     let steady = metrics::steady_error_deg(&with, options.steady_window_s);
@@ -286,7 +290,7 @@ fn stabilisation(
 
 fn cmg_slew(model: &ModelConfig, options: &PaperOptions) -> Result<(CmgResult, Trace), LoopError> {
     let mut scenario = Scenario::paper_stabilisation(model.clone(), options.seed);
-    scenario.controller.actuators = Actuators::Cmg;
+    scenario.controller.law = "cmg_slew".into();
     scenario.feedback = Feedback::Estimate;
     scenario.manoeuvre = Manoeuvre {
         initial_heading_deg: 0.0,

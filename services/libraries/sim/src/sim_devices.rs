@@ -5,10 +5,10 @@ use ipc_types::{
     CmgCommand, CmgTelemetry, GyroSample, InclinometerSample, MagnetometerSample, SampleHeader,
     SimTruth, WheelCommand, WheelTelemetry,
 };
+use testbed_config::RunConfig;
 use testbed_flight::convert::{Sequence, a3, a4, quaternion_from_array, saturation_flags, v3, v4};
 use testbed_flight::schedule::Schedule;
 use testbed_model::devices::{CmgEncoder, Gyro, Inclinometer, Magnetometer, WheelTachometer};
-use testbed_runtime::run_config::RunConfig;
 
 const SIMULATED_VALID: u32 = SampleHeader::VALID | SampleHeader::SIMULATED;
 

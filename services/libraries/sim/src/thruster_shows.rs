@@ -1,4 +1,4 @@
-//! The runs that show the thrusters at work (issue 14), in the in-process closed loop:
+//! The runs that show the thrusters at work, in the in-process closed loop:
 //! momentum dumping against a constant disturbance over two hours, and rate damping on the
 //! thrusters alone. Used by `tests/thrusters.rs` and `examples/thrusters.rs`.
 

@@ -1,4 +1,4 @@
-//! What the thrusters did in an in-process closed-loop run (issue 14): per tick the activity,
+//! What the thrusters did in an in-process closed-loop run: per tick the activity,
 //! the valve command and the propellant used; at the end the totals and the centre-of-mass shift.
 
 use nalgebra::Vector3;

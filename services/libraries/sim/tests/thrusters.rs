@@ -1,4 +1,4 @@
-//! The thruster shows of issue 14 in the in-process closed loop (MEKF in the loop, seed 1).
+//! The thruster shows in the in-process closed loop (MEKF in the loop, seed 1).
 //! `cargo test --release -p testbed-sim --test thrusters -- --nocapture` prints the summaries.
 
 use testbed_sim::closed_loop;

@@ -2,12 +2,14 @@
 //! `[ground]`, the per-viewer rate limit and the per-viewer decimation. Plain logic, no I/O.
 //!
 //! A command is the JSON payload of a Foxglove client-publish message on the channel
-//! `testbed/ground/command` (see `docs/ground.md`):
+//! `testbed/ground/command` (see `docs/ground.md`), from a connection in the command role (it
+//! gave the run's token on its URL, `?token=`); a `token` in the payload is optional and, when
+//! there, must be the run's too:
 //!
 //! ```json
-//! {"token": "…", "id": 7, "command": "mode", "mode": "rate_damping"}
+//! {"id": 7, "command": "mode", "mode": "rate_damping"}
 //! {"token": "…", "id": 8, "command": "target", "heading_deg": 10, "pitch_deg": 0, "roll_deg": 2}
-//! {"token": "…", "id": 9, "command": "experiment", "action": "start"}
+//! {"id": 9, "command": "experiment", "action": "start"}
 //! ```
 
 use ipc_types::{ControllerMode, GroundCommand, GroundCommandKind, SampleHeader};
@@ -19,7 +21,8 @@ use testbed_model::config::DEG;
 /// A command read from a viewer, before validation (degrees at this edge).
 #[derive(Debug, Clone, PartialEq)]
 pub struct CommandRequest {
-    pub token: String,
+    /// The payload's token, if it has one.
+    pub token: Option<String>,
     pub id: u64,
     pub kind: GroundCommandKind,
     pub mode: Option<ControllerMode>,
@@ -80,7 +83,11 @@ pub fn parse(payload: &[u8]) -> Result<CommandRequest, Malformed> {
             .and_then(Value::as_str)
             .ok_or(Malformed::Field(key))
     };
-    let token = text("token")?.to_owned();
+    let token = match obj.get("token") {
+        None => None,
+        Some(Value::String(t)) => Some(t.clone()),
+        Some(_) => return Err(Malformed::Field("token")),
+    };
     let id = obj
         .get("id")
         .and_then(Value::as_u64)
@@ -132,6 +139,39 @@ pub struct Limits {
     pub max_tilt_rad: f64,
 }
 
+/// What a connection may do, decided at its handshake by the token on its URL.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Role {
+    /// No token: sees every channel, commands nothing.
+    Watch,
+    /// The run's token: may command too.
+    Command,
+}
+
+impl Role {
+    pub const fn name(self) -> &'static str {
+        match self {
+            Self::Watch => "watch",
+            Self::Command => "command",
+        }
+    }
+}
+
+/// Why a watching connection's command is refused (the sender's status and the logged
+/// acknowledgement say it).
+pub const WATCH_ONLY: &str =
+    "watch-only connection: commanding needs the run's command token on the URL (?token=…)";
+
+/// The role of a connection that gave `token` on its URL, or why its handshake is refused.
+pub fn role_of(token: Option<&str>, limits: &Limits) -> Result<Role, &'static str> {
+    match token {
+        None => Ok(Role::Watch),
+        Some(t) if same_token(t, &limits.token) => Ok(Role::Command),
+        // A guess, or the token of another (earlier) run: each run has its own.
+        Some(_) => Err("wrong command token"),
+    }
+}
+
 /// Compares two tokens in time independent of where they differ.
 fn same_token(a: &str, b: &str) -> bool {
     a.len() == b.len()
@@ -141,14 +181,21 @@ fn same_token(a: &str, b: &str) -> bool {
             == 0
 }
 
-/// Checks `request` (token, limits) and makes the bus command; the reason if refused.
+/// Checks `request` from a connection of `role` (role, token, limits) and makes the bus
+/// command; the reason if refused.
 pub fn validate(
     request: &CommandRequest,
     limits: &Limits,
+    role: Role,
     client_id: u32,
     header: SampleHeader,
 ) -> Result<GroundCommand, String> {
-    if !same_token(&request.token, &limits.token) {
+    if role != Role::Command {
+        return Err(WATCH_ONLY.into());
+    }
+    if let Some(token) = &request.token
+        && !same_token(token, &limits.token)
+    {
         return Err("wrong token".into());
     }
     let mut command = GroundCommand {
@@ -267,7 +314,13 @@ mod tests {
 
     fn check(json: &str) -> Result<GroundCommand, String> {
         let request = parse(json.as_bytes()).map_err(|e| e.to_string())?;
-        validate(&request, &limits(), 3, SampleHeader::default())
+        validate(
+            &request,
+            &limits(),
+            Role::Command,
+            3,
+            SampleHeader::default(),
+        )
     }
 
     #[test]
@@ -314,6 +367,33 @@ mod tests {
     }
 
     #[test]
+    fn a_watching_connection_commands_nothing_and_a_wrong_url_token_is_refused() {
+        let request = parse(br#"{"id":1,"command":"mode","mode":"idle"}"#).unwrap();
+        assert_eq!(request.token, None);
+        let header = SampleHeader::default();
+        let refused = validate(&request, &limits(), Role::Watch, 3, header).unwrap_err();
+        assert_eq!(refused, WATCH_ONLY);
+        // With the token in the payload too: the role is the connection's.
+        let with_token = parse(
+            format!(r#"{{"token":"{TOKEN}","id":1,"command":"mode","mode":"idle"}}"#).as_bytes(),
+        )
+        .unwrap();
+        assert_eq!(
+            validate(&with_token, &limits(), Role::Watch, 3, header).unwrap_err(),
+            WATCH_ONLY
+        );
+        assert!(validate(&request, &limits(), Role::Command, 3, header).is_ok());
+        assert_eq!(role_of(None, &limits()), Ok(Role::Watch));
+        assert_eq!(role_of(Some(TOKEN), &limits()), Ok(Role::Command));
+        let earlier_run = "fedcba9876543210fedcba9876543210";
+        assert_eq!(
+            role_of(Some(earlier_run), &limits()),
+            Err("wrong command token")
+        );
+        assert_eq!(role_of(Some(""), &limits()), Err("wrong command token"));
+    }
+
+    #[test]
     fn experiments_are_refused_with_the_reason() {
         let e = check(&format!(
             r#"{{"token":"{TOKEN}","id":1,"command":"experiment","action":"start"}}"#
@@ -340,7 +420,35 @@ mod tests {
             parse(br#"{"token":"t","id":1,"command":"target","heading_deg":"north","pitch_deg":0,"roll_deg":0}"#),
             Err(Malformed::Field("heading_deg"))
         );
+        assert_eq!(
+            parse(br#"{"token":7,"id":1,"command":"mode","mode":"idle"}"#),
+            Err(Malformed::Field("token"))
+        );
         assert_eq!(Malformed::id_of(br#"{"id":42}"#), 42);
+    }
+
+    /// The longest reasons the link gives fit an acknowledgement whole: a malformed command
+    /// quoting 32 four-byte characters of the sender's, and the watch-only refusal.
+    #[test]
+    fn the_longest_reasons_fit_an_acknowledgement_whole() {
+        use ipc_types::{GroundAckStatus, GroundCommandAck};
+        let quoted = "😀".repeat(40);
+        let payload = format!(r#"{{"id":1,"command":"mode","mode":"{quoted}"}}"#);
+        let malformed = format!("malformed: {}", parse(payload.as_bytes()).unwrap_err());
+        let mode = format!("malformed: {}", Malformed::UnknownAction("😀".repeat(32)));
+        for reason in [malformed.as_str(), mode.as_str(), WATCH_ONLY] {
+            assert!(reason.len() > 64, "{reason}");
+            let ack = GroundCommandAck::new(
+                SampleHeader::default(),
+                1,
+                1,
+                GroundAckStatus::Rejected,
+                1,
+                GroundCommandAck::BY_LINK,
+                reason,
+            );
+            assert_eq!(ack.reason(), reason);
+        }
     }
 
     #[test]

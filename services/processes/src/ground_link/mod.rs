@@ -1,8 +1,9 @@
-//! The ground link (issue 13): the platform side of the ground supervision station. A pure
+//! The ground link: the platform side of the ground supervision station. A pure
 //! observer of the pipeline — it takes no part in the lockstep start barrier or in any tick —
 //! that serves the pipeline's topics to any number of viewers over the Foxglove WebSocket
-//! protocol, serves the project's ground page over HTTP from the same port, and passes the
-//! ground's commands, once checked, to the controller (`testbed/ground/command`).
+//! protocol, serves the project's ground page over HTTP from the same port (both over TLS when
+//! `ground.tls_cert` is set), and passes the commands of connections in the command role, once
+//! checked, to the controller (`testbed/ground/command`).
 //!
 //! Threads: the bus stays on the node's thread (iceoryx2 ports are not `Send`); the server
 //! ([`server`]) has its own threads and exchanges only bounded queues with the node, so a
@@ -12,8 +13,10 @@
 pub mod command;
 pub mod protocol;
 pub mod server;
+pub mod tls;
 
 use anyhow::Context as _;
+use ipc_types::ClockMode;
 use ipc_types::*;
 use protocol::Channel;
 use serde_json::json;
@@ -23,13 +26,13 @@ use std::path::PathBuf;
 use std::sync::atomic::Ordering;
 use std::sync::mpsc::Receiver;
 use std::time::{Duration, Instant};
-use testbed_bus::{Bus, Flow, LoopExit, SubscriberOptions, TopicPublisher, TopicSubscriber, Wake};
-use testbed_log::{LogEncode, LogRecord, foxglove};
+use testbed_bus::{AnySubscribers, Flow, LoopExit, SubscriberOptions, TopicPublisher, Wake};
+use testbed_config::ENV_GROUND_TOKEN;
+use testbed_log::{LogRecord, TopicJson as _, derived_channel_id, foxglove};
 use testbed_model::attitude::{self, Attitude};
 use testbed_model::config::DEG;
 use testbed_model::physics::cmg_pyramid::CmgPyramid;
-use testbed_runtime::ground::ENV_GROUND_TOKEN;
-use testbed_runtime::{ClockMode, Context, Io, Node, WakeOn};
+use testbed_runtime::{Context, Io, Node, WakeOn};
 
 /// How often the node looks at the viewers' commands and sends the link's own status.
 const SERVICE_PERIOD: Duration = Duration::from_millis(100);
@@ -46,49 +49,24 @@ const UNWATCHED_PERIOD: Duration = testbed_runtime::process::QUIET_PERIOD;
 /// Period of `testbed/ground/link`.
 const STATUS_PERIOD: Duration = Duration::from_secs(1);
 
-/// Channel ids of what the link derives itself (after the bus topics, 1 to 13).
-pub const CH_TF_ESTIMATE: u32 = 14;
-pub const CH_TF_TRUTH: u32 = 15;
-pub const CH_CMG: u32 = 16;
-pub const CH_LINK: u32 = 17;
-pub const CH_EVENTS: u32 = 18;
-/// Thruster status and commands (runs with thrusters).
-pub const CH_THRUSTER_STATUS: u32 = 19;
-pub const CH_THRUSTER_COMMAND: u32 = 20;
-
-/// The bus topics served: channel id, whether viewers get it decimated (streams) or whole
-/// (events, heartbeats, commands).
-fn bus_channel(record: &LogRecord) -> Option<(u32, bool)> {
-    Some(match record {
-        LogRecord::AttitudeEstimate(_) => (1, true),
-        LogRecord::ControllerStatus(_) => (2, true),
-        LogRecord::SimTruth(_) => (3, true),
-        LogRecord::WheelTelemetry(_) => (4, true),
-        LogRecord::WheelCommand(_) => (5, true),
-        LogRecord::CmgTelemetry(_) => (6, true),
-        LogRecord::CmgCommand(_) => (7, true),
-        LogRecord::Gyro(_) => (8, true),
-        LogRecord::Heartbeat(_) => (9, false),
-        LogRecord::Health(_) => (10, false),
-        LogRecord::CanStatus(_) => (11, true),
-        LogRecord::GroundCommand(_) => (12, false),
-        LogRecord::GroundCommandAck(_) => (13, false),
-        LogRecord::ThrusterStatus(_) => (CH_THRUSTER_STATUS, true),
-        LogRecord::ThrusterCommand(_) => (CH_THRUSTER_COMMAND, true),
-        _ => return None,
-    })
+/// The channel id of a bus topic: its channel id in the run log ([`testbed_log::channel_id`]).
+pub fn bus_channel_id(topic: TopicId) -> u32 {
+    testbed_log::channel_id(topic).into()
 }
 
-fn bus_channel_spec<T: LogEncode>(id: u32) -> Channel {
-    Channel {
-        id,
-        topic: T::NAME,
-        schema_name: T::SCHEMA_NAME,
-        schema: T::json_schema(),
-    }
-}
+/// Channel ids of what the link derives, after the table's topics: the run log's derived
+/// channels ([`foxglove::DERIVED_TOPICS`]: transforms, pose, events, scene), then the link's
+/// own channels.
+pub const CH_TF_ESTIMATE: u32 = derived_channel_id(0) as u32;
+pub const CH_TF_TRUTH: u32 = derived_channel_id(1) as u32;
+pub const CH_POSE: u32 = derived_channel_id(2) as u32;
+pub const CH_EVENTS: u32 = derived_channel_id(3) as u32;
+pub const CH_SCENE: u32 = derived_channel_id(4) as u32;
+pub const CH_CMG: u32 = derived_channel_id(foxglove::DERIVED_TOPICS.len()) as u32;
+pub const CH_LINK: u32 = CH_CMG + 1;
 
-/// Every channel the link advertises.
+/// Every channel the link advertises: the topics of the table it shows
+/// ([`GroundView`]), then its own.
 pub fn channels() -> Vec<Channel> {
     let own = |id, topic, schema_name, schema: String| Channel {
         id,
@@ -96,34 +74,29 @@ pub fn channels() -> Vec<Channel> {
         schema_name,
         schema,
     };
-    vec![
-        bus_channel_spec::<AttitudeEstimate>(1),
-        bus_channel_spec::<ControllerStatus>(2),
-        bus_channel_spec::<SimTruth>(3),
-        bus_channel_spec::<WheelTelemetry>(4),
-        bus_channel_spec::<WheelCommand>(5),
-        bus_channel_spec::<CmgTelemetry>(6),
-        bus_channel_spec::<CmgCommand>(7),
-        bus_channel_spec::<GyroSample>(8),
-        bus_channel_spec::<Heartbeat>(9),
-        bus_channel_spec::<HealthEvent>(10),
-        bus_channel_spec::<CanLinkStatus>(11),
-        bus_channel_spec::<GroundCommand>(12),
-        bus_channel_spec::<GroundCommandAck>(13),
-        bus_channel_spec::<ThrusterStatus>(CH_THRUSTER_STATUS),
-        bus_channel_spec::<ThrusterCommand>(CH_THRUSTER_COMMAND),
-        own(
-            CH_TF_ESTIMATE,
-            foxglove::TF_ESTIMATE_TOPIC,
-            foxglove::FRAME_TRANSFORM,
-            foxglove::frame_transform_schema(),
-        ),
-        own(
-            CH_TF_TRUTH,
-            foxglove::TF_TRUTH_TOPIC,
-            foxglove::FRAME_TRANSFORM,
-            foxglove::frame_transform_schema(),
-        ),
+    let shown = TopicId::ALL
+        .iter()
+        .filter(|topic| topic.ground_view() != GroundView::Hidden);
+    let mut channels: Vec<Channel> = shown
+        .map(|&topic| {
+            own(
+                bus_channel_id(topic),
+                topic.name(),
+                topic.schema_name(),
+                topic.json_schema(),
+            )
+        })
+        .collect();
+    channels.extend(
+        foxglove::DERIVED_TOPICS
+            .iter()
+            .zip(foxglove::derived_schemas())
+            .enumerate()
+            .map(|(i, (&topic, (name, schema)))| {
+                own(derived_channel_id(i).into(), topic, name, schema.to_owned())
+            }),
+    );
+    channels.extend([
         own(
             CH_CMG,
             "testbed/ground/cmg",
@@ -136,40 +109,13 @@ pub fn channels() -> Vec<Channel> {
             "testbed::ground::Link",
             json!({"type": "object", "description": "The ground link's counters and the controller's target attitude (degrees), every second."}).to_string(),
         ),
-        own(
-            CH_EVENTS,
-            "testbed/ground/events",
-            "testbed::ground::Event",
-            json!({"type": "object", "description": "Controller mode changes seen by the link: time_ns, text."}).to_string(),
-        ),
-    ]
-}
-
-/// A subscriber whose samples go to the viewers, whatever their type.
-trait Streamed {
-    fn drain(&self, sink: &mut dyn FnMut(LogRecord)) -> anyhow::Result<usize>;
-}
-
-struct Stream<T: Topic>(TopicSubscriber<T>);
-
-impl<T: Topic + LogEncode> Streamed for Stream<T> {
-    fn drain(&self, sink: &mut dyn FnMut(LogRecord)) -> anyhow::Result<usize> {
-        Ok(self.0.drain(|s| sink(s.into_record()))?)
-    }
-}
-
-fn stream<T: Topic + LogEncode>(bus: &Bus) -> anyhow::Result<Box<dyn Streamed>> {
-    // Deep buffers: in lockstep (lossless delivery) a publisher waits only if the link falls
-    // 256 samples behind, and the link's thread does nothing but copy samples to queues.
-    // Drained on timers only (see `wake_on`): publishing rings no doorbell of the link.
-    Ok(Box::new(Stream(bus.subscriber_with::<T>(
-        SubscriberOptions::buffer(256).polled(),
-    )?)))
+    ]);
+    channels
 }
 
 /// The ground link's ports.
 pub struct GroundLinkPorts {
-    streams: Vec<Box<dyn Streamed>>,
+    streams: AnySubscribers<LogRecord>,
     command: TopicPublisher<GroundCommand>,
     ack: TopicPublisher<GroundCommandAck>,
     /// The service interval's period: [`SERVICE_PERIOD`] while viewers are connected,
@@ -189,7 +135,10 @@ pub struct GroundLinkProcess {
     target_hpr: [f64; 3],
     /// Target commands sent and not yet answered, by (viewer, command id).
     pending_targets: HashMap<(u32, u64), [f64; 3]>,
-    last_mode: Option<u32>,
+    /// The controller's mode changes, as events.
+    modes: foxglove::events::ModeChanges,
+    /// The platform's shape, sent with the status every second.
+    scene: foxglove::scene::Scene,
     last_status: Instant,
     buffer: Vec<u8>,
     /// The records of one wake-up, a buffer kept for the run.
@@ -206,17 +155,7 @@ fn token(configured: Option<&String>) -> anyhow::Result<String> {
     {
         return Ok(t);
     }
-    random_token()
-}
-
-/// 128 random bits from the OS, hex.
-pub fn random_token() -> anyhow::Result<String> {
-    use std::io::Read as _;
-    let mut bytes = [0u8; 16];
-    std::fs::File::open("/dev/urandom")
-        .and_then(|mut f| f.read_exact(&mut bytes))
-        .context("reading /dev/urandom for the ground token")?;
-    Ok(bytes.iter().map(|b| format!("{b:02x}")).collect())
+    testbed_config::random_token().context("making the ground command token")
 }
 
 /// Heading and the inclinometer's tilt angles θ (body x) and φ (body y) of `q`, rad: what the
@@ -231,6 +170,20 @@ impl GroundLinkProcess {
         let (config, bus) = (cx.config, cx.bus);
         let ground = &config.ground;
         let token = token(ground.token.as_ref())?;
+        let tls = match (&ground.tls_cert, &ground.tls_key) {
+            (Some(cert), Some(key)) => Some(tls::server_config(cert, key)?),
+            _ => None,
+        };
+        let (http, ws) = if tls.is_some() {
+            ("https", "wss")
+        } else {
+            ("http", "ws")
+        };
+        // Read-only parameters: the run configuration, less the command token.
+        let parameters = protocol::flatten_parameters(
+            &serde_json::to_value(config).context("the run configuration as parameters")?,
+            &["ground.token"],
+        );
         let (to_bus, from_viewers) = std::sync::mpsc::sync_channel(64);
         let start_time_ns = config
             .run
@@ -248,49 +201,40 @@ impl GroundLinkProcess {
                 "duration_s": config.run.duration_s,
                 "max_target_tilt_deg": ground.max_target_tilt_deg,
             }),
+            parameters,
             limits: command::Limits {
                 token: token.clone(),
                 max_tilt_rad: ground.max_target_tilt_deg * DEG,
             },
-            viewer_rate_hz: ground.viewer_rate_hz,
-            max_viewer_rate_hz: ground.max_viewer_rate_hz,
-            max_viewers: ground.max_viewers,
-            viewer_queue: ground.viewer_queue,
-            max_message_bytes: ground.max_message_bytes,
-            command_burst: ground.command_burst,
-            command_rate_hz: ground.command_rate_hz,
+            ground: ground.clone(),
+            tls,
             to_bus,
             command_topic: topic::GROUND_COMMAND,
         };
-        let server = Server::start(&ground.bind, ground.port, settings)
+        let server = Server::start(settings)
             .with_context(|| format!("listening on {}:{}", ground.bind, ground.port))?;
         let addr = server.addr;
+        server
+            .shared
+            .stats
+            .latency
+            .set_paced(config.run.mode == ClockMode::Paced);
         let info_path = config.run.log.with_extension("ground.json");
         let info = json!({
-            "url": format!("http://{addr}/"),
-            "ws": format!("ws://{addr}/"),
+            "url": format!("{http}://{addr}/"),
+            "ws": format!("{ws}://{addr}/"),
             "token": token,
         });
         write_private(&info_path, info.to_string().as_bytes())
             .with_context(|| format!("writing {}", info_path.display()))?;
-        tracing::info!("ground station on http://{addr}/ (Foxglove WebSocket ws://{addr}/)");
-        let streams = vec![
-            stream::<AttitudeEstimate>(bus)?,
-            stream::<ControllerStatus>(bus)?,
-            stream::<SimTruth>(bus)?,
-            stream::<WheelTelemetry>(bus)?,
-            stream::<WheelCommand>(bus)?,
-            stream::<CmgTelemetry>(bus)?,
-            stream::<CmgCommand>(bus)?,
-            stream::<GyroSample>(bus)?,
-            stream::<Heartbeat>(bus)?,
-            stream::<HealthEvent>(bus)?,
-            stream::<CanLinkStatus>(bus)?,
-            stream::<GroundCommand>(bus)?,
-            stream::<GroundCommandAck>(bus)?,
-            stream::<ThrusterStatus>(bus)?,
-            stream::<ThrusterCommand>(bus)?,
-        ];
+        tracing::info!("ground station on {http}://{addr}/ (Foxglove WebSocket {ws}://{addr}/)");
+        // Deep buffers: in lockstep (lossless delivery) a publisher waits only if the link
+        // falls 256 samples behind, and the link's thread does nothing but copy samples to
+        // queues. Drained on timers only (see `wake_on`): publishing rings no doorbell of the
+        // link.
+        let streams = bus.subscribe_each(SubscriberOptions::buffer(256).polled(), |topic| {
+            topic.ground_view() != GroundView::Hidden
+        })?;
         let ports = GroundLinkPorts {
             streams,
             command: bus.publisher()?,
@@ -305,7 +249,8 @@ impl GroundLinkProcess {
                 pyramid: CmgPyramid::from_config(&config.model.cmg),
                 target_hpr: hpr(&config.manoeuvre.target()),
                 pending_targets: HashMap::new(),
-                last_mode: None,
+                modes: Default::default(),
+                scene: crate::scene::platform_scene(&config.model, "body"),
                 last_status: Instant::now() - STATUS_PERIOD,
                 buffer: Vec::with_capacity(1024),
                 records: Vec::new(),
@@ -314,14 +259,20 @@ impl GroundLinkProcess {
         ))
     }
 
-    fn serve(&mut self, record: &LogRecord) {
-        let Some((channel, decimate)) = bus_channel(record) else {
-            return;
+    /// Serves `record`, drained at wall time `wall_ns`.
+    fn serve(&mut self, record: &LogRecord, wall_ns: u64) {
+        let topic = record.topic_id();
+        let decimate = match topic.ground_view() {
+            GroundView::Hidden => return,
+            GroundView::Decimated => true,
+            GroundView::Whole => false,
         };
+        let channel = bus_channel_id(topic);
         let shared = &self.server.shared;
         let header = *record.header();
         if !matches!(record, LogRecord::Heartbeat(_)) {
             shared.now_ns.fetch_max(header.time_ns, Ordering::Relaxed);
+            shared.stats.latency.observe_stamp(header.time_ns, wall_ns);
         }
         let t = header.time_ns;
         // Encoding for nobody is most of the link's work on a bus with no viewer connected.
@@ -329,22 +280,40 @@ impl GroundLinkProcess {
         if watched {
             self.buffer.clear();
             record.encode_json(&mut self.buffer);
+            // A heartbeat repeats the time of its process's last activity: no latency.
+            let stamped = !matches!(record, LogRecord::Heartbeat(_));
             shared.broadcast(
                 channel,
                 header.source_id,
                 decimate,
                 header.time_ns,
+                stamped,
                 &self.buffer,
             );
         }
-        if watched && let Some((topic, child, q)) = foxglove::transform_of(record) {
-            let text = foxglove::frame_transform_json(shared.start_time_ns + t, child, &q);
-            let channel = if topic == foxglove::TF_ESTIMATE_TOPIC {
-                CH_TF_ESTIMATE
-            } else {
-                CH_TF_TRUTH
-            };
-            shared.broadcast(channel, 0, true, t, text.as_bytes());
+        let stamp = shared.start_time_ns + t;
+        let event = match foxglove::derived_of(record) {
+            foxglove::Derived::Transform((topic, child, q)) => {
+                if watched {
+                    let text = foxglove::frame_transform_json(stamp, child, &q);
+                    if topic == foxglove::TF_ESTIMATE_TOPIC {
+                        shared.broadcast(CH_TF_ESTIMATE, 0, true, t, true, text.as_bytes());
+                        let pose = foxglove::pose_in_frame_json(stamp, &q);
+                        shared.broadcast(CH_POSE, 0, true, t, true, pose.as_bytes());
+                    } else {
+                        shared.broadcast(CH_TF_TRUTH, 0, true, t, true, text.as_bytes());
+                    }
+                }
+                None
+            }
+            foxglove::Derived::Event(event) => Some(event),
+            // Followed even while nobody watches: a viewer that connects later sees changes.
+            foxglove::Derived::Mode(mode) => self.modes.event(mode),
+            foxglove::Derived::Nothing => None,
+        };
+        if let Some(event) = event {
+            let text = event.log_json(stamp);
+            shared.broadcast(CH_EVENTS, 0, false, t, true, text.as_bytes());
         }
         match record {
             LogRecord::CmgTelemetry(c) if watched => {
@@ -359,20 +328,7 @@ impl GroundLinkProcess {
                     "singularity_measure": measure,
                 })
                 .to_string();
-                shared.broadcast(CH_CMG, 0, true, t, text.as_bytes());
-            }
-            LogRecord::ControllerStatus(s) if self.last_mode != Some(s.mode) => {
-                let name = |m: u32| {
-                    ControllerMode::from_u32(m)
-                        .map_or_else(|| format!("mode {m}"), |m| format!("{m:?}"))
-                };
-                let text = match self.last_mode {
-                    Some(old) => format!("controller mode {} → {}", name(old), name(s.mode)),
-                    None => format!("controller mode {}", name(s.mode)),
-                };
-                self.last_mode = Some(s.mode);
-                let event = json!({"time_ns": t, "text": text}).to_string();
-                shared.broadcast(CH_EVENTS, 0, false, t, event.as_bytes());
+                shared.broadcast(CH_CMG, 0, true, t, true, text.as_bytes());
             }
             LogRecord::GroundCommandAck(a) if a.decided_by == GroundCommandAck::BY_CONTROLLER => {
                 if let Some(target) = self.pending_targets.remove(&(a.client_id, a.command_id))
@@ -392,7 +348,11 @@ impl GroundLinkProcess {
         value["target_deg"] = json!({"heading": h, "tilt_x": p, "tilt_y": r});
         value["time_ns"] = shared.now_ns.load(Ordering::Relaxed).into();
         let t = shared.now_ns.load(Ordering::Relaxed);
-        shared.broadcast(CH_LINK, 0, false, t, value.to_string().as_bytes());
+        shared.broadcast(CH_LINK, 0, false, t, false, value.to_string().as_bytes());
+        if shared.has_viewers() {
+            let scene = self.scene.update_json(shared.start_time_ns + t);
+            shared.broadcast(CH_SCENE, 0, false, t, false, scene.as_bytes());
+        }
     }
 }
 
@@ -420,7 +380,7 @@ impl Node for GroundLinkProcess {
         // The link never wakes per sample: it drains every stream on a timer. Paced, the
         // service period's wake-ups take every sample: a viewer sees it at most one period
         // later (it draws at a few hertz), and the link no longer wakes for each of some 150
-        // samples a second (issue 18: it cost 0.5 % of a core with no viewer at all).
+        // samples a second (it cost 0.5 % of a core with no viewer at all).
         // Lockstep runs as fast as the machine allows: a wake-up for every sample of every
         // topic (about ten a tick) took as much CPU as the tick's own processes, on the same
         // cores. It instead drains everything every LOCKSTEP_DRAIN of wall time: at 10 000
@@ -443,13 +403,18 @@ impl Node for GroundLinkProcess {
             });
         let mut records = std::mem::take(&mut self.records);
         for s in &ports.streams {
-            s.drain(&mut |r| records.push(r))?;
+            s.drain_as(&mut |r| records.push(r))?;
         }
         io.heartbeat.add_samples_in(records.len() as u64);
+        let wall_ns = testbed_log::unix_time_ns();
         for record in records.drain(..) {
-            self.serve(&record);
+            self.serve(&record, wall_ns);
         }
         self.records = records;
+        // The heartbeat describes the run as far as the link has seen it (not time 0: a
+        // heartbeat stamped 0 in the log widens every chunk's time range back to the start).
+        io.heartbeat
+            .set_time_ns(self.server.shared.now_ns.load(Ordering::Relaxed));
         while let Ok(message) = self.from_viewers.try_recv() {
             match message {
                 ToBus::Command(command) => {
@@ -482,6 +447,7 @@ impl Node for GroundLinkProcess {
         }
         if self.last_status.elapsed() >= STATUS_PERIOD {
             self.last_status = Instant::now();
+            self.server.shared.stats.latency.roll();
             self.status();
         }
         Ok(Flow::Continue)
@@ -493,5 +459,50 @@ impl Node for GroundLinkProcess {
         tracing::info!(%stats, "ground link stopping");
         let _ = std::fs::remove_file(&self.info_path);
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The ids a viewer sees (those of `docs/ground.md`): a bus topic's is its channel id in the
+    /// run log, the derived channels' (transforms, pose, events, scene) too, and the link's own
+    /// follow.
+    #[test]
+    fn channel_ids_are_the_logs_and_pinned() {
+        let ids: Vec<(u32, &str)> = channels().iter().map(|c| (c.id, c.topic)).collect();
+        assert_eq!(
+            ids,
+            [
+                (1, topic::GYRO),
+                (4, topic::WHEEL_TELEMETRY),
+                (5, topic::WHEEL_COMMAND),
+                (6, topic::CMG_TELEMETRY),
+                (7, topic::CMG_COMMAND),
+                (8, topic::ATTITUDE_ESTIMATE),
+                (9, topic::CONTROLLER_STATUS),
+                (10, topic::SIM_TRUTH),
+                (12, topic::HEARTBEAT),
+                (14, topic::CAN_STATUS),
+                (17, topic::HEALTH),
+                (18, topic::GROUND_COMMAND),
+                (19, topic::GROUND_COMMAND_ACK),
+                (20, topic::THRUSTER_COMMAND),
+                (21, topic::THRUSTER_STATUS),
+                (23, foxglove::TF_ESTIMATE_TOPIC),
+                (24, foxglove::TF_TRUTH_TOPIC),
+                (25, foxglove::POSE_ESTIMATE_TOPIC),
+                (26, foxglove::events::EVENTS_TOPIC),
+                (27, foxglove::scene::SCENE_TOPIC),
+                (28, "testbed/ground/cmg"),
+                (29, "testbed/ground/link"),
+            ]
+        );
+        for channel in channels().iter().take_while(|c| c.id < CH_TF_ESTIMATE) {
+            let topic = TopicId::from_name(channel.topic).expect("a topic of the table");
+            assert_eq!(channel.id, u32::from(testbed_log::channel_id(topic)));
+            assert_eq!(channel.schema_name, topic.schema_name());
+        }
     }
 }

@@ -23,6 +23,16 @@ pub fn report(error: &anyhow::Error) -> String {
     out
 }
 
+/// The exit status of a failed command: 2 when the computer lacks what a run needs (nothing
+/// was started; as the launcher's status for an unusable profile), 1 otherwise.
+pub fn status(error: &anyhow::Error) -> u8 {
+    if error.is::<crate::run::preflight::Unmet>() {
+        2
+    } else {
+        1
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -70,12 +70,31 @@ fn register_font() {
     });
 }
 
+/// The horizontal axis of a figure's panels.
+#[derive(Debug, Clone, Copy)]
+pub enum XAxis<'a> {
+    /// One time axis for every panel, in seconds.
+    Time,
+    /// Each panel its own range, under these labels (one per panel, e.g. an ECDF's metric).
+    PerPanel(&'a [&'a str]),
+}
+
 /// Writes the panels stacked vertically to `<stem>.svg` and `<stem>.png`; returns the paths.
 pub fn write_figure(stem: &Path, title: &str, panels: &[Panel]) -> Result<Vec<PathBuf>> {
+    write_figure_on(stem, title, XAxis::Time, panels)
+}
+
+/// [`write_figure`] with the horizontal axis `x`.
+pub fn write_figure_on(
+    stem: &Path,
+    title: &str,
+    x: XAxis,
+    panels: &[Panel],
+) -> Result<Vec<PathBuf>> {
     let svg = stem.with_extension("svg");
     let png = stem.with_extension("png");
-    write_svg(&svg, title, panels)?;
-    write_png(&png, title, panels)?;
+    write_svg_on(&svg, title, x, panels)?;
+    write_png_on(&png, title, x, panels)?;
     Ok(vec![svg, png])
 }
 
@@ -92,9 +111,13 @@ fn create_dir(path: &Path) -> Result<()> {
 
 /// Writes the panels stacked vertically to an SVG file.
 pub fn write_svg(path: &Path, title: &str, panels: &[Panel]) -> Result<()> {
+    write_svg_on(path, title, XAxis::Time, panels)
+}
+
+fn write_svg_on(path: &Path, title: &str, x: XAxis, panels: &[Panel]) -> Result<()> {
     create_dir(path)?;
     let root = SVGBackend::new(path, size(panels)).into_drawing_area();
-    draw(&root, title, panels).with_context(|| format!("drawing {}", path.display()))?;
+    draw(&root, title, x, panels).with_context(|| format!("drawing {}", path.display()))?;
     root.present()
         .map_err(draw_error)
         .with_context(|| format!("writing {}", path.display()))
@@ -102,9 +125,13 @@ pub fn write_svg(path: &Path, title: &str, panels: &[Panel]) -> Result<()> {
 
 /// Writes the panels stacked vertically to a PNG file.
 pub fn write_png(path: &Path, title: &str, panels: &[Panel]) -> Result<()> {
+    write_png_on(path, title, XAxis::Time, panels)
+}
+
+fn write_png_on(path: &Path, title: &str, x: XAxis, panels: &[Panel]) -> Result<()> {
     create_dir(path)?;
     let root = BitMapBackend::new(path, size(panels)).into_drawing_area();
-    draw(&root, title, panels).with_context(|| format!("drawing {}", path.display()))?;
+    draw(&root, title, x, panels).with_context(|| format!("drawing {}", path.display()))?;
     root.present()
         .map_err(draw_error)
         .with_context(|| format!("writing {}", path.display()))
@@ -113,6 +140,7 @@ pub fn write_png(path: &Path, title: &str, panels: &[Panel]) -> Result<()> {
 fn draw<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     title: &str,
+    x: XAxis,
     panels: &[Panel],
 ) -> Result<()>
 where
@@ -123,13 +151,21 @@ where
     let root = root.titled(title, (FONT, 22)).map_err(draw_error)?;
     let areas = root.split_evenly((panels.len().max(1), 1));
     let t_range = time_range(panels);
-    for (panel, area) in panels.iter().zip(areas.iter()) {
-        draw_panel(area, panel, t_range)?;
+    for (i, (panel, area)) in panels.iter().zip(areas.iter()).enumerate() {
+        match x {
+            XAxis::Time => draw_panel(area, panel, "time (s)", t_range)?,
+            XAxis::PerPanel(labels) => draw_panel(
+                area,
+                panel,
+                labels.get(i).copied().unwrap_or(""),
+                time_range(std::slice::from_ref(panel)),
+            )?,
+        }
     }
     Ok(())
 }
 
-/// The time span of every panel's data (one time axis for the figure).
+/// The horizontal span of every panel's data (one time axis for the figure).
 fn time_range(panels: &[Panel]) -> (f64, f64) {
     let times = panels
         .iter()
@@ -159,6 +195,7 @@ fn tick_label(value: f64, span: f64) -> String {
 fn draw_panel<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
     panel: &Panel,
+    x_label: &str,
     (t0, t1): (f64, f64),
 ) -> Result<()>
 where
@@ -204,7 +241,7 @@ where
     let x_span = t1 - t0;
     chart
         .configure_mesh()
-        .x_desc("time (s)")
+        .x_desc(x_label)
         .y_desc(panel.y_label)
         .x_label_formatter(&|v| tick_label(*v, x_span))
         .y_label_formatter(&|v| tick_label(*v, span))

@@ -105,7 +105,7 @@ pub const LOOK_EVERY: Duration = Duration::from_millis(500);
 /// How long to sleep before the next look: [`LOOK_EVERY`] on a terminal (the bar moves), else
 /// until the next plain line is due, `since_line` after the last one and `wall` into the run
 /// (never less than [`LOOK_EVERY`]). Looking twice a second to print a line every ten was two
-/// of `testbed run`'s 2.3 wake-ups a second in a paced run (issue 18).
+/// of `testbed run`'s 2.3 wake-ups a second in a paced run.
 fn next_look(terminal: bool, wall: Duration, since_line: Duration) -> Duration {
     if terminal {
         return LOOK_EVERY;

@@ -154,6 +154,27 @@ pub enum MekfError {
     Covariance,
 }
 
+/// Refuses (and counts) a gyro sample a filter at `state_ns` cannot apply: not finite, or
+/// older than the state.
+pub(crate) fn check_gyro_sample(
+    counters: &mut MekfCounters,
+    t_ns: u64,
+    state_ns: u64,
+    w_meas_rad_s: &Vector3<f64>,
+) -> Result<(), MekfError> {
+    if !w_meas_rad_s.iter().all(|x| x.is_finite()) {
+        counters.invalid_gyro += 1;
+        return Err(MekfError::NonFinite {
+            what: "gyro sample",
+        });
+    }
+    if t_ns < state_ns {
+        counters.out_of_order_gyro += 1;
+        return Err(MekfError::OutOfOrder { t_ns, state_ns });
+    }
+    Ok(())
+}
+
 /// The MEKF. See the module documentation for the equations and conventions.
 #[derive(Debug, Clone)]
 pub struct Mekf {
@@ -245,19 +266,7 @@ impl Mekf {
     /// convention). `t_ns` equal to the state's time only records the sample. A sample older than
     /// the state is refused ([`MekfError::OutOfOrder`]) and counted; a non-finite one likewise.
     pub fn propagate(&mut self, t_ns: u64, w_meas_rad_s: &Vector3<f64>) -> Result<(), MekfError> {
-        if !w_meas_rad_s.iter().all(|x| x.is_finite()) {
-            self.counters.invalid_gyro += 1;
-            return Err(MekfError::NonFinite {
-                what: "gyro sample",
-            });
-        }
-        if t_ns < self.t_ns {
-            self.counters.out_of_order_gyro += 1;
-            return Err(MekfError::OutOfOrder {
-                t_ns,
-                state_ns: self.t_ns,
-            });
-        }
+        check_gyro_sample(&mut self.counters, t_ns, self.t_ns, w_meas_rad_s)?;
         let dt_s = (t_ns - self.t_ns) as f64 / NS_PER_S;
         self.advance(dt_s, w_meas_rad_s);
         self.t_ns = t_ns;

@@ -33,11 +33,10 @@
 //! test (see `wheel`). [`significance_beside`] and [`compete`] are shared by the torque and
 //! wheel channels.
 
-use super::unexplained::{Candidates, INNOVATION_LABELS, TorqueCandidates, UnexplainedEffect};
-use crate::channels::torque_columns;
-use crate::effects::{Cause, Kind};
-use crate::fit::{Problem, SetFit};
-use crate::stats::{NormalEquations, chi_square_cdf, chi_square_quantile};
+use super::unexplained::UnexplainedEffect;
+use crate::effects::Cause;
+use crate::sparse::SparseOptions;
+use crate::stats::{LsFit, NormalEquations, chi_square_cdf, chi_square_quantile};
 use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
 
@@ -159,102 +158,79 @@ pub struct Consistency {
     pub stderr: Vec<Vec<f64>>,
 }
 
-/// Joint fit of the torque causes with the unexplained torque terms.
-pub(super) struct JointTorque {
-    /// Per named torque cause: the fitted change per column and its standard errors (fit data).
-    pub delta: Vec<(Cause, Vec<f64>, Vec<f64>)>,
+/// The tests a cause failed, in the order its verdict names them: the first is the one it is
+/// dropped for ([`CauseTest::failed`]), the others are named after it.
+#[derive(Default)]
+pub(super) struct Failures(Vec<(&'static str, String)>);
+
+impl Failures {
+    /// Whether no test has failed (so far).
+    pub fn none(&self) -> bool {
+        self.0.is_empty()
+    }
+
+    /// The test `test` failed; `text` says how, in words.
+    pub fn add(&mut self, test: &'static str, text: String) {
+        self.0.push((test, text));
+    }
 }
 
-/// Columns of the joint torque model: (cause, torque column) of the named causes, and (axis,
-/// candidate index) of the unexplained terms.
-type JointColumns = (Vec<(Option<Cause>, usize)>, Vec<(usize, usize)>);
+/// The statistics of a cause's tests, as [`CauseTest`] reports them (`None`: not run).
+#[derive(Default)]
+pub(super) struct Evidence {
+    pub consistency: Option<Consistency>,
+    pub joint_lr: Option<f64>,
+    pub joint_wald: Option<f64>,
+    pub joint_threshold: Option<f64>,
+    pub whiteness: Option<Whiteness>,
+    pub competitor: Option<Competitor>,
+}
 
-/// The design of the joint torque model: named torque causes' columns, then one column per
-/// unexplained torque term (on its axis).
-fn joint_columns(
-    named: &[Cause],
-    effects: &[UnexplainedEffect],
-    candidates: &TorqueCandidates,
-    channel: &crate::channels::TorqueChannel,
-) -> JointColumns {
-    // (cause, torque column) for named; (axis, candidate index) for the unexplained terms.
-    let cols: Vec<(Option<Cause>, usize)> = named
-        .iter()
-        .filter(|c| c.kind() == Kind::Torque)
-        .flat_map(|c| {
-            torque_columns(*c)
-                .into_iter()
-                .flatten()
-                .filter(|col| channel.determined(*col))
-                .map(move |col| (Some(*c), col))
-        })
-        .collect();
-    let mut extra = Vec::new();
-    for e in effects {
-        let Some(axis) = e
-            .equation
-            .strip_prefix("torque_")
-            .and_then(|a| "xyz".find(a))
-        else {
-            continue;
+impl CauseTest {
+    /// The verdict on `cause`, the same in every channel: kept when it failed no test, in the
+    /// words of `consistent` (its block consistency, the channel's other tests passed); else
+    /// dropped for its first failure, the others named after it.
+    pub(super) fn verdict(
+        cause: Cause,
+        evidence: Evidence,
+        failures: Failures,
+        consistent: impl FnOnce(&Consistency) -> String,
+    ) -> Self {
+        let Evidence {
+            consistency,
+            joint_lr,
+            joint_wald,
+            joint_threshold,
+            whiteness,
+            competitor,
+        } = evidence;
+        let kept = failures.none();
+        let failed = failures.0.first().map(|f| f.0);
+        let verdict = match failures.0.split_first() {
+            Some(((_, text), [])) => text.clone(),
+            Some(((_, text), more)) => format!(
+                "{text}; it also fails its {} test{}",
+                more.iter().map(|f| f.0).collect::<Vec<_>>().join(" and "),
+                if more.len() > 1 { "s" } else { "" }
+            ),
+            None => consistency.as_ref().map_or_else(
+                || "kept (block consistency not determined)".into(),
+                consistent,
+            ),
         };
-        for t in &e.terms {
-            if let Some(j) = candidates.names.iter().position(|n| *n == t.name) {
-                extra.push((axis, j));
-            }
+        Self {
+            name: cause.name(),
+            kept,
+            consistency,
+            joint_lr,
+            joint_wald,
+            joint_threshold,
+            whiteness,
+            competitor,
+            failed,
+            verdict,
         }
     }
-    (cols, extra)
-}
-
-/// One whitened row of the joint torque model, interval `i`, body axis `axis`: the columns
-/// `cols` of the causes, then the unexplained terms `extra` (each on its own axis), written
-/// into `x`; returns the whitened residual `y`.
-fn torque_row(
-    fit: &SetFit,
-    cols: &[(Option<Cause>, usize)],
-    extra: &[(usize, usize)],
-    candidates: &TorqueCandidates,
-    (i, axis): (usize, usize),
-    x: &mut [f64],
-) -> f64 {
-    let ch = &fit.state.torque;
-    let sigma = ch.sigma[axis];
-    for (j, &(_, col)) in cols.iter().enumerate() {
-        x[j] = ch.x[i][col][axis] / sigma;
-    }
-    for (j, &(a, c)) in extra.iter().enumerate() {
-        x[cols.len() + j] = if a == axis {
-            candidates.values[i][c] / sigma
-        } else {
-            0.0
-        };
-    }
-    ch.y[i][axis] / sigma
-}
-
-/// Normal equations of the joint torque model over the rows `keep` accepts.
-fn normal_equations(
-    fit: &SetFit,
-    cols: &[(Option<Cause>, usize)],
-    extra: &[(usize, usize)],
-    candidates: &TorqueCandidates,
-    keep: impl Fn(usize) -> bool,
-) -> NormalEquations {
-    let ch = &fit.state.torque;
-    let p = cols.len() + extra.len();
-    let mut ne = NormalEquations::new(p);
-    let mut row = vec![0.0; p];
-    for i in 0..ch.len() {
-        if !keep(i) {
-            continue;
-        }
-        for axis in 0..3 {
-            let y = torque_row(fit, cols, extra, candidates, (i, axis), &mut row);
-            ne.add(&row, y);
-        }
-    }
-    ne
 }
 
 /// How much better (relative drop of the cross-validated residual sum) a competing generic
@@ -274,7 +250,7 @@ pub(super) struct Levels<'a> {
     pub n_fit: f64,
     /// The unexplained-effect search's blocks and settings (for the competing explanation).
     pub block_s: f64,
-    pub sparse: &'a crate::sparse::SparseOptions,
+    pub sparse: &'a SparseOptions,
 }
 
 impl Levels<'_> {
@@ -289,407 +265,11 @@ impl Levels<'_> {
     }
 }
 
-/// Run both tests on every named cause of `fit`.
-pub(super) fn test_causes(
-    problem: &Problem,
-    fit: &SetFit,
-    named: &[Cause],
-    effects: &[UnexplainedEffect],
-    all: &Candidates,
-    levels: &Levels,
-) -> (Vec<CauseTest>, Option<JointTorque>) {
-    let candidates = &all.torque;
-    let Levels {
-        blocks,
-        consistency: alpha_consistency,
-        ..
-    } = *levels;
-    let ch = &fit.state.torque;
-    let data = problem.data;
-    let (cols, extra) = joint_columns(named, effects, candidates, &fit.state.torque);
-    let mut out = Vec::new();
-    let mut joint = None;
-    if !cols.is_empty() && ch.len() >= 30 {
-        let t0 = ch.ticks.first().map_or(0.0, |&k| data.t[k]);
-        let t1 = ch.ticks.last().map_or(1.0, |&k| data.t[k]);
-        let block_of = |i: usize| -> usize {
-            (((data.t[ch.ticks[i]] - t0) / (t1 - t0).max(1e-9) * blocks as f64) as usize)
-                .min(blocks - 1)
-        };
-        let per_block: Vec<Option<crate::stats::LsFit>> = (0..blocks)
-            .map(|b| normal_equations(fit, &cols, &extra, candidates, |i| block_of(i) == b).solve())
-            .collect();
-        let fit_rows = |i: usize| !problem.held_out[ch.ticks[i]];
-        let full = normal_equations(fit, &cols, &extra, candidates, fit_rows).solve();
-        if let Some(f) = &full {
-            let se = f.stderr();
-            let mut delta = Vec::new();
-            for &cause in named.iter().filter(|c| c.kind() == Kind::Torque) {
-                // Every value of the cause: a column not in the fit (not determined) unchanged.
-                let at = |col: usize| {
-                    (0..cols.len()).find(|&j| cols[j].0 == Some(cause) && cols[j].1 == col)
-                };
-                let range = torque_columns(cause).unwrap_or(0..0);
-                delta.push((
-                    cause,
-                    range
-                        .clone()
-                        .map(|col| at(col).map_or(0.0, |j| f.theta[j]))
-                        .collect(),
-                    range
-                        .map(|col| at(col).map_or(f64::NAN, |j| se[j]))
-                        .collect(),
-                ));
-            }
-            joint = Some(JointTorque { delta });
-        }
-        // The torque search with every named cause, computed once for all the competitions.
-        let cv_with = super::unexplained::torque_cv_rss(
-            problem,
-            fit,
-            named,
-            candidates,
-            levels.block_s,
-            levels.sparse,
-        );
-        for &cause in named.iter().filter(|c| c.kind() == Kind::Torque) {
-            let idx: Vec<usize> = (0..cols.len())
-                .filter(|&j| cols[j].0 == Some(cause))
-                .collect();
-            let consistency = consistency(&per_block, &idx);
-            let mut verdict = String::new();
-            let mut kept = true;
-            let mut failed = None;
-            if let Some(c) = &consistency
-                && c.p < alpha_consistency
-            {
-                kept = false;
-                failed = Some("consistency");
-                verdict = falsified_text(c, alpha_consistency);
-            }
-            let (mut joint_lr, mut joint_threshold, mut joint_wald) = (None, None, None);
-            {
-                // Beside each unexplained effect its offset: a constant part of the cause on
-                // that axis cannot be told apart from it. A named constant torque's column on
-                // such an axis is that offset: in the constant torque's own test it is replaced
-                // by the offset (tested are its other axes), in the others' it stands for it
-                // (adding the offset again would make the model singular).
-                let effect_axes: Vec<usize> = extra.iter().map(|e| e.0).collect();
-                let cols_test: Vec<(Option<Cause>, usize)> = cols
-                    .iter()
-                    .copied()
-                    .filter(|&(c, col)| {
-                        !(cause == Cause::ConstantTorque
-                            && c == Some(cause)
-                            && effect_axes
-                                .iter()
-                                .any(|&a| ch.x.iter().any(|row| row[col][a] != 0.0)))
-                    })
-                    .collect();
-                let idx_test: Vec<usize> = (0..cols_test.len())
-                    .filter(|&j| cols_test[j].0 == Some(cause))
-                    .collect();
-                let extra_with = with_offsets(&extra, &cols_test, candidates, ch);
-                if let Some((lr, threshold, wald)) = torque_significance(
-                    fit,
-                    &cols_test,
-                    &extra_with,
-                    candidates,
-                    fit_rows,
-                    cause,
-                    (idx.len(), &idx_test),
-                    levels,
-                ) {
-                    joint_lr = Some(lr);
-                    joint_threshold = Some(threshold);
-                    joint_wald = wald;
-                    if lr <= threshold && kept {
-                        kept = false;
-                        failed = Some("joint");
-                        verdict = format!(
-                            "dropped: not significant beside the other named causes and the unexplained effects (likelihood ratio {lr:.1} ≤ threshold {threshold:.1}); it stood in for an effect of another form or for a dropped cause"
-                        );
-                    } else if let Some(w) = wald.filter(|w| *w <= threshold && kept) {
-                        kept = false;
-                        failed = Some("joint");
-                        verdict = format!(
-                            "dropped: not significant beside the other named causes and the unexplained effects once the residuals' correlation within a segment is allowed for (cluster-robust Wald statistic {w:.1} ≤ threshold {threshold:.1}; likelihood ratio {lr:.1}); it stood in for an effect of another form or for a dropped cause"
-                        );
-                    }
-                }
-            }
-            // Third: no generic form of another kind explains the cause's part as well. The
-            // torque search is redone without the cause and its own form (its competitor); the
-            // cause is dropped if that search's cross-validated residual sum is more than
-            // `COMPETITOR_MARGIN` below the one with it, or, if that sum is not above it, if
-            // the cause is not significant beside the terms it finds (the selection's
-            // threshold, by the likelihood ratio and
-            // by the cluster-robust Wald statistic, as in the joint test). The joint test above
-            // takes the terms found *with* the cause, whose form the cause has shaped (a
-            // constant torque takes an effect's offset, and the search then settles on another
-            // harmonic); here the null model is the best explanation without it.
-            let mut competitor = None;
-            if kept
-                && let Some(with) = cv_with
-                && let Some((rival, without)) = super::unexplained::competing_explanation(
-                    problem,
-                    fit,
-                    named,
-                    cause,
-                    candidates,
-                    levels.block_s,
-                    levels.sparse,
-                )
-            {
-                let (rival_cols, rival_extra) = joint_columns(named, &rival, candidates, ch);
-                debug_assert_eq!(rival_cols, cols);
-                let (c, dropped) = compete("torque", with, without, &rival, || {
-                    torque_significance(
-                        fit,
-                        &cols,
-                        &rival_extra,
-                        candidates,
-                        fit_rows,
-                        cause,
-                        (idx.len(), &idx),
-                        levels,
-                    )
-                });
-                if let Some(text) = dropped {
-                    kept = false;
-                    failed = Some("competitor");
-                    verdict = text;
-                }
-                competitor = Some(c);
-            }
-            if kept {
-                verdict = match &consistency {
-                    Some(c) => format!(
-                        "kept: consistent across {} time blocks (p = {:.2})",
-                        c.blocks, c.p
-                    ),
-                    None => "kept (block consistency not determined)".into(),
-                };
-            }
-            out.push(CauseTest {
-                name: cause.name(),
-                kept,
-                consistency,
-                joint_lr,
-                joint_wald,
-                joint_threshold,
-                whiteness: None,
-                competitor,
-                failed,
-                verdict,
-            });
-        }
-    }
-    out.extend(sensor_tests(problem, fit, named, effects, all, levels));
-    out.extend(super::wheel::wheel_tests(
-        problem, fit, named, effects, &all.wheel, levels,
-    ));
-    (out, joint)
-}
-
-/// The same two tests for the sensor causes, on their linearisation ([`SensorLinear`]): per
-/// block one Gauss–Newton step from the fitted values (with the unexplained innovation terms
-/// as extra columns) for the consistency, and the likelihood ratio of the innovations with and
-/// without the cause (its effect removed to first order, `r − J_c Δθ_c`) beside the unexplained
-/// terms for the significance.
-fn sensor_tests(
-    problem: &Problem,
-    fit: &SetFit,
-    named: &[Cause],
-    effects: &[UnexplainedEffect],
-    all_candidates: &Candidates,
-    levels: &Levels,
-) -> Vec<CauseTest> {
-    let innovation = &all_candidates.innovation;
-    let linear = all_candidates.linear.as_ref();
-    let Levels {
-        blocks,
-        consistency: alpha_consistency,
-        ..
-    } = *levels;
-    let sensor: Vec<Cause> = named
-        .iter()
-        .copied()
-        .filter(|c| c.kind() == Kind::Sensor)
-        .collect();
-    let not_tested = CauseTest::not_tested;
-    let Some(lin) = linear else {
-        return sensor
-            .iter()
-            .map(|c| not_tested(*c, "its linearisation through the filter failed"))
-            .collect();
-    };
-    let data = problem.data;
-    let inn = &fit.state.recon.innovations;
-    // Unexplained innovation terms: (component, candidate index).
-    let mut extra: Vec<(usize, usize)> = Vec::new();
-    for e in effects {
-        let Some(c) = INNOVATION_LABELS.iter().position(|l| *l == e.equation) else {
-            continue;
-        };
-        for t in &e.terms {
-            if let Some(j) = innovation.names.iter().position(|n| *n == t.name) {
-                extra.push((c, j));
-            }
-        }
-    }
-    let (Some(first), Some(last)) = (inn.first(), inn.last()) else {
-        return Vec::new();
-    };
-    let (t0, t1) = (data.t[first.tick], data.t[last.tick]);
-    let block_of = |tick: usize| -> usize {
-        (((data.t[tick] - t0) / (t1 - t0).max(1e-9) * blocks as f64) as usize).min(blocks - 1)
-    };
-    // Rows: (innovation index, component, vector row).
-    let rows: Vec<(usize, usize, usize)> = (0..inn.len())
-        .flat_map(|i| {
-            (0..INNOVATION_LABELS.len())
-                .filter(move |&c| innovation.row[i][c] != usize::MAX)
-                .map(move |c| (i, c, innovation.row[i][c]))
-        })
-        .collect();
-    // Normal equations of `y ≈ [J_used, U] β` over the rows `keep` accepts, y the innovation
-    // with the causes in `removed` taken out to first order.
-    let build = |used: &[usize],
-                 removed: &[usize],
-                 keep: &dyn Fn(usize) -> bool,
-                 sign: f64,
-                 extra: &[(usize, usize)]| {
-        let p = used.len() + extra.len();
-        let mut ne = NormalEquations::new(p);
-        let mut x = vec![0.0; p];
-        for &(i, c, r) in &rows {
-            if !keep(inn[i].tick) {
-                continue;
-            }
-            let mut y = inn[i].values[c];
-            for &j in removed {
-                y -= lin.j[j][r] * lin.delta[j].unwrap_or(0.0);
-            }
-            for (a, &j) in used.iter().enumerate() {
-                x[a] = lin.j[j][r];
-            }
-            for (a, &(ec, cand)) in extra.iter().enumerate() {
-                x[used.len() + a] = if ec == c {
-                    innovation.values[i][cand]
-                } else {
-                    0.0
-                };
-            }
-            ne.add(&x, sign * y);
-        }
-        ne
-    };
-    let all: Vec<usize> = (0..lin.cols.len()).collect();
-    // For the significance test, each unexplained effect with its offset (see the torque test).
-    let mut extra1 = extra.clone();
-    if let Some(one) = innovation.names.iter().position(|n| *n == "1") {
-        for c in 0..INNOVATION_LABELS.len() {
-            if extra.iter().any(|e| e.0 == c) && !extra1.contains(&(c, one)) {
-                extra1.push((c, one));
-            }
-        }
-    }
-    let mut out = Vec::new();
-    for cause in sensor {
-        let idx: Vec<usize> = all
-            .iter()
-            .copied()
-            .filter(|&j| lin.cols[j].0 == cause)
-            .collect();
-        // Consistency: per block, δ_b solving J δ ≈ −r (one Gauss–Newton step).
-        let per_block: Vec<Option<crate::stats::LsFit>> = (0..blocks)
-            .map(|b| build(&all, &[], &|tick| block_of(tick) == b, -1.0, &extra).solve())
-            .collect();
-        let consistency = consistency(&per_block, &idx);
-        let mut kept = true;
-        let mut failed = None;
-        let mut verdict = String::new();
-        if let Some(c) = &consistency
-            && c.p < alpha_consistency
-        {
-            kept = false;
-            failed = Some("consistency");
-            verdict = falsified_text(c, alpha_consistency);
-        }
-        let (mut joint_lr, mut joint_threshold) = (None, None);
-        let removable = idx.iter().all(|&j| lin.delta[j].is_some());
-        if !extra.is_empty() && removable {
-            let fit_rows = |tick: usize| !problem.held_out[tick];
-            let others: Vec<usize> = all.iter().copied().filter(|j| !idx.contains(j)).collect();
-            let with = build(&all, &idx, &fit_rows, 1.0, &extra1).solve();
-            let without = rss_of(&build(&others, &idx, &fit_rows, 1.0, &extra1));
-            if let (Some(w), Some(wo)) = (with, without) {
-                let (lr, threshold) = levels.joint(w.n as f64, wo, w.rss, idx.len());
-                joint_lr = Some(lr);
-                joint_threshold = Some(threshold);
-                if lr <= threshold && kept {
-                    kept = false;
-                    failed = Some("joint");
-                    verdict = format!(
-                        "dropped: not significant once the unexplained effect is modelled (likelihood ratio {lr:.1} ≤ threshold {threshold:.1}); it stood in for an effect of another form"
-                    );
-                }
-            }
-        }
-        if kept {
-            verdict = match &consistency {
-                Some(c) => format!(
-                    "kept: consistent across {} time blocks (p = {:.2}, linearised through the filter)",
-                    c.blocks, c.p
-                ),
-                None => "kept (block consistency not determined)".into(),
-            };
-        }
-        out.push(CauseTest {
-            name: cause.name(),
-            kept,
-            consistency,
-            joint_lr,
-            joint_wald: None,
-            joint_threshold,
-            whiteness: None,
-            competitor: None,
-            failed,
-            verdict,
-        });
-    }
-    out
-}
-
 pub(super) fn falsified_text(c: &Consistency, alpha: f64) -> String {
     format!(
         "falsified: its parameters differ between {} time blocks (χ² = {:.1} on {} degrees of freedom, p = {:.1e} < {:.0e}); a time- or state-dependent effect, not a constant one",
         c.blocks, c.chi2, c.dof, c.p, alpha
     )
-}
-
-/// The unexplained terms `extra` with each one's axis offset (`1`) added, except on an axis
-/// where a named constant torque's column in `cols` is that offset already.
-fn with_offsets(
-    extra: &[(usize, usize)],
-    cols: &[(Option<Cause>, usize)],
-    candidates: &TorqueCandidates,
-    ch: &crate::channels::TorqueChannel,
-) -> Vec<(usize, usize)> {
-    let mut out = extra.to_vec();
-    let Some(one) = candidates.names.iter().position(|n| *n == "1") else {
-        return out;
-    };
-    for axis in 0..3 {
-        let covered = cols.iter().any(|&(c, col)| {
-            c == Some(Cause::ConstantTorque) && ch.x.iter().any(|row| row[col][axis] != 0.0)
-        });
-        if extra.iter().any(|e| e.0 == axis) && !covered && !out.contains(&(axis, one)) {
-            out.push((axis, one));
-        }
-    }
-    out
 }
 
 /// The rows of a linear equation, for [`significance_beside`]: calls `row(x, y, y_without,
@@ -750,38 +330,6 @@ pub(super) fn significance_beside(
     }
     let wald = total.cluster_robust_wald(&scores, idx);
     Some((lr, threshold, wald))
-}
-
-/// [`significance_beside`] in the torque channel: the cause beside the columns `cols` and the
-/// unexplained terms `extra`, on the rows `keep` takes (the channel's `y` is the residual of the
-/// base model, so the cause's columns carry all of it); clusters are the channel's segments,
-/// their three axes together.
-#[allow(clippy::too_many_arguments)]
-fn torque_significance(
-    fit: &SetFit,
-    cols: &[(Option<Cause>, usize)],
-    extra: &[(usize, usize)],
-    candidates: &TorqueCandidates,
-    keep: impl Fn(usize) -> bool + Copy,
-    cause: Cause,
-    (dof, idx): (usize, &[usize]),
-    levels: &Levels,
-) -> Option<(f64, f64, Option<f64>)> {
-    debug_assert!(idx.iter().all(|&j| cols[j].0 == Some(cause)));
-    let ch = &fit.state.torque;
-    let p = cols.len() + extra.len();
-    let rows = |row: &mut RowSink| {
-        let mut x = vec![0.0; p];
-        for (s, seg) in ch.segments.iter().enumerate() {
-            for i in seg.clone().filter(|&i| keep(i)) {
-                for axis in 0..3 {
-                    let y = torque_row(fit, cols, extra, candidates, (i, axis), &mut x);
-                    row(&x, y, y, s);
-                }
-            }
-        }
-    };
-    significance_beside(&rows, p, (dof, idx, &vec![0.0; idx.len()]), levels)
 }
 
 /// The competing explanation's verdict, the same in every channel: the cause is dropped if the
@@ -851,10 +399,7 @@ pub(super) fn rss_of(ne: &NormalEquations) -> Option<f64> {
 
 /// χ² consistency of the parameters `idx` across the block fits (`None` if a block does not
 /// determine them).
-pub(super) fn consistency(
-    per_block: &[Option<crate::stats::LsFit>],
-    idx: &[usize],
-) -> Option<Consistency> {
+pub(super) fn consistency(per_block: &[Option<LsFit>], idx: &[usize]) -> Option<Consistency> {
     let k = idx.len();
     let mut thetas = Vec::new();
     let mut weights = Vec::new();

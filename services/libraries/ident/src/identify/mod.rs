@@ -26,15 +26,16 @@
 //!    component and overall on every fold predicted by the extended model fitted without it
 //!    (with `folds` 0: on the held-out blocks); gain = nominal / extended.
 //!
-//! 5. **Falsify the named causes** (`falsify`, wheel causes in `wheel`): each must have the same
-//!    parameters in disjoint time blocks and stay significant beside the other causes and the
-//!    unexplained effects, and a torque cause also beside the best explanation of another
-//!    form found without it (a wheel cause needs white residuals of its wheel equation);
-//!    the worst failure is dropped and the rest refitted and tested again.
-//! 6. **Find the form of what remains** (`unexplained`, [`crate::sparse`]): sparse regression of
-//!    each equation's residual (torque per axis, each innovation component, each wheel's spin
-//!    equation: `wheel`) on a fixed library of candidate functions of the state and time, with k-fold cross-validation and
-//!    cluster-robust standard errors; what it finds is reported as an unexplained effect.
+//! 5. **Falsify the named causes** (`falsify`; each channel's tests in `torque`, `innovation`,
+//!    `wheel`): each must have the same parameters in disjoint time blocks and stay significant
+//!    beside the other causes and the unexplained effects, and a torque cause also beside the
+//!    best explanation of another form found without it (a wheel cause needs white residuals of
+//!    its wheel equation); the worst failure is dropped and the rest refitted and tested again.
+//! 6. **Find the form of what remains** (`equations`, [`crate::sparse`]): sparse regression of
+//!    each equation's residual (torque per axis: `torque`, each innovation component:
+//!    `innovation`, each wheel's spin equation: `wheel`) on a fixed library of candidate
+//!    functions of the state and time, with k-fold cross-validation and cluster-robust standard
+//!    errors; what it finds is reported as an unexplained effect (`unexplained`).
 //! 7. **Second pass** (`sensor`): when the field innovations hold an unexplained effect that
 //!    is a function of the attitude (a soft iron), the readings are corrected with it (fitted
 //!    in tesla through the filter, carried as `[effects.fitted_field]`) and steps 1–6 are
@@ -44,164 +45,51 @@
 //! the noise the model expects), by the unexplained-effect search, and, if something remains,
 //! correlated with the signals the candidate effects would produce.
 //!
-//! The report's types and its tables of curves are in `report`; the residual series after a
-//! fit, what remains and what it correlates with in `residuals`.
+//! The settings are in `options`, the forward selection of step 2 in `selection`. The report's
+//! types and its tables of curves are in `report`; the residual series after a fit, what
+//! remains and what it correlates with in `residuals`.
 
+mod colour;
+mod equations;
 mod falsify;
+mod innovation;
+mod options;
 mod report;
 mod residuals;
+mod rounding;
+mod selection;
 mod sensor;
+mod torque;
 mod unexplained;
 mod wheel;
 
+pub use colour::{
+    COLOUR_ALPHA, COLOUR_SEGMENT_S, ChannelWhiteness, INNOVATION_LAGS, InnovationWhiteness,
+    WhitenessReport, torque_whiteness,
+};
 pub use falsify::{CauseTest, Consistency, Whiteness};
+pub use options::{Options, held_out_mask};
 pub use sensor::SensorCorrection;
 pub use unexplained::UnexplainedEffect;
 
 pub use report::{
     CandidateRow, CauseReport, ComponentReport, Correlation, Curve, DataSummary, FigureData,
-    Identification, Remaining, Report, ResidualReport, RmsReport, round_to, with_error,
+    Identification, Remaining, Report, ResidualReport, RmsReport,
 };
+pub use rounding::{round_to, with_error};
 
 use report::{prediction_curves, rms_report, window_curves};
 use residuals::{equation_error, remaining};
+use selection::{Selection, forward_selection, sensor_warm};
 
 use crate::data::{Aligned, Dataset};
 use crate::effects::{Cause, Kind};
 use crate::error::IdentError;
-use crate::fit::{FitOptions, Problem, SetFit};
+use crate::fit::{Problem, SetFit};
 use crate::predict::{self, COMPONENTS};
-use crate::sparse::SparseOptions;
 use crate::stats::chi_square_quantile;
-use serde::Serialize;
 use std::collections::{BTreeMap, HashMap};
 use testbed_model::ModelConfig;
-
-/// Settings of the analysis.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct Options {
-    pub fit: FitOptions,
-    /// Prediction window: re-initialisation period of the multi-step predictions, s.
-    pub horizon_s: f64,
-    /// Length of the time blocks (held-out split or cross-validation folds), s.
-    pub block_s: f64,
-    /// Without cross-validation (`folds` 0): every this-many-th block is held out of the fits
-    /// (3: a third of the data).
-    pub held_out_every: usize,
-    /// Folds of the k-fold cross-validation of the selection and of the gain (block b of
-    /// `block_s` in fold `b mod folds`; the fits then use all the data; 5, the default); 0:
-    /// off, one held-out share (`held_out_every`) instead.
-    pub folds: usize,
-    /// Most causes named.
-    pub max_causes: usize,
-    /// Significance level of a cause (per candidate and step).
-    pub alpha: f64,
-    /// Candidates considered (default: the whole library).
-    pub candidates: Vec<Cause>,
-    /// Normalised RMS of an equation-error channel above which residual is said to remain.
-    pub remaining_rms: f64,
-    /// The search for unexplained effects (sparse regression on the candidate functions).
-    pub sparse: SparseOptions,
-    /// Disjoint time blocks of the consistency test of a named cause.
-    pub consistency_blocks: usize,
-    /// Level of the consistency test (a cause fails at p below it).
-    pub consistency_alpha: f64,
-}
-
-impl Default for Options {
-    fn default() -> Self {
-        Self {
-            fit: FitOptions::default(),
-            horizon_s: 10.0,
-            block_s: 30.0,
-            held_out_every: 3,
-            folds: 5,
-            max_causes: 4,
-            alpha: 1e-6,
-            candidates: Cause::ALL.to_vec(),
-            remaining_rms: 1.3,
-            sparse: SparseOptions::default(),
-            consistency_blocks: 4,
-            consistency_alpha: 1e-3,
-        }
-    }
-}
-
-impl Options {
-    /// Refuse options the analysis cannot use, naming the option.
-    pub fn validate(&self) -> Result<(), IdentError> {
-        let bad = |key: &str, value: String, reason: &str| {
-            Err(IdentError::Options {
-                key: key.into(),
-                value,
-                reason: reason.into(),
-            })
-        };
-        if !(self.horizon_s.is_finite() && self.horizon_s > 0.0) {
-            return bad("horizon_s", self.horizon_s.to_string(), "must be > 0");
-        }
-        if !(self.block_s.is_finite() && self.block_s >= self.horizon_s) {
-            return bad(
-                "block_s",
-                self.block_s.to_string(),
-                "must be at least the prediction horizon",
-            );
-        }
-        if self.held_out_every < 2 {
-            return bad(
-                "held_out_every",
-                self.held_out_every.to_string(),
-                "must be >= 2",
-            );
-        }
-        if self.folds == 1 {
-            return bad("folds", self.folds.to_string(), "must be 0 (off) or >= 2");
-        }
-        if !(self.alpha > 0.0 && self.alpha < 0.5) {
-            return bad("alpha", self.alpha.to_string(), "must be within (0, 0.5)");
-        }
-        if self.consistency_blocks < 2 {
-            return bad(
-                "consistency_blocks",
-                self.consistency_blocks.to_string(),
-                "must be >= 2",
-            );
-        }
-        if !(self.consistency_alpha > 0.0 && self.consistency_alpha < 0.5) {
-            return bad(
-                "consistency_alpha",
-                self.consistency_alpha.to_string(),
-                "must be within (0, 0.5)",
-            );
-        }
-        if self.sparse.folds < 2 || !(self.sparse.alpha > 0.0 && self.sparse.alpha < 0.5) {
-            return bad(
-                "sparse",
-                format!("{:?}", self.sparse),
-                "needs at least 2 folds and alpha within (0, 0.5)",
-            );
-        }
-        if !(self.fit.torque_segment_s > 0.0 && self.fit.max_delay_s > 0.0) {
-            return bad("fit", format!("{:?}", self.fit), "intervals must be > 0");
-        }
-        Ok(())
-    }
-}
-
-/// Which ticks the fits of [`identify`] leave out: with `folds` ≥ 2 (k-fold) none (the fits use
-/// all the data, each fold's problem holds out its own blocks); otherwise every
-/// `held_out_every`-th block of `block_s`.
-pub fn held_out_mask(aligned: &Aligned, options: &Options) -> Vec<bool> {
-    let block = |t: f64| (t / options.block_s).floor().max(0.0) as usize;
-    let cross_validated = options.folds >= 2;
-    aligned
-        .t
-        .iter()
-        .map(|&t| {
-            !cross_validated && block(t) % options.held_out_every == options.held_out_every - 1
-        })
-        .collect()
-}
 
 /// Identify what the model gets wrong in `data` (see the module documentation).
 ///
@@ -216,7 +104,7 @@ pub fn identify(
 ) -> Result<Identification, IdentError> {
     options.validate()?;
     model.validate()?;
-    data.check()?;
+    crate::sanity::check(data, model)?;
     let aligned = Aligned::new(data);
     let first = identify_pass(data, &aligned, model, options, None)?;
     let equations = sensor::field_equations(&first.report.unexplained);
@@ -331,129 +219,20 @@ fn identify_pass(
         .iter()
         .map(|f| f.fit(&[], &empty))
         .collect::<Result<_, _>>()?;
-    let mut current_folds = nominal_folds.clone();
-    let sensor_warm = |fit: &SetFit| -> HashMap<Cause, crate::fit::FittedCause> {
-        fit.causes
-            .iter()
-            .filter(|c| c.cause.kind() == Kind::Sensor)
-            .map(|c| (c.cause, c.clone()))
-            .collect()
-    };
+    let Selection {
+        selected,
+        mut current,
+        current_folds,
+        steps,
+        chosen_rows,
+        mut warm,
+    } = forward_selection(&problem, &folds, &nominal, &nominal_folds, n_fit, options);
 
-    // Forward selection.
-    let available: Vec<Cause> = options
-        .candidates
-        .iter()
-        .copied()
-        .filter(|c| available(*c, &problem, &nominal))
-        .collect();
-    let mut selected: Vec<Cause> = Vec::new();
-    let mut current = nominal.clone();
-    let mut steps = Vec::new();
-    let mut chosen_rows: Vec<CandidateRow> = Vec::new();
-    let mut warm: HashMap<Cause, crate::fit::FittedCause> = HashMap::new();
-    for _ in 0..options.max_causes {
-        let mut rows = Vec::new();
-        let mut best: Option<(usize, SetFit, Vec<SetFit>)> = None;
-        for &cause in available.iter().filter(|c| !selected.contains(c)) {
-            let mut set = selected.clone();
-            set.push(cause);
-            let threshold_for = |k: usize| {
-                (k as f64 * n_fit.ln()).max(
-                    chi_square_quantile(1.0 - options.alpha, k.max(1) as f64)
-                        .unwrap_or(f64::INFINITY),
-                )
-            };
-            let screen = (cause.kind() == Kind::Sensor)
-                .then(|| (threshold_for(cause.len()), current.evaluation.fit.rss[0]));
-            match problem.fit_screened(&set, &warm, screen) {
-                Ok(fit) => {
-                    let lr = current.evaluation.fit.log_ratio(&fit.evaluation.fit);
-                    let k = fit.free().saturating_sub(current.free());
-                    let threshold = threshold_for(k);
-                    let significant = k > 0 && lr > threshold;
-                    // Cross-validation of the candidates that can be chosen or listed as
-                    // possible (significant at 1 %); the others' is not computed (NaN).
-                    let cv = if cross_validated {
-                        (k > 0 && lr > chi_square_quantile(0.99, k as f64).unwrap_or(f64::INFINITY))
-                            .then(|| cross_validate(&folds, &current_folds, &set, &sensor_warm))
-                            .flatten()
-                    } else {
-                        let lr_held = current
-                            .evaluation
-                            .held_out
-                            .log_ratio(&fit.evaluation.held_out);
-                        Some((lr_held, Vec::new()))
-                    };
-                    let lr_held = cv.as_ref().map_or(f64::NAN, |(lr, _)| *lr);
-                    let note = fit
-                        .causes
-                        .iter()
-                        .find(|c| c.cause == cause)
-                        .map(|c| c.note.clone())
-                        .unwrap_or_default();
-                    rows.push(CandidateRow {
-                        name: cause.name(),
-                        k,
-                        lr_fit: lr,
-                        threshold,
-                        delta_bic: -lr + k as f64 * n_fit.ln(),
-                        lr_held_out: lr_held,
-                        significant,
-                        chosen: false,
-                        note,
-                    });
-                    if let Some((_, fold_fits)) = cv.filter(|_| significant && lr_held > 0.0)
-                        && best
-                            .as_ref()
-                            .is_none_or(|(i, _, _)| lr_held > rows[*i].lr_held_out)
-                    {
-                        best = Some((rows.len() - 1, fit, fold_fits));
-                    }
-                }
-                Err(e) => rows.push(CandidateRow {
-                    name: cause.name(),
-                    k: 0,
-                    lr_fit: 0.0,
-                    threshold: f64::NAN,
-                    delta_bic: f64::NAN,
-                    lr_held_out: f64::NAN,
-                    significant: false,
-                    chosen: false,
-                    note: e.to_string(),
-                }),
-            }
-        }
-        let Some((i, fit, fold_fits)) = best else {
-            steps.push(rows);
-            break;
-        };
-        rows[i].chosen = true;
-        let cause = Cause::from_name(rows[i].name).unwrap_or(Cause::ComOffset);
-        chosen_rows.push(rows[i].clone());
-        steps.push(rows);
-        selected.push(cause);
-        warm = fit
-            .causes
-            .iter()
-            .filter(|c| c.cause.kind() == Kind::Sensor)
-            .map(|c| (c.cause, c.clone()))
-            .collect();
-        current = fit;
-        current_folds = fold_fits;
-        let mut keep: Vec<&ModelConfig> = current_folds.iter().map(|f| &f.config).collect();
-        keep.push(&current.config);
-        problem.trim_cache(&keep);
-        for f in &folds {
-            f.trim_cache(&keep);
-        }
-    }
-
-    // Falsify the named causes and search what remains (see `falsify`, `unexplained`).
+    // Falsify the named causes and search what remains (see `equations`).
     let mut named = selected.clone();
     let analyse = |fit: &SetFit, named: &[Cause]| {
-        let candidates = unexplained::Candidates::new(&problem, fit, named);
-        let effects = unexplained::search_all(
+        let candidates = equations::Candidates::new(&problem, fit, named);
+        let effects = equations::search_all(
             &problem,
             fit,
             named,
@@ -461,7 +240,7 @@ fn identify_pass(
             options.block_s,
             &options.sparse,
         );
-        let (tests, joint) = falsify::test_causes(
+        let (tests, joint) = equations::test_causes(
             &problem,
             fit,
             named,
@@ -844,7 +623,9 @@ fn identify_pass(
         figures.nominal_equation = equation;
         filter_runs += runs + 1;
     }
-    let summary = report::summary(
+    // Whiteness of the torque channel under the extended model: a coloured disturbance.
+    let whiteness = colour::whiteness(aligned, &current.state.recon, &extended);
+    let mut summary = report::summary(
         &causes,
         &cause_tests,
         &possible,
@@ -854,6 +635,7 @@ fn identify_pass(
         &extension,
         sensor_correction.as_ref(),
     );
+    summary.extend(whiteness.lines());
     let report = Report {
         summary,
         data: DataSummary {
@@ -881,6 +663,7 @@ fn identify_pass(
         gain_by_component,
         gain_by_group,
         sensor_correction,
+        whiteness,
         filter_runs: filter_runs
             + problem.filter_runs.get()
             + folds.iter().map(|f| f.filter_runs.get()).sum::<usize>(),
@@ -894,52 +677,6 @@ fn identify_pass(
 
 /// Least relative drop of the held-out prediction's RMS for the fitted torque to be carried.
 const MIN_EXTENSION_GAIN: f64 = 0.01;
-
-/// Cross-validation of the set `set` over the folds: fitted on each fold's problem (sensor
-/// causes of the fold's current fit warm, `warm_of`), the sum over the folds of the held-out
-/// log-likelihood ratio against `current` (the set chosen so far, fitted the same way), and the
-/// fold fits. `None` when a fold's fit fails (the fold does not determine the set).
-fn cross_validate(
-    folds: &[Problem],
-    current: &[SetFit],
-    set: &[Cause],
-    warm_of: &dyn Fn(&SetFit) -> HashMap<Cause, crate::fit::FittedCause>,
-) -> Option<(f64, Vec<SetFit>)> {
-    let mut lr = 0.0;
-    let mut fits = Vec::with_capacity(folds.len());
-    for (fold, cur) in folds.iter().zip(current) {
-        let fit = fold.fit(set, &warm_of(cur)).ok()?;
-        lr += cur.evaluation.held_out.log_ratio(&fit.evaluation.held_out);
-        fits.push(fit);
-    }
-    Some((lr, fits))
-}
-
-/// Whether the data can say anything about a cause.
-fn available(cause: Cause, problem: &Problem, nominal: &SetFit) -> bool {
-    let s = &nominal.state;
-    match cause.kind() {
-        Kind::Sensor => {
-            !s.recon.innovations.is_empty()
-                && (cause != Cause::MagneticDisturbance || !problem.data.field.is_empty())
-                && (!matches!(cause, Cause::InclinometerBias | Cause::InclinometerScale)
-                    || !problem.data.tilt.is_empty())
-        }
-        // The thrusters' causes only with thruster firings in the data (and `[thrusters]` in
-        // the model): otherwise their columns are zero.
-        Kind::Torque => {
-            s.torque.len() >= 30
-                && (!matches!(
-                    cause,
-                    Cause::ThrusterTorqueScale | Cause::PropellantComShift
-                ) || crate::channels::torque_columns(cause)
-                    .into_iter()
-                    .flatten()
-                    .any(|c| s.torque.excited[c]))
-        }
-        Kind::Wheel => s.wheel.len() >= 10,
-    }
-}
 
 /// Contiguous runs of held-out ticks after `start`.
 fn held_out_spans(held: &[bool], start: usize) -> Vec<(usize, usize)> {
@@ -957,28 +694,4 @@ fn held_out_spans(held: &[bool], start: usize) -> Vec<(usize, usize)> {
         }
     }
     out
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn cross_validation_is_on_by_default_and_needs_two_folds() {
-        assert_eq!(Options::default().folds, 5);
-        assert!(Options::default().validate().is_ok());
-        let off = Options {
-            folds: 0,
-            ..Options::default()
-        };
-        assert!(off.validate().is_ok());
-        let one = Options {
-            folds: 1,
-            ..Options::default()
-        };
-        assert!(
-            matches!(one.validate(), Err(IdentError::Options { ref key, .. }) if key == "folds"),
-            "1 fold accepted"
-        );
-    }
 }

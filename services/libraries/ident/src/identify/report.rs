@@ -2,6 +2,7 @@
 //! curves the figures draw.
 
 use super::Options;
+use super::rounding::with_error;
 use crate::data::Aligned;
 use crate::predict::{self, COMPONENTS, ComponentRms, Predictions};
 use crate::stats::SeriesStats;
@@ -155,6 +156,9 @@ pub struct Report {
     /// residuals and the effects marked `pass: 1`) is the analysis of the corrected estimate.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub sensor_correction: Option<super::SensorCorrection>,
+    /// Whiteness of the torque channel's residual under the extended model per axis, and the
+    /// coloured disturbances it finds (see `colour`).
+    pub whiteness: super::WhitenessReport,
     /// Filter runs the analysis took (both passes).
     pub filter_runs: usize,
 }
@@ -188,47 +192,14 @@ pub struct Identification {
     pub figures: FigureData,
 }
 
-/// `value` rounded to its standard error (two significant digits of the error), in scientific
-/// notation; three significant digits when the error is not known.
-pub fn round_to(value: f64, stderr: f64) -> String {
-    if !value.is_finite() {
-        return value.to_string();
-    }
-    if !(stderr.is_finite() && stderr > 0.0) {
-        return format!("{value:.2e}");
-    }
-    let e_se = stderr.log10().floor() as i32 - 1;
-    let e_v = if value == 0.0 {
-        e_se + 1
-    } else {
-        value.abs().log10().floor() as i32
-    };
-    let digits = (e_v - e_se).clamp(0, 12) as usize;
-    if e_v < e_se {
-        // The value is below its error's last digit: zero within the error.
-        return format!("{:.1e}", 0.0);
-    }
-    format!("{value:.digits$e}")
-}
-
-/// `value ± stderr`, the value rounded to its error (see [`round_to`]).
-pub fn with_error(value: f64, stderr: f64) -> String {
-    if stderr.is_finite() && stderr > 0.0 {
-        format!("{} ± {stderr:.1e}", round_to(value, stderr))
-    } else {
-        round_to(value, stderr)
-    }
-}
-
-/// The verdict in sentences (see [`Report::summary`]).
 /// What the extended model carries beyond the named causes.
 #[derive(Debug, Clone, Default, Serialize)]
 pub struct ModelExtension {
     /// The unexplained torque terms as a fitted torque (`[effects.fitted_torque]`).
-    pub fitted_torque: Option<testbed_model::config::FittedTorque>,
+    pub fitted_torque: Option<testbed_model::physics::fitted_torque::FittedTorque>,
     /// The unexplained wheel-channel terms as a fitted wheel torque
     /// (`[effects.fitted_wheel_torque]`).
-    pub fitted_wheel_torque: Option<testbed_model::config::FittedWheelTorque>,
+    pub fitted_wheel_torque: Option<testbed_model::physics::fitted_wheel_torque::FittedWheelTorque>,
     /// Terms found but not carried (`equation: function`).
     pub not_carried: Vec<String>,
     /// Whether the held-out gain's predictions include the fitted torques (`fitted_torque` and
@@ -242,6 +213,7 @@ pub struct ModelExtension {
     pub rejected: Option<String>,
 }
 
+/// The verdict in sentences (see [`Report::summary`]).
 // One argument per part of the report the summary speaks of.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn summary(

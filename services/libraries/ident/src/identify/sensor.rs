@@ -30,8 +30,7 @@ use crate::reconstruct::{Reconstruction, reconstruct};
 use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
 use testbed_model::ModelConfig;
-use testbed_model::config::{FittedField, FittedFieldTerm};
-use testbed_model::devices::fitted_field::FieldFunction;
+use testbed_model::devices::fitted_field::{FieldFunction, FittedField, FittedFieldTerm};
 
 /// Most Gauss-Newton steps of the correction's fit per Jacobian (each one filter run; the
 /// filter's innovations are close to linear in an additive reading error, so a Jacobian serves

@@ -45,10 +45,10 @@
 //! competitor is reported first: it names the form the cause stood in for.
 
 use super::falsify::{
-    CauseTest, Levels, RowSink, Whiteness, compete, consistency, falsified_text, rss_of,
-    significance_beside,
+    CauseTest, Evidence, Failures, Levels, RowSink, Whiteness, compete, consistency,
+    falsified_text, rss_of, significance_beside,
 };
-use super::unexplained::{UnexplainedEffect, effect, fold_of};
+use super::unexplained::{UnexplainedEffect, competing, effect, fold_of};
 use crate::channels::{WheelChannel, WheelInterval, friction_regressors, speed_integral};
 use crate::effects::{Cause, Kind};
 use crate::fit::{Problem, SetFit, WheelModel};
@@ -192,17 +192,17 @@ pub(super) fn competing_explanation(
     block_s: f64,
     options: &SparseOptions,
 ) -> Option<(Vec<UnexplainedEffect>, f64)> {
-    let others: Vec<Cause> = named.iter().copied().filter(|c| *c != cause).collect();
-    let (effects, cv) = search(
-        problem,
-        fit,
-        &others,
-        candidates,
-        block_s,
-        options,
-        Some(cause),
-    );
-    Some((effects, cv?))
+    competing(named, cause, |others| {
+        search(
+            problem,
+            fit,
+            others,
+            candidates,
+            block_s,
+            options,
+            Some(cause),
+        )
+    })
 }
 
 /// The wheel search's cross-validated residual sum (whitened by the channel's noise, summed
@@ -573,29 +573,29 @@ pub(super) fn wheel_tests(
         // The failed tests, the competitor first: it says what the cause stood in for (the
         // form the report then carries), where a failed consistency, joint or whiteness test
         // says only that the cause does not describe the wheel.
-        let mut failures: Vec<(&'static str, String)> = Vec::new();
+        let mut failures = Failures::default();
         if let Some(text) = competitor_failed {
-            failures.push(("competitor", text));
+            failures.add("competitor", text);
         }
         if let Some(c) = &consistency
             && c.p < levels.consistency
         {
-            failures.push(("consistency", falsified_text(c, levels.consistency)));
+            failures.add("consistency", falsified_text(c, levels.consistency));
         }
         if let (Some(lr), Some(threshold)) = (joint_lr, joint_threshold)
             && lr <= threshold
         {
-            failures.push((
+            failures.add(
                 "joint",
                 format!(
                     "dropped: not significant beside the unexplained wheel effects (likelihood ratio {lr:.1} ≤ threshold {threshold:.1}); it stood in for an effect of another form"
                 ),
-            ));
+            );
         }
         if let Some(wt) = &whiteness
             && wt.p < levels.consistency
         {
-            failures.push((
+            failures.add(
                 "whiteness",
                 format!(
                     "falsified: the residuals of the extended wheel equation are not white (wheel {}: Ljung–Box {:.1} on {} lags, p = {:.1e} < {:.0e} after Bonferroni over {} wheels); the cause and the unexplained terms do not describe the wheel",
@@ -606,44 +606,27 @@ pub(super) fn wheel_tests(
                     levels.consistency,
                     wt.wheels
                 ),
-            ));
+            );
         }
-        let kept = failures.is_empty();
-        let failed = failures.first().map(|f| f.0);
-        let verdict = match failures.split_first() {
-            Some(((_, text), [])) => text.clone(),
-            Some(((_, text), more)) => format!(
-                "{text}; it also fails its {} test{}",
-                more.iter().map(|f| f.0).collect::<Vec<_>>().join(" and "),
-                if more.len() > 1 { "s" } else { "" }
-            ),
-            None => match &consistency {
-                Some(c) => format!(
-                    "kept: consistent across {} time blocks (p = {:.2}), residuals of the wheel equation white{}",
-                    c.blocks,
-                    c.p,
-                    whiteness
-                        .as_ref()
-                        .map_or(" (not determined)".to_string(), |w| format!(
-                            " (p = {:.2})",
-                            w.p
-                        ))
-                ),
-                None => "kept (block consistency not determined)".into(),
-            },
-        };
-        out.push(CauseTest {
-            name: cause.name(),
-            kept,
+        let white = whiteness
+            .as_ref()
+            .map_or(" (not determined)".to_string(), |w| {
+                format!(" (p = {:.2})", w.p)
+            });
+        let evidence = Evidence {
             consistency,
             joint_lr,
-            joint_wald: None,
             joint_threshold,
             whiteness,
             competitor,
-            failed,
-            verdict,
-        });
+            ..Evidence::default()
+        };
+        out.push(CauseTest::verdict(cause, evidence, failures, |c| {
+            format!(
+                "kept: consistent across {} time blocks (p = {:.2}), residuals of the wheel equation white{white}",
+                c.blocks, c.p
+            )
+        }));
     }
     out
 }

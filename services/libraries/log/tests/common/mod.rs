@@ -326,13 +326,13 @@ pub fn framing(bytes: &[u8]) -> Vec<Framed> {
 /// Fails with instructions if `python3` or its `mcap` package is missing.
 pub fn python_read_log(args: &[&str]) -> serde_json::Value {
     let check = std::process::Command::new("python3")
-        .args(["-c", "import mcap"])
+        .args(["-c", "import mcap, zstandard"])
         .output();
     match check {
         Err(e) => panic!("python3 is needed to check logs with a standard MCAP reader: {e}"),
         Ok(out) if !out.status.success() => panic!(
             "Python's `mcap` package is missing (needed to check logs with a standard MCAP \
-             reader); install it with: python3 -m pip install 'mcap>=1.1,<2'\n{}",
+             reader); install it with: python3 -m pip install 'mcap>=1.1,<2' zstandard\n{}",
             String::from_utf8_lossy(&out.stderr)
         ),
         Ok(_) => {}
@@ -354,4 +354,51 @@ pub fn python_read_log(args: &[&str]) -> serde_json::Value {
             String::from_utf8_lossy(&out.stdout)
         )
     })
+}
+
+/// `records` in the order an indexed log gives them back: by time, then by channel (topic
+/// table order), each topic's records in the order written.
+#[allow(dead_code)] // not every test file that includes this module uses it
+pub fn in_log_order(records: &[LogRecord]) -> Vec<LogRecord> {
+    let mut sorted = records.to_vec();
+    sorted.sort_by_key(|r| (r.header().time_ns, testbed_log::channel_id(r.topic_id())));
+    sorted
+}
+
+/// Messages per topic a log of `records` holds among those for which `inside(time_ns)`: each
+/// record, and what it derives for Foxglove's panels (a transform per truth sample and valid
+/// estimate, a pose per valid estimate, an event per health event, acknowledgement and mode
+/// change; mode changes followed over all records).
+pub fn expected_messages(
+    records: &[LogRecord],
+    inside: impl Fn(u64) -> bool,
+) -> BTreeMap<&'static str, u64> {
+    use testbed_log::foxglove::{self, Derived};
+    let mut expected = BTreeMap::new();
+    let mut modes = foxglove::events::ModeChanges::default();
+    for r in records {
+        let counted = inside(r.header().time_ns);
+        let mut count = |topic: &'static str| {
+            if counted {
+                *expected.entry(topic).or_default() += 1;
+            }
+        };
+        count(r.topic());
+        match foxglove::derived_of(r) {
+            Derived::Transform((topic, ..)) => {
+                count(topic);
+                if topic == foxglove::TF_ESTIMATE_TOPIC {
+                    count(foxglove::POSE_ESTIMATE_TOPIC);
+                }
+            }
+            Derived::Event(_) => count(foxglove::events::EVENTS_TOPIC),
+            Derived::Mode(m) => {
+                if modes.event(m).is_some() {
+                    count(foxglove::events::EVENTS_TOPIC);
+                }
+            }
+            Derived::Nothing => {}
+        }
+    }
+    expected
 }

@@ -12,9 +12,31 @@
 //! in body axes over its magnitude (`B_x`, `B_y`, `B_z`).
 
 use crate::attitude::{self, Attitude};
-use crate::config::FittedField;
 use crate::physics::fitted_torque::axis_index;
 use nalgebra::Vector3;
+use serde::{Deserialize, Serialize};
+
+/// A magnetometer error fitted to data, `ΔM_a = Σ coefficient × function(q)` per body axis `a`
+/// of the reading, written by `testbed identify` from the unexplained effects it finds in the
+/// field innovations (or by hand). The simulated magnetometer adds it to its reading;
+/// identification's filter takes it out of the readings. Functions: [`FieldFunction`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FittedField {
+    pub terms: Vec<FittedFieldTerm>,
+}
+
+/// One term of a [`FittedField`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FittedFieldTerm {
+    /// Body axis of the reading: `x`, `y` or `z`.
+    pub axis: String,
+    /// The function, by name (`1`, `cos 2ψ`, `B_y`, …).
+    pub function: String,
+    /// Tesla per unit of the function.
+    pub coefficient: f64,
+}
 
 /// A function a fitted field term may use; names are those identification prints.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -152,7 +174,6 @@ impl FittedFieldModel {
 mod tests {
     use super::*;
     use crate::attitude::from_heading_pitch_roll;
-    use crate::config::FittedFieldTerm;
 
     fn term(axis: &str, function: &str, coefficient: f64) -> FittedFieldTerm {
         FittedFieldTerm {

@@ -128,7 +128,7 @@ mod tests {
     /// `effects.fitted_field` adds its error, evaluated at the attitude, to the reading.
     #[test]
     fn a_fitted_field_is_added_to_the_reading() {
-        use crate::config::{FittedField, FittedFieldTerm};
+        use crate::devices::fitted_field::{FittedField, FittedFieldTerm};
         let mut config = ModelConfig::default();
         let plain = Magnetometer::new(&config, 1);
         config.effects.fitted_field = Some(FittedField {

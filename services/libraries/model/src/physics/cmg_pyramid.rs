@@ -110,7 +110,7 @@ impl CmgPyramid {
 
     /// [`Self::momentum`] and [`Self::jacobian`] at the same gimbal angles, each angle's sine and
     /// cosine taken once: the equations of motion need both at every evaluation, and taking
-    /// them twice was an eighth of the plant's instructions (bench/README.md, session 29).
+    /// them twice was an eighth of the plant's instructions (bench/README.md).
     pub fn momentum_and_jacobian(
         &self,
         gimbal_rad: &Vector4<f64>,

@@ -9,8 +9,33 @@
 //! start, s: `t = start_time_s + plant time`.
 
 use crate::attitude::{self, Attitude};
-use crate::config::FittedTorque;
 use nalgebra::Vector3;
+use serde::{Deserialize, Serialize};
+
+/// A torque fitted to data, `M_a = Σ coefficient × function` per body axis `a`, written by
+/// `testbed identify` from the unexplained effects it finds in the torque channels (or by
+/// hand). Functions: [`TorqueFunction`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FittedTorque {
+    /// The terms' time at the plant's start, s (their time is the record's time from its
+    /// start; 0 when the run starts where the record did).
+    #[serde(default)]
+    pub start_time_s: f64,
+    pub terms: Vec<FittedTorqueTerm>,
+}
+
+/// One term of a [`FittedTorque`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FittedTorqueTerm {
+    /// Body axis of the torque: `x`, `y` or `z`.
+    pub axis: String,
+    /// The function, by name (`1`, `t_s`, `sin 2ψ`, `w_z`, …).
+    pub function: String,
+    /// Nm per unit of the function (Nm/s for `t_s`, Nm/(rad/s) for a rate).
+    pub coefficient: f64,
+}
 
 /// A function a fitted torque term may use. Names are those identification prints, except
 /// time, which is in seconds here (`t_s`; identification's `t` runs 0…1 over the record).
@@ -225,7 +250,6 @@ impl FittedTorqueModel {
 mod tests {
     use super::*;
     use crate::attitude::from_heading_pitch_roll;
-    use crate::config::FittedTorqueTerm;
 
     fn term(axis: &str, function: &str, coefficient: f64) -> FittedTorqueTerm {
         FittedTorqueTerm {

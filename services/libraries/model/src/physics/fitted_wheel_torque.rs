@@ -12,8 +12,35 @@
 //! functions' time is the record's time from its start, s: `t = start_time_s + plant time`.
 
 use crate::attitude::{self, Attitude};
-use crate::config::FittedWheelTorque;
 use nalgebra::Vector3;
+use serde::{Deserialize, Serialize};
+
+/// A torque between each wheel and the platform fitted to data, `T_i = Σ coefficient ×
+/// function` per wheel `i`, accelerating the wheel in its positive sense (the platform takes the
+/// reaction); written by `testbed identify` from the unexplained effects it finds in the wheel
+/// channel (or by hand). Functions: [`WheelFunction`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FittedWheelTorque {
+    /// The terms' time at the plant's start, s (their time is the record's time from its
+    /// start; 0 when the run starts where the record did).
+    #[serde(default)]
+    pub start_time_s: f64,
+    pub terms: Vec<FittedWheelTorqueTerm>,
+}
+
+/// One term of a [`FittedWheelTorque`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FittedWheelTorqueTerm {
+    /// The wheel, by the body axis it spins about: `x`, `y` or `z`.
+    pub wheel: String,
+    /// The function, by name (`1`, `t_s`, `sign n`, `n·|n|`, `τ`, `sin tilt_x`, …).
+    pub function: String,
+    /// Nm per unit of the function (Nm/s for `t_s`, Nm/(rad/s) for `n` or a rate,
+    /// Nm/(rad/s)² for `n·|n|` and `n²`, Nm/Nm for `τ`).
+    pub coefficient: f64,
+}
 
 /// A function a fitted wheel torque term may use. Names are those identification prints,
 /// except time, which is in seconds here (`t_s`; identification's `t` runs 0…1 over the
@@ -230,7 +257,6 @@ impl FittedWheelTorqueModel {
 mod tests {
     use super::*;
     use crate::attitude::from_heading_pitch_roll;
-    use crate::config::FittedWheelTorqueTerm;
 
     fn term(wheel: &str, function: &str, coefficient: f64) -> FittedWheelTorqueTerm {
         FittedWheelTorqueTerm {

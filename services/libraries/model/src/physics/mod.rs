@@ -9,6 +9,7 @@
 //! * [`fitted_torque`]: a torque fitted to data (identification's unexplained effect);
 //! * [`fitted_wheel_torque`]: a torque between a wheel and the platform fitted to data
 //!   (identification's unexplained effect in the wheel channel);
+//! * [`gauss_markov`]: a slowly wandering (Gauss–Markov) external torque;
 //! * [`tilt_stop`]: the bearing's ±30° mechanical stop;
 //! * [`delay`]: actuator command delay;
 //! * [`integrator`]: fixed-step RK4;
@@ -24,6 +25,7 @@ pub mod error;
 pub mod fitted_torque;
 pub mod fitted_wheel_torque;
 pub mod friction;
+pub mod gauss_markov;
 pub mod integrator;
 pub mod plant;
 pub mod state;

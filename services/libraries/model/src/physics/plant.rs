@@ -24,6 +24,7 @@ use super::delay::{CommandDelay, TIME_TOLERANCE_S};
 use super::dynamics::{Dynamics, StepInput, WheelMode};
 use super::environment::{ExternalTorque, ExternalTorqueModel};
 use super::friction::Wheel;
+use super::gauss_markov::GaussMarkovProcess;
 use super::integrator::rk4_step;
 use super::state::{ActuatorCommand, PlatformState, StateVector};
 use super::thrusters::{ThrusterBank, ThrusterCommand};
@@ -96,6 +97,8 @@ pub struct Plant {
     /// The thrusters (`None` unless configured) and the command for the next step.
     thrusters: Option<ThrusterBank>,
     thruster_command: Option<ThrusterCommand>,
+    /// `gauss_markov_torque` (`None` unless configured): its process, sampled per substep.
+    gauss_markov: Option<GaussMarkovProcess>,
 }
 
 impl Plant {
@@ -158,6 +161,10 @@ impl Plant {
             },
             thrusters: ThrusterBank::from_config(config),
             thruster_command: None,
+            gauss_markov: effects
+                .gauss_markov_torque
+                .as_ref()
+                .map(GaussMarkovProcess::new),
         })
     }
 
@@ -338,6 +345,16 @@ impl Plant {
             self.dynamics.set_thruster_torque(Some(bank.torque_b(&f)));
             f
         });
+        // The wandering torque, held over the substep, beside the constant torque.
+        if let Some(gm) = &mut self.gauss_markov {
+            let mut external = if self.thrusters.is_some() || self.external_t0.time_dependent() {
+                *self.dynamics.external()
+            } else {
+                self.external_t0
+            };
+            external.constant_b += gm.torque_at(self.time_s);
+            self.dynamics.set_external_model(external);
+        }
         for split in 0..MAX_SPLITS {
             let motor = self.speed_limited(delivered, remaining);
             let modes = self.dynamics.wheel_modes(&self.state, &motor, gimbal_rate);

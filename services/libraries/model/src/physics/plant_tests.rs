@@ -411,7 +411,7 @@ fn linear_drag_decays_the_spin_exponentially() {
 
 #[test]
 fn a_fitted_rate_term_is_linear_drag_and_a_fitted_time_term_ramps_the_rate() {
-    use crate::config::{FittedTorque, FittedTorqueTerm};
+    use crate::physics::fitted_torque::{FittedTorque, FittedTorqueTerm};
     let term = |function: &str, coefficient: f64| FittedTorqueTerm {
         axis: "z".into(),
         function: function.into(),
@@ -456,7 +456,7 @@ fn a_fitted_rate_term_is_linear_drag_and_a_fitted_time_term_ramps_the_rate() {
 
 #[test]
 fn a_fitted_torque_with_an_unknown_function_or_axis_is_refused() {
-    use crate::config::{FittedTorque, FittedTorqueTerm};
+    use crate::physics::fitted_torque::{FittedTorque, FittedTorqueTerm};
     let mut config = ModelConfig::default();
     config.effects.fitted_torque = Some(FittedTorque {
         start_time_s: 0.0,
@@ -486,7 +486,7 @@ fn a_fitted_torque_with_an_unknown_function_or_axis_is_refused() {
 /// The Z wheel spinning at `n0` on a frictionless, diagonal platform with `terms` as its fitted
 /// wheel torque, stepped `steps` × 0.1 s without commands.
 fn fitted_wheel_run(terms: Vec<(&str, f64)>, start_time_s: f64, n0: f64, steps: usize) -> Plant {
-    use crate::config::{FittedWheelTorque, FittedWheelTorqueTerm};
+    use crate::physics::fitted_wheel_torque::{FittedWheelTorque, FittedWheelTorqueTerm};
     let mut config = frictionless(diagonal());
     config.effects.fitted_wheel_torque = Some(FittedWheelTorque {
         start_time_s,
@@ -558,7 +558,7 @@ fn a_fitted_wheel_torque_spins_the_wheel_up_and_down_as_the_closed_forms() {
 
 #[test]
 fn a_fitted_wheel_torque_with_an_unknown_function_or_wheel_is_refused() {
-    use crate::config::{FittedWheelTorque, FittedWheelTorqueTerm};
+    use crate::physics::fitted_wheel_torque::{FittedWheelTorque, FittedWheelTorqueTerm};
     let with = |wheel: &str, function: &str, coefficient: f64| {
         let mut config = ModelConfig::default();
         config.effects.fitted_wheel_torque = Some(FittedWheelTorque {

@@ -1,4 +1,4 @@
-//! The six on/off cold-gas thrusters (issue 14): valves with opening and closing delays and a
+//! The six on/off cold-gas thrusters: valves with opening and closing delays and a
 //! minimum on-time, the torque `r × F` about the bearing centre, propellant use and the moving
 //! centre of mass of a draining tank. Off unless `[thrusters]` is configured.
 //!

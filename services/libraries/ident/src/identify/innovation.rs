@@ -1,0 +1,402 @@
+//! The sensor channel (the attitude filter's innovations, whitened, per component) as an
+//! equation of the unexplained-effect search (its candidate functions: see `equations`), and
+//! the falsification of the named sensor causes on their linearisation through the filter.
+
+use super::falsify::{CauseTest, Evidence, Failures, Levels, consistency, falsified_text, rss_of};
+use super::unexplained::{UnexplainedEffect, effect, fold_of};
+use crate::effects::{Cause, Kind};
+use crate::fit::{Problem, SetFit};
+use crate::reconstruct::INNOVATION_LEN;
+use crate::sparse::{Design, Rows, SparseOptions, search};
+use crate::stats::{LsFit, NormalEquations};
+use testbed_model::attitude;
+
+/// Per filter innovation (all ticks, in the reconstruction's order): the sensor-channel
+/// candidates, evaluated at its tick.
+pub(super) struct InnovationCandidates {
+    pub names: Vec<&'static str>,
+    pub values: Vec<Vec<f64>>,
+    /// Per innovation and component: its row in the innovation vector (`usize::MAX`: absent).
+    pub row: Vec<[usize; INNOVATION_LEN]>,
+}
+
+impl InnovationCandidates {
+    pub fn new(problem: &Problem, fit: &SetFit) -> Self {
+        let data = problem.data;
+        let s = &fit.state;
+        let t0 = data.t.first().copied().unwrap_or(0.0);
+        let span = (data.t.last().copied().unwrap_or(1.0) - t0).max(1e-9);
+        let field = problem.base.platform.field_l_t();
+        let field_n = field / field.norm().max(1e-300);
+        let wheels = data.has_wheels();
+        let mut names: Vec<&'static str> = vec![
+            "1",
+            "t",
+            "cos ψ",
+            "sin ψ",
+            "cos 2ψ",
+            "sin 2ψ",
+            "t·cos ψ",
+            "t·sin ψ",
+            "sin tilt_x",
+            "sin tilt_y",
+            "B_x",
+            "B_y",
+            "B_z",
+            "w_x",
+            "w_y",
+            "w_z",
+        ];
+        if wheels {
+            names.extend(["n_x", "n_y", "n_z"]);
+        }
+        let mut next = 0;
+        let mut row = Vec::with_capacity(s.recon.innovations.len());
+        let values = s
+            .recon
+            .innovations
+            .iter()
+            .map(|i| {
+                let mut r = [usize::MAX; INNOVATION_LEN];
+                for (c, slot) in r.iter_mut().enumerate() {
+                    if i.mask & (1 << c) != 0 {
+                        *slot = next;
+                        next += 1;
+                    }
+                }
+                row.push(r);
+                let k = i.tick;
+                let q = &s.recon.q[k];
+                let t = (data.t[k] - t0) / span;
+                let psi = attitude::heading(q);
+                let g = attitude::gravity_b(q);
+                let b = q * field_n;
+                let w = s.recon.rate[k];
+                let mut v = vec![
+                    1.0,
+                    t,
+                    psi.cos(),
+                    psi.sin(),
+                    (2.0 * psi).cos(),
+                    (2.0 * psi).sin(),
+                    t * psi.cos(),
+                    t * psi.sin(),
+                    g.x,
+                    g.y,
+                    b.x,
+                    b.y,
+                    b.z,
+                    w.x,
+                    w.y,
+                    w.z,
+                ];
+                if wheels {
+                    let n = data.wheel_speed_at(k);
+                    v.extend([n.x, n.y, n.z]);
+                }
+                v
+            })
+            .collect();
+        Self { names, values, row }
+    }
+}
+
+/// The named sensor causes linearised at their fitted values: `∂(innovation vector)/∂θ_j` by
+/// forward differences through the filter (one filter run per parameter), over all ticks.
+pub(super) struct SensorLinear {
+    /// Per column: cause, value index, name.
+    pub cols: Vec<(Cause, usize, String)>,
+    /// Per column: fitted value minus the value that switches the cause off (`None` for
+    /// `earth_rate`, which has no neutral value).
+    pub delta: Vec<Option<f64>>,
+    /// Per column, per innovation-vector row.
+    pub j: Vec<Vec<f64>>,
+}
+
+impl SensorLinear {
+    pub fn new(problem: &Problem, fit: &SetFit, named: &[Cause]) -> Option<Self> {
+        let sensor: Vec<Cause> = named
+            .iter()
+            .copied()
+            .filter(|c| c.kind() == Kind::Sensor)
+            .collect();
+        if sensor.is_empty() {
+            return None;
+        }
+        let r0 = fit.state.recon.innovation_vector(|_| true);
+        let mut cols = Vec::new();
+        let mut delta = Vec::new();
+        let mut j = Vec::new();
+        for cause in sensor {
+            let values = cause.values(&fit.config);
+            let neutral = cause.values(&problem.base);
+            let mut offset = 0;
+            for spec in cause.params() {
+                for e in 0..spec.len {
+                    let i = offset + e;
+                    let (lo, hi) = cause.bounds(i);
+                    let h = if values[i] + spec.step > hi {
+                        -spec.step
+                    } else {
+                        spec.step
+                    };
+                    let mut v = values.clone();
+                    v[i] = (values[i] + h).clamp(lo, hi);
+                    let taken = v[i] - values[i];
+                    let mut config = fit.config.clone();
+                    cause.apply(&mut config, &v);
+                    let r = problem
+                        .run_filter(&config)
+                        .ok()?
+                        .innovation_vector(|_| true);
+                    if r.len() != r0.len() || taken == 0.0 {
+                        return None;
+                    }
+                    j.push(r.iter().zip(&r0).map(|(a, b)| (a - b) / taken).collect());
+                    cols.push((cause, i, cause.value_name(i)));
+                    delta.push((cause != Cause::EarthRate).then(|| values[i] - neutral[i]));
+                }
+                offset += spec.len;
+            }
+        }
+        Some(Self { cols, delta, j })
+    }
+}
+
+pub(super) fn search_innovations(
+    problem: &Problem,
+    fit: &SetFit,
+    candidates: &InnovationCandidates,
+    linear: Option<&SensorLinear>,
+    block_s: f64,
+    options: &SparseOptions,
+) -> Vec<UnexplainedEffect> {
+    let data = problem.data;
+    let s = &fit.state;
+    let mut out = Vec::new();
+    for c in 0..INNOVATION_LEN {
+        let rows: Vec<usize> = (0..s.recon.innovations.len())
+            .filter(|&i| candidates.row[i][c] != usize::MAX)
+            .collect();
+        if rows.len() < 100 {
+            continue;
+        }
+        // The named sensor causes' own columns (their Jacobian rows of this component) are
+        // forced, so their values re-adjust with any new term.
+        let forced: Vec<usize> = linear.map_or(Vec::new(), |l| {
+            (0..l.cols.len())
+                .filter(|&j| rows.iter().any(|&i| l.j[j][candidates.row[i][c]] != 0.0))
+                .collect()
+        });
+        let mut names: Vec<String> = forced
+            .iter()
+            .filter_map(|&j| linear.map(|l| l.cols[j].2.clone()))
+            .collect();
+        names.extend(candidates.names.iter().map(|n| n.to_string()));
+        let x: Vec<Vec<f64>> = rows
+            .iter()
+            .map(|&i| {
+                let mut row: Vec<f64> = forced
+                    .iter()
+                    .filter_map(|&j| linear.map(|l| l.j[j][candidates.row[i][c]]))
+                    .collect();
+                row.extend(&candidates.values[i]);
+                row
+            })
+            .collect();
+        let inn = &s.recon.innovations;
+        let y: Vec<f64> = rows.iter().map(|&i| inn[i].values[c]).collect();
+        // Clusters of a third of a block (never across a fit / held-out change).
+        let cluster: Vec<usize> = rows
+            .iter()
+            .map(|&i| fold_of(data.t[inn[i].tick], block_s / 3.0))
+            .collect();
+        let fold: Vec<usize> = rows
+            .iter()
+            .map(|&i| fold_of(data.t[inn[i].tick], block_s))
+            .collect();
+        let held: Vec<bool> = rows
+            .iter()
+            .map(|&i| problem.held_out[inn[i].tick])
+            .collect();
+        let rows = Rows {
+            x: &x,
+            y: &y,
+            cluster: &cluster,
+            fold: &fold,
+            held_out: &held,
+        };
+        let design = Design::new(names, forced.len(), rows, options.folds);
+        let result = search(&design, options);
+        if let Some(e) = effect(
+            INNOVATION_LABELS[c].to_string(),
+            "1 (whitened)",
+            result,
+            &design,
+        ) {
+            out.push(e);
+        }
+    }
+    out
+}
+
+/// Names of the innovation components (the equations of the sensor channel).
+pub(super) const INNOVATION_LABELS: [&str; INNOVATION_LEN] = [
+    "innovation_tilt_1",
+    "innovation_tilt_2",
+    "innovation_field_x",
+    "innovation_field_y",
+    "innovation_field_z",
+];
+
+/// The torque causes' consistency and significance tests for the sensor causes, on their
+/// linearisation ([`SensorLinear`]): per block one Gauss–Newton step from the fitted values
+/// (with the unexplained innovation terms as extra columns) for the consistency, and the
+/// likelihood ratio of the innovations with and without the cause (its effect removed to first
+/// order, `r − J_c Δθ_c`) beside the unexplained terms for the significance.
+pub(super) fn sensor_tests(
+    problem: &Problem,
+    fit: &SetFit,
+    named: &[Cause],
+    effects: &[UnexplainedEffect],
+    (innovation, linear): (&InnovationCandidates, Option<&SensorLinear>),
+    levels: &Levels,
+) -> Vec<CauseTest> {
+    let Levels {
+        blocks,
+        consistency: alpha_consistency,
+        ..
+    } = *levels;
+    let sensor: Vec<Cause> = named
+        .iter()
+        .copied()
+        .filter(|c| c.kind() == Kind::Sensor)
+        .collect();
+    let not_tested = CauseTest::not_tested;
+    let Some(lin) = linear else {
+        return sensor
+            .iter()
+            .map(|c| not_tested(*c, "its linearisation through the filter failed"))
+            .collect();
+    };
+    let data = problem.data;
+    let inn = &fit.state.recon.innovations;
+    // Unexplained innovation terms: (component, candidate index).
+    let mut extra: Vec<(usize, usize)> = Vec::new();
+    for e in effects {
+        let Some(c) = INNOVATION_LABELS.iter().position(|l| *l == e.equation) else {
+            continue;
+        };
+        for t in &e.terms {
+            if let Some(j) = innovation.names.iter().position(|n| *n == t.name) {
+                extra.push((c, j));
+            }
+        }
+    }
+    let (Some(first), Some(last)) = (inn.first(), inn.last()) else {
+        return Vec::new();
+    };
+    let (t0, t1) = (data.t[first.tick], data.t[last.tick]);
+    let block_of = |tick: usize| -> usize {
+        (((data.t[tick] - t0) / (t1 - t0).max(1e-9) * blocks as f64) as usize).min(blocks - 1)
+    };
+    // Rows: (innovation index, component, vector row).
+    let rows: Vec<(usize, usize, usize)> = (0..inn.len())
+        .flat_map(|i| {
+            (0..INNOVATION_LABELS.len())
+                .filter(move |&c| innovation.row[i][c] != usize::MAX)
+                .map(move |c| (i, c, innovation.row[i][c]))
+        })
+        .collect();
+    // Normal equations of `y ≈ [J_used, U] β` over the rows `keep` accepts, y the innovation
+    // with the causes in `removed` taken out to first order.
+    let build = |used: &[usize],
+                 removed: &[usize],
+                 keep: &dyn Fn(usize) -> bool,
+                 sign: f64,
+                 extra: &[(usize, usize)]| {
+        let p = used.len() + extra.len();
+        let mut ne = NormalEquations::new(p);
+        let mut x = vec![0.0; p];
+        for &(i, c, r) in &rows {
+            if !keep(inn[i].tick) {
+                continue;
+            }
+            let mut y = inn[i].values[c];
+            for &j in removed {
+                y -= lin.j[j][r] * lin.delta[j].unwrap_or(0.0);
+            }
+            for (a, &j) in used.iter().enumerate() {
+                x[a] = lin.j[j][r];
+            }
+            for (a, &(ec, cand)) in extra.iter().enumerate() {
+                x[used.len() + a] = if ec == c {
+                    innovation.values[i][cand]
+                } else {
+                    0.0
+                };
+            }
+            ne.add(&x, sign * y);
+        }
+        ne
+    };
+    let all: Vec<usize> = (0..lin.cols.len()).collect();
+    // For the significance test, each unexplained effect with its offset (see the torque test).
+    let mut extra1 = extra.clone();
+    if let Some(one) = innovation.names.iter().position(|n| *n == "1") {
+        for c in 0..INNOVATION_LABELS.len() {
+            if extra.iter().any(|e| e.0 == c) && !extra1.contains(&(c, one)) {
+                extra1.push((c, one));
+            }
+        }
+    }
+    let mut out = Vec::new();
+    for cause in sensor {
+        let idx: Vec<usize> = all
+            .iter()
+            .copied()
+            .filter(|&j| lin.cols[j].0 == cause)
+            .collect();
+        // Consistency: per block, δ_b solving J δ ≈ −r (one Gauss–Newton step).
+        let per_block: Vec<Option<LsFit>> = (0..blocks)
+            .map(|b| build(&all, &[], &|tick| block_of(tick) == b, -1.0, &extra).solve())
+            .collect();
+        let mut evidence = Evidence {
+            consistency: consistency(&per_block, &idx),
+            ..Evidence::default()
+        };
+        let mut failures = Failures::default();
+        if let Some(c) = &evidence.consistency
+            && c.p < alpha_consistency
+        {
+            failures.add("consistency", falsified_text(c, alpha_consistency));
+        }
+        let removable = idx.iter().all(|&j| lin.delta[j].is_some());
+        if !extra.is_empty() && removable {
+            let fit_rows = |tick: usize| !problem.held_out[tick];
+            let others: Vec<usize> = all.iter().copied().filter(|j| !idx.contains(j)).collect();
+            let with = build(&all, &idx, &fit_rows, 1.0, &extra1).solve();
+            let without = rss_of(&build(&others, &idx, &fit_rows, 1.0, &extra1));
+            if let (Some(w), Some(wo)) = (with, without) {
+                let (lr, threshold) = levels.joint(w.n as f64, wo, w.rss, idx.len());
+                evidence.joint_lr = Some(lr);
+                evidence.joint_threshold = Some(threshold);
+                if lr <= threshold && failures.none() {
+                    failures.add(
+                        "joint",
+                        format!(
+                            "dropped: not significant once the unexplained effect is modelled (likelihood ratio {lr:.1} ≤ threshold {threshold:.1}); it stood in for an effect of another form"
+                        ),
+                    );
+                }
+            }
+        }
+        out.push(CauseTest::verdict(cause, evidence, failures, |c| {
+            format!(
+                "kept: consistent across {} time blocks (p = {:.2}, linearised through the filter)",
+                c.blocks, c.p
+            )
+        }));
+    }
+    out
+}
