@@ -79,10 +79,8 @@ fn run_with_fault(
         .stderr(Stdio::piped())
         .spawn()
         .expect("starting testbed run");
-    let root = child.id();
     std::thread::sleep(Duration::from_secs(FAULT_AT_S));
-    let target = descendant(root, program)
-        .unwrap_or_else(|| panic!("no {program} process under testbed (pid {root})"));
+    let target = find_program(&mut child, program);
     let signal = match fault {
         Fault::Kill => libc::SIGKILL,
         Fault::Stop => libc::SIGSTOP,
@@ -121,6 +119,30 @@ fn run_with_fault(
         stderr,
         summary: serde_json::from_str(&stdout).ok(),
         wall: started.elapsed(),
+    }
+}
+
+/// The pid of `program` under the run `child`, waited for up to [`FAULT_AT_S`] more (a loaded
+/// machine may start it late); a run that ended, or a program not found, fails the test with
+/// what the run said.
+fn find_program(child: &mut std::process::Child, program: &str) -> u32 {
+    let root = child.id();
+    let deadline = Instant::now() + Duration::from_secs(FAULT_AT_S);
+    loop {
+        if let Some(pid) = descendant(root, program) {
+            return pid;
+        }
+        let ended = child.try_wait().expect("polling testbed run");
+        if ended.is_some() || Instant::now() > deadline {
+            child.kill().ok();
+            let status = child.wait().expect("waiting for testbed run");
+            let mut stderr = String::new();
+            if let Some(mut pipe) = child.stderr.take() {
+                std::io::Read::read_to_string(&mut pipe, &mut stderr).ok();
+            }
+            panic!("no {program} process under testbed (pid {root}, {status}):\n{stderr}");
+        }
+        std::thread::sleep(Duration::from_millis(100));
     }
 }
 

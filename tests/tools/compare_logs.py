@@ -19,8 +19,9 @@ from mcap.reader import make_reader
 def load(path):
     """Messages per topic as (time on the run clock, data). Log times are the run's wall-clock
     start plus the run clock; the start (metadata `start_time_ns`, absent in older logs) is
-    taken off so two runs compare. The Foxglove transforms (`testbed/tf/*`) are left out: they
-    are derived from the estimate and truth samples, and their timestamp carries the start."""
+    taken off so two runs compare. The channels on Foxglove's schemas (`foxglove.*`: transforms,
+    pose, events, scene) are left out: they are derived from the samples, and their time stamps
+    carry the start."""
     per_topic = defaultdict(list)
     with open(path, "rb") as f:
         reader = make_reader(f)
@@ -28,8 +29,8 @@ def load(path):
         for m in reader.iter_metadata():
             if m.name == "testbed.run":
                 start = int(m.metadata.get("start_time_ns", "0"))
-        for _, channel, message in reader.iter_messages(log_time_order=False):
-            if channel.topic.startswith("testbed/tf/"):
+        for schema, channel, message in reader.iter_messages(log_time_order=False):
+            if schema is not None and schema.name.startswith("foxglove."):
                 continue
             per_topic[channel.topic].append((message.log_time - start, message.data))
     return per_topic
