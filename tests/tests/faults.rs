@@ -24,6 +24,8 @@ const PERIOD_S: f64 = 0.1;
 const WHEEL_LIMIT_RPM: f64 = 6000.0;
 /// Wall time after the start when the fault is injected, s.
 const FAULT_AT_S: u64 = 10;
+/// How much longer the fault waits for its target process to start on a loaded machine.
+const TARGET_WAIT: Duration = Duration::from_secs(10);
 
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum Mode {
@@ -122,12 +124,11 @@ fn run_with_fault(
     }
 }
 
-/// The pid of `program` under the run `child`, waited for up to [`FAULT_AT_S`] more (a loaded
-/// machine may start it late); a run that ended, or a program not found, fails the test with
-/// what the run said.
+/// The pid of `program` under the run `child`, waited for up to [`TARGET_WAIT`]; a run that
+/// ended, or a program not found, fails the test with what the run said.
 fn find_program(child: &mut std::process::Child, program: &str) -> u32 {
     let root = child.id();
-    let deadline = Instant::now() + Duration::from_secs(FAULT_AT_S);
+    let deadline = Instant::now() + TARGET_WAIT;
     loop {
         if let Some(pid) = descendant(root, program) {
             return pid;

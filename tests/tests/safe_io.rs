@@ -136,17 +136,19 @@ fn output_of(child: Child) -> (std::process::ExitStatus, String, String) {
 }
 
 /// Python `mcap`'s `make_reader` (reads from the footer): the number of sample messages it
-/// iterates (the channels derived on Foxglove's `foxglove.*` schemas left out; the statistics count
-/// every one).
+/// iterates, the channels derived from them ([`testbed_log::foxglove::DERIVED_TOPICS`], which
+/// [`RunLog::message_count`] leaves out) left out; the statistics count every one.
 fn python_make_reader_count(log: &Path) -> u64 {
     let script = "import sys\nfrom mcap.reader import make_reader\n\
+                  derived = set(sys.argv[2:])\n\
                   with open(sys.argv[1], 'rb') as f:\n    r = make_reader(f)\n    \
-                  schemas = [s.name for s, _, _ in r.iter_messages()]\n    \
-                  assert r.get_summary().statistics.message_count == len(schemas)\n    \
-                  print(sum(1 for s in schemas if not s.startswith('foxglove.')))\n";
+                  topics = [ch.topic for _, ch, _ in r.iter_messages()]\n    \
+                  assert r.get_summary().statistics.message_count == len(topics)\n    \
+                  print(sum(1 for t in topics if t not in derived))\n";
     let out = Command::new("python3")
         .args(["-c", script])
         .arg(log)
+        .args(testbed_log::foxglove::DERIVED_TOPICS)
         .output()
         .expect("python3 (with `pip install mcap`) is needed");
     assert!(
