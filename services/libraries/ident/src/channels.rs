@@ -41,9 +41,9 @@ use testbed_model::thruster_config::THRUSTER_COUNT;
 /// Columns of the torque channel's regressor matrix, in this order: `com_offset.r_m` (3),
 /// `constant_torque.torque_nm` (3), `aero_drag.c1` (3), `aero_drag.c2` (3),
 /// `inertia_error.fraction` (3), `inertia_error.products_kgm2` (3: xy, yz, zx),
-/// `thruster_torque_scale.scale` (6), `propellant_com_shift.tank_position_m` (3). The last nine
-/// are zero without thruster firings.
-pub const TORQUE_COLUMNS: usize = 27;
+/// `thruster_torque_scale.scale` (6), `propellant_com_shift.tank_position_m` (3),
+/// `com_drift.rate_m_per_s` (3). The thrusters' nine are zero without thruster firings.
+pub const TORQUE_COLUMNS: usize = 30;
 
 /// Column range of a torque-kind cause in the torque regressors.
 pub fn torque_columns(cause: Cause) -> Option<std::ops::Range<usize>> {
@@ -54,6 +54,7 @@ pub fn torque_columns(cause: Cause) -> Option<std::ops::Range<usize>> {
         Cause::InertiaError => Some(12..18),
         Cause::ThrusterTorqueScale => Some(18..24),
         Cause::PropellantComShift => Some(24..27),
+        Cause::ComDrift => Some(27..30),
         _ => None,
     }
 }
@@ -66,7 +67,8 @@ pub fn column_cause(col: usize) -> (Cause, usize) {
         6..12 => (Cause::AeroDrag, col - 6),
         12..18 => (Cause::InertiaError, col - 12),
         18..24 => (Cause::ThrusterTorqueScale, col - 18),
-        _ => (Cause::PropellantComShift, col - 24),
+        24..27 => (Cause::PropellantComShift, col - 24),
+        _ => (Cause::ComDrift, col - 27),
     }
 }
 
@@ -141,7 +143,14 @@ impl TorqueChannel {
         let momentum = |k: usize, b0: &Vector3<f64>| inertia * rate(k, b0) + rotor(k);
         let integrand = |k: usize, b0: &Vector3<f64>| {
             let w = rate(k, b0);
-            let f = w.cross(&momentum(k, b0)) - external.torque(&recon.q[k], &w).total_b();
+            // A torque that changes with time (a drifting centre of mass, a fitted term in
+            // time) at the record's time, the plant's clock.
+            let at = if external.time_dependent() {
+                ExternalTorqueModel::at_time(&external, data.t[k])
+            } else {
+                external
+            };
+            let f = w.cross(&momentum(k, b0)) - at.torque(&recon.q[k], &w).total_b();
             match &thrusters {
                 // The propellant's gravity torque; the thrust itself is added per interval.
                 Some(th) => f - th.propellant_torque(k, &attitude::gravity_b(&recon.q[k])),
@@ -161,6 +170,7 @@ impl TorqueChannel {
             for i in 0..3 {
                 let e = Vector3::ith(i, 1.0);
                 f[i] = mg * e.cross(&g);
+                f[27 + i] = f[i] * data.t[k];
                 f[3 + i] = e;
                 f[6 + i] = -v[i] * e;
                 f[9 + i] = -v[i] * v[i].abs() * e;
@@ -291,11 +301,10 @@ impl TorqueChannel {
         out
     }
 
-    /// Whether column `col` can be fitted: the thrusters' columns (18 on) only where the data
-    /// excite them (a thruster that fired, propellant used); the others always (as before the
-    /// thrusters were added).
+    /// Whether column `col` can be fitted: the thrusters' columns (18 to 26) only where the
+    /// data excite them (a thruster that fired, propellant used); the others always.
     pub fn determined(&self, col: usize) -> bool {
-        col < 18 || self.excited[col]
+        !(18..27).contains(&col) || self.excited[col]
     }
 
     /// Rows.

@@ -292,15 +292,16 @@ impl DesignOptions {
 
 /// Typical magnitude of a parameter (configuration units): the unit the design's information
 /// is expressed in. 1 µm of centre-of-mass offset (about 1 mNm of gravity torque on the default
-/// platform), 0.1 mNm of constant torque, 1e-3 Nm/(rad/s) and 1e-2 Nm/(rad/s)² of drag, 1 % of
-/// a principal moment and 0.5 kg m² of product of inertia (1 % of the default moments), 1 % of
-/// wheel torque scale, 0.1 mNm of Coulomb friction and 1e-7 Nm/(rad/s) of viscous friction
+/// platform), 1.7 nm/s of centre-of-mass drift (1 µm in 10 min, thermal), 0.1 mNm of constant
+/// torque, 1e-3 Nm/(rad/s) and 1e-2 Nm/(rad/s)² of drag, 1 % of a principal moment and 0.5 kg
+/// m² of product of inertia (1 % of the default moments), 1 % of wheel torque scale, 0.1 mNm of Coulomb friction and 1e-7 Nm/(rad/s) of viscous friction
 /// (7 % and 3 % of the default wheels'), 100 ppm of gyro scale, 0.1 mrad of gyro
 /// misalignment, 1° of latitude (Earth rate), 0.01 G (1 µT) of hard iron, 1 mrad (0.06°) of
 /// inclinometer offset, 1000 ppm of inclinometer scale; 1 for anything else.
 pub fn typical_magnitude(cause: Cause, i: usize) -> f64 {
     match cause {
         Cause::ComOffset => 1e-6,
+        Cause::ComDrift => 1.7e-9,
         Cause::ConstantTorque => 1e-4,
         Cause::AeroDrag => {
             if i < 3 {

@@ -8,6 +8,7 @@
 //! | cause | parameters |
 //! |---|---|
 //! | `com_offset` | `r_m` — centre of mass from the bearing centre, m, body axes |
+//! | `com_drift` | `rate_m_per_s` — the centre of mass's drift (thermal expansion, a shifting cable), m/s, body axes: the offset is `r + ṙ t`, `t` the record's time |
 //! | `earth_rate` | `latitude_deg` — latitude, degrees north |
 //! | `aero_drag` | `c1` — Nm/(rad/s); `c2` — Nm/(rad/s)², per body axis |
 //! | `constant_torque` | `torque_nm` — Nm, body axes |
@@ -32,9 +33,9 @@
 use serde::Serialize;
 use testbed_model::ModelConfig;
 use testbed_model::config::{
-    ActuatorDelay, AeroDrag, ComOffset, ConstantTorque, EarthRate, GyroMisalignment, GyroScale,
-    InclinometerBias, InclinometerScale, InertiaError, MagneticDisturbance, WheelFriction,
-    WheelTorqueScale,
+    ActuatorDelay, AeroDrag, ComDrift, ComOffset, ConstantTorque, EarthRate, GyroMisalignment,
+    GyroScale, InclinometerBias, InclinometerScale, InertiaError, MagneticDisturbance,
+    WheelFriction, WheelTorqueScale,
 };
 use testbed_model::thruster_config::{THRUSTER_COUNT, ThrusterConfig, ThrusterTorqueScale};
 
@@ -43,6 +44,7 @@ use testbed_model::thruster_config::{THRUSTER_COUNT, ThrusterConfig, ThrusterTor
 #[serde(rename_all = "snake_case")]
 pub enum Cause {
     ComOffset,
+    ComDrift,
     EarthRate,
     AeroDrag,
     ConstantTorque,
@@ -107,6 +109,14 @@ const fn spec(
 const INF: f64 = f64::INFINITY;
 
 const P_COM: &[ParamSpec] = &[spec("r_m", 3, "m, body axes", -1e-3, 1e-3, 1e-7)];
+const P_COM_DRIFT: &[ParamSpec] = &[spec(
+    "rate_m_per_s",
+    3,
+    "m/s, body axes",
+    -1e-3,
+    1e-3,
+    1e-10,
+)];
 const P_EARTH: &[ParamSpec] = &[spec("latitude_deg", 1, "degrees north", -90.0, 90.0, 0.5)];
 const P_DRAG: &[ParamSpec] = &[
     spec("c1", 3, "Nm/(rad/s), per body axis", 0.0, INF, 1e-3),
@@ -220,8 +230,9 @@ const P_MAG: &[ParamSpec] = &[spec(
 
 impl Cause {
     /// Every cause, in the library's order.
-    pub const ALL: [Cause; 15] = [
+    pub const ALL: [Cause; 16] = [
         Cause::ComOffset,
+        Cause::ComDrift,
         Cause::EarthRate,
         Cause::AeroDrag,
         Cause::ConstantTorque,
@@ -242,6 +253,7 @@ impl Cause {
     pub fn name(self) -> &'static str {
         match self {
             Cause::ComOffset => "com_offset",
+            Cause::ComDrift => "com_drift",
             Cause::EarthRate => "earth_rate",
             Cause::AeroDrag => "aero_drag",
             Cause::ConstantTorque => "constant_torque",
@@ -269,6 +281,10 @@ impl Cause {
         match self {
             Cause::ComOffset => {
                 "centre of mass offset from the bearing centre: gravity torque m g (r × G_B)"
+            }
+            Cause::ComDrift => {
+                "the centre of mass drifts at a constant rate (thermal expansion, a shifting \
+                 cable): gravity torque m g (ṙ t × G_B) growing with time"
             }
             Cause::EarthRate => {
                 "the Earth's rotation sensed by the gyros, fixed in the level frame"
@@ -309,6 +325,7 @@ impl Cause {
             | Cause::InclinometerBias
             | Cause::InclinometerScale => Kind::Sensor,
             Cause::ComOffset
+            | Cause::ComDrift
             | Cause::AeroDrag
             | Cause::ConstantTorque
             | Cause::InertiaError
@@ -322,6 +339,7 @@ impl Cause {
     pub fn params(self) -> &'static [ParamSpec] {
         match self {
             Cause::ComOffset => P_COM,
+            Cause::ComDrift => P_COM_DRIFT,
             Cause::EarthRate => P_EARTH,
             Cause::AeroDrag => P_DRAG,
             Cause::ConstantTorque => P_CONST,
@@ -378,6 +396,7 @@ impl Cause {
         let e = &config.effects;
         match self {
             Cause::ComOffset => e.com_offset.is_some(),
+            Cause::ComDrift => e.com_drift.is_some(),
             Cause::EarthRate => e.earth_rate.is_some(),
             Cause::AeroDrag => e.aero_drag.is_some(),
             Cause::ConstantTorque => e.constant_torque.is_some(),
@@ -404,6 +423,11 @@ impl Cause {
         let e = &config.effects;
         match self {
             Cause::ComOffset => e.com_offset.as_ref().map_or([0.0; 3], |x| x.r_m).to_vec(),
+            Cause::ComDrift => e
+                .com_drift
+                .as_ref()
+                .map_or([0.0; 3], |x| x.rate_m_per_s)
+                .to_vec(),
             Cause::EarthRate => vec![
                 e.earth_rate
                     .as_ref()
@@ -498,6 +522,11 @@ impl Cause {
         let e = &mut config.effects;
         match self {
             Cause::ComOffset => e.com_offset = Some(ComOffset { r_m: a3(0) }),
+            Cause::ComDrift => {
+                e.com_drift = Some(ComDrift {
+                    rate_m_per_s: a3(0),
+                })
+            }
             Cause::EarthRate => e.earth_rate = Some(EarthRate { latitude_deg: v[0] }),
             Cause::AeroDrag => {
                 e.aero_drag = Some(AeroDrag {

@@ -173,6 +173,7 @@ fn own_form(cause: Cause) -> &'static [&'static str] {
     match cause {
         Cause::ConstantTorque => &["1"],
         Cause::ComOffset => &["1", "sin tilt_x", "sin tilt_y"],
+        Cause::ComDrift => &["t", "t·sin tilt_x", "t·sin tilt_y"],
         Cause::AeroDrag => &["w_x", "w_y", "w_z", "w_x·|w_x|", "w_y·|w_y|", "w_z·|w_z|"],
         Cause::InertiaError => &[
             "dw_x/dt", "dw_y/dt", "dw_z/dt", "w_x·w_y", "w_y·w_z", "w_z·w_x",

@@ -60,8 +60,7 @@ pub struct EffectsConfig {
 }
 
 /// The centre of mass moves at a constant rate (thermal expansion, a draining tank): the offset
-/// of `com_offset` plus `rate_m_per_s · t`, `t` the plant's time from its start, s. Not in
-/// identification's library.
+/// of `com_offset` plus `rate_m_per_s · t`, `t` the plant's time from its start, s.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ComDrift {
