@@ -156,6 +156,33 @@ pub struct Consistency {
     /// standard errors.
     pub values: Vec<Vec<f64>>,
     pub stderr: Vec<Vec<f64>>,
+    /// The same blocks against a linear trend in time (`None` with fewer than three blocks).
+    pub trend: Option<Trend>,
+}
+
+/// The block values of a cause against a linear trend, `θ_b = a + ṙ (t_b − t̄)` (`t_b` the
+/// blocks' mid-times), fitted by the same weights: when the constant fails and the trend fits
+/// (`p` at or above the consistency level) with a rate significantly non-zero, the parameter
+/// drifts (a trend, not a state-dependent effect).
+#[derive(Debug, Clone, Serialize)]
+pub struct Trend {
+    pub chi2: f64,
+    pub dof: usize,
+    pub p: f64,
+    /// Rate of each value per second (configuration units / s), and its standard error.
+    pub rate_per_s: Vec<f64>,
+    pub rate_stderr: Vec<f64>,
+    /// Wald statistic of the rates (`k` degrees of freedom) and its p value.
+    pub rate_wald: f64,
+    pub rate_p: f64,
+}
+
+impl Trend {
+    /// Whether the blocks say "a drift": the trend fits at `alpha` and its rate is non-zero at
+    /// `alpha`.
+    pub fn drifts(&self, alpha: f64) -> bool {
+        self.p >= alpha && self.rate_p < alpha
+    }
 }
 
 /// The tests a cause failed, in the order its verdict names them: the first is the one it is
@@ -266,10 +293,25 @@ impl Levels<'_> {
 }
 
 pub(super) fn falsified_text(c: &Consistency, alpha: f64) -> String {
-    format!(
-        "falsified: its parameters differ between {} time blocks (χ² = {:.1} on {} degrees of freedom, p = {:.1e} < {:.0e}); a time- or state-dependent effect, not a constant one",
+    let differ = format!(
+        "falsified: its parameters differ between {} time blocks (χ² = {:.1} on {} degrees of freedom, p = {:.1e} < {:.0e})",
         c.blocks, c.chi2, c.dof, c.p, alpha
-    )
+    );
+    match &c.trend {
+        Some(t) if t.drifts(alpha) => format!(
+            "{differ}, and follow a linear trend (χ² = {:.1} on {} degrees of freedom, p = {:.2}): it drifts, at [{}] per second (a constant cause does not hold it)",
+            t.chi2,
+            t.dof,
+            t.p,
+            t.rate_per_s
+                .iter()
+                .zip(&t.rate_stderr)
+                .map(|(r, se)| super::with_error(*r, *se))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+        _ => format!("{differ}; a time- or state-dependent effect, not a constant one"),
+    }
 }
 
 /// The rows of a linear equation, for [`significance_beside`]: calls `row(x, y, y_without,
@@ -398,8 +440,12 @@ pub(super) fn rss_of(ne: &NormalEquations) -> Option<f64> {
 }
 
 /// χ² consistency of the parameters `idx` across the block fits (`None` if a block does not
-/// determine them).
-pub(super) fn consistency(per_block: &[Option<LsFit>], idx: &[usize]) -> Option<Consistency> {
+/// determine them), each block `block_s` long, and their linear trend.
+pub(super) fn consistency(
+    per_block: &[Option<LsFit>],
+    idx: &[usize],
+    block_s: f64,
+) -> Option<Consistency> {
     let k = idx.len();
     let mut thetas = Vec::new();
     let mut weights = Vec::new();
@@ -427,6 +473,7 @@ pub(super) fn consistency(per_block: &[Option<LsFit>], idx: &[usize]) -> Option<
         .sum();
     let dof = (per_block.len() - 1) * k;
     let p = 1.0 - chi_square_cdf(chi2, dof as f64);
+    let trend = linear_trend(&thetas, &weights, block_s);
     Some(Consistency {
         blocks: per_block.len(),
         chi2,
@@ -444,5 +491,121 @@ pub(super) fn consistency(per_block: &[Option<LsFit>], idx: &[usize]) -> Option<
                     .unwrap_or_default()
             })
             .collect(),
+        trend,
     })
+}
+
+/// Weighted fit of `θ_b = a + ṙ τ_b` to the block values (`τ_b` the block's mid-time from the
+/// record's middle, blocks `block_s` long); `None` with fewer than three blocks or a singular
+/// fit.
+fn linear_trend(thetas: &[DVector<f64>], weights: &[DMatrix<f64>], block_s: f64) -> Option<Trend> {
+    let blocks = thetas.len();
+    let k = thetas.first()?.len();
+    if blocks < 3 || block_s <= 0.0 {
+        return None;
+    }
+    let tau = |b: usize| (b as f64 + 0.5 - blocks as f64 / 2.0) * block_s;
+    let mut a = DMatrix::zeros(2 * k, 2 * k);
+    let mut rhs = DVector::zeros(2 * k);
+    for (b, (t, w)) in thetas.iter().zip(weights).enumerate() {
+        let s = tau(b);
+        let wt = w * t;
+        for (i, j, scale) in [(0, 0, 1.0), (0, k, s), (k, 0, s), (k, k, s * s)] {
+            let mut view = a.view_mut((i, j), (k, k));
+            view += w * scale;
+        }
+        let mut top = rhs.rows_mut(0, k);
+        top += &wt;
+        let mut bottom = rhs.rows_mut(k, k);
+        bottom += &wt * s;
+    }
+    let cov = a.try_inverse()?;
+    let x = &cov * rhs;
+    let (level, rate) = (x.rows(0, k).into_owned(), x.rows(k, k).into_owned());
+    let chi2: f64 = thetas
+        .iter()
+        .zip(weights)
+        .enumerate()
+        .map(|(b, (t, w))| {
+            let d = t - &level - &rate * tau(b);
+            (d.transpose() * w * &d)[(0, 0)]
+        })
+        .sum();
+    let dof = (blocks - 2) * k;
+    let rate_cov = cov.view((k, k), (k, k)).into_owned();
+    let rate_wald = (rate.transpose() * rate_cov.clone().try_inverse()? * &rate)[(0, 0)];
+    Some(Trend {
+        chi2,
+        dof,
+        p: 1.0 - chi_square_cdf(chi2, dof as f64),
+        rate_per_s: rate.iter().copied().collect(),
+        rate_stderr: (0..k).map(|i| rate_cov[(i, i)].max(0.0).sqrt()).collect(),
+        rate_wald,
+        rate_p: 1.0 - chi_square_cdf(rate_wald, k as f64),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Block fits of one parameter with values `theta` and standard error `se` each.
+    fn blocks(theta: &[f64], se: f64) -> Vec<Option<LsFit>> {
+        theta
+            .iter()
+            .map(|&t| {
+                Some(LsFit {
+                    theta: DVector::from_element(1, t),
+                    cov_unit: DMatrix::from_element(1, 1, se * se),
+                    rss: 1.0,
+                    n: 2,
+                })
+            })
+            .collect()
+    }
+
+    /// Closed form: four blocks of 100 s on the line `θ = 1 + 0.01 (t − 200)`, each ±0.1.
+    /// The constant fails (χ² = Σ (θ_b − 1)² / 0.01 = 500), the trend fits exactly (χ² = 0) with
+    /// rate 0.01 / s and its standard error `σ / √(Σ τ_b²)` = 0.1 / √50000.
+    #[test]
+    fn block_values_on_a_line_are_a_trend_with_its_rate() {
+        let per_block = blocks(&[-0.5, 0.5, 1.5, 2.5], 0.1);
+        let c = consistency(&per_block, &[0], 100.0).expect("determined");
+        assert!((c.chi2 - 500.0).abs() < 1e-6, "{}", c.chi2);
+        let t = c.trend.clone().expect("a trend with four blocks");
+        assert!(t.chi2.abs() < 1e-9 && t.dof == 2, "{t:?}");
+        assert!((t.rate_per_s[0] - 0.01).abs() < 1e-12, "{t:?}");
+        assert!(
+            (t.rate_stderr[0] - 0.1 / 50_000f64.sqrt()).abs() < 1e-12,
+            "{t:?}"
+        );
+        assert!(t.drifts(1e-3));
+        let text = falsified_text(&c, 1e-3);
+        assert!(
+            text.contains("it drifts, at [1.000e-2 ± 4.5e-4] per second"),
+            "{text}"
+        );
+    }
+
+    /// Values that jump about (not on a line) fail the trend as well: the verdict stays "a time-
+    /// or state-dependent effect".
+    #[test]
+    fn block_values_off_a_line_are_no_trend() {
+        let per_block = blocks(&[0.0, 2.0, 0.0, 2.0], 0.1);
+        let c = consistency(&per_block, &[0], 100.0).expect("determined");
+        let t = c.trend.clone().expect("a trend with four blocks");
+        assert!(!t.drifts(1e-3), "{t:?}");
+        let text = falsified_text(&c, 1e-3);
+        assert!(
+            text.ends_with("a time- or state-dependent effect, not a constant one"),
+            "{text}"
+        );
+        // Two blocks cannot tell a trend from a step.
+        assert!(
+            consistency(&blocks(&[0.0, 2.0], 0.1), &[0], 100.0)
+                .unwrap()
+                .trend
+                .is_none()
+        );
+    }
 }

@@ -362,7 +362,7 @@ pub(super) fn sensor_tests(
             .map(|b| build(&all, &[], &|tick| block_of(tick) == b, -1.0, &extra).solve())
             .collect();
         let mut evidence = Evidence {
-            consistency: consistency(&per_block, &idx),
+            consistency: consistency(&per_block, &idx, (t1 - t0) / blocks as f64),
             ..Evidence::default()
         };
         let mut failures = Failures::default();

@@ -67,7 +67,7 @@ pub use colour::{
     COLOUR_ALPHA, COLOUR_SEGMENT_S, ChannelWhiteness, INNOVATION_LAGS, InnovationWhiteness,
     WhitenessReport, torque_whiteness,
 };
-pub use falsify::{CauseTest, Consistency, Whiteness};
+pub use falsify::{CauseTest, Consistency, Trend, Whiteness};
 pub use options::{Options, held_out_mask};
 pub use sensor::SensorCorrection;
 pub use unexplained::UnexplainedEffect;

@@ -446,7 +446,7 @@ pub(super) fn torque_tests(
             .filter(|&j| cols[j].0 == Some(cause))
             .collect();
         let mut evidence = Evidence {
-            consistency: consistency(&per_block, &idx),
+            consistency: consistency(&per_block, &idx, (t1 - t0) / blocks as f64),
             ..Evidence::default()
         };
         let mut failures = Failures::default();

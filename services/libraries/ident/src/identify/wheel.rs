@@ -468,7 +468,7 @@ pub(super) fn wheel_tests(
         let consistency = if idx.is_empty() {
             None
         } else {
-            consistency(&per_block, &idx)
+            consistency(&per_block, &idx, (t1 - t0) / blocks as f64)
         };
         // The residual with the cause at its base values (its part put back), per row in the
         // order of `rows`.
