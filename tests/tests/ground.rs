@@ -358,6 +358,54 @@ fn the_ground_page_shows_the_run_and_commands_the_controller() {
         browser.eval("document.getElementById('link').dataset.state"),
         "live"
     );
+    // The plots are uPlot's: each with a legend naming every line, its unit on the value axis
+    // and in the legend, drawing the run's samples (the thrusters' plot only with thrusters).
+    let plots = wait_for("the plots drawn", Duration::from_secs(10), || {
+        let v = browser.eval(
+            "PLOTS.filter((p) => p.chart).map((p) => ({ id: p.id, unit: p.unit, \
+               lines: p.series.length, points: p.chart.data[0].length, \
+               legend: [...document.querySelectorAll(`#${p.id} .u-legend .u-series .u-label`)].map((e) => e.textContent), \
+               axes: p.chart.axes.map((a) => a.label), \
+               values: (p.chart.setCursor({ left: p.chart.bbox.width / devicePixelRatio - 2, top: 5 }), \
+                 [...document.querySelectorAll(`#${p.id} .u-legend .u-series .u-value`)].map((e) => e.textContent)) }))",
+        );
+        let plots = v.as_array()?.clone();
+        (plots.len() == 7 && plots.iter().all(|p| p["points"].as_u64() > Some(5))).then_some(plots)
+    });
+    for p in &plots {
+        let legend: Vec<&str> = p["legend"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter_map(Value::as_str)
+            .collect();
+        // The first legend entry is the time axis.
+        assert_eq!(legend.len() as u64, p["lines"].as_u64().unwrap() + 1, "{p}");
+        // The axes are labelled with the time and the unit; the legend's values (at the cursor,
+        // set near the newest samples) carry the unit.
+        let unit = p["unit"].as_str().unwrap();
+        assert_eq!(p["axes"], json!(["run time, s", unit]), "{p}");
+        let values: Vec<&str> = p["values"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter_map(Value::as_str)
+            .collect();
+        assert!(
+            values[0].ends_with(" s")
+                && values[1..].iter().any(|v| v.ends_with(&format!(" {unit}"))),
+            "{p}"
+        );
+    }
+    assert!(
+        plots[0]["legend"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|l| l == "estimate heading"),
+        "{}",
+        plots[0]
+    );
     // The page's clock is the run clock (message times minus the run's start time): it is
     // at least the time of the estimate shown, and within the 60-s run.
     let shown_s: f64 = browser
@@ -417,9 +465,28 @@ fn the_ground_page_shows_the_run_and_commands_the_controller() {
         Duration::from_secs(20),
         || browser.estimate().filter(|(t, _)| *t > second.0),
     );
-    drop(browser);
+    assert_eq!(
+        browser.eval("[...document.querySelectorAll('#health tbody tr')].filter((r) => r.dataset.stale === 'true').length"),
+        0,
+        "a live run's processes shown stale"
+    );
 
     let out = run.child.wait_with_output().unwrap();
+    // The run is over: the link is gone, and every process row says its state is no longer
+    // known instead of staying "Running".
+    let rows = wait_for("every process row stale", Duration::from_secs(10), || {
+        let v = browser.eval(
+            "[...document.querySelectorAll('#health tbody tr')].map((r) => [r.dataset.stale, r.cells[1].textContent])",
+        );
+        let rows = v.as_array()?.clone();
+        (!rows.is_empty() && rows.iter().all(|r| r[0] == "true")).then_some(rows)
+    });
+    assert!(
+        rows.iter()
+            .all(|r| r[1].as_str().is_some_and(|s| s.ends_with("? (link lost)"))),
+        "{rows:?}"
+    );
+    drop(browser);
     assert!(
         out.status.success(),
         "{}",

@@ -1,11 +1,13 @@
 // The ground page: a Foxglove WebSocket protocol client (subprotocol foxglove.websocket.v1)
-// for the ground link of the same host. No build step, no external resources.
+// for the ground link of the same host. No build step, no external resources: the plots are
+// uPlot's (vendor/, served by the link like this file).
 "use strict";
 
 const DEG = 180 / Math.PI;
 const RPM = 60 / (2 * Math.PI);
 const WINDOW_S = 60;            // plot window, simulated s
 const STALE_AFTER_S = 1.0;      // no message for this long: the link is stale
+const HEARTBEAT_STALE_S = 2.0;  // a process's heartbeats (every 0.5 s) stopped this long: stale
 const MODES = ["Idle", "RateDamping", "WheelPointing", "CmgSlew", "Fault", "Safe", "MomentumDump", "ThrusterRateDamping"];
 const STATES = ["Starting", "Running", "Degraded", "Stopping", "Faulted"];
 const COMMAND_KINDS = ["unknown", "mode", "target", "experiment start", "experiment abort"];
@@ -35,60 +37,64 @@ function headingTilt(q) {         // heading, tilt θ (body x), tilt φ (body y)
   return [Math.atan2(xl[1], xl[0]) * DEG, clampAsin(g[0]) * DEG, clampAsin(g[1]) * DEG];
 }
 
-// ---- series and plots ----
+// ---- series and plots (uPlot, vendor/uPlot.iife.min.js) ----
 function push(name, t, v) {
   let s = state.series.get(name);
-  if (!s) { s = []; state.series.set(name, s); }
-  s.push([t, v]);
-  while (s.length && s[0][0] < t - WINDOW_S) s.shift();
+  if (!s) { s = { t: [], v: [] }; state.series.set(name, s); }
+  s.t.push(t); s.v.push(Number.isFinite(v) ? v : null);   // a value JSON could not carry: a gap
+  let old = 0;
+  while (old < s.t.length && s.t[old] < t - WINDOW_S) old++;
+  if (old) { s.t.splice(0, old); s.v.splice(0, old); }
   state.dirty = true;
 }
-function plot(canvasId, lines) {
-  const c = $(canvasId), g = c.getContext("2d"), W = c.width, H = c.height, L = 46, B = 14;
-  g.clearRect(0, 0, W, H);
-  const t1 = state.simTime, t0 = t1 - WINDOW_S;
-  let lo = Infinity, hi = -Infinity;
-  for (const l of lines) for (const [t, v] of state.series.get(l.name) || []) {
-    if (t >= t0 && Number.isFinite(v)) { lo = Math.min(lo, v); hi = Math.max(hi, v); }
-  }
-  if (!Number.isFinite(lo)) { g.fillStyle = "#99a"; g.fillText("no data", W / 2 - 20, H / 2); return; }
-  if (hi - lo < 1e-9) { hi += 1e-3; lo -= 1e-3; }
-  const pad = (hi - lo) * 0.08; lo -= pad; hi += pad;
-  const X = (t) => L + (t - t0) / WINDOW_S * (W - L - 4), Y = (v) => 4 + (hi - v) / (hi - lo) * (H - B - 8);
-  g.strokeStyle = "#e3e5ea"; g.fillStyle = "#667"; g.font = "11px sans-serif";
-  for (let i = 0; i <= 4; i++) {
-    const v = lo + (hi - lo) * i / 4, y = Y(v);
-    g.beginPath(); g.moveTo(L, y); g.lineTo(W, y); g.stroke();
-    g.fillText(v.toPrecision(3), 2, y + 4);
-  }
-  g.fillText(`${t0.toFixed(0)} s`, L, H - 2); g.fillText(`${t1.toFixed(1)} s`, W - 50, H - 2);
-  for (const l of lines) {
-    const data = state.series.get(l.name) || [];
-    g.strokeStyle = l.color; g.setLineDash(l.dash || []); g.lineWidth = 1.4; g.beginPath();
-    let first = true;
-    for (const [t, v] of data) {
-      if (t < t0 || !Number.isFinite(v)) continue;
-      if (first) { g.moveTo(X(t), Y(v)); first = false; } else g.lineTo(X(t), Y(v));
-    }
-    g.stroke();
-  }
-  g.setLineDash([]);
+const AXES = { hpr: ["heading", "tilt x θ", "tilt y φ"], xyz: ["x", "y", "z"], wheels: ["X", "Y", "Z"], cmgs: ["1", "2", "3", "4"] };
+// One plot per element: its unit (axis label and legend values) and its lines, each a series
+// key of `push`, a legend label and a colour; dashed lines are a second source of the same axes.
+const PLOTS = [
+  ["plot-attitude", "deg", 220, [...lines("est", AXES.hpr, "estimate"), ...lines("tgt", AXES.hpr, "target", [6, 4]), ...lines("tru", AXES.hpr, "truth", [2, 3])]],
+  ["plot-error", "deg", 180, [...lines("err", AXES.xyz, "error"), ...lines("sig+", AXES.xyz, "+3σ", [4, 3]), ...lines("sig-", AXES.xyz, "−3σ", [4, 3])]],
+  ["plot-rate", "deg/s", 180, lines("rate", AXES.xyz, "rate")],
+  ["plot-wheel-speed", "rpm", 160, lines("wspd", AXES.wheels, "wheel")],
+  ["plot-wheel-torque", "mN m", 160, lines("wtrq", AXES.wheels, "wheel")],
+  ["plot-gimbal", "deg", 140, lines("gim", AXES.cmgs, "gimbal")],
+  ["plot-gimbal-rate", "deg/s", 140, lines("grate", AXES.cmgs, "gimbal")],
+  ["plot-thrust", "ms", 160, lines("thr", AXES.xyz, "axis")],
+].map(([id, unit, height, series]) => ({ id, unit, height, series, chart: null }));
+function lines(prefix, names, what, dash) {
+  return names.map((n, i) => ({ key: `${prefix}${i}`, label: `${what} ${n}`, color: COLORS[i], dash }));
 }
-function axes(prefix, n, dash) {
-  return Array.from({ length: n }, (_, i) => ({ name: `${prefix}${i}`, color: COLORS[i], dash }));
+function format(v, unit) { return v == null ? "–" : `${Number(v.toPrecision(4))} ${unit}`; }
+function makeChart(p) {
+  const el = $(p.id);
+  const opts = {
+    width: Math.max(300, el.clientWidth), height: p.height,
+    scales: { x: { time: false, range: () => [Math.max(0, state.simTime - WINDOW_S), Math.max(state.simTime, 1)] } },
+    axes: [{ label: "run time, s", labelSize: 18, size: 36 }, { label: p.unit, labelSize: 18, size: 64 }],
+    series: [
+      { label: "t", value: (u, v) => format(v, "s") },
+      ...p.series.map((l) => ({ label: l.label, stroke: l.color, dash: l.dash, width: 1.4, spanGaps: false, value: (u, v) => format(v, p.unit) })),
+    ],
+    cursor: { drag: { x: false, y: false } },
+  };
+  p.chart = new uPlot(opts, [[], ...p.series.map(() => [])], el);
+}
+// The lines of a plot on one time axis: each source's samples where it has them, gaps elsewhere.
+function plotData(p) {
+  const tables = p.series.map((l) => { const s = state.series.get(l.key); return s ? [s.t, s.v] : [[], []]; });
+  return uPlot.join(tables);
 }
 function redraw() {
   if (!state.dirty) return;
   state.dirty = false;
-  plot("plot-attitude", [...axes("est", 3), ...axes("tgt", 3, [6, 4]), ...axes("tru", 3, [2, 3])]);
-  plot("plot-error", [...axes("err", 3), ...axes("sig+", 3, [4, 3]), ...axes("sig-", 3, [4, 3])]);
-  plot("plot-rate", axes("rate", 3));
-  plot("plot-wheel-speed", axes("wspd", 3));
-  plot("plot-wheel-torque", axes("wtrq", 3));
-  plot("plot-gimbal", axes("gim", 4));
-  plot("plot-gimbal-rate", axes("grate", 4));
-  if (state.thrusters) plot("plot-thrust", axes("thr", 3));
+  for (const p of PLOTS) {
+    if (p.id === "plot-thrust" && !state.thrusters) continue;
+    if (!p.chart) makeChart(p);
+    p.chart.setData(plotData(p));
+  }
 }
+window.addEventListener("resize", () => {
+  for (const p of PLOTS) if (p.chart) p.chart.setSize({ width: Math.max(300, $(p.id).clientWidth), height: p.height });
+});
 
 // ---- displays ----
 function setNumber(id, value, digits) {
@@ -192,11 +198,16 @@ const handlers = {
 };
 
 function renderTables() {
-  const now = performance.now();
+  const now = performance.now(), live = linkLive();
   const rows = [...state.processes.entries()].sort(([a], [b]) => a.localeCompare(b)).map(([name, { hb, at }]) => {
     const st = STATES[hb.state] || hb.state;
     const misses = name === "controller" ? state.deadlineMisses : "";
-    return `<tr class="state-${st}" data-name="${name}"><td>${name}</td><td>${st}</td><td>${((now - at) / 1000).toFixed(1)}</td>` +
+    // A row says what the process last said; once its heartbeats stop (or the link is gone) that
+    // is no longer known, and the row says so.
+    const age = (now - at) / 1000;
+    const stale = !live || age > HEARTBEAT_STALE_S;
+    const shown = stale ? `${st}? (${live ? `no heartbeat for ${age.toFixed(1)} s` : "link lost"})` : st;
+    return `<tr class="state-${st}${stale ? " stale" : ""}" data-name="${name}" data-stale="${stale}"><td>${name}</td><td>${shown}</td><td>${age.toFixed(1)}</td>` +
       `<td>${hb.samples_in}</td><td>${hb.samples_out}</td><td>${hb.errors}</td><td>${hb.frames_ok} / ${hb.frames_bad}</td>` +
       `<td>${state.restarts.get(name) || 0}</td><td>${misses}</td></tr>`;
   });
@@ -208,10 +219,14 @@ function renderTables() {
   $("can").style.display = can.length ? "" : "none";
 }
 
+function linkLive() {
+  const open = state.ws && state.ws.readyState === WebSocket.OPEN;
+  return open && (performance.now() - state.lastMessage) / 1000 < STALE_AFTER_S;
+}
 function showLink() {
   const e = $("link"), open = state.ws && state.ws.readyState === WebSocket.OPEN;
   const age = (performance.now() - state.lastMessage) / 1000;
-  if (open && age < STALE_AFTER_S) {
+  if (linkLive()) {
     e.textContent = "live"; e.className = "badge ok"; e.dataset.state = "live";
   } else if (state.lastMessage) {
     e.textContent = `stale since ${age.toFixed(1)} s` + (open ? "" : " · reconnecting");

@@ -42,6 +42,17 @@ const PAGE: &[(&str, &str, &str)] = &[
         "text/css; charset=utf-8",
         include_str!("../../ground-page/style.css"),
     ),
+    // uPlot 1.6.32 (MIT), from npm's `uplot` package, unmodified (tests/js checks it).
+    (
+        "/uPlot.iife.min.js",
+        "text/javascript; charset=utf-8",
+        include_str!("../../ground-page/vendor/uPlot.iife.min.js"),
+    ),
+    (
+        "/uPlot.min.css",
+        "text/css; charset=utf-8",
+        include_str!("../../ground-page/vendor/uPlot.min.css"),
+    ),
 ];
 
 /// Largest HTTP request head read, bytes.
@@ -1148,6 +1159,39 @@ impl Session<'_> {
                 Err(_) => self.reject(ws, request.id, request.kind as u32, "link busy", false),
             },
             Err(reason) => self.reject(ws, request.id, request.kind as u32, &reason, true),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::PAGE;
+    use std::path::Path;
+
+    /// The page's uPlot is npm's `uplot` 1.6.32 byte for byte (tests/js pins that version; run
+    /// `npm ci --prefix tests/js`, as .ci/run does, to check it; skipped outside CI without it).
+    #[test]
+    fn the_served_uplot_is_the_npm_package() {
+        let dist =
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/js/node_modules/uplot/dist");
+        if !dist.is_dir() {
+            assert!(
+                std::env::var_os("CI").is_none(),
+                "under CI, tests/js/node_modules is needed (run `npm ci` in tests/js)"
+            );
+            eprintln!("skipped: needs `npm ci` in tests/js");
+            return;
+        }
+        for (path, file) in [
+            ("/uPlot.iife.min.js", "uPlot.iife.min.js"),
+            ("/uPlot.min.css", "uPlot.min.css"),
+        ] {
+            let served = PAGE.iter().find(|(p, _, _)| *p == path).expect("served");
+            let npm = std::fs::read_to_string(dist.join(file)).expect("npm's file");
+            assert!(
+                served.2 == npm,
+                "{path} differs from npm's uplot/dist/{file}"
+            );
         }
     }
 }
