@@ -625,10 +625,12 @@ fn identify_pass(
     }
     // Whiteness of the torque channel under the extended model: a coloured disturbance.
     let whiteness = colour::whiteness(aligned, &current.state.recon, &extended);
+    let unconfirmed = report::unconfirmed(&steps);
     let mut summary = report::summary(
         &causes,
         &cause_tests,
         &possible,
+        &unconfirmed,
         &effects,
         &remaining,
         gain,
@@ -650,6 +652,7 @@ fn identify_pass(
         nominal_residuals: nominal_report,
         steps,
         possible,
+        unconfirmed,
         causes,
         verdict,
         cause_tests,

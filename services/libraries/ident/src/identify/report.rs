@@ -131,6 +131,10 @@ pub struct Report {
     /// Borderline causes of the last selection step: below the threshold, but significant at
     /// the 1 % level (`LR > χ²_k(0.99)`) and improving the held-out data. Listed, not named.
     pub possible: Vec<CandidateRow>,
+    /// Causes above the threshold at every selection step but never chosen, because their
+    /// held-out (cross-validated) likelihood ratio never rose above zero: their last step's
+    /// rows. Said, not silently dropped (on a short record the out-of-sample check is weak).
+    pub unconfirmed: Vec<CandidateRow>,
     /// Named causes, strongest first (empty: none).
     pub causes: Vec<CauseReport>,
     /// `none`, or the causes joined by ` + `.
@@ -220,6 +224,7 @@ pub(super) fn summary(
     causes: &[CauseReport],
     tests: &[super::CauseTest],
     possible: &[CandidateRow],
+    unconfirmed: &[CandidateRow],
     effects: &[super::UnexplainedEffect],
     remaining: &Remaining,
     gain: f64,
@@ -314,6 +319,12 @@ pub(super) fn summary(
         out.push(format!(
             "Possible (below the threshold, not named): {} — likelihood ratio {:.1} against the threshold {:.1}, held-out {:+.1}.",
             p.name, p.lr_fit, p.threshold, p.lr_held_out
+        ));
+    }
+    for u in unconfirmed {
+        out.push(format!(
+            "Not chosen: {} — above the threshold at every selection step (likelihood ratio {:.1} against {:.1} at the last) but not confirmed out of sample (held-out {:+.1}); a longer record, or one that excites it more, would decide.",
+            u.name, u.lr_fit, u.threshold, u.lr_held_out
         ));
     }
     if effects.is_empty() {
@@ -438,4 +449,66 @@ pub(super) fn window_curves(p: &Predictions, data: &Aligned) -> Vec<Curve> {
             }
         })
         .collect()
+}
+
+/// The causes above the threshold at every step of `steps` and never chosen (their held-out
+/// likelihood ratio never rose above zero, or could not be computed): their rows of the last
+/// step.
+pub(super) fn unconfirmed(steps: &[Vec<CandidateRow>]) -> Vec<CandidateRow> {
+    let Some(last) = steps.last() else {
+        return Vec::new();
+    };
+    last.iter()
+        .filter(|r| {
+            !r.chosen
+                && !(r.lr_held_out > 0.0)
+                && steps.iter().all(|step| {
+                    step.iter()
+                        .any(|x| x.name == r.name && x.significant && !x.chosen)
+                })
+        })
+        .cloned()
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(name: &'static str, significant: bool, chosen: bool, lr_held_out: f64) -> CandidateRow {
+        CandidateRow {
+            name,
+            k: 3,
+            lr_fit: if significant { 40.0 } else { 5.0 },
+            threshold: 20.0,
+            delta_bic: 0.0,
+            lr_held_out,
+            significant,
+            chosen,
+            note: String::new(),
+        }
+    }
+
+    /// Two steps: `com_offset` chosen in the first; `gyro_scale` above the threshold in both
+    /// but never better out of sample; `aero_drag` above it only in the second; `inertia_error`
+    /// never. Only `gyro_scale` is unconfirmed.
+    #[test]
+    fn a_cause_significant_at_every_step_and_never_chosen_is_unconfirmed() {
+        let steps = vec![
+            vec![
+                row("com_offset", true, true, 30.0),
+                row("gyro_scale", true, false, -2.0),
+                row("aero_drag", false, false, -1.0),
+                row("inertia_error", false, false, 1.0),
+            ],
+            vec![
+                row("gyro_scale", true, false, -1.5),
+                row("aero_drag", true, false, -0.5),
+                row("inertia_error", false, false, 1.0),
+            ],
+        ];
+        let names: Vec<&str> = unconfirmed(&steps).iter().map(|r| r.name).collect();
+        assert_eq!(names, ["gyro_scale"]);
+        assert!(unconfirmed(&[]).is_empty());
+    }
 }
