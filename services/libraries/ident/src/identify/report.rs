@@ -461,7 +461,7 @@ pub(super) fn unconfirmed(steps: &[Vec<CandidateRow>]) -> Vec<CandidateRow> {
     last.iter()
         .filter(|r| {
             !r.chosen
-                && !(r.lr_held_out > 0.0)
+                && (r.lr_held_out.is_nan() || r.lr_held_out <= 0.0)
                 && steps.iter().all(|step| {
                     step.iter()
                         .any(|x| x.name == r.name && x.significant && !x.chosen)
