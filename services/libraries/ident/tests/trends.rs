@@ -92,36 +92,10 @@ fn a_drifting_centre_of_mass_is_named_with_its_rate() {
 /// run (a rate of the wrong sign or size would not come within 5×).
 #[test]
 fn the_extended_model_reproduces_the_drift_in_simulation() {
-    use testbed_ident::experiment::{self, ExperimentOptions};
     let t = truth(COM_DRIFT);
     let id = identify_blind(&t, 51, 600.0);
     let extended = extended_round_trip(&id, "drift");
     assert!(extended.effects.com_drift.is_some(), "{extended:?}");
-    let options = ExperimentOptions {
-        duration_s: 600.0,
-        seed: 51,
-        ..ExperimentOptions::default()
-    };
-    let wheels = |model: &testbed_model::ModelConfig| {
-        experiment::run(model, &options)
-            .expect("experiment runs")
-            .0
-            .wheels
-    };
-    let (truth_run, extended_run, nominal_run) =
-        (wheels(&t), wheels(&extended), wheels(&nominal()));
-    let rms = |run: &[testbed_ident::data::WheelRow]| {
-        let sum: f64 = truth_run
-            .iter()
-            .zip(run)
-            .map(|(a, b)| (a.speed_rad_s - b.speed_rad_s).norm_squared())
-            .sum();
-        (sum / truth_run.len() as f64).sqrt()
-    };
-    let (ext, nom) = (rms(&extended_run), rms(&nominal_run));
-    println!(
-        "wheel-speed RMS difference from the truth: nominal {nom:.3} rad/s, extended {ext:.3} rad/s ({:.1}× closer)",
-        nom / ext
-    );
+    let (nom, ext) = wheel_speed_rms_from_truth(&t, &extended, 51, 600.0);
     assert!(nom > 5.0 * ext, "nominal {nom} rad/s, extended {ext} rad/s");
 }

@@ -339,39 +339,13 @@ fn every_torque_cause_is_tested_beside_an_effect_on_a_constant_torque_axis() {
 /// fitted torque of the wrong sign or form would not come within 5×).
 #[test]
 fn the_extended_model_reproduces_an_unexplained_torque_in_simulation() {
-    use testbed_ident::experiment::{self, ExperimentOptions};
     let t = truth(HEADING);
     let id = identify_blind(&t, 55, 600.0);
     let text = id.extended.to_toml_string();
     assert!(text.contains("[effects.fitted_torque]"), "{text}");
     let extended = testbed_model::ModelConfig::from_toml_str(&text, "extended model")
         .expect("the extended model reads back");
-    let options = ExperimentOptions {
-        duration_s: 600.0,
-        seed: 55,
-        ..ExperimentOptions::default()
-    };
-    let wheels = |model: &testbed_model::ModelConfig| {
-        experiment::run(model, &options)
-            .expect("experiment runs")
-            .0
-            .wheels
-    };
-    let (truth_run, extended_run, nominal_run) =
-        (wheels(&t), wheels(&extended), wheels(&nominal()));
-    let rms = |run: &[testbed_ident::data::WheelRow]| {
-        let sum: f64 = truth_run
-            .iter()
-            .zip(run)
-            .map(|(a, b)| (a.speed_rad_s - b.speed_rad_s).norm_squared())
-            .sum();
-        (sum / truth_run.len() as f64).sqrt()
-    };
-    let (ext, nom) = (rms(&extended_run), rms(&nominal_run));
-    println!(
-        "wheel-speed RMS difference from the truth: nominal {nom:.3} rad/s, extended {ext:.3} rad/s ({:.1}× closer)",
-        nom / ext
-    );
+    let (nom, ext) = wheel_speed_rms_from_truth(&t, &extended, 55, 600.0);
     assert!(nom > 5.0 * ext, "nominal {nom} rad/s, extended {ext} rad/s");
 }
 

@@ -152,3 +152,32 @@ pub fn check_single(
     );
     assert_eq!(extended_round_trip(id, label), id.extended);
 }
+
+/// The identification experiment (seed `seed`, `duration_s`) run on `truth`, `extended` and the
+/// nominal model: the RMS over the run of each one's wheel-speed difference from the truth's
+/// (rad/s), `(nominal, extended)`. In closed loop the wheels take up the external torque, so
+/// their speeds carry its integral: a model that reproduces the effect follows them.
+pub fn wheel_speed_rms_from_truth(
+    truth: &ModelConfig,
+    extended: &ModelConfig,
+    seed: u64,
+    duration_s: f64,
+) -> (f64, f64) {
+    let wheels = |model: &ModelConfig| experiment_data(model, seed, duration_s).wheels;
+    let (truth_run, extended_run, nominal_run) =
+        (wheels(truth), wheels(extended), wheels(&nominal()));
+    let rms = |run: &[testbed_ident::data::WheelRow]| {
+        let sum: f64 = truth_run
+            .iter()
+            .zip(run)
+            .map(|(a, b)| (a.speed_rad_s - b.speed_rad_s).norm_squared())
+            .sum();
+        (sum / truth_run.len() as f64).sqrt()
+    };
+    let (nom, ext) = (rms(&nominal_run), rms(&extended_run));
+    println!(
+        "wheel-speed RMS difference from the truth: nominal {nom:.3} rad/s, extended {ext:.3} rad/s ({:.1}× closer)",
+        nom / ext
+    );
+    (nom, ext)
+}
