@@ -330,6 +330,12 @@ impl Drop for Browser {
     }
 }
 
+/// The strings of a JSON array (none for anything else).
+fn strings(v: &Value) -> Vec<&str> {
+    v.as_array()
+        .map_or_else(Vec::new, |a| a.iter().filter_map(Value::as_str).collect())
+}
+
 fn samples<T: LogEncode>(log: &Path) -> Vec<T> {
     RunLog::open(log)
         .unwrap()
@@ -373,24 +379,14 @@ fn the_ground_page_shows_the_run_and_commands_the_controller() {
         (plots.len() == 7 && plots.iter().all(|p| p["points"].as_u64() > Some(5))).then_some(plots)
     });
     for p in &plots {
-        let legend: Vec<&str> = p["legend"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .filter_map(Value::as_str)
-            .collect();
+        let legend = strings(&p["legend"]);
         // The first legend entry is the time axis.
         assert_eq!(legend.len() as u64, p["lines"].as_u64().unwrap() + 1, "{p}");
         // The axes are labelled with the time and the unit; the legend's values (at the cursor,
         // set near the newest samples) carry the unit.
         let unit = p["unit"].as_str().unwrap();
         assert_eq!(p["axes"], json!(["run time, s", unit]), "{p}");
-        let values: Vec<&str> = p["values"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .filter_map(Value::as_str)
-            .collect();
+        let values = strings(&p["values"]);
         assert!(
             values[0].ends_with(" s")
                 && values[1..].iter().any(|v| v.ends_with(&format!(" {unit}"))),
