@@ -14,8 +14,14 @@
 //! With `--levels`, the indexed finish at other zstd levels too (the choice of
 //! `CHUNK_ZSTD_LEVEL`).
 //!
-//! `target/release/testbed run --duration 3000 --log /tmp/x/run.mcap --no-progress &&
-//!  target/release/log_size --log /tmp/x/run.mcap [--repeats 3] [--levels 3,6]`
+//! With `--run TESTBED`, the log is first made by a lockstep run of that executable
+//! (`TESTBED run --duration 3000 --log DIR/run.mcap --no-progress`), timed from start to exit.
+//! Both encodings write the same unchunked file while the run goes on and differ only in the
+//! finish, so the run's wall time with the baseline finish is its measured wall time less the
+//! indexed finish plus the baseline one, each as measured here.
+//!
+//! `target/release/log_size --run target/release/testbed --dir /tmp/x [--repeats 3]`, or on a
+//! log made before: `target/release/log_size --log /tmp/x/run.mcap [--levels 3,6]`
 
 use anyhow::{Context, Result};
 use clap::Parser;
@@ -26,12 +32,18 @@ use testbed_log::{LogRecord, RunLog, RunLogWriter, WriterOptions};
 #[derive(Parser)]
 struct Args {
     /// A finished log whose records are written again.
+    #[arg(long, required_unless_present = "run", conflicts_with = "run")]
+    log: Option<PathBuf>,
+    /// Make the log first by a lockstep run of this `testbed` executable, timed.
     #[arg(long)]
-    log: PathBuf,
+    run: Option<PathBuf>,
+    /// Simulated seconds of the `--run` run.
+    #[arg(long, default_value_t = 3000)]
+    duration: u64,
     /// Repetitions of each finish (the median is reported).
     #[arg(long, default_value_t = 3)]
     repeats: usize,
-    /// Where the files go (default: beside `--log`).
+    /// Where the files go (default: beside `--log`; needed with `--run`).
     #[arg(long)]
     dir: Option<PathBuf>,
     /// Further zstd levels to measure the indexed finish at, beside the logger's
@@ -101,14 +113,38 @@ fn measure(
     Ok((median(times), std::fs::metadata(to)?.len()))
 }
 
+/// Runs `testbed run --duration D --log PATH --no-progress` and returns its wall time.
+fn timed_run(testbed: &Path, duration: u64, log: &Path) -> Result<Duration> {
+    let start = Instant::now();
+    let status = std::process::Command::new(testbed)
+        .args(["run", "--duration", &duration.to_string(), "--no-progress", "--log"])
+        .arg(log)
+        .stdout(std::process::Stdio::null())
+        .status()
+        .with_context(|| format!("starting {}", testbed.display()))?;
+    let wall = start.elapsed();
+    anyhow::ensure!(status.success(), "{} run exited with {status}", testbed.display());
+    Ok(wall)
+}
+
 fn main() -> Result<()> {
     let args = Args::parse();
-    let log = RunLog::open(&args.log).with_context(|| format!("opening {}", args.log.display()))?;
+    let (log_path, run_wall) = match (&args.run, &args.log) {
+        (Some(testbed), _) => {
+            let dir = args.dir.as_deref().context("--run needs --dir")?;
+            std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+            let log = dir.join("run.mcap");
+            (log.clone(), Some(timed_run(testbed, args.duration, &log)?))
+        }
+        (None, Some(log)) => (log.clone(), None),
+        (None, None) => anyhow::bail!("give --log or --run"),
+    };
+    let log = RunLog::open(&log_path).with_context(|| format!("opening {}", log_path.display()))?;
     let records: Vec<LogRecord> = log.records()?.collect::<Result<_, _>>()?;
     let dir = args
         .dir
         .clone()
-        .or_else(|| args.log.parent().map(Path::to_path_buf))
+        .or_else(|| log_path.parent().map(Path::to_path_buf))
         .unwrap_or_default();
     let unchunked = dir.join("log_size.unchunked.mcap");
 
@@ -157,6 +193,12 @@ fn main() -> Result<()> {
         levels.push((level, time, size));
     }
     let mb = |b: u64| b as f64 / 1e6;
+    // The run's wall time with either finish: the same run, its finish swapped.
+    let run_walls = run_wall.map(|wall| {
+        let indexed = wall.as_secs_f64();
+        let baseline = indexed - indexed_time.as_secs_f64() + baseline_time.as_secs_f64();
+        (indexed, baseline)
+    });
     if args.json {
         println!(
             "{}",
@@ -171,6 +213,8 @@ fn main() -> Result<()> {
                 "indexed_finish_s": indexed_time.as_secs_f64(),
                 "size_ratio": baseline_size as f64 / indexed_size as f64,
                 "finish_time_ratio": indexed_time.as_secs_f64() / baseline_time.as_secs_f64(),
+                "run_wall_s": run_walls.map(|w| w.0),
+                "run_wall_baseline_finish_s": run_walls.map(|w| w.1),
                 "other_levels": levels.iter().map(|(l, t, b)| serde_json::json!({
                     "level": l, "bytes": b, "finish_s": t.as_secs_f64(),
                 })).collect::<Vec<_>>(),
@@ -201,6 +245,14 @@ fn main() -> Result<()> {
             baseline_size as f64 / indexed_size as f64,
             indexed_time.as_secs_f64() / baseline_time.as_secs_f64()
         );
+        if let Some((indexed, baseline)) = run_walls {
+            println!(
+                "testbed run --duration {}: {indexed:.2} s wall with the indexed finish, \
+                 {baseline:.2} s with the baseline finish ({:.2}×)",
+                args.duration,
+                indexed / baseline
+            );
+        }
         for (level, time, size) in &levels {
             println!(
                 "  at zstd level {level}: {:.1} MB in {:.2} s",
