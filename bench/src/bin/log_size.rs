@@ -117,13 +117,23 @@ fn measure(
 fn timed_run(testbed: &Path, duration: u64, log: &Path) -> Result<Duration> {
     let start = Instant::now();
     let status = std::process::Command::new(testbed)
-        .args(["run", "--duration", &duration.to_string(), "--no-progress", "--log"])
+        .args([
+            "run",
+            "--duration",
+            &duration.to_string(),
+            "--no-progress",
+            "--log",
+        ])
         .arg(log)
         .stdout(std::process::Stdio::null())
         .status()
         .with_context(|| format!("starting {}", testbed.display()))?;
     let wall = start.elapsed();
-    anyhow::ensure!(status.success(), "{} run exited with {status}", testbed.display());
+    anyhow::ensure!(
+        status.success(),
+        "{} run exited with {status}",
+        testbed.display()
+    );
     Ok(wall)
 }
 

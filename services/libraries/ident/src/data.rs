@@ -634,10 +634,32 @@ impl Aligned {
     }
 }
 
-/// Index of the last entry with time ≤ t + 1e-9.
+/// Index of the last entry with time ≤ t + 1e-9 (times in order). Records are sampled at a
+/// near-constant rate, so the search starts where a uniform spacing puts `t` and walks a few
+/// entries from there; a binary search when that does not find it.
 fn held_index<T>(series: &[(f64, T)], t: f64) -> Option<usize> {
-    let n = series.partition_point(|(ti, _)| *ti <= t + 1e-9);
-    n.checked_sub(1)
+    let key = t + 1e-9;
+    let (first, last) = (series.first()?.0, series.last()?.0);
+    // Before the first entry (or a NaN time): nothing is held yet.
+    if key.partial_cmp(&first).is_none_or(|o| o.is_lt()) {
+        return None;
+    }
+    let n = series.len();
+    if key >= last {
+        return Some(n - 1);
+    }
+    // Here first ≤ key < last: the answer is in 0..n − 1.
+    let mut i = (((key - first) / (last - first) * (n - 1) as f64) as usize).min(n - 2);
+    for _ in 0..8 {
+        if series[i].0 > key {
+            i -= 1;
+        } else if series[i + 1].0 <= key {
+            i += 1;
+        } else {
+            return Some(i);
+        }
+    }
+    series.partition_point(|(ti, _)| *ti <= key).checked_sub(1)
 }
 
 fn held<T: Copy>(series: &[(f64, T)], t: f64) -> Option<T> {
@@ -695,6 +717,30 @@ where
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The guessed search finds what a binary search finds: on a jittered 10-Hz series with a
+    /// gap, repeated times and a burst, at times on, between and beyond its entries.
+    #[test]
+    fn held_index_is_the_binary_search() {
+        let mut times: Vec<f64> = (0..2000)
+            .map(|k| 0.1 * k as f64 + 0.003 * ((k * 7919 % 13) as f64 - 6.0))
+            .collect();
+        times.extend([200.0, 200.0, 200.0, 200.01, 200.02, 350.0, 350.1]);
+        let series: Vec<(f64, ())> = times.iter().map(|&t| (t, ())).collect();
+        let binary = |t: f64| {
+            series
+                .partition_point(|(ti, _)| *ti <= t + 1e-9)
+                .checked_sub(1)
+        };
+        let probes = times
+            .iter()
+            .flat_map(|&t| [t, t - 1e-9, t + 1e-9, t - 2e-9, t + 0.05, t - 0.05])
+            .chain([-1.0, -0.4, 1e9, f64::NAN, 275.0]);
+        for t in probes {
+            assert_eq!(held_index(&series, t), binary(t), "at t = {t}");
+        }
+        assert_eq!(held_index::<()>(&[], 1.0), None);
+    }
 
     #[test]
     fn held_integral_splits_at_command_changes_and_delays() {

@@ -55,6 +55,7 @@ use crate::error::IdentError;
 use crate::experiment::{self, ExperimentOptions};
 use crate::fit::{Information, Problem, information_params, information_supported};
 use crate::identify::{Options as IdentifyOptions, held_out_mask};
+use crate::separability::{Confusion, unseparable};
 use nalgebra::DMatrix;
 use serde::Serialize;
 use testbed_model::ModelConfig;
@@ -371,20 +372,12 @@ pub fn d_criterion(f: &DMatrix<f64>) -> (Criterion, Vec<f64>) {
             Vec::new(),
         );
     }
-    let sym = DMatrix::from_fn(p, p, |i, j| 0.5 * (f[(i, j)] + f[(j, i)]));
-    let eig = sym.symmetric_eigen();
-    let max = eig.eigenvalues.iter().copied().fold(0.0f64, f64::max);
-    let finite = eig.eigenvalues.iter().all(|x| x.is_finite());
-    let determined: Vec<bool> = eig
-        .eigenvalues
-        .iter()
-        .map(|&x| finite && max > 0.0 && x > SINGULAR * max)
-        .collect();
+    let (eigenvalues, eigenvectors, determined) = d_criterion_eigen(f);
     let unidentified = determined.iter().filter(|d| !**d).count();
     let log_det = if unidentified == p {
         f64::NEG_INFINITY
     } else {
-        eig.eigenvalues
+        eigenvalues
             .iter()
             .zip(&determined)
             .filter(|(_, d)| **d)
@@ -395,14 +388,14 @@ pub fn d_criterion(f: &DMatrix<f64>) -> (Criterion, Vec<f64>) {
         .map(|i| {
             let null: f64 = (0..p)
                 .filter(|&k| !determined[k])
-                .map(|k| eig.eigenvectors[(i, k)].powi(2))
+                .map(|k| eigenvectors[(i, k)].powi(2))
                 .sum();
             if null > 1e-6 {
                 return f64::NAN;
             }
             (0..p)
                 .filter(|&k| determined[k])
-                .map(|k| eig.eigenvectors[(i, k)].powi(2) / eig.eigenvalues[k])
+                .map(|k| eigenvectors[(i, k)].powi(2) / eigenvalues[k])
                 .sum::<f64>()
                 .sqrt()
         })
@@ -413,6 +406,26 @@ pub fn d_criterion(f: &DMatrix<f64>) -> (Criterion, Vec<f64>) {
             log_det,
         },
         stderr,
+    )
+}
+
+/// The eigen-decomposition of a symmetric information matrix `f` (symmetrised) and which of
+/// its directions it determines (eigenvalue above [`SINGULAR`] times the largest, all finite).
+pub(crate) fn d_criterion_eigen(f: &DMatrix<f64>) -> (Vec<f64>, DMatrix<f64>, Vec<bool>) {
+    let p = f.nrows();
+    let sym = DMatrix::from_fn(p, p, |i, j| 0.5 * (f[(i, j)] + f[(j, i)]));
+    let eig = sym.symmetric_eigen();
+    let max = eig.eigenvalues.iter().copied().fold(0.0f64, f64::max);
+    let finite = eig.eigenvalues.iter().all(|x| x.is_finite());
+    let determined = eig
+        .eigenvalues
+        .iter()
+        .map(|&x| finite && max > 0.0 && x > SINGULAR * max)
+        .collect();
+    (
+        eig.eigenvalues.iter().copied().collect(),
+        eig.eigenvectors,
+        determined,
     )
 }
 
@@ -603,15 +616,7 @@ pub fn evaluate(
     );
     let state = problem.state(model)?;
     let information = problem.information(&state, &settings.targets)?;
-    let scale: Vec<f64> = information
-        .params
-        .iter()
-        .map(|(c, i)| typical_magnitude(*c, *i))
-        .collect();
-    let p = scale.len();
-    let scaled = DMatrix::from_fn(p, p, |i, j| {
-        information.matrix[(i, j)] * scale[i] * scale[j]
-    });
+    let (scale, scaled) = scaled_information(&information);
     let (criterion, se_scaled) = d_criterion(&scaled);
     let stderr = se_scaled.iter().zip(&scale).map(|(s, d)| s * d).collect();
     Ok(Evaluation {
@@ -626,6 +631,21 @@ pub fn evaluate(
         stderr,
         information: Some(information),
     })
+}
+
+/// Each parameter's typical magnitude ([`typical_magnitude`]) and the information in those
+/// units (`F_s = D F D`, `D` the magnitudes): what the criterion and the separability read.
+fn scaled_information(information: &Information) -> (Vec<f64>, DMatrix<f64>) {
+    let scale: Vec<f64> = information
+        .params
+        .iter()
+        .map(|(c, i)| typical_magnitude(*c, *i))
+        .collect();
+    let p = scale.len();
+    let scaled = DMatrix::from_fn(p, p, |i, j| {
+        information.matrix[(i, j)] * scale[i] * scale[j]
+    });
+    (scale, scaled)
 }
 
 /// The result of a design search.
@@ -648,6 +668,9 @@ pub struct Design {
     /// Passes of the coordinate search run.
     pub passes: usize,
     pub limits: DesignLimits,
+    /// The pairs of target causes the chosen programme cannot separate
+    /// ([`crate::separability`]).
+    pub unseparable: Vec<Confusion>,
 }
 
 impl Design {
@@ -779,6 +802,9 @@ pub fn design(
         });
     }
     let params = parameters(&settings.targets);
+    let unseparable = best.information.as_ref().map_or_else(Vec::new, |f| {
+        unseparable(&f.params, &scaled_information(f).1)
+    });
     Ok(Design {
         parameters: params.iter().map(|(c, i)| c.value_name(*i)).collect(),
         typical: params
@@ -792,6 +818,7 @@ pub fn design(
         rejections,
         passes,
         limits: settings.limits.clone(),
+        unseparable,
     })
 }
 

@@ -42,6 +42,7 @@ pub mod predict;
 pub mod reconstruct;
 pub mod runlog;
 pub mod sanity;
+pub mod separability;
 pub mod sparse;
 pub mod spectral;
 pub mod stats;

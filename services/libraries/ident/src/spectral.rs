@@ -78,14 +78,25 @@ fn ar1_shape(phi: f64, w: f64) -> f64 {
     (1.0 - phi * phi) / (1.0 - 2.0 * phi * w.cos() + phi * phi)
 }
 
-/// Whittle negative log-likelihood and non-negative coefficients of `S = Σ c_i b_i(ω)`.
-fn whittle_linear(basis: &[Vec<f64>], power: &[f64]) -> (f64, Vec<f64>) {
+/// Whittle negative log-likelihood and non-negative coefficients of `S = Σ c_i b_i(ω)`, by
+/// iteratively reweighted least squares from `start` (coefficients; the flat spectrum at the
+/// mean power without). The fit is the same from any start; one near it needs fewer passes.
+fn whittle_linear(basis: &[Vec<f64>], power: &[f64], start: Option<&[f64]>) -> (f64, Vec<f64>) {
     let k = basis.len();
     let n = power.len();
     let mean = power.iter().sum::<f64>() / n.max(1) as f64;
     let floor = mean.max(1e-300) * 1e-9;
     let mut s = vec![mean.max(1e-300); n];
     let mut coef = vec![0.0; k];
+    if let Some(start) = start.filter(|c| c.len() == k && c.iter().all(|v| v.is_finite())) {
+        coef = start.to_vec();
+        for (j, s) in s.iter_mut().enumerate() {
+            *s = (0..k)
+                .map(|i| coef[i] * basis[i][j])
+                .sum::<f64>()
+                .max(floor);
+        }
+    }
     for _ in 0..60 {
         let mut active: Vec<usize> = (0..k).collect();
         let solved = loop {
@@ -157,12 +168,15 @@ pub fn colour_fit(ordinates: &[(f64, f64)]) -> Option<ColourFit> {
     let power: Vec<f64> = ordinates.iter().map(|o| o.1).collect();
     let ones = vec![1.0; ordinates.len()];
     let diff: Vec<f64> = ordinates.iter().map(|o| 2.0 * (1.0 - o.0.cos())).collect();
-    let (nll0, _) = whittle_linear(&[ones.clone(), diff.clone()], &power);
+    let (nll0, null) = whittle_linear(&[ones.clone(), diff.clone()], &power, None);
     let mut best: Option<(f64, f64, Vec<f64>)> = None;
+    // Each grid point starts from its neighbour's fit (the first from the null's).
+    let mut start = [null, vec![0.0]].concat();
     for c in correlation_grid() {
         let phi = (-1.0 / c).exp();
         let ar: Vec<f64> = ordinates.iter().map(|o| ar1_shape(phi, o.0)).collect();
-        let (nll, coef) = whittle_linear(&[ones.clone(), diff.clone(), ar], &power);
+        let (nll, coef) = whittle_linear(&[ones.clone(), diff.clone(), ar], &power, Some(&start));
+        start.clone_from(&coef);
         if best.as_ref().is_none_or(|b| nll < b.0) {
             best = Some((nll, phi, coef));
         }

@@ -1,9 +1,10 @@
 //! Detection power of a 20-minute experiment: each cause hidden at
 //! increasing fractions of the magnitude the library tests use, 10 seeds each, identified blind;
 //! the table gives the share of seeds in which the cause is named (alone or with others).
-//! Ignored (about 280 identifications): run with
+//! Ignored (520 identifications): run with
 //! `cargo test --release -p testbed-ident --test power -- --ignored --nocapture`; the table in
-//! `docs/measured-data.md` is its output.
+//! `docs/measured-data.md` is its output. `POWER_DURATION_S=300 POWER_SCALES=1` gives its
+//! column for a 5-minute record; `POWER_CAUSES=aero_drag,earth_rate` only those rows.
 
 mod common;
 use common::*;
@@ -12,7 +13,17 @@ use testbed_ident::Cause;
 #[test]
 #[ignore]
 fn detection_power_table_for_a_20_minute_experiment() {
-    let scales = [0.03, 0.1, 0.3, 1.0];
+    let env = |name: &str, default: &str| std::env::var(name).unwrap_or_else(|_| default.into());
+    let number = |name: &str, text: &str| -> f64 {
+        text.trim()
+            .parse()
+            .unwrap_or_else(|_| panic!("{name}: {text:?} is not a number"))
+    };
+    let duration_s = number("POWER_DURATION_S", &env("POWER_DURATION_S", "1200"));
+    let scales: Vec<f64> = env("POWER_SCALES", "0.03,0.1,0.3,1")
+        .split(',')
+        .map(|s| number("POWER_SCALES", s))
+        .collect();
     // (cause, its effects table at a scale, the magnitude at scale 1)
     type Case<'a> = (Cause, Box<dyn Fn(f64) -> String + Sync>, &'a str);
     let cases: Vec<Case> = vec![
@@ -166,7 +177,6 @@ fn detection_power_table_for_a_20_minute_experiment() {
             "fixed: 15 °/h at 43.88° N (every column the same)",
         ),
     ];
-    // `POWER_CAUSES=aero_drag,earth_rate`: only these rows.
     let only: Option<Vec<String>> = std::env::var("POWER_CAUSES")
         .ok()
         .map(|v| v.split(',').map(|c| c.trim().to_string()).collect());
@@ -181,7 +191,7 @@ fn detection_power_table_for_a_20_minute_experiment() {
     let rows: Vec<String> = std::thread::scope(|scope| {
         let handles: Vec<_> = [0, 1]
             .map(|worker| {
-                let cases = &cases;
+                let (cases, scales) = (&cases, &scales);
                 scope.spawn(move || {
                     cases
                         .iter()
@@ -194,7 +204,7 @@ fn detection_power_table_for_a_20_minute_experiment() {
                                     let t = truth(&effects(s));
                                     let named = (300..310)
                                         .filter(|&seed| {
-                                            names(&identify_blind(&t, seed, 1200.0))
+                                            names(&identify_blind(&t, seed, duration_s))
                                                 .contains(&cause.name())
                                         })
                                         .count();
@@ -218,9 +228,14 @@ fn detection_power_table_for_a_20_minute_experiment() {
         all.sort_by_key(|(i, _)| *i);
         all.into_iter().map(|(_, r)| r).collect()
     });
+    println!("{duration_s} s, seeds 300–309");
     println!(
         "| cause | magnitude | {} |",
-        scales.map(|s| format!("× {s}")).join(" | ")
+        scales
+            .iter()
+            .map(|s| format!("× {s}"))
+            .collect::<Vec<_>>()
+            .join(" | ")
     );
     println!("|---|---|{}", "---|".repeat(scales.len()));
     for r in rows {

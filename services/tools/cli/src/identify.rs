@@ -12,6 +12,7 @@ use anyhow::{Context, Result, bail};
 use std::path::{Path, PathBuf};
 use testbed_ident::design::{self, Design, DesignOptions, Limit};
 use testbed_ident::experiment::{self, ExperimentOptions};
+use testbed_ident::separability::UNSEPARABLE_CORRELATION;
 use testbed_ident::{Dataset, Options, csv, runlog};
 use testbed_model::ModelConfig;
 use testbed_model::config::{DEG, RPM};
@@ -390,6 +391,24 @@ fn print_design(d: &Design, model: &ModelConfig) {
             a.stderr[i], b.stderr[i], ratio[i]
         );
     }
+    if d.unseparable.is_empty() {
+        println!(
+            "  the designed programme separates every pair of these causes (no predicted \
+             correlation at or above {UNSEPARABLE_CORRELATION})"
+        );
+    } else {
+        println!(
+            "  causes the designed programme cannot separate (predicted correlation at or \
+             above {UNSEPARABLE_CORRELATION}): an effect of one can be named as the other"
+        );
+        for c in &d.unseparable {
+            let how = c.correlation.map_or_else(
+                || "not determined apart at all".to_string(),
+                |r| format!("correlation {r:+.4}"),
+            );
+            println!("    {} and {}: {how}", c.first, c.second);
+        }
+    }
 }
 
 #[cfg(test)]
@@ -475,6 +494,7 @@ mod tests {
                 .unwrap();
         let design = &info["design"];
         assert_eq!(design["parameters"].as_array().unwrap().len(), 9);
+        assert!(design["unseparable"].is_array(), "{design}");
         // The programme run is the designed one, at the duration and seed asked for.
         assert_eq!(info["options"], design["chosen"]["options"]);
         assert_eq!(info["options"]["duration_s"], 180.0);

@@ -179,8 +179,8 @@ impl Problem<'_> {
                 &all,
                 &steps,
                 |k| sensor[k].1.bounds(sensor[k].2),
-                |t: &[f64]| -> Result<Vec<f64>, IdentError> {
-                    Ok(self.fit_innovations(&self.run_filter(&build(t))?))
+                |ts: &[Vec<f64>]| -> Result<Vec<Vec<f64>>, IdentError> {
+                    self.perturbed_innovations(&ts.iter().map(|t| build(t)).collect::<Vec<_>>())
                 },
             )?;
             let f = normal_equations(&columns, &r0).information();

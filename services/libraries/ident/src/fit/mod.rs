@@ -43,6 +43,7 @@ use crate::effects::{Cause, Kind};
 use crate::error::IdentError;
 use crate::reconstruct::{Reconstruction, reconstruct};
 use crate::stats::NormalEquations;
+use rayon::prelude::*;
 use serde::Serialize;
 use std::cell::{Cell, RefCell};
 use std::collections::HashMap;
@@ -271,13 +272,41 @@ impl<'a> Problem<'a> {
         Ok(r)
     }
 
-    /// A filter run that is not worth keeping (finite-difference steps).
-    pub(crate) fn run_filter(&self, config: &ModelConfig) -> Result<Reconstruction, IdentError> {
-        if let Some(r) = self.recons.borrow().get(&SensorKey::of(config)) {
-            return Ok((**r).clone());
-        }
-        self.filter_runs.set(self.filter_runs.get() + 1);
-        reconstruct(self.data, config)
+    /// Filter runs that are not worth keeping (finite-difference steps), one per configuration.
+    /// Those not cached run across the machine's cores: each is independent of the others and
+    /// deterministic, so the result does not depend on how many cores there are.
+    pub(crate) fn run_filters(
+        &self,
+        configs: &[ModelConfig],
+    ) -> Result<Vec<Reconstruction>, IdentError> {
+        let cached: Vec<Option<Reconstruction>> = {
+            let recons = self.recons.borrow();
+            configs
+                .iter()
+                .map(|c| recons.get(&SensorKey::of(c)).map(|r| (**r).clone()))
+                .collect()
+        };
+        let runs = cached.iter().filter(|c| c.is_none()).count();
+        self.filter_runs.set(self.filter_runs.get() + runs);
+        let data = self.data;
+        configs
+            .par_iter()
+            .zip(cached)
+            .map(|(config, cached)| cached.map_or_else(|| reconstruct(data, config), Ok))
+            .collect()
+    }
+
+    /// The fit ticks' whitened innovations of a filter run per configuration (see
+    /// [`Problem::run_filters`]).
+    pub(crate) fn perturbed_innovations(
+        &self,
+        configs: &[ModelConfig],
+    ) -> Result<Vec<Vec<f64>>, IdentError> {
+        Ok(self
+            .run_filters(configs)?
+            .iter()
+            .map(|r| self.fit_innovations(r))
+            .collect())
     }
 
     /// The state and channels for the sensor effects of `config` (cached).

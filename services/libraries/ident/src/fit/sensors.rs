@@ -68,9 +68,9 @@ impl Problem<'_> {
             })
             .collect();
         let p = theta.len();
-        // Innovations at a finite-difference step (a filter run not worth caching).
-        let perturbed = |t: &[f64]| -> Result<Vec<f64>, IdentError> {
-            Ok(self.fit_innovations(&self.run_filter(&build(t))?))
+        // Innovations at finite-difference steps (filter runs not worth caching).
+        let perturbed = |ts: &[Vec<f64>]| -> Result<Vec<Vec<f64>>, IdentError> {
+            self.perturbed_innovations(&ts.iter().map(|t| build(t)).collect::<Vec<_>>())
         };
         let mut r0 = self.fit_innovations(&*self.recon(&build(&theta))?);
         let rss = |r: &[f64]| r.iter().map(|x| x * x).sum::<f64>();

@@ -126,7 +126,8 @@ impl SensorLinear {
         let r0 = fit.state.recon.innovation_vector(|_| true);
         let mut cols = Vec::new();
         let mut delta = Vec::new();
-        let mut j = Vec::new();
+        let mut taken = Vec::new();
+        let mut configs = Vec::new();
         for cause in sensor {
             let values = cause.values(&fit.config);
             let neutral = cause.values(&problem.base);
@@ -142,22 +143,26 @@ impl SensorLinear {
                     };
                     let mut v = values.clone();
                     v[i] = (values[i] + h).clamp(lo, hi);
-                    let taken = v[i] - values[i];
-                    let mut config = fit.config.clone();
-                    cause.apply(&mut config, &v);
-                    let r = problem
-                        .run_filter(&config)
-                        .ok()?
-                        .innovation_vector(|_| true);
-                    if r.len() != r0.len() || taken == 0.0 {
+                    if v[i] == values[i] {
                         return None;
                     }
-                    j.push(r.iter().zip(&r0).map(|(a, b)| (a - b) / taken).collect());
+                    taken.push(v[i] - values[i]);
+                    let mut config = fit.config.clone();
+                    cause.apply(&mut config, &v);
+                    configs.push(config);
                     cols.push((cause, i, cause.value_name(i)));
                     delta.push((cause != Cause::EarthRate).then(|| values[i] - neutral[i]));
                 }
                 offset += spec.len;
             }
+        }
+        let mut j = Vec::new();
+        for (run, taken) in problem.run_filters(&configs).ok()?.iter().zip(taken) {
+            let r = run.innovation_vector(|_| true);
+            if r.len() != r0.len() {
+                return None;
+            }
+            j.push(r.iter().zip(&r0).map(|(a, b)| (a - b) / taken).collect());
         }
         Some(Self { cols, delta, j })
     }

@@ -188,11 +188,16 @@ pub(super) fn fit_field_correction(
     'jacobians: for _ in 0..MAX_JACOBIANS {
         // The Jacobian of the whitened innovations of the fit ticks at `theta`, by forward
         // differences.
+        let steps: Vec<ModelConfig> = (0..n)
+            .map(|j| {
+                let mut step = theta.clone();
+                step[j] += STEP_T;
+                config_with(&step)
+            })
+            .collect();
         let mut jacobian = DMatrix::<f64>::zeros(r0.len(), n);
-        for j in 0..n {
-            let mut step = theta.clone();
-            step[j] += STEP_T;
-            let r_j = run(&step)?.innovation_vector(keep);
+        for (j, run_j) in problem.run_filters(&steps)?.iter().enumerate() {
+            let r_j = run_j.innovation_vector(keep);
             iterations += 1;
             if r_j.len() != r0.len() {
                 return Ok(None);
