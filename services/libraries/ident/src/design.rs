@@ -127,7 +127,8 @@ pub struct Rejection {
 /// at the baseline's value.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct DesignSpace {
-    /// `heading_amplitude_deg`, degrees.
+    /// `heading_amplitude_deg`, degrees; up to 180 (±180°: a full turn, which tells a torque
+    /// that varies with the heading from a constant one over every heading).
     pub heading_amplitude_deg: Vec<f64>,
     /// `heading_rate_deg_s`, °/s.
     pub heading_rate_deg_s: Vec<f64>,
@@ -142,7 +143,7 @@ pub struct DesignSpace {
 impl Default for DesignSpace {
     fn default() -> Self {
         Self {
-            heading_amplitude_deg: vec![20.0, 40.0, 60.0, 90.0, 120.0, 150.0],
+            heading_amplitude_deg: vec![20.0, 40.0, 60.0, 90.0, 120.0, 150.0, 180.0],
             heading_rate_deg_s: vec![0.2, 0.3, 0.45, 0.6, 0.75, 0.9],
             tilt_deg: vec![3.0, 5.0, 7.0, 10.0, 13.0, 16.0, 20.0],
             tilt_dwell_s: vec![10.0, 15.0, 20.0, 30.0, 45.0, 60.0],
