@@ -11,8 +11,12 @@
 //! counted). See `docs/ground.md` for the channels, the commands and their limits.
 
 pub mod command;
+mod connection;
+mod http;
 pub mod protocol;
 pub mod server;
+mod shared;
+mod stats;
 pub mod tls;
 
 use anyhow::Context as _;
