@@ -193,19 +193,24 @@ pub enum BusError {
 }
 
 /// Installs the process's `tracing` subscriber: human-readable lines on stderr, filtered by
-/// `RUST_LOG` (EnvFilter syntax, default `info,iceoryx2=warn`; see [`logging_directives`]),
+/// `RUST_LOG` (comma-separated `target=level` directives and a bare default level, as
+/// `tracing_subscriber::filter::Targets` reads them; default `info,iceoryx2=warn`; see
+/// [`logging_directives`]; a value that does not parse gives the default),
 /// without colours unless stderr is a terminal. iceoryx2's own messages (routed through
 /// `tracing`) get the level of the `iceoryx2` directive: `warn` unless `RUST_LOG` names
 /// iceoryx2 (`RUST_LOG=debug,iceoryx2=debug` for its debug output). Does nothing if a subscriber
 /// is already installed.
 pub fn init_logging() {
     use std::io::IsTerminal;
-    use tracing_subscriber::EnvFilter;
-    use tracing_subscriber::filter::LevelFilter;
+    use tracing_subscriber::filter::{LevelFilter, Targets};
+    use tracing_subscriber::layer::SubscriberExt;
+    use tracing_subscriber::util::SubscriberInitExt;
 
     let directives = logging_directives(std::env::var("RUST_LOG").ok().as_deref());
-    let filter =
-        EnvFilter::try_new(&directives).unwrap_or_else(|_| EnvFilter::new(DEFAULT_LOG_DIRECTIVES));
+    let filter = directives
+        .parse::<Targets>()
+        .or_else(|_| DEFAULT_LOG_DIRECTIVES.parse())
+        .unwrap_or_default();
     // iceoryx2's own logger follows its directive (`iceoryx2=…`), not the overall level: its
     // debug output is every expected "Unable to open …" miss of a service lookup.
     let iox_filter = logging_iceoryx2_level(&directives);
@@ -217,10 +222,12 @@ pub fn init_logging() {
         _ => LogLevel::Error,
     };
     set_log_level(iox_level);
-    let _ = tracing_subscriber::fmt()
-        .with_env_filter(filter)
+    let lines = tracing_subscriber::fmt::layer()
         .with_writer(std::io::stderr)
-        .with_ansi(std::io::stderr().is_terminal())
+        .with_ansi(std::io::stderr().is_terminal());
+    let _ = tracing_subscriber::registry()
+        .with(lines)
+        .with(filter)
         .try_init();
 }
 
