@@ -1,5 +1,5 @@
-//! Sensor causes (gyro scale and misalignment, Earth rate, hard iron, inclinometer offset and
-//! scale): Gauss–Newton on the filter's whitened innovations (the prediction-error method), with the Jacobian by finite
+//! Sensor causes (gyro scale and misalignment, Earth rate, hard and soft iron, inclinometer
+//! offset and scale): Gauss–Newton on the filter's whitened innovations (the prediction-error method), with the Jacobian by finite
 //! differences through the filter ([`super::jacobian`]), an optional first-order screen, and
 //! damped steps within the causes' bounds.
 
