@@ -76,10 +76,21 @@ impl Problem<'_> {
         let rss = |r: &[f64]| r.iter().map(|x| x * x).sum::<f64>();
         let mut last: Option<LsFit> = None;
         // Screening with causes already fitted (warm): only the new causes' columns are
-        // linearised first; the fitted ones sit at their optimum.
+        // linearised first; the fitted ones sit at their optimum. Except the magnetometer's two:
+        // a soft iron fitted alone takes up part of a hard iron (its column on the nearly
+        // constant vertical field is one) and a hard iron part of a soft iron, so each is
+        // screened with the other free, or the second would never be tried.
+        let magnetometer = |c: Cause| matches!(c, Cause::MagneticDisturbance | Cause::SoftIron);
+        let new_magnetometer = layout
+            .iter()
+            .any(|&(c, _)| magnetometer(c) && !warm.contains_key(&c));
         let new_params: Vec<bool> = layout
             .iter()
-            .flat_map(|&(cause, len)| std::iter::repeat_n(!warm.contains_key(&cause), len))
+            .flat_map(|&(cause, len)| {
+                let screened =
+                    !warm.contains_key(&cause) || (new_magnetometer && magnetometer(cause));
+                std::iter::repeat_n(screened, len)
+            })
             .collect();
         if let Some((threshold, reference)) = screen.filter(|_| new_params.iter().any(|n| !n)) {
             let idx: Vec<usize> = (0..p).filter(|&j| new_params[j]).collect();
