@@ -379,6 +379,11 @@ impl Cause {
         }
     }
 
+    /// Whether the cause acts on the magnetometer's reading (hard and soft iron).
+    pub fn magnetometer(self) -> bool {
+        matches!(self, Cause::MagneticDisturbance | Cause::SoftIron)
+    }
+
     /// Parameter arrays, in the order of [`Cause::values`].
     pub fn params(self) -> &'static [ParamSpec] {
         match self {

@@ -80,15 +80,14 @@ impl Problem<'_> {
         // a soft iron fitted alone takes up part of a hard iron (its column on the nearly
         // constant vertical field is one) and a hard iron part of a soft iron, so each is
         // screened with the other free, or the second would never be tried.
-        let magnetometer = |c: Cause| matches!(c, Cause::MagneticDisturbance | Cause::SoftIron);
         let new_magnetometer = layout
             .iter()
-            .any(|&(c, _)| magnetometer(c) && !warm.contains_key(&c));
+            .any(|&(c, _)| c.magnetometer() && !warm.contains_key(&c));
         let new_params: Vec<bool> = layout
             .iter()
             .flat_map(|&(cause, len)| {
                 let screened =
-                    !warm.contains_key(&cause) || (new_magnetometer && magnetometer(cause));
+                    !warm.contains_key(&cause) || (new_magnetometer && cause.magnetometer());
                 std::iter::repeat_n(screened, len)
             })
             .collect();

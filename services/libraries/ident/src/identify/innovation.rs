@@ -372,7 +372,10 @@ pub(super) fn sensor_tests(
         let block_cols: Vec<usize> = all
             .iter()
             .copied()
-            .filter(|&j| !other_magnetometer_cause(cause, lin.cols[j].0))
+            .filter(|&j| {
+                let other = lin.cols[j].0;
+                !(other != cause && other.magnetometer() && cause.magnetometer())
+            })
             .collect();
         let block_idx: Vec<usize> = idx
             .iter()
@@ -419,10 +422,4 @@ pub(super) fn sensor_tests(
         }));
     }
     out
-}
-
-/// `other` is the magnetometer cause that `cause`, itself one, is not (hard and soft iron).
-fn other_magnetometer_cause(cause: Cause, other: Cause) -> bool {
-    let magnetometer = |c: Cause| matches!(c, Cause::MagneticDisturbance | Cause::SoftIron);
-    cause != other && magnetometer(cause) && magnetometer(other)
 }
