@@ -192,8 +192,11 @@ pub struct Problem<'a> {
     /// Filter runs so far (for the benchmark and the report).
     pub filter_runs: Cell<usize>,
     sphere: RefCell<Option<Option<[f64; 3]>>>,
-    ellipsoid: RefCell<Option<Option<([f64; 3], [f64; 6])>>>,
+    ellipsoid: RefCell<Option<Option<HardAndSoftIron>>>,
 }
+
+/// Hard iron (gauss) and the soft iron's six values, from [`ellipsoid_fit`].
+type HardAndSoftIron = ([f64; 3], [f64; 6]);
 
 /// Cache key of a filter run: the sensor causes present in a configuration and their values,
 /// exactly (bit patterns), in [`Cause::ALL`] order, and the fitted field error's terms
