@@ -1,12 +1,13 @@
 //! Soft iron, the magnetometer's `(1 + S)` with `S` symmetric, as a cause of the library:
 //! hidden in simulated data of the identification experiment and identified blind against the
-//! nominal model, alone, beside a hard iron and beside a gyro scale error, and told apart from
-//! the gyro causes (which also make the heading the gyros integrate disagree with the one the
-//! field gives).
+//! nominal model, alone, beside a hard iron and beside a gyro scale error or misalignment, and
+//! told apart from the gyro causes (which also make the heading the gyros integrate disagree
+//! with the one the field gives).
 //!
 //! Bounds, stated before the runs: every entry of `S` within 3 of its reported standard errors
 //! and within 0.003 (a tenth of the largest entry) of the truth; the hard iron within 3
-//! standard errors and 0.002 G (0.2 µT); no residual left unexplained.
+//! standard errors and 0.002 G (0.2 µT); a gyro cause beside it within 3 standard errors and
+//! the bounds of its own test in `tests/causes.rs`; no residual left unexplained.
 
 mod common;
 use common::*;
@@ -55,6 +56,8 @@ fn within(
     }
 }
 
+/// The named causes are exactly `want` and nothing is left unexplained; on failure the
+/// selection's steps, the causes' tests and the summary are printed.
 fn named(label: &str, id: &Identification, want: &[Cause]) {
     let mut found = names(id);
     found.sort();
