@@ -19,6 +19,7 @@
 //! | `wheel_torque_scale` | `scale` — delivered / commanded motor torque per wheel |
 //! | `actuator_delay` | `delay_s` — s |
 //! | `magnetic_disturbance` | `hard_iron_gauss` — body-fixed field, gauss |
+//! | `soft_iron` | `matrix` — the symmetric soft-iron matrix `S` of `(1 + S) A(q) M_L`, dimensionless, as its six entries `[S_xx, S_yy, S_zz, S_xy, S_yz, S_zx]` |
 //! | `inclinometer_bias` | `offset_rad` — mounting offset of the tilt angles θ (body X), φ (body Y), rad |
 //! | `inclinometer_scale` | `ppm` — scale error of the tilt angles θ, φ, parts per million |
 //! | `thruster_torque_scale` | `scale` — delivered / nominal thrust per thruster 0–5 |
@@ -29,12 +30,20 @@
 //! `m_u` of propellant used, the gravity torque changes by `−m_u g r_t × G_B`; what is uncertain
 //! is where the propellant sits, `r_t`, so that is the parameter (it is written into the model's
 //! `[thrusters]` table, not into an effect table).
+//!
+//! `soft_iron` is the configuration's `matrix` restricted to symmetric matrices (the
+//! configuration refuses others): six free values, the diagonal then the off-diagonal pairs in
+//! the order of inertia's products, written back as the full symmetric 3×3 `matrix`. An
+//! antisymmetric part would be a rotation of the sensor, which the attitude takes up (about
+//! the vertical) or a hard iron mimics (about a horizontal axis, on a near-level platform).
+//! On a platform that tilts by a few degrees `S_zz` acts on a nearly constant vertical field:
+//! beside a hard iron it is determined only by the tilts' change of that field.
 
 use serde::Serialize;
 use testbed_model::ModelConfig;
 use testbed_model::config::{
     ActuatorDelay, AeroDrag, ComDrift, ComOffset, ConstantTorque, EarthRate, GyroMisalignment,
-    GyroScale, InclinometerBias, InclinometerScale, InertiaError, MagneticDisturbance,
+    GyroScale, InclinometerBias, InclinometerScale, InertiaError, MagneticDisturbance, SoftIron,
     WheelFriction, WheelTorqueScale,
 };
 use testbed_model::thruster_config::{THRUSTER_COUNT, ThrusterConfig, ThrusterTorqueScale};
@@ -55,6 +64,7 @@ pub enum Cause {
     WheelTorqueScale,
     ActuatorDelay,
     MagneticDisturbance,
+    SoftIron,
     InclinometerBias,
     InclinometerScale,
     ThrusterTorqueScale,
@@ -227,10 +237,38 @@ const P_MAG: &[ParamSpec] = &[spec(
     INF,
     0.005,
 )];
+// The step: 0.2 % of a 0.55-G field is 0.1 µT, about the magnetometer's noise.
+const P_SOFT: &[ParamSpec] = &[spec(
+    "matrix",
+    6,
+    "dimensionless, symmetric: [S_xx, S_yy, S_zz, S_xy, S_yz, S_zx]",
+    -0.5,
+    0.5,
+    2e-3,
+)];
+
+/// Row and column in the soft-iron matrix of each of its six values.
+const SOFT_IRON_ENTRIES: [(usize, usize); 6] = [(0, 0), (1, 1), (2, 2), (0, 1), (1, 2), (2, 0)];
+
+/// The six values of a symmetric soft-iron matrix (its upper and lower entries are equal; the
+/// configuration refuses others), in [`SOFT_IRON_ENTRIES`] order.
+pub fn soft_iron_values(matrix: &[[f64; 3]; 3]) -> [f64; 6] {
+    SOFT_IRON_ENTRIES.map(|(i, j)| matrix[i][j])
+}
+
+/// The symmetric matrix of six values in [`SOFT_IRON_ENTRIES`] order.
+pub fn soft_iron_matrix(values: &[f64]) -> [[f64; 3]; 3] {
+    let mut m = [[0.0; 3]; 3];
+    for (&(i, j), &v) in SOFT_IRON_ENTRIES.iter().zip(values) {
+        m[i][j] = v;
+        m[j][i] = v;
+    }
+    m
+}
 
 impl Cause {
     /// Every cause, in the library's order.
-    pub const ALL: [Cause; 16] = [
+    pub const ALL: [Cause; 17] = [
         Cause::ComOffset,
         Cause::ComDrift,
         Cause::EarthRate,
@@ -243,6 +281,7 @@ impl Cause {
         Cause::WheelTorqueScale,
         Cause::ActuatorDelay,
         Cause::MagneticDisturbance,
+        Cause::SoftIron,
         Cause::InclinometerBias,
         Cause::InclinometerScale,
         Cause::ThrusterTorqueScale,
@@ -264,6 +303,7 @@ impl Cause {
             Cause::WheelTorqueScale => "wheel_torque_scale",
             Cause::ActuatorDelay => "actuator_delay",
             Cause::MagneticDisturbance => "magnetic_disturbance",
+            Cause::SoftIron => "soft_iron",
             Cause::InclinometerBias => "inclinometer_bias",
             Cause::InclinometerScale => "inclinometer_scale",
             Cause::ThrusterTorqueScale => "thruster_torque_scale",
@@ -302,6 +342,9 @@ impl Cause {
             Cause::MagneticDisturbance => {
                 "body-fixed (hard-iron) field added to the magnetometer reading"
             }
+            Cause::SoftIron => {
+                "soft iron: the magnetometer reads (1 + S) times the field, S symmetric"
+            }
             Cause::InclinometerBias => {
                 "inclinometer mounted off level with the body axes: a constant offset of its angles"
             }
@@ -322,6 +365,7 @@ impl Cause {
             | Cause::GyroScale
             | Cause::GyroMisalignment
             | Cause::MagneticDisturbance
+            | Cause::SoftIron
             | Cause::InclinometerBias
             | Cause::InclinometerScale => Kind::Sensor,
             Cause::ComOffset
@@ -333,6 +377,11 @@ impl Cause {
             | Cause::PropellantComShift => Kind::Torque,
             Cause::WheelFriction | Cause::WheelTorqueScale | Cause::ActuatorDelay => Kind::Wheel,
         }
+    }
+
+    /// Whether the cause acts on the magnetometer's reading (hard and soft iron).
+    pub fn magnetometer(self) -> bool {
+        matches!(self, Cause::MagneticDisturbance | Cause::SoftIron)
     }
 
     /// Parameter arrays, in the order of [`Cause::values`].
@@ -350,6 +399,7 @@ impl Cause {
             Cause::WheelTorqueScale => P_TSCALE,
             Cause::ActuatorDelay => P_DELAY,
             Cause::MagneticDisturbance => P_MAG,
+            Cause::SoftIron => P_SOFT,
             Cause::InclinometerBias => P_TILT_BIAS,
             Cause::InclinometerScale => P_TILT_SCALE,
             Cause::ThrusterTorqueScale => P_THRUSTER_SCALE,
@@ -375,8 +425,11 @@ impl Cause {
         (-INF, INF)
     }
 
-    /// `key[index]` name of value `i`.
+    /// `key[index]` name of value `i` (`soft_iron.matrix[row][column]` for the soft iron).
     pub fn value_name(self, i: usize) -> String {
+        if let (Cause::SoftIron, Some((r, c))) = (self, SOFT_IRON_ENTRIES.get(i)) {
+            return format!("soft_iron.matrix[{r}][{c}]");
+        }
         let mut k = i;
         for p in self.params() {
             if k < p.len {
@@ -407,6 +460,7 @@ impl Cause {
             Cause::WheelTorqueScale => e.wheel_torque_scale.is_some(),
             Cause::ActuatorDelay => e.actuator_delay.is_some(),
             Cause::MagneticDisturbance => e.magnetic_disturbance.is_some(),
+            Cause::SoftIron => e.soft_iron.is_some(),
             Cause::InclinometerBias => e.inclinometer_bias.is_some(),
             Cause::InclinometerScale => e.inclinometer_scale.is_some(),
             Cause::ThrusterTorqueScale => e.thruster_torque_scale.is_some(),
@@ -480,6 +534,11 @@ impl Cause {
                 .magnetic_disturbance
                 .as_ref()
                 .map_or([0.0; 3], |x| x.hard_iron_gauss)
+                .to_vec(),
+            Cause::SoftIron => e
+                .soft_iron
+                .as_ref()
+                .map_or([0.0; 6], |x| soft_iron_values(&x.matrix))
                 .to_vec(),
             Cause::InclinometerBias => e
                 .inclinometer_bias
@@ -561,6 +620,11 @@ impl Cause {
             Cause::MagneticDisturbance => {
                 e.magnetic_disturbance = Some(MagneticDisturbance {
                     hard_iron_gauss: a3(0),
+                })
+            }
+            Cause::SoftIron => {
+                e.soft_iron = Some(SoftIron {
+                    matrix: soft_iron_matrix(&v),
                 })
             }
             Cause::InclinometerBias => {
@@ -659,6 +723,20 @@ mod tests {
             assert_eq!(Cause::from_name(cause.name()), Some(cause));
             assert_eq!(cause.len(), values.len());
         }
+    }
+
+    #[test]
+    fn soft_iron_values_are_the_symmetric_matrix_entries() {
+        let mut config = ModelConfig::default();
+        Cause::SoftIron.apply(&mut config, &[0.01, 0.02, 0.03, 0.04, 0.05, 0.06]);
+        let m = config.effects.soft_iron.as_ref().map(|s| s.matrix);
+        assert_eq!(
+            m,
+            Some([[0.01, 0.04, 0.06], [0.04, 0.02, 0.05], [0.06, 0.05, 0.03]])
+        );
+        assert!(config.validate().is_ok());
+        assert_eq!(Cause::SoftIron.value_name(3), "soft_iron.matrix[0][1]");
+        assert_eq!(Cause::SoftIron.value_name(5), "soft_iron.matrix[2][0]");
     }
 
     #[test]

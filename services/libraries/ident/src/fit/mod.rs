@@ -3,11 +3,11 @@
 //! fit of a set; each kind of cause has its own module.
 //!
 //! Each cause acts on one channel directly ([`Kind`]):
-//! * **sensor** causes (gyro scale and misalignment, Earth rate, hard iron, inclinometer offset
-//!   and scale) change the readings the attitude filter sees; they are fitted by Gauss–Newton
-//!   on the filter's whitened innovations (the prediction-error method), with Jacobians by
-//!   finite differences through the filter, started for the hard iron from a sphere fit of the
-//!   field readings;
+//! * **sensor** causes (gyro scale and misalignment, Earth rate, hard and soft iron,
+//!   inclinometer offset and scale) change the readings the attitude filter sees; they are
+//!   fitted by Gauss–Newton on the filter's whitened innovations (the prediction-error method),
+//!   with Jacobians by finite differences through the filter, started for the hard iron from a
+//!   sphere fit of the field readings, for the soft iron from an ellipsoid fit;
 //! * **torque** causes (centre-of-mass offset, constant torque, drag, inertia error) are linear
 //!   in the torque channel: weighted least squares, with `aero_drag`'s coefficients kept ≥ 0;
 //! * **wheel** causes are linear in the wheel channel for a given delay and Stribeck speed
@@ -19,7 +19,8 @@
 //! held-out data.
 //!
 //! * `sensors`: Gauss–Newton of the sensor causes through the filter;
-//! * `hard_iron`: the hard iron's starting value (sphere fit of the field readings);
+//! * `hard_iron`: the hard and soft iron's starting values (sphere and ellipsoid fits of the
+//!   field readings);
 //! * `torque`: weighted least squares of the torque causes;
 //! * `wheels`: per-wheel least squares, delay and Stribeck-speed searches, [`WheelModel`];
 //! * `information`: the Fisher information of torque and wheel causes on a state (the normal
@@ -33,7 +34,7 @@ mod sensors;
 mod torque;
 mod wheels;
 
-pub use hard_iron::sphere_fit;
+pub use hard_iron::{ellipsoid_fit, ellipsoid_fit_pairs, sphere_fit};
 pub use information::{Information, information_params, information_supported};
 pub use wheels::WheelModel;
 
@@ -191,7 +192,11 @@ pub struct Problem<'a> {
     /// Filter runs so far (for the benchmark and the report).
     pub filter_runs: Cell<usize>,
     sphere: RefCell<Option<Option<[f64; 3]>>>,
+    ellipsoid: RefCell<Option<Option<HardAndSoftIron>>>,
 }
+
+/// Hard iron (gauss) and the soft iron's six values, from [`ellipsoid_fit`].
+type HardAndSoftIron = ([f64; 3], [f64; 6]);
 
 /// Cache key of a filter run: the sensor causes present in a configuration and their values,
 /// exactly (bit patterns), in [`Cause::ALL`] order, and the fitted field error's terms
@@ -241,6 +246,7 @@ impl<'a> Problem<'a> {
             recons: Rc::new(RefCell::new(HashMap::new())),
             filter_runs: Cell::new(0),
             sphere: RefCell::new(None),
+            ellipsoid: RefCell::new(None),
         }
     }
 
@@ -257,6 +263,7 @@ impl<'a> Problem<'a> {
             recons: Rc::clone(&self.recons),
             filter_runs: Cell::new(0),
             sphere: RefCell::new(*self.sphere.borrow()),
+            ellipsoid: RefCell::new(*self.ellipsoid.borrow()),
         }
     }
 

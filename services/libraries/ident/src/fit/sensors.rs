@@ -1,5 +1,5 @@
-//! Sensor causes (gyro scale and misalignment, Earth rate, hard iron, inclinometer offset and
-//! scale): Gauss–Newton on the filter's whitened innovations (the prediction-error method), with the Jacobian by finite
+//! Sensor causes (gyro scale and misalignment, Earth rate, hard and soft iron, inclinometer
+//! offset and scale): Gauss–Newton on the filter's whitened innovations (the prediction-error method), with the Jacobian by finite
 //! differences through the filter ([`super::jacobian`]), an optional first-order screen, and
 //! damped steps within the causes' bounds.
 
@@ -76,10 +76,20 @@ impl Problem<'_> {
         let rss = |r: &[f64]| r.iter().map(|x| x * x).sum::<f64>();
         let mut last: Option<LsFit> = None;
         // Screening with causes already fitted (warm): only the new causes' columns are
-        // linearised first; the fitted ones sit at their optimum.
+        // linearised first; the fitted ones sit at their optimum. Except the magnetometer's two:
+        // a soft iron fitted alone takes up part of a hard iron (its column on the nearly
+        // constant vertical field is one) and a hard iron part of a soft iron, so each is
+        // screened with the other free, or the second would never be tried.
+        let new_magnetometer = layout
+            .iter()
+            .any(|&(c, _)| c.magnetometer() && !warm.contains_key(&c));
         let new_params: Vec<bool> = layout
             .iter()
-            .flat_map(|&(cause, len)| std::iter::repeat_n(!warm.contains_key(&cause), len))
+            .flat_map(|&(cause, len)| {
+                let screened =
+                    !warm.contains_key(&cause) || (new_magnetometer && cause.magnetometer());
+                std::iter::repeat_n(screened, len)
+            })
             .collect();
         if let Some((threshold, reference)) = screen.filter(|_| new_params.iter().any(|n| !n)) {
             let idx: Vec<usize> = (0..p).filter(|&j| new_params[j]).collect();

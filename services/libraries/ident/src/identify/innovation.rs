@@ -362,12 +362,30 @@ pub(super) fn sensor_tests(
             .copied()
             .filter(|&j| lin.cols[j].0 == cause)
             .collect();
-        // Consistency: per block, δ_b solving J δ ≈ −r (one Gauss–Newton step).
+        // Consistency: per block, δ_b solving J δ ≈ −r (one Gauss–Newton step). The
+        // magnetometer's two causes are nearly degenerate within a block of a few minutes (the
+        // hard iron and the soft iron's columns on the nearly constant vertical field, and on a
+        // field that turns through a small arc of heading), and block fits of both together
+        // come out far apart although the whole record's fit is at its optimum (in simulation
+        // with both hidden: χ² = 4·10⁴ on 18 degrees of freedom with 4 blocks, 10 with 2); so
+        // each is tested with the other held at its value on the whole record.
+        let block_cols: Vec<usize> = all
+            .iter()
+            .copied()
+            .filter(|&j| {
+                let other = lin.cols[j].0;
+                !(other != cause && other.magnetometer() && cause.magnetometer())
+            })
+            .collect();
+        let block_idx: Vec<usize> = idx
+            .iter()
+            .filter_map(|j| block_cols.iter().position(|c| c == j))
+            .collect();
         let per_block: Vec<Option<LsFit>> = (0..blocks)
-            .map(|b| build(&all, &[], &|tick| block_of(tick) == b, -1.0, &extra).solve())
+            .map(|b| build(&block_cols, &[], &|tick| block_of(tick) == b, -1.0, &extra).solve())
             .collect();
         let mut evidence = Evidence {
-            consistency: consistency(&per_block, &idx, (t1 - t0) / blocks as f64),
+            consistency: consistency(&per_block, &block_idx, (t1 - t0) / blocks as f64),
             ..Evidence::default()
         };
         let mut failures = Failures::default();

@@ -186,7 +186,7 @@ fn available(cause: Cause, problem: &Problem, nominal: &SetFit) -> bool {
     match cause.kind() {
         Kind::Sensor => {
             !s.recon.innovations.is_empty()
-                && (cause != Cause::MagneticDisturbance || !problem.data.field.is_empty())
+                && (!cause.magnetometer() || !problem.data.field.is_empty())
                 && (!matches!(cause, Cause::InclinometerBias | Cause::InclinometerScale)
                     || !problem.data.tilt.is_empty())
         }

@@ -25,13 +25,15 @@ pub struct EffectsConfig {
     pub magnetic_disturbance: Option<MagneticDisturbance>,
     pub inclinometer_bias: Option<InclinometerBias>,
     pub inclinometer_scale: Option<InclinometerScale>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub soft_iron: Option<SoftIron>,
     /// Effects outside identification's cause library (the simulator can produce them so tests
     /// can check that `testbed identify` reports them as unexplained rather than absorbing
     /// them into library causes). Off unless configured.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub com_drift: Option<ComDrift>,
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub soft_iron: Option<SoftIron>,
+    pub field_heading_error: Option<FieldHeadingError>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub heading_torque: Option<HeadingTorque>,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -69,12 +71,28 @@ pub struct ComDrift {
 }
 
 /// Soft-iron distortion of the magnetometer: `M_meas = (1 + S) A(q) M_L + M_hard`, `S` the
-/// matrix given (rows = body axes of the reading). Not in identification's library.
+/// matrix given (rows = body axes of the reading). `S` must be symmetric: induced
+/// magnetisation is symmetric in the field, and an antisymmetric part is a rotation of the
+/// sensor, which the attitude takes up (about the vertical) or a hard iron mimics (about a
+/// horizontal axis on a near-level platform). A cause of identification's library.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SoftIron {
-    /// `S`, dimensionless, row-major (a few percent for nearby steel).
+    /// `S`, dimensionless, row-major, symmetric (a few percent for nearby steel).
     pub matrix: [[f64; 3]; 3],
+}
+
+/// A magnetometer error at twice the heading ψ: `ΔM = cos_2psi_gauss cos 2ψ + sin_2psi_gauss
+/// sin 2ψ`, body axes (the lab field's gradient swept by a magnetometer off the rotation axis,
+/// a second-harmonic compass deviation). Not a linear map of the field, so neither hard nor
+/// soft iron; not in identification's library.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FieldHeadingError {
+    /// Amplitude of the `cos 2ψ` part per body axis of the reading, gauss.
+    pub cos_2psi_gauss: [f64; 3],
+    /// Amplitude of the `sin 2ψ` part per body axis of the reading, gauss.
+    pub sin_2psi_gauss: [f64; 3],
 }
 
 /// A torque that varies with the heading ψ: `M = cos_nm cos ψ + sin_nm sin ψ`, body axes (a

@@ -420,6 +420,17 @@ mod tests {
     }
 
     #[test]
+    fn non_symmetric_soft_iron_is_refused_naming_the_entry() {
+        let msg = refused(
+            "[effects.soft_iron]\nmatrix = [[0.03, 0.02, 0.0], [0.01, -0.03, 0.0], [0.0, 0.0, 0.0]]\n",
+        );
+        assert!(msg.contains("effects.soft_iron.matrix[0][1]"), "{msg}");
+        assert!(msg.contains("symmetric"), "{msg}");
+        let ok = "[effects.soft_iron]\nmatrix = [[0.03, 0.02, 0.0], [0.02, -0.03, 0.0], [0.0, 0.0, 0.0]]\n";
+        assert!(ModelConfig::from_toml_str(ok, "test.toml").is_ok());
+    }
+
+    #[test]
     fn indefinite_inertia_with_positive_diagonal_is_refused() {
         // Positive diagonal, but a products of inertia so large the matrix is indefinite.
         let msg = refused("[platform]\ninertia_kgm2 = [[45, 50, 0], [50, 46, 0], [0, 0, 62]]\n");

@@ -176,6 +176,17 @@ impl ModelConfig {
                     );
                 }
             }
+            v.symmetric("effects.soft_iron.matrix", &x.matrix);
+        }
+        if let Some(x) = &e.field_heading_error {
+            v.finite_all(
+                "effects.field_heading_error.cos_2psi_gauss",
+                &x.cos_2psi_gauss,
+            );
+            v.finite_all(
+                "effects.field_heading_error.sin_2psi_gauss",
+                &x.sin_2psi_gauss,
+            );
         }
         if let Some(x) = &e.heading_torque {
             v.finite_all("effects.heading_torque.cos_nm", &x.cos_nm);
@@ -348,6 +359,20 @@ impl Validator {
     fn within(&mut self, key: &str, x: f64, lo: f64, hi: f64) {
         if !(x.is_finite() && x >= lo && x <= hi) {
             self.fail(key, format!("{x}"), &format!("must be within [{lo}, {hi}]"));
+        }
+    }
+    /// Each entry equal to its transpose's, to rounding (`1e-12` absolute: the matrix is
+    /// dimensionless and of order 0.01–0.5).
+    fn symmetric(&mut self, key: &str, rows: &[[f64; 3]; 3]) {
+        for (i, j) in [(0, 1), (1, 2), (2, 0)] {
+            let (a, b) = (rows[i][j], rows[j][i]);
+            if (a - b).abs() > 1e-12 {
+                self.fail(
+                    &format!("{key}[{i}][{j}]"),
+                    format!("{a} (its transpose [{j}][{i}] is {b})"),
+                    "must be symmetric",
+                );
+            }
         }
     }
     fn inertia(&mut self, key: &str, rows: &[[f64; 3]; 3]) {

@@ -34,6 +34,9 @@ pub struct Magnetometer {
     hard_iron_b_t: Vector3<f64>,
     /// `1 + S` of `effects.soft_iron`; `None` without it (the reading is then bit-identical).
     soft_iron: Option<Matrix3<f64>>,
+    /// `effects.field_heading_error`: amplitudes of the `cos 2ψ` and `sin 2ψ` parts, tesla,
+    /// body axes; `None` without it.
+    heading_error_t: Option<(Vector3<f64>, Vector3<f64>)>,
     /// `effects.fitted_field`, added to the reading (zero without it).
     fitted: FittedFieldModel,
     noise_t: Vector3<f64>,
@@ -59,6 +62,12 @@ impl Magnetometer {
                 .soft_iron
                 .as_ref()
                 .map(|s| Matrix3::identity() + Matrix3::from_fn(|i, j| s.matrix[i][j])),
+            heading_error_t: config.effects.field_heading_error.as_ref().map(|h| {
+                (
+                    Vector3::from(h.cos_2psi_gauss) * GAUSS,
+                    Vector3::from(h.sin_2psi_gauss) * GAUSS,
+                )
+            }),
             fitted: FittedFieldModel::from_config(
                 config.effects.fitted_field.as_ref(),
                 &config.platform.field_l_t(),
@@ -75,13 +84,18 @@ impl Magnetometer {
     }
 
     /// The noise-free reading at attitude `q`: lab field in body axes (times `1 + S` with soft
-    /// iron) plus hard iron plus the fitted error of `effects.fitted_field`, tesla.
+    /// iron) plus hard iron plus the heading error of `effects.field_heading_error` plus the
+    /// fitted error of `effects.fitted_field`, tesla.
     pub fn expected_t(&self, q: &Attitude) -> Vector3<f64> {
         let body = q * self.field_l_t;
-        let reading = match &self.soft_iron {
+        let mut reading = match &self.soft_iron {
             Some(m) => m * body + self.hard_iron_b_t,
             None => body + self.hard_iron_b_t,
         };
+        if let Some((c, s)) = &self.heading_error_t {
+            let two_psi = 2.0 * crate::attitude::heading(q);
+            reading += c * two_psi.cos() + s * two_psi.sin();
+        }
         if self.fitted.is_active() {
             reading + self.fitted.error_t(q)
         } else {
@@ -123,6 +137,27 @@ mod tests {
         let s = nalgebra::Matrix3::new(0.03, 0.02, 0.0, 0.02, -0.03, 0.0, 0.0, 0.0, 0.01);
         let want = body + s * body;
         assert!((soft.expected_t(&q) - want).norm() < 1e-18);
+    }
+
+    /// `effects.field_heading_error` adds `c cos 2ψ + s sin 2ψ` per body axis (gauss in the
+    /// configuration, tesla in the reading).
+    #[test]
+    fn a_heading_error_adds_the_second_harmonic_of_the_heading() {
+        use crate::config::FieldHeadingError;
+        let mut config = ModelConfig::default();
+        let plain = Magnetometer::new(&config, 1);
+        config.effects.field_heading_error = Some(FieldHeadingError {
+            cos_2psi_gauss: [0.004, -0.002, 0.0],
+            sin_2psi_gauss: [0.0, 0.003, 0.001],
+        });
+        let with = Magnetometer::new(&config, 1);
+        for psi in [0.0, 0.3, 1.2, -2.5] {
+            let q = from_heading_pitch_roll(psi, 0.05, -0.03);
+            let (c, s) = ((2.0 * psi).cos(), (2.0 * psi).sin());
+            let want = plain.expected_t(&q)
+                + Vector3::new(0.004 * c, -0.002 * c + 0.003 * s, 0.001 * s) * GAUSS;
+            assert!((with.expected_t(&q) - want).norm() < 1e-18, "ψ = {psi}");
+        }
     }
 
     /// `effects.fitted_field` adds its error, evaluated at the attitude, to the reading.
