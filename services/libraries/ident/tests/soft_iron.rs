@@ -21,41 +21,6 @@ const SOFT_IRON: &str = "[effects.soft_iron]\n\
 const HARD_IRON: &str = "[effects.magnetic_disturbance]\nhard_iron_gauss = [0.08, -0.05, 0.1]\n";
 const GYRO_SCALE: &str = "[effects.gyro_scale]\nppm = [500.0, -700.0, 900.0]\n";
 
-/// Every value of the named `cause` within `k` of its standard errors and within `abs` of the
-/// truth; prints the values.
-fn within(
-    label: &str,
-    id: &Identification,
-    truth: &testbed_model::ModelConfig,
-    cause: Cause,
-    k: f64,
-    abs: f64,
-) {
-    let fitted = cause.values(&id.extended);
-    let hidden = cause.values(truth);
-    let se = stderr(id, cause);
-    for i in 0..fitted.len() {
-        let err = fitted[i] - hidden[i];
-        println!(
-            "{label}: {} = {:.5e} ± {:.1e} (true {:.5e}, error {:+.2e}, {:+.2} σ)",
-            cause.value_name(i),
-            fitted[i],
-            se[i],
-            hidden[i],
-            err,
-            err / se[i]
-        );
-        assert!(
-            se[i].is_finite() && err.abs() <= k * se[i] && err.abs() <= abs,
-            "{label}: {} = {} ± {} vs true {} (bounds {k} σ and {abs})",
-            cause.value_name(i),
-            fitted[i],
-            se[i],
-            hidden[i]
-        );
-    }
-}
-
 /// The named causes are exactly `want` and nothing is left unexplained; on failure the
 /// selection's steps, the causes' tests and the summary are printed.
 fn named(label: &str, id: &Identification, want: &[Cause]) {
@@ -109,7 +74,7 @@ fn soft_iron_alone_is_named_with_its_matrix() {
         let label = format!("soft iron seed {seed}");
         let id = identify_blind(&t, seed, 600.0);
         named(&label, &id, &[Cause::SoftIron]);
-        within(&label, &id, &t, Cause::SoftIron, 3.0, 0.003);
+        check_within(&label, &id, &t, Cause::SoftIron, 3.0, 0.003);
         assert!(id.report.gain > 1.02, "{label}: gain {}", id.report.gain);
         assert_eq!(extended_round_trip(&id, &label), id.extended);
     }
@@ -126,8 +91,8 @@ fn soft_and_hard_iron_together_are_both_named() {
         let label = format!("soft + hard iron seed {seed}");
         let id = identify_blind(&t, seed, 600.0);
         named(&label, &id, &[Cause::SoftIron, Cause::MagneticDisturbance]);
-        within(&label, &id, &t, Cause::SoftIron, 3.0, 0.003);
-        within(&label, &id, &t, Cause::MagneticDisturbance, 3.0, 0.002);
+        check_within(&label, &id, &t, Cause::SoftIron, 3.0, 0.003);
+        check_within(&label, &id, &t, Cause::MagneticDisturbance, 3.0, 0.002);
     }
 }
 
@@ -150,8 +115,8 @@ fn soft_iron_beside_a_gyro_cause_names_both() {
             let label = format!("soft iron + {} seed {seed}", other.name());
             let id = identify_blind(&t, seed, 1200.0);
             named(&label, &id, &[Cause::SoftIron, other]);
-            within(&label, &id, &t, Cause::SoftIron, 3.0, 0.003);
-            within(&label, &id, &t, other, 3.0, abs);
+            check_within(&label, &id, &t, Cause::SoftIron, 3.0, 0.003);
+            check_within(&label, &id, &t, other, 3.0, abs);
         }
     }
 }

@@ -181,3 +181,38 @@ pub fn wheel_speed_rms_from_truth(
     );
     (nom, ext)
 }
+
+/// Prints a named cause's values beside the truth, with their standard errors, and requires each
+/// within `k` standard errors (finite and positive) and within `abs` of the truth.
+pub fn check_within(
+    label: &str,
+    id: &Identification,
+    truth: &ModelConfig,
+    cause: Cause,
+    k: f64,
+    abs: f64,
+) {
+    let fitted = cause.values(&id.extended);
+    let hidden = cause.values(truth);
+    let se = stderr(id, cause);
+    for i in 0..fitted.len() {
+        let err = fitted[i] - hidden[i];
+        println!(
+            "{label}: {} = {:.5e} ± {:.1e} (true {:.5e}, error {:+.2e}, {:+.2} σ)",
+            cause.value_name(i),
+            fitted[i],
+            se[i],
+            hidden[i],
+            err,
+            err / se[i]
+        );
+        assert!(
+            se[i].is_finite() && se[i] > 0.0 && err.abs() <= k * se[i] && err.abs() <= abs,
+            "{label}: {} = {} ± {} vs true {} (bounds {k} standard errors and ±{abs})",
+            cause.value_name(i),
+            fitted[i],
+            se[i],
+            hidden[i]
+        );
+    }
+}
