@@ -137,3 +137,36 @@ fn a_library_cause_alone_is_not_flagged_over_ten_seeds() {
     }
     assert!(flagged.is_empty(), "flagged on seeds {flagged:?}");
 }
+
+/// Known limit (ignored; run with `--ignored`): the guard flags a remainder only where it is
+/// significant beside the cause, and at these sizes it is not, so the misattribution stands.
+/// Beside the constant torque about X and Y:
+/// - a magnetic dipole of 5 A m² along body Y in the lab field (`[effects.dipole_torque]`:
+///   −0.24 mNm about X, −0.13 mNm × cos ψ about Z), seed 82: `constant_torque + com_offset`
+///   named, no residual; the unrestricted search finds `torque_z ≈ −1.26e-4 Nm × cos ψ` and
+///   predicts better out of fold (6.9227e-3 against 6.9286e-3), but beside the two causes its
+///   likelihood ratio is 9.7 and its Wald statistic 6.8 against 23.9;
+/// - a torque about X of 0.4 mNm per unit of `sin tilt_x`, seed 82: `constant_torque` named,
+///   no residual; the unrestricted search without it finds no function but its own form.
+#[test]
+#[ignore]
+fn a_dipole_in_the_lab_field_and_a_tilt_torque_known_limit() {
+    for (label, effects, seed) in [
+        (
+            "dipole 5 A m² along Y",
+            "[effects.dipole_torque]\nmoment_am2 = [0.0, 5.0, 0.0]\n",
+            82,
+        ),
+        (
+            "tilt torque 0.4 mNm",
+            "[effects.fitted_torque]\nstart_time_s = 0.0\n[[effects.fitted_torque.terms]]\naxis = \"x\"\nfunction = \"sin tilt_x\"\ncoefficient = 4.0e-4\n",
+            82,
+        ),
+    ] {
+        let t = truth(&format!("{CONSTANT_XY}{effects}"));
+        let data = experiment_data(&t, seed, 600.0);
+        let id = identify_with(&data, true);
+        print(label, &id);
+        assert!(!id.report.partly_explained.is_empty(), "{label}");
+    }
+}
