@@ -104,7 +104,7 @@ pub(super) fn judge(
 
     // Held out, the search's form must predict better than the cause (the selection's
     // held-out likelihood ratio above zero).
-    if !(cv_search < cv_cause) {
+    if cv_search.partial_cmp(&cv_cause) != Some(std::cmp::Ordering::Less) {
         return None;
     }
     let column = |name: &str| with.names.iter().position(|n| n == name);
@@ -165,8 +165,8 @@ pub(super) fn judge(
 
 /// The guard on every named cause, per equation of its channel (body axis, wheel, innovation
 /// component); the channels' candidate libraries `torque`, `wheel` and `sensor` (with the
-/// named sensor causes' linearisation; `None`: no sensor cause named, or not linearised). A cause flagged on several
-/// equations has one entry per equation.
+/// named sensor causes' linearisation; `None`: no sensor cause named, or not linearised). A
+/// cause flagged on several equations has one entry per equation.
 pub(super) fn causes(
     problem: &Problem,
     fit: &SetFit,
@@ -261,13 +261,15 @@ pub(super) fn apply(
     let torque = TorqueCandidates::new(problem, fit);
     let wheel = WheelCandidates::new(problem, fit);
     // The sensor causes' linearisation costs a filter run per parameter: only when one is named.
-    let innovation = InnovationCandidates::new(problem, fit);
     let linear = named
         .iter()
         .any(|c| c.kind() == Kind::Sensor)
         .then(|| SensorLinear::new(problem, fit, named))
         .flatten();
-    let sensor = linear.as_ref().map(|l| (&innovation, l));
+    let innovation = linear
+        .as_ref()
+        .map(|_| InnovationCandidates::new(problem, fit));
+    let sensor = innovation.as_ref().zip(linear.as_ref());
     let found = causes(
         problem,
         fit,

@@ -439,7 +439,7 @@ pub(super) fn torque_tests(
         .map(|b| normal_equations(fit, &cols, &extra, candidates, |i| block_of(i) == b).solve())
         .collect();
     let fit_rows = |i: usize| !problem.held_out[ch.ticks[i]];
-    let joint = joint_fit(problem, fit, named, (&cols, &extra), candidates);
+    let joint = joint_fit(problem, fit, named, &cols, &extra, candidates);
     // The torque search with every named cause, computed once for all the competitions.
     let cv_with = torque_cv_rss(
         problem,
@@ -577,7 +577,7 @@ pub(super) fn joint_torque(
     if cols.is_empty() || ch.len() < 30 {
         return None;
     }
-    joint_fit(problem, fit, named, (&cols, &extra), candidates)
+    joint_fit(problem, fit, named, &cols, &extra, candidates)
 }
 
 /// [`joint_torque`] on the joint model's columns `cols` and terms `extra`, on the fit rows.
@@ -585,7 +585,8 @@ fn joint_fit(
     problem: &Problem,
     fit: &SetFit,
     named: &[Cause],
-    (cols, extra): (&[(Option<Cause>, usize)], &[(usize, usize)]),
+    cols: &[(Option<Cause>, usize)],
+    extra: &[(usize, usize)],
     candidates: &TorqueCandidates,
 ) -> Option<JointTorque> {
     let ch = &fit.state.torque;
