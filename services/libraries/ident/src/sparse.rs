@@ -285,6 +285,39 @@ impl Design {
 
     /// Fit on all rows: θ in the columns' own units, cluster-robust standard errors.
     pub fn fit(&self, cols: &[usize]) -> Option<(Vec<f64>, Vec<f64>)> {
+        let (theta, cov) = self.sandwich(cols)?;
+        let p = cols.len();
+        let values = (0..p).map(|i| theta[i] / self.scale[cols[i]]).collect();
+        let se = (0..p)
+            .map(|i| cov[(i, i)].max(0.0).sqrt() / self.scale[cols[i]])
+            .collect();
+        Some((values, se))
+    }
+
+    /// Residual sum over all rows at the least-squares fit of `cols` (`None`: not determined).
+    pub fn fit_rss(&self, cols: &[usize]) -> Option<f64> {
+        let (theta, _) = self.solve(cols, Subset::All)?;
+        Some(self.rss(cols, &theta, Subset::All))
+    }
+
+    /// Cluster-robust Wald statistic `θ_Sᵀ V_SS⁻¹ θ_S` of the columns `cols[i]`, `i ∈ idx`, in the
+    /// fit of `cols` on all rows (χ² on `idx.len()` degrees of freedom under the null that they
+    /// are zero, residuals independent between clusters); `None` if not determined.
+    pub fn wald(&self, cols: &[usize], idx: &[usize]) -> Option<f64> {
+        let (theta, cov) = self.sandwich(cols)?;
+        let k = idx.len();
+        if k == 0 || idx.iter().any(|&i| i >= cols.len()) {
+            return None;
+        }
+        let v = DMatrix::from_fn(k, k, |a, b| cov[(idx[a], idx[b])]);
+        let t = DVector::from_fn(k, |a, _| theta[idx[a]]);
+        let w = (t.transpose() * v.try_inverse()? * &t)[(0, 0)];
+        w.is_finite().then_some(w)
+    }
+
+    /// Least squares on all rows with the cluster-robust (sandwich) covariance, both in the
+    /// equilibrated columns.
+    fn sandwich(&self, cols: &[usize]) -> Option<(DVector<f64>, DMatrix<f64>)> {
         let (theta, inv) = self.solve(cols, Subset::All)?;
         let p = cols.len();
         // Meat: Σ_c s_c s_cᵀ with the cluster scores s_c = X_cᵀ r_c = X_cᵀy_c − X_cᵀX_c θ.
@@ -301,11 +334,7 @@ impl Design {
         let g = self.clusters.len() as f64;
         // Small-sample factor of the sandwich (G/(G − 1)).
         let cov = (&inv * meat * &inv) * (g / (g - 1.0).max(1.0));
-        let values = (0..p).map(|i| theta[i] / self.scale[cols[i]]).collect();
-        let se = (0..p)
-            .map(|i| cov[(i, i)].max(0.0).sqrt() / self.scale[cols[i]])
-            .collect();
-        Some((values, se))
+        Some((theta, cov))
     }
 
     /// Coefficients of `cols` fitted on the clusters of `subset`, in the columns' own units.
@@ -438,11 +467,9 @@ fn erfc(x: f64) -> f64 {
     }
 }
 
-/// Search one equation (see the module documentation).
-pub fn search(design: &Design, options: &SparseOptions) -> SparseResult {
-    let p = design.names.len();
-    // Forced columns that are not determined beside the others in this one equation (two
-    // causes' columns proportional on this axis) are left out.
+/// The forced columns of `design` determined beside each other in this one equation (two
+/// causes' columns proportional on a torque axis: the later one is left out).
+pub fn determined_forced(design: &Design) -> Vec<usize> {
     let mut forced: Vec<usize> = Vec::new();
     for j in 0..design.forced {
         let mut cols = forced.clone();
@@ -451,6 +478,13 @@ pub fn search(design: &Design, options: &SparseOptions) -> SparseResult {
             forced = cols;
         }
     }
+    forced
+}
+
+/// Search one equation (see the module documentation).
+pub fn search(design: &Design, options: &SparseOptions) -> SparseResult {
+    let p = design.names.len();
+    let forced = determined_forced(design);
     let nf = forced.len();
     let candidates = p - design.forced;
     let z_threshold = normal_two_sided_quantile(options.alpha / candidates.max(1) as f64);
@@ -525,16 +559,31 @@ pub fn search(design: &Design, options: &SparseOptions) -> SparseResult {
             _ => break,
         }
     }
+    result_for(design, nf, &active, z_threshold, base_cv)
+}
+
+/// The search's result for the columns `active` (the first `nf` of them forced), with the
+/// search's `z_threshold` and the cross-validated residual sum of the forced columns alone,
+/// `base_cv`: every term's fit on all rows, without the held-out clusters and without each
+/// fold, and the gains.
+pub fn result_for(
+    design: &Design,
+    nf: usize,
+    active: &[usize],
+    z_threshold: f64,
+    base_cv: f64,
+) -> SparseResult {
+    let forced = &active[..nf.min(active.len())];
     let (values, se) = design
-        .fit(&active)
+        .fit(active)
         .unwrap_or((vec![f64::NAN; active.len()], vec![f64::NAN; active.len()]));
     let fit_blocks = design
-        .fit_on(&active, Subset::NotHeld)
+        .fit_on(active, Subset::NotHeld)
         .unwrap_or_else(|| values.clone());
     let without_fold: Vec<Vec<f64>> = (0..design.folds)
         .map(|f| {
             design
-                .fit_on(&active, Subset::NotFold(f))
+                .fit_on(active, Subset::NotFold(f))
                 .unwrap_or_else(|| values.clone())
         })
         .collect();
@@ -545,14 +594,14 @@ pub fn search(design: &Design, options: &SparseOptions) -> SparseResult {
         value_fit_blocks: fit_blocks[i],
         value_without_fold: without_fold.iter().map(|v| v[i]).collect(),
     };
-    let cv = design.cv_rss(&active).unwrap_or(base_cv);
+    let cv = design.cv_rss(active).unwrap_or(base_cv);
     let cv_gain = if cv > 0.0 { (base_cv / cv).sqrt() } else { 1.0 };
     // No cluster held out (the selection uses all the data): the held-out gain is the
     // cross-validated one.
     let held_out_gain = if !design.clusters.iter().any(|c| c.held_out) {
         cv_gain
     } else {
-        match (design.held_out_rss(&forced), design.held_out_rss(&active)) {
+        match (design.held_out_rss(forced), design.held_out_rss(active)) {
             (Some(a), Some(b)) if b > 0.0 => (a / b).sqrt(),
             _ => 1.0,
         }

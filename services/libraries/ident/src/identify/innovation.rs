@@ -176,8 +176,54 @@ pub(super) fn search_innovations(
     block_s: f64,
     options: &SparseOptions,
 ) -> Vec<UnexplainedEffect> {
+    let designs = innovation_designs(
+        problem,
+        fit,
+        (candidates, linear),
+        (block_s, options.folds),
+        None,
+    );
+    designs
+        .into_iter()
+        .filter_map(|(c, design)| {
+            let result = search(&design, options);
+            effect(
+                INNOVATION_LABELS[c].to_string(),
+                "1 (whitened)",
+                result,
+                &design,
+            )
+        })
+        .collect()
+}
+
+/// The sensor channel's equations, one design per innovation component with enough rows: the
+/// named sensor causes' columns (their Jacobian rows of the component) forced, so their values
+/// re-adjust with any new term, then every candidate. With `removed` the innovations have that
+/// cause's fitted part put back to first order (`r − J_c Δθ_c`) and its columns are not forced
+/// (nothing when it has no neutral value). `(block_s, folds)`: the blocks and folds.
+pub(super) fn innovation_designs(
+    problem: &Problem,
+    fit: &SetFit,
+    (candidates, linear): (&InnovationCandidates, Option<&SensorLinear>),
+    (block_s, folds): (f64, usize),
+    removed: Option<Cause>,
+) -> Vec<(usize, Design)> {
     let data = problem.data;
     let s = &fit.state;
+    let put_back: Vec<(usize, f64)> = match (removed, linear) {
+        (None, _) => Vec::new(),
+        (Some(cause), Some(l)) => {
+            let cols: Vec<usize> = (0..l.cols.len())
+                .filter(|&j| l.cols[j].0 == cause)
+                .collect();
+            match cols.iter().map(|&j| l.delta[j].map(|d| (j, d))).collect() {
+                Some(v) => v,
+                None => return Vec::new(),
+            }
+        }
+        (Some(_), None) => return Vec::new(),
+    };
     let mut out = Vec::new();
     for c in 0..INNOVATION_LEN {
         let rows: Vec<usize> = (0..s.recon.innovations.len())
@@ -186,10 +232,9 @@ pub(super) fn search_innovations(
         if rows.len() < 100 {
             continue;
         }
-        // The named sensor causes' own columns (their Jacobian rows of this component) are
-        // forced, so their values re-adjust with any new term.
         let forced: Vec<usize> = linear.map_or(Vec::new(), |l| {
             (0..l.cols.len())
+                .filter(|&j| Some(l.cols[j].0) != removed)
                 .filter(|&j| rows.iter().any(|&i| l.j[j][candidates.row[i][c]] != 0.0))
                 .collect()
         });
@@ -210,7 +255,17 @@ pub(super) fn search_innovations(
             })
             .collect();
         let inn = &s.recon.innovations;
-        let y: Vec<f64> = rows.iter().map(|&i| inn[i].values[c]).collect();
+        let y: Vec<f64> = rows
+            .iter()
+            .map(|&i| {
+                let r = candidates.row[i][c];
+                let back: f64 = put_back
+                    .iter()
+                    .filter_map(|&(j, d)| linear.map(|l| l.j[j][r] * d))
+                    .sum();
+                inn[i].values[c] - back
+            })
+            .collect();
         // Clusters of a third of a block (never across a fit / held-out change).
         let cluster: Vec<usize> = rows
             .iter()
@@ -231,16 +286,7 @@ pub(super) fn search_innovations(
             fold: &fold,
             held_out: &held,
         };
-        let design = Design::new(names, forced.len(), rows, options.folds);
-        let result = search(&design, options);
-        if let Some(e) = effect(
-            INNOVATION_LABELS[c].to_string(),
-            "1 (whitened)",
-            result,
-            &design,
-        ) {
-            out.push(e);
-        }
+        out.push((c, Design::new(names, forced.len(), rows, folds)));
     }
     out
 }

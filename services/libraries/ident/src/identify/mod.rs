@@ -52,6 +52,7 @@
 mod colour;
 mod equations;
 mod falsify;
+mod guard;
 mod innovation;
 mod options;
 mod report;
@@ -68,6 +69,7 @@ pub use colour::{
     WhitenessReport, torque_whiteness,
 };
 pub use falsify::{CauseTest, Consistency, Trend, Whiteness};
+pub use guard::PartlyExplained;
 pub use options::{Options, held_out_mask};
 pub use sensor::SensorCorrection;
 pub use unexplained::UnexplainedEffect;
@@ -285,6 +287,20 @@ fn identify_pass(
         (effects, tests, joint) = analyse(&current, &named);
     }
     cause_tests.extend(tests.iter().cloned());
+    // A named cause that the unrestricted search explains better in one of its equations
+    // explains it only partly: flagged, its remainder among the unexplained effects (`guard`).
+    let partly = if options.misattribution_guard {
+        guard::apply(
+            &problem,
+            &current,
+            &named,
+            (options, n_fit),
+            &mut effects,
+            &mut joint,
+        )
+    } else {
+        Vec::new()
+    };
     // With unexplained torque terms, the named torque causes take their values from the joint
     // fit (they no longer absorb part of the new effect).
     let torque_terms = effects.iter().any(|e| e.equation.starts_with("torque_"));
@@ -637,6 +653,7 @@ fn identify_pass(
         &extension,
         sensor_correction.as_ref(),
     );
+    guard::annotate(&mut summary, &partly);
     summary.extend(whiteness.lines());
     let report = Report {
         summary,
@@ -656,6 +673,7 @@ fn identify_pass(
         causes,
         verdict,
         cause_tests,
+        partly_explained: partly,
         unexplained: effects,
         extension,
         remaining,

@@ -36,6 +36,10 @@ pub struct Options {
     pub consistency_blocks: usize,
     /// Level of the consistency test (a cause fails at p below it).
     pub consistency_alpha: f64,
+    /// Whether a named cause is set against the unrestricted candidate search in its channel's
+    /// equations and flagged when it explains only part of one (`guard`; on by default, off
+    /// only to see what the analysis says without it).
+    pub misattribution_guard: bool,
 }
 
 impl Default for Options {
@@ -53,6 +57,7 @@ impl Default for Options {
             sparse: SparseOptions::default(),
             consistency_blocks: 4,
             consistency_alpha: 1e-3,
+            misattribution_guard: true,
         }
     }
 }

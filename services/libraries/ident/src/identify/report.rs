@@ -141,6 +141,10 @@ pub struct Report {
     pub verdict: String,
     /// The falsification tests of every cause the selection named (dropped ones included).
     pub cause_tests: Vec<super::CauseTest>,
+    /// Named causes that explain only part of an equation of their channel: the unrestricted
+    /// candidate search does better there, and the remainder is among `unexplained` (see
+    /// `guard`).
+    pub partly_explained: Vec<super::PartlyExplained>,
     /// Effects no named cause explains, with their proposed form (empty: none found).
     pub unexplained: Vec<super::UnexplainedEffect>,
     /// What the extended model carries beyond the named causes.

@@ -169,7 +169,7 @@ pub(super) fn competing_explanation(
 }
 
 /// The cause's own form among the torque candidates (excluded from its competitor).
-fn own_form(cause: Cause) -> &'static [&'static str] {
+pub(super) fn own_form(cause: Cause) -> &'static [&'static str] {
     match cause {
         Cause::ConstantTorque => &["1"],
         Cause::ComOffset => &["1", "sin tilt_x", "sin tilt_y"],
@@ -194,10 +194,53 @@ pub(super) fn search_torque(
     options: &SparseOptions,
     removed: Option<Cause>,
 ) -> (Vec<UnexplainedEffect>, Option<f64>) {
+    let excluded: &[&str] = removed.map_or(&[], own_form);
+    let Some(designs) = torque_designs(
+        problem,
+        fit,
+        named,
+        candidates,
+        (block_s, options.folds),
+        removed,
+        excluded,
+    ) else {
+        return (Vec::new(), None);
+    };
+    let mut cv_total = 0.0;
+    let mut out = Vec::new();
+    for (axis, design) in designs {
+        let result = search(&design, options);
+        let sigma = fit.state.torque.sigma[axis];
+        cv_total += result.cv_rss / (sigma * sigma);
+        if let Some(e) = effect(torque_equation(axis), "Nm", result, &design) {
+            out.push(e);
+        }
+    }
+    (out, Some(cv_total))
+}
+
+/// Name of the torque channel's equation about body axis `axis`: `torque_x` …
+pub(super) fn torque_equation(axis: usize) -> String {
+    format!("torque_{}", "xyz".as_bytes()[axis.min(2)] as char)
+}
+
+/// The torque search's equations, one design per body axis: the named causes' columns that act
+/// on it forced, then the candidates but those named in `excluded`; with `removed` the residual
+/// has that cause's fitted part put back (and its columns are not forced). `(block_s, folds)`:
+/// the clusters' blocks and the cross-validation's folds. `None` if the channel is too short.
+pub(super) fn torque_designs(
+    problem: &Problem,
+    fit: &SetFit,
+    named: &[Cause],
+    candidates: &TorqueCandidates,
+    (block_s, folds): (f64, usize),
+    removed: Option<Cause>,
+    excluded: &[&str],
+) -> Option<Vec<(usize, Design)>> {
     let data = problem.data;
     let ch = &fit.state.torque;
     if ch.len() < 30 {
-        return (Vec::new(), None);
+        return None;
     }
     let mut delta = fit.torque_delta;
     if let Some(range) = removed.and_then(torque_columns) {
@@ -205,14 +248,12 @@ pub(super) fn search_torque(
             *d = 0.0;
         }
     }
-    let excluded: &[&str] = removed.map_or(&[], own_form);
     let kept_candidates: Vec<usize> = (0..candidates.names.len())
         .filter(|&j| !excluded.contains(&candidates.names[j]))
         .collect();
-    let mut cv_total = 0.0;
     let named_cols: Vec<usize> = named
         .iter()
-        .filter(|c| c.kind() == Kind::Torque)
+        .filter(|c| c.kind() == Kind::Torque && Some(**c) != removed)
         .flat_map(|c| torque_columns(*c).into_iter().flatten())
         .collect();
     let mut segment_of = vec![0; ch.len()];
@@ -256,19 +297,9 @@ pub(super) fn search_torque(
             fold: &fold,
             held_out: &held,
         };
-        let design = Design::new(names, forced.len(), rows, options.folds);
-        let result = search(&design, options);
-        cv_total += result.cv_rss / (ch.sigma[axis] * ch.sigma[axis]);
-        if let Some(e) = effect(
-            format!("torque_{}", "xyz".as_bytes()[axis] as char),
-            "Nm",
-            result,
-            &design,
-        ) {
-            out.push(e);
-        }
+        out.push((axis, Design::new(names, forced.len(), rows, folds)));
     }
-    (out, Some(cv_total))
+    Some(out)
 }
 
 /// Name of a torque column (`com_offset.r_m[0]` …).
@@ -395,9 +426,8 @@ pub(super) fn torque_tests(
     let data = problem.data;
     let (cols, extra) = joint_columns(named, effects, candidates, &fit.state.torque);
     let mut out = Vec::new();
-    let mut joint = None;
     if cols.is_empty() || ch.len() < 30 {
-        return (out, joint);
+        return (out, None);
     }
     let t0 = ch.ticks.first().map_or(0.0, |&k| data.t[k]);
     let t1 = ch.ticks.last().map_or(1.0, |&k| data.t[k]);
@@ -409,29 +439,7 @@ pub(super) fn torque_tests(
         .map(|b| normal_equations(fit, &cols, &extra, candidates, |i| block_of(i) == b).solve())
         .collect();
     let fit_rows = |i: usize| !problem.held_out[ch.ticks[i]];
-    let full = normal_equations(fit, &cols, &extra, candidates, fit_rows).solve();
-    if let Some(f) = &full {
-        let se = f.stderr();
-        let mut delta = Vec::new();
-        for &cause in named.iter().filter(|c| c.kind() == Kind::Torque) {
-            // Every value of the cause: a column not in the fit (not determined) unchanged.
-            let at = |col: usize| {
-                (0..cols.len()).find(|&j| cols[j].0 == Some(cause) && cols[j].1 == col)
-            };
-            let range = torque_columns(cause).unwrap_or(0..0);
-            delta.push((
-                cause,
-                range
-                    .clone()
-                    .map(|col| at(col).map_or(0.0, |j| f.theta[j]))
-                    .collect(),
-                range
-                    .map(|col| at(col).map_or(f64::NAN, |j| se[j]))
-                    .collect(),
-            ));
-        }
-        joint = Some(JointTorque { delta });
-    }
+    let joint = joint_fit(problem, fit, named, &cols, &extra, candidates);
     // The torque search with every named cause, computed once for all the competitions.
     let cv_with = torque_cv_rss(
         problem,
@@ -553,6 +561,56 @@ pub(super) fn torque_tests(
         }));
     }
     (out, joint)
+}
+
+/// The joint fit of the named torque causes with the unexplained torque terms of `effects`
+/// (`None`: no named torque cause, a short channel, or not determined).
+pub(super) fn joint_torque(
+    problem: &Problem,
+    fit: &SetFit,
+    named: &[Cause],
+    effects: &[UnexplainedEffect],
+    candidates: &TorqueCandidates,
+) -> Option<JointTorque> {
+    let ch = &fit.state.torque;
+    let (cols, extra) = joint_columns(named, effects, candidates, ch);
+    if cols.is_empty() || ch.len() < 30 {
+        return None;
+    }
+    joint_fit(problem, fit, named, &cols, &extra, candidates)
+}
+
+/// [`joint_torque`] on the joint model's columns `cols` and terms `extra`, on the fit rows.
+fn joint_fit(
+    problem: &Problem,
+    fit: &SetFit,
+    named: &[Cause],
+    cols: &[(Option<Cause>, usize)],
+    extra: &[(usize, usize)],
+    candidates: &TorqueCandidates,
+) -> Option<JointTorque> {
+    let ch = &fit.state.torque;
+    let fit_rows = |i: usize| !problem.held_out[ch.ticks[i]];
+    let f = normal_equations(fit, cols, extra, candidates, fit_rows).solve()?;
+    let se = f.stderr();
+    let mut delta = Vec::new();
+    for &cause in named.iter().filter(|c| c.kind() == Kind::Torque) {
+        // Every value of the cause: a column not in the fit (not determined) unchanged.
+        let at =
+            |col: usize| (0..cols.len()).find(|&j| cols[j].0 == Some(cause) && cols[j].1 == col);
+        let range = torque_columns(cause).unwrap_or(0..0);
+        delta.push((
+            cause,
+            range
+                .clone()
+                .map(|col| at(col).map_or(0.0, |j| f.theta[j]))
+                .collect(),
+            range
+                .map(|col| at(col).map_or(f64::NAN, |j| se[j]))
+                .collect(),
+        ));
+    }
+    Some(JointTorque { delta })
 }
 
 /// The unexplained terms `extra` with each one's axis offset (`1`) added, except on an axis

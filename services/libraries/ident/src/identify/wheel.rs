@@ -222,7 +222,7 @@ pub(super) fn wheel_cv_rss(
 /// friction's Coulomb levels (`1` and `sign n` span the levels of the two directions) and its
 /// viscous level `n`, the torque scale's `τ`. The delay's own form (the change of the command
 /// over the delay) is not a candidate.
-fn own_form(cause: Cause) -> &'static [&'static str] {
+pub(super) fn own_form(cause: Cause) -> &'static [&'static str] {
     match cause {
         Cause::WheelFriction => &["1", "sign n", "n"],
         Cause::WheelTorqueScale => &["τ"],
@@ -243,19 +243,57 @@ fn search(
     options: &SparseOptions,
     removed: Option<Cause>,
 ) -> (Vec<UnexplainedEffect>, Option<f64>) {
+    let excluded: &[&str] = removed.map_or(&[], own_form);
+    let designs = wheel_designs(
+        problem,
+        fit,
+        named,
+        candidates,
+        (block_s, options.folds),
+        removed,
+        excluded,
+    );
+    let sigma2 = fit.state.wheel.sigma.max(1e-300).powi(2);
+    let mut cv_total = None;
+    let mut out = Vec::new();
+    for (w, design) in designs {
+        let result = sparse_search(&design, options);
+        *cv_total.get_or_insert(0.0) += result.cv_rss / sigma2;
+        if let Some(e) = effect(wheel_equation(w), "Nm", result, &design) {
+            out.push(e);
+        }
+    }
+    (out, cv_total)
+}
+
+/// The wheel search's equations, one design per wheel with enough rows: the named wheel causes'
+/// regressors forced, then the candidates but those named in `excluded`; with `removed` the
+/// residual has that cause at its base values (its fitted part put back, its columns not
+/// forced). `(block_s, folds)`: the clusters' blocks and the cross-validation's folds.
+pub(super) fn wheel_designs(
+    problem: &Problem,
+    fit: &SetFit,
+    named: &[Cause],
+    candidates: &WheelCandidates,
+    (block_s, folds): (f64, usize),
+    removed: Option<Cause>,
+    excluded: &[&str],
+) -> Vec<(usize, Design)> {
     let data = problem.data;
     let ch = &fit.state.wheel;
     let mut config = fit.config.clone();
     if let Some(cause) = removed {
         cause.apply(&mut config, &cause.values(&problem.base));
     }
+    let named: Vec<Cause> = named
+        .iter()
+        .copied()
+        .filter(|c| Some(*c) != removed)
+        .collect();
     let model = WheelModel::from_config(&config);
-    let excluded: &[&str] = removed.map_or(&[], own_form);
     let kept_candidates: Vec<usize> = (0..candidates.names.len())
         .filter(|&j| !excluded.contains(&candidates.names[j]))
         .collect();
-    let sigma2 = ch.sigma.max(1e-300).powi(2);
-    let mut cv_total = None;
     let mut out = Vec::new();
     for w in 0..3 {
         let rows = &ch.rows[w];
@@ -264,7 +302,7 @@ fn search(
         }
         let forced_rows: Vec<Vec<(Cause, usize, f64)>> = rows
             .iter()
-            .map(|row| named_regressors(problem, ch, &model, named, w, row))
+            .map(|row| named_regressors(problem, ch, &model, &named, w, row))
             .collect();
         // Forced columns that the data determine (a direction the wheel never turns in leaves
         // its Coulomb column zero).
@@ -309,15 +347,11 @@ fn search(
                 fold: &fold,
                 held_out: &held,
             },
-            options.folds,
+            folds,
         );
-        let result = sparse_search(&design, options);
-        *cv_total.get_or_insert(0.0) += result.cv_rss / sigma2;
-        if let Some(e) = effect(wheel_equation(w), "Nm", result, &design) {
-            out.push(e);
-        }
+        out.push((w, design));
     }
-    (out, cv_total)
+    out
 }
 
 /// Name of wheel `w`'s equation: `wheel_x`, `wheel_y`, `wheel_z`.

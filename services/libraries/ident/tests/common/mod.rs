@@ -150,6 +150,12 @@ pub fn check_single(
         "{label}: {}",
         report.remaining.message
     );
+    // A library cause alone explains all it absorbed: not flagged by the misattribution guard.
+    assert!(
+        report.partly_explained.is_empty(),
+        "{label}: {:?}",
+        report.partly_explained
+    );
     assert_eq!(extended_round_trip(id, label), id.extended);
 }
 

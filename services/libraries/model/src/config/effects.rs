@@ -37,6 +37,8 @@ pub struct EffectsConfig {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub heading_torque: Option<HeadingTorque>,
     #[serde(skip_serializing_if = "Option::is_none")]
+    pub dipole_torque: Option<DipoleTorque>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub wheel_drag: Option<WheelDrag>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub gauss_markov_torque: Option<GaussMarkovTorque>,
@@ -105,6 +107,17 @@ pub struct HeadingTorque {
     pub cos_nm: [f64; 3],
     /// Amplitude of the `sin ψ` part per body axis, Nm.
     pub sin_nm: [f64; 3],
+}
+
+/// A magnetic dipole fixed in the platform (a magnet in a motor, a current loop of the
+/// harness) in the lab's field: `M = m × B_B`, `B_B = A(q) B_L` the lab field
+/// (`[platform] field_l_gauss`) in body axes. Depends on the heading and on the tilt. Not in
+/// identification's library.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DipoleTorque {
+    /// Magnetic moment `m`, body axes, A m² (20 A m² in the default 54 µT field: about 1 mNm).
+    pub moment_am2: [f64; 3],
 }
 
 /// A slowly wandering external torque on the platform: per body axis a first-order

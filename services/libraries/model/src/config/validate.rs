@@ -192,6 +192,9 @@ impl ModelConfig {
             v.finite_all("effects.heading_torque.cos_nm", &x.cos_nm);
             v.finite_all("effects.heading_torque.sin_nm", &x.sin_nm);
         }
+        if let Some(x) = &e.dipole_torque {
+            v.finite_all("effects.dipole_torque.moment_am2", &x.moment_am2);
+        }
         if let Some(x) = &e.wheel_drag {
             for (i, c) in x.quadratic_nm_per_rad2_s2.iter().enumerate() {
                 v.within(

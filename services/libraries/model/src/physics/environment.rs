@@ -54,6 +54,10 @@ pub struct ExternalTorqueModel {
     /// without it (then the heading is not computed).
     pub heading_cos_b: Vector3<f64>,
     pub heading_sin_b: Vector3<f64>,
+    /// `dipole_torque`: the moment `m`, A m², body axes, and the lab field `B_L`, T (zero moment
+    /// without it).
+    pub dipole_b: Vector3<f64>,
+    pub field_l_t: Vector3<f64>,
     /// `fitted_torque`, resolved.
     pub fitted: FittedTorqueModel,
     /// Plant time the model was resolved at ([`ExternalTorqueModel::at_time`]), s.
@@ -93,6 +97,11 @@ impl ExternalTorqueModel {
                 .heading_torque
                 .as_ref()
                 .map_or_else(Vector3::zeros, |h| Vector3::from(h.sin_nm)),
+            dipole_b: e
+                .dipole_torque
+                .as_ref()
+                .map_or_else(Vector3::zeros, |d| Vector3::from(d.moment_am2)),
+            field_l_t: config.platform.field_l_t(),
             fitted: FittedTorqueModel::from_config(e.fitted_torque.as_ref()),
             time_s: 0.0,
         }
@@ -124,9 +133,19 @@ impl ExternalTorqueModel {
                     .component_mul(&rate_b.component_mul(&rate_b.abs()))),
             constant_b: self
                 .heading_part(q)
-                .map_or(self.constant_b, |h| self.constant_b + h),
+                .map_or(self.constant_b, |h| self.constant_b + h)
+                + self.dipole_part(q),
             fitted_b: self.fitted.torque(self.time_s, q, rate_b),
         }
+    }
+
+    /// `dipole_torque` at attitude `q`, `m × A(q) B_L`, Nm, body axes (zero without it).
+    /// Counted with the constant part in [`ExternalTorque`].
+    fn dipole_part(&self, q: &Attitude) -> Vector3<f64> {
+        if self.dipole_b == Vector3::zeros() {
+            return Vector3::zeros();
+        }
+        self.dipole_b.cross(&(q * self.field_l_t))
     }
 
     /// `heading_torque` at attitude `q`, Nm, body axes (`None`, and no heading computed,
@@ -156,6 +175,43 @@ mod tests {
     use super::*;
     use crate::attitude::from_heading_pitch_roll;
     use crate::config::{AeroDrag, ComOffset, ConstantTorque};
+
+    /// `dipole_torque`: `m × B_B`. Level at heading 0 (`B_B = B_L`) a moment along X gives
+    /// `(0, −m_x B_z, m_x B_y)`; about any heading a vertical moment's torque is horizontal,
+    /// `m_z` times the horizontal field's magnitude, and always normal to the moment.
+    #[test]
+    fn dipole_torque_is_the_moment_across_the_field_in_body_axes() {
+        use crate::config::DipoleTorque;
+        let mut config = ModelConfig::default();
+        let b = config.platform.field_l_t();
+        config.effects.dipole_torque = Some(DipoleTorque {
+            moment_am2: [20.0, 0.0, 0.0],
+        });
+        let level = from_heading_pitch_roll(0.0, 0.0, 0.0);
+        let t = ExternalTorqueModel::from_config(&config)
+            .torque(&level, &Vector3::zeros())
+            .total_b();
+        let want = Vector3::new(0.0, -20.0 * b.z, 20.0 * b.y);
+        assert!((t - want).norm() < 1e-15, "{t:?} vs {want:?}");
+        config.effects.dipole_torque = Some(DipoleTorque {
+            moment_am2: [0.0, 0.0, 20.0],
+        });
+        let model = ExternalTorqueModel::from_config(&config);
+        let horizontal = (b.x * b.x + b.y * b.y).sqrt();
+        for psi in [0.3, 1.9, -2.4] {
+            let t = model
+                .torque(&from_heading_pitch_roll(psi, 0.0, 0.0), &Vector3::zeros())
+                .total_b();
+            assert!(t.z.abs() < 1e-15, "{t:?}");
+            assert!(
+                ((t.x.hypot(t.y)) - 20.0 * horizontal).abs() < 1e-15,
+                "{t:?}"
+            );
+        }
+        // Off by default: no dipole part.
+        let nominal = ExternalTorqueModel::from_config(&ModelConfig::default());
+        assert_eq!(nominal.dipole_part(&level), Vector3::zeros());
+    }
 
     #[test]
     fn heading_torque_and_com_drift_follow_their_formulas() {
