@@ -280,7 +280,19 @@ pub(super) struct Levels<'a> {
     pub sparse: &'a SparseOptions,
 }
 
-impl Levels<'_> {
+impl<'a> Levels<'a> {
+    /// The run's levels, from its options; `n_fit` scalar residuals in the fit data.
+    pub(super) fn new(options: &'a super::Options, n_fit: f64) -> Self {
+        Self {
+            blocks: options.consistency_blocks,
+            consistency: options.consistency_alpha,
+            selection: options.alpha,
+            n_fit,
+            block_s: options.block_s,
+            sparse: &options.sparse,
+        }
+    }
+
     /// The test of a cause beside the others: the likelihood ratio `n ln(RSS_without /
     /// RSS_with)` of `n` residuals, and the selection's threshold for its `k` parameters,
     /// `max(k ln N, χ²_k(1 − selection))`.

@@ -250,14 +250,7 @@ pub(super) fn apply(
     if named.is_empty() {
         return Vec::new();
     }
-    let levels = Levels {
-        blocks: options.consistency_blocks,
-        consistency: options.consistency_alpha,
-        selection: options.alpha,
-        n_fit,
-        block_s: options.block_s,
-        sparse: &options.sparse,
-    };
+    let levels = Levels::new(options, n_fit);
     let torque = TorqueCandidates::new(problem, fit);
     let wheel = WheelCandidates::new(problem, fit);
     // The sensor causes' linearisation costs a filter run per parameter: only when one is named.

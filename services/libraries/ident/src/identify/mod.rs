@@ -248,14 +248,7 @@ fn identify_pass(
             named,
             &effects,
             &candidates,
-            &falsify::Levels {
-                blocks: options.consistency_blocks,
-                consistency: options.consistency_alpha,
-                selection: options.alpha,
-                n_fit,
-                block_s: options.block_s,
-                sparse: &options.sparse,
-            },
+            &falsify::Levels::new(options, n_fit),
         );
         (effects, tests, joint)
     };
