@@ -26,6 +26,9 @@ const WHEEL_LIMIT_RPM: f64 = 6000.0;
 const FAULT_AT_S: u64 = 10;
 /// How much longer the fault waits for its target process to start on a loaded machine.
 const TARGET_WAIT: Duration = Duration::from_secs(10);
+/// A simulated duration, s, that no run reaches before its fault, however fast the machine
+/// (lockstep has run at over 2000× real time).
+const OUTLASTS_THE_FAULT_S: u32 = 10_000_000;
 
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum Mode {
@@ -299,8 +302,7 @@ fn lockstep(program: &str, fault: Fault) {
     let scratch = Scratch::new(&format!("fault-ls-{program}-{fault:?}"));
     let profile = fault_profile(scratch.path(), Mode::Lockstep);
     let log = scratch.path().join("run.mcap");
-    // Long enough to still run at the fault (lockstep runs at ~250x real time).
-    let outcome = run_with_fault(&profile, &log, 20_000, program, fault);
+    let outcome = run_with_fault(&profile, &log, OUTLASTS_THE_FAULT_S, program, fault);
     let stderr = &outcome.stderr;
     assert!(
         !outcome.success,
@@ -357,7 +359,7 @@ fn a_dead_or_hung_plant_ends_the_run_with_its_name() {
         let scratch = Scratch::new(&format!("fault-plant-{mode:?}"));
         let profile = fault_profile(scratch.path(), mode);
         let log = scratch.path().join("run.mcap");
-        let outcome = run_with_fault(&profile, &log, 20_000, "plant", fault);
+        let outcome = run_with_fault(&profile, &log, OUTLASTS_THE_FAULT_S, "plant", fault);
         assert!(!outcome.success, "{mode:?}: {}", outcome.stderr);
         assert!(
             outcome.stderr.contains("\"plant\""),
