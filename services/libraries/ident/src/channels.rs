@@ -200,11 +200,13 @@ impl TorqueChannel {
             (m, f)
         };
 
+        // Every tick may be a row: room for all of them up front (the rows are large, and
+        // growing them by doubling copied them over and over).
         let mut out = Self {
-            ticks: Vec::new(),
+            ticks: Vec::with_capacity(n),
             segments: Vec::new(),
-            y: Vec::new(),
-            x: Vec::new(),
+            y: Vec::with_capacity(n),
+            x: Vec::with_capacity(n),
             sigma: Vector3::zeros(),
             excited: [false; TORQUE_COLUMNS],
             thrusters: None,

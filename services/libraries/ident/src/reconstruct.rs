@@ -413,6 +413,18 @@ impl Reconstruction {
         }
         v
     }
+
+    /// The tick of each row of [`Reconstruction::innovation_vector`] with the same `keep`.
+    pub fn innovation_ticks(&self, keep: impl Fn(usize) -> bool) -> Vec<usize> {
+        let mut v = Vec::with_capacity(self.innovations.len() * INNOVATION_LEN);
+        for i in self.innovations.iter().filter(|i| keep(i.tick)) {
+            let rows = (0..INNOVATION_LEN)
+                .filter(|c| i.mask & (1 << c) != 0)
+                .count();
+            v.extend(std::iter::repeat_n(i.tick, rows));
+        }
+        v
+    }
 }
 
 #[cfg(test)]

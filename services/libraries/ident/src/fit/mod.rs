@@ -146,6 +146,21 @@ pub struct SetFit {
     pub state: Rc<State>,
     /// Torque-channel parameter change from the base, per column.
     pub torque_delta: [f64; TORQUE_COLUMNS],
+    /// The sensor fit's last linearisation (none without sensor causes fitted here): the folds
+    /// of a cross-validation fit the same set from it ([`Problem::fit_from`]).
+    pub sensor_linearisation: Option<Rc<SensorLinearisation>>,
+}
+
+/// Where a sensor fit last linearised the filter's whitened innovations: the parameters, and
+/// per row of its fit data the row's tick, the innovation and its derivatives.
+#[derive(Debug)]
+pub struct SensorLinearisation {
+    layout: Vec<(Cause, usize)>,
+    theta: Vec<f64>,
+    ticks: Vec<usize>,
+    residual: Vec<f64>,
+    /// `∂r/∂θ_j` per parameter, each over the rows.
+    columns: Vec<Vec<f64>>,
 }
 
 impl SetFit {
@@ -377,8 +392,65 @@ impl<'a> Problem<'a> {
         warm: &HashMap<Cause, FittedCause>,
         screen: Option<(f64, f64)>,
     ) -> Result<SetFit, IdentError> {
+        self.fit_with(set, warm, screen, None)
+    }
+
+    /// [`Problem::fit`] of a fold of a cross-validation: the sensor causes of `set`, when
+    /// `from` (the fit of the same set on all the data) linearised them, take one Gauss–Newton
+    /// step from there on this problem's fit rows, one filter run instead of a fit's many. The
+    /// fold's data differ from all the data by a fifth, so the step lands where the fold's own
+    /// fit would converge, to within the curvature the step neglects.
+    pub fn fit_from(
+        &self,
+        set: &[Cause],
+        warm: &HashMap<Cause, FittedCause>,
+        from: Option<&SensorLinearisation>,
+    ) -> Result<SetFit, IdentError> {
+        self.fit_with(set, warm, None, from)
+    }
+
+    /// The configuration of the one-step fold fit of [`Problem::fit_from`], to run its filter
+    /// ahead ([`Problem::prefetch`]); `None` when the step cannot be taken.
+    pub fn step_config(&self, from: &SensorLinearisation) -> Option<ModelConfig> {
+        let (theta, _, _) = self.linear_step(from).ok()?;
+        Some(build_sensors(&self.base, &from.layout, &theta))
+    }
+
+    /// Run the filters of `configs` not run yet, across the machine's cores, and keep them.
+    pub fn prefetch(&self, configs: &[ModelConfig]) -> Result<(), IdentError> {
+        let mut todo: Vec<(SensorKey, &ModelConfig)> = Vec::new();
+        {
+            let recons = self.recons.borrow();
+            for c in configs {
+                let key = SensorKey::of(c);
+                if !recons.contains_key(&key) && !todo.iter().any(|(k, _)| *k == key) {
+                    todo.push((key, c));
+                }
+            }
+        }
+        self.filter_runs.set(self.filter_runs.get() + todo.len());
+        let data = self.data;
+        let runs: Vec<Reconstruction> = todo
+            .par_iter()
+            .map(|(_, c)| reconstruct(data, c))
+            .collect::<Result<_, _>>()?;
+        let mut recons = self.recons.borrow_mut();
+        for ((key, _), r) in todo.into_iter().zip(runs) {
+            recons.insert(key, Rc::new(r));
+        }
+        Ok(())
+    }
+
+    fn fit_with(
+        &self,
+        set: &[Cause],
+        warm: &HashMap<Cause, FittedCause>,
+        screen: Option<(f64, f64)>,
+        from: Option<&SensorLinearisation>,
+    ) -> Result<SetFit, IdentError> {
         let mut config = self.base.clone();
         let mut fitted: Vec<FittedCause> = Vec::new();
+        let mut sensor_linearisation = None;
 
         let sensor: Vec<Cause> = set
             .iter()
@@ -386,9 +458,10 @@ impl<'a> Problem<'a> {
             .filter(|c| c.kind() == Kind::Sensor)
             .collect();
         if !sensor.is_empty() {
-            let (c, f) = self.fit_sensors(&sensor, warm, screen)?;
+            let (c, f, lin) = self.fit_sensors(&sensor, warm, screen, from)?;
             config = c;
             fitted.extend(f);
+            sensor_linearisation = lin.map(Rc::new);
         }
         let state = self.state(&config)?;
 
@@ -429,6 +502,7 @@ impl<'a> Problem<'a> {
             evaluation,
             state,
             torque_delta,
+            sensor_linearisation,
         })
     }
 
@@ -478,6 +552,17 @@ impl<'a> Problem<'a> {
         }
         e
     }
+}
+
+/// `base` with the sensor causes of `layout` set to `theta` (their values in order).
+fn build_sensors(base: &ModelConfig, layout: &[(Cause, usize)], theta: &[f64]) -> ModelConfig {
+    let mut config = base.clone();
+    let mut i = 0;
+    for &(cause, len) in layout {
+        cause.apply(&mut config, &theta[i..i + len]);
+        i += len;
+    }
+    config
 }
 
 /// Solve with some unknowns held at given values; returns the full vector and standard errors

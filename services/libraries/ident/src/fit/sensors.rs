@@ -4,7 +4,7 @@
 //! damped steps within the causes' bounds.
 
 use super::jacobian::{forward_jacobian, normal_equations};
-use super::{FittedCause, Problem};
+use super::{FittedCause, Problem, SensorLinearisation, build_sensors};
 use crate::effects::Cause;
 use crate::error::IdentError;
 use crate::stats::LsFit;
@@ -13,13 +13,16 @@ use testbed_model::ModelConfig;
 
 impl Problem<'_> {
     /// Fit the sensor causes `set` jointly (see [`Problem::fit_screened`] for `warm` and
-    /// `screen`): the configuration with the fitted values, and the fitted causes.
+    /// `screen`, [`Problem::fit_from`] for `from`): the configuration with the fitted values,
+    /// the fitted causes, and the last linearisation (none when the values were kept or
+    /// screened out).
     pub(super) fn fit_sensors(
         &self,
         set: &[Cause],
         warm: &HashMap<Cause, FittedCause>,
         screen: Option<(f64, f64)>,
-    ) -> Result<(ModelConfig, Vec<FittedCause>), IdentError> {
+        from: Option<&SensorLinearisation>,
+    ) -> Result<SensorFit, IdentError> {
         if set.iter().all(|c| warm.contains_key(c)) {
             let mut config = self.base.clone();
             let fitted: Vec<FittedCause> =
@@ -27,7 +30,7 @@ impl Problem<'_> {
             for f in &fitted {
                 f.cause.apply(&mut config, &f.values);
             }
-            return Ok((config, fitted));
+            return Ok((config, fitted, None));
         }
         let mut theta: Vec<f64> = Vec::new();
         let mut layout: Vec<(Cause, usize)> = Vec::new();
@@ -39,25 +42,14 @@ impl Problem<'_> {
             layout.push((cause, start.len()));
             theta.extend(start);
         }
-        let build = |theta: &[f64]| {
-            let mut config = self.base.clone();
-            let mut i = 0;
-            for &(cause, len) in &layout {
-                cause.apply(&mut config, &theta[i..i + len]);
-                i += len;
-            }
-            config
-        };
-        let clamp = |theta: &mut [f64]| {
-            let mut i = 0;
-            for &(cause, len) in &layout {
-                for j in 0..len {
-                    let (lo, hi) = cause.bounds(j);
-                    theta[i + j] = theta[i + j].clamp(lo, hi);
-                }
-                i += len;
-            }
-        };
+        if let Some(from) = from.filter(|f| f.layout == layout) {
+            let (theta, fit) = self.step_from(from)?;
+            let config = build_sensors(&self.base, &layout, &theta);
+            let fitted = fitted_causes(&layout, &theta, &fit.stderr());
+            return Ok((config, fitted, None));
+        }
+        let build = |theta: &[f64]| build_sensors(&self.base, &layout, theta);
+        let clamp = |theta: &mut [f64]| clamp_to_bounds(&layout, theta);
         let steps: Vec<f64> = layout
             .iter()
             .flat_map(|&(cause, _)| {
@@ -73,8 +65,8 @@ impl Problem<'_> {
             self.perturbed_innovations(&ts.iter().map(|t| build(t)).collect::<Vec<_>>())
         };
         let mut r0 = self.fit_innovations(&*self.recon(&build(&theta))?);
-        let rss = |r: &[f64]| r.iter().map(|x| x * x).sum::<f64>();
         let mut last: Option<LsFit> = None;
+        let mut linearisation: Option<SensorLinearisation> = None;
         // Screening with causes already fitted (warm): only the new causes' columns are
         // linearised first; the fitted ones sit at their optimum. Except the magnetometer's two:
         // a soft iron fitted alone takes up part of a hard iron (its column on the nearly
@@ -106,7 +98,8 @@ impl Problem<'_> {
                 .solve()
                 .map_or(0.0, |f| (reference - f.rss) / f.sigma2().max(1e-300));
             if predicted < 0.5 * threshold {
-                return Ok(self.unchanged(&layout, &theta, &build(&theta)));
+                let (config, fitted) = self.unchanged(&layout, &theta, &build(&theta));
+                return Ok((config, fitted, None));
             }
         }
         for _iteration in 0..8 {
@@ -121,12 +114,7 @@ impl Problem<'_> {
                 perturbed,
             )?;
             let ne = normal_equations(&columns, &r0);
-            let Some(fit) = ne.solve() else {
-                return Err(IdentError::Failed(format!(
-                    "{}: the data do not determine the parameters (no excitation of this effect)",
-                    set.iter().map(|c| c.name()).collect::<Vec<_>>().join(" + ")
-                )));
-            };
+            let fit = ne.solve().ok_or_else(|| undetermined(&layout))?;
             let stderr = fit.stderr();
             let step: Vec<f64> = fit.theta.iter().copied().collect();
             let small = step
@@ -141,6 +129,13 @@ impl Problem<'_> {
                     break;
                 }
             }
+            linearisation = Some(SensorLinearisation {
+                layout: layout.clone(),
+                theta: theta.clone(),
+                ticks: Vec::new(),
+                residual: r0.clone(),
+                columns,
+            });
             // Damped step: halve until the residual decreases.
             let mut scale = 1.0;
             let mut accepted = false;
@@ -168,25 +163,53 @@ impl Problem<'_> {
         let config = build(&theta);
         let fit = last.ok_or_else(|| IdentError::Failed("sensor fit did not run".into()))?;
         // Standard errors: residual-scaled Gauss–Newton covariance at the last linearisation.
-        let stderr = fit.stderr();
-        let mut out = Vec::new();
-        let mut i = 0;
-        for &(cause, len) in &layout {
-            let values = theta[i..i + len].to_vec();
-            let se: Vec<f64> = (0..len)
-                .map(|j| {
-                    let (lo, hi) = cause.bounds(j);
-                    if values[j] <= lo || values[j] >= hi {
-                        f64::NAN
-                    } else {
-                        stderr[i + j]
-                    }
-                })
-                .collect();
-            out.push(FittedCause::estimated(cause, values, se));
-            i += len;
+        let fitted = fitted_causes(&layout, &theta, &fit.stderr());
+        let linearisation = linearisation.map(|mut l| {
+            let recon = self.recon(&build(&l.theta)).ok()?;
+            l.ticks = recon.innovation_ticks(|k| !self.held_out[k]);
+            (l.ticks.len() == l.residual.len()).then_some(l)
+        });
+        Ok((config, fitted, linearisation.flatten()))
+    }
+
+    /// One Gauss–Newton step from `from` on this problem's fit rows: the parameters (within
+    /// their bounds) and the linearised fit. The step is kept when the filter run at its end
+    /// fits these rows no worse than where it started; otherwise the parameters stay.
+    fn step_from(&self, from: &SensorLinearisation) -> Result<(Vec<f64>, LsFit), IdentError> {
+        let (mut theta, fit, rss_before) = self.linear_step(from)?;
+        let config = build_sensors(&self.base, &from.layout, &theta);
+        if rss(&self.fit_innovations(&*self.recon(&config)?)) > rss_before {
+            theta = from.theta.clone();
         }
-        Ok((config, out))
+        Ok((theta, fit))
+    }
+
+    /// The parameters one Gauss–Newton step from `from` on this problem's fit rows (within
+    /// their bounds; no filter run), the linearised fit, and the residual sum where it starts.
+    pub(super) fn linear_step(
+        &self,
+        from: &SensorLinearisation,
+    ) -> Result<(Vec<f64>, LsFit, f64), IdentError> {
+        let rows: Vec<usize> = (0..from.ticks.len())
+            .filter(|&i| !self.held_out[from.ticks[i]])
+            .collect();
+        let r: Vec<f64> = rows.iter().map(|&i| from.residual[i]).collect();
+        let columns: Vec<Vec<f64>> = from
+            .columns
+            .iter()
+            .map(|c| rows.iter().map(|&i| c[i]).collect())
+            .collect();
+        let fit = normal_equations(&columns, &r)
+            .solve()
+            .ok_or_else(|| undetermined(&from.layout))?;
+        let mut theta: Vec<f64> = from
+            .theta
+            .iter()
+            .zip(fit.theta.iter())
+            .map(|(a, d)| a + d)
+            .collect();
+        clamp_to_bounds(&from.layout, &mut theta);
+        Ok((theta, fit, rss(&r)))
     }
 
     /// A sensor fit that stopped at its starting values (screened out): the values, no standard
@@ -210,6 +233,58 @@ impl Problem<'_> {
             i += len;
         }
         (config.clone(), out)
+    }
+}
+
+/// A sensor fit's configuration, fitted causes and last linearisation.
+pub(super) type SensorFit = (ModelConfig, Vec<FittedCause>, Option<SensorLinearisation>);
+
+fn rss(r: &[f64]) -> f64 {
+    r.iter().map(|x| x * x).sum()
+}
+
+fn undetermined(layout: &[(Cause, usize)]) -> IdentError {
+    IdentError::Failed(format!(
+        "{}: the data do not determine the parameters (no excitation of this effect)",
+        layout
+            .iter()
+            .map(|(c, _)| c.name())
+            .collect::<Vec<_>>()
+            .join(" + ")
+    ))
+}
+
+/// Each cause of `layout` with its values from `theta` and standard errors from `stderr` (NaN
+/// for a value at a bound: not estimated).
+fn fitted_causes(layout: &[(Cause, usize)], theta: &[f64], stderr: &[f64]) -> Vec<FittedCause> {
+    let mut out = Vec::new();
+    let mut i = 0;
+    for &(cause, len) in layout {
+        let values = theta[i..i + len].to_vec();
+        let se: Vec<f64> = (0..len)
+            .map(|j| {
+                let (lo, hi) = cause.bounds(j);
+                if values[j] <= lo || values[j] >= hi {
+                    f64::NAN
+                } else {
+                    stderr[i + j]
+                }
+            })
+            .collect();
+        out.push(FittedCause::estimated(cause, values, se));
+        i += len;
+    }
+    out
+}
+
+fn clamp_to_bounds(layout: &[(Cause, usize)], theta: &mut [f64]) {
+    let mut i = 0;
+    for &(cause, len) in layout {
+        for j in 0..len {
+            let (lo, hi) = cause.bounds(j);
+            theta[i + j] = theta[i + j].clamp(lo, hi);
+        }
+        i += len;
     }
 }
 

@@ -11,9 +11,11 @@
 //! 2. **Name the cause.** The data are split in time blocks of `block_s`. By default (`folds`
 //!    5: k-fold cross-validation over contiguous blocks, block b in fold `b mod folds`) the
 //!    fits use all the data, and a candidate significant at 1 % is also fitted k times, each
-//!    time without one fold; its held-out statistic is then the sum over the folds of the
-//!    left-out fold's log-likelihood ratio against the set chosen so far (fitted the same
-//!    way). With `folds` 0 every `held_out_every`-th block is held out of the fits instead.
+//!    time without one fold (sensor causes: one Gauss–Newton step from the fit on all the
+//!    data, [`crate::fit::Problem::fit_from`]); its held-out statistic is then the sum over
+//!    the folds of the left-out fold's log-likelihood ratio against the set chosen so far
+//!    (fitted the same way). With `folds` 0 every `held_out_every`-th block is held out of
+//!    the fits instead.
 //!    Forward selection over the candidate library: at each step every remaining cause is fitted
 //!    jointly with those already chosen ([`crate::fit`]); a candidate is significant when its
 //!    likelihood ratio on the fit data beats both the information criterion (BIC, `k ln N`)
