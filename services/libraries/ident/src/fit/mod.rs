@@ -131,7 +131,7 @@ impl FittedCause {
 /// The estimated state and the channels built on it, for one sensor configuration.
 #[derive(Debug)]
 pub struct State {
-    pub recon: Reconstruction,
+    pub recon: Rc<Reconstruction>,
     pub torque: TorqueChannel,
     pub wheel: WheelChannel,
 }
@@ -337,7 +337,7 @@ impl<'a> Problem<'a> {
         if let Some(s) = self.cache.borrow().get(&key) {
             return Ok(s.clone());
         }
-        let recon = (*self.recon(config)?).clone();
+        let recon = self.recon(config)?;
         let torque = TorqueChannel::new(
             self.data,
             &recon,

@@ -405,7 +405,7 @@ fn identify_pass(
     };
     let (baseline_recon, baseline_model) = match (&baseline_recon, &prior) {
         (Some(r), Some(p)) => (r, p.original),
-        _ => (&nominal.state.recon, model),
+        _ => (&*nominal.state.recon, model),
     };
     let second_pass = prior.is_some();
     let extends = extends || second_pass;
