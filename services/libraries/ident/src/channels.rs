@@ -72,6 +72,17 @@ pub fn column_cause(col: usize) -> (Cause, usize) {
     }
 }
 
+/// Whether a torque channel builds its regressors.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Regressors {
+    /// Every column's (to fit torque causes).
+    Built,
+    /// None (`x` empty): enough for the residual of the configuration as it is
+    /// ([`TorqueChannel::whitened`] with no change) and its whiteness, at a fraction of the
+    /// time and memory (the regressors are 30 vectors a row).
+    Skipped,
+}
+
 /// The torque channel on one reconstruction, under a base configuration.
 #[derive(Debug, Clone)]
 pub struct TorqueChannel {
@@ -83,7 +94,7 @@ pub struct TorqueChannel {
     /// body axes.
     pub y: Vec<Vector3<f64>>,
     /// Regressors per row, [`TORQUE_COLUMNS`] columns (Nms per unit of the parameter), segment
-    /// mean removed.
+    /// mean removed; empty when built with [`Regressors::Skipped`].
     pub x: Vec<[Vector3<f64>; TORQUE_COLUMNS]>,
     /// A-priori 1σ of a row per axis, Nms (gyro and tachometer noise).
     pub sigma: Vector3<f64>,
@@ -97,14 +108,16 @@ pub struct TorqueChannel {
 impl TorqueChannel {
     /// Build the channel: segments of at most `segment_s` that do not cross a change of
     /// `held_out` (fit / held-out blocks), on a regular clock, after the filter's start, away
-    /// from the tilt stop; residuals under `config`; regressors.
+    /// from the tilt stop; residuals under `config`; regressors unless `regressors` skips them.
     pub fn new(
         data: &Aligned,
         recon: &Reconstruction,
         config: &ModelConfig,
         segment_s: f64,
         held_out: &[bool],
+        regressors: Regressors,
     ) -> Self {
+        let built = regressors == Regressors::Built;
         let n = data.len();
         let max_len = ((segment_s / data.period_s).round() as usize).max(10);
         let inertia = config.true_inertia().unwrap_or_else(Matrix3::identity);
@@ -206,7 +219,7 @@ impl TorqueChannel {
             ticks: Vec::with_capacity(n),
             segments: Vec::new(),
             y: Vec::with_capacity(n),
-            x: Vec::with_capacity(n),
+            x: Vec::with_capacity(if built { n } else { 0 }),
             sigma: Vector3::zeros(),
             excited: [false; TORQUE_COLUMNS],
             thrusters: None,
@@ -220,21 +233,30 @@ impl TorqueChannel {
             // A segment from k: same block, usable ticks, at most max_len.
             let first_row = out.ticks.len();
             let b0 = recon.bias[k];
-            let (m0, _) = parts(k, &b0);
+            let zero = || [Vector3::zeros(); TORQUE_COLUMNS];
+            let parts_if_built = |k: usize| {
+                if built {
+                    parts(k, &b0)
+                } else {
+                    (zero(), zero())
+                }
+            };
+            let (m0, mut prev_parts) = parts_if_built(k);
             let h0 = momentum(k, &b0);
             let mut c = Vector3::zeros();
-            let mut xc = [Vector3::zeros(); TORQUE_COLUMNS];
+            let mut xc = zero();
             let mut prev_f = integrand(k, &b0);
-            let mut prev_parts = parts(k, &b0).1;
             let start = k;
             loop {
-                let (m, f_parts) = parts(k, &b0);
+                let (m, f_parts) = parts_if_built(k);
                 if k > start {
                     let h = 0.5 * (data.t[k] - data.t[k - 1]);
                     let fk = integrand(k, &b0);
                     c += h * (prev_f + fk);
-                    for col in 0..TORQUE_COLUMNS {
-                        xc[col] += h * (prev_parts[col] + f_parts[col]);
+                    if built {
+                        for col in 0..TORQUE_COLUMNS {
+                            xc[col] += h * (prev_parts[col] + f_parts[col]);
+                        }
                     }
                     // The thrusters' impulse over the interval, exact (valve switches inside).
                     if let Some(th) = &thrusters {
@@ -248,8 +270,10 @@ impl TorqueChannel {
                 }
                 out.ticks.push(k);
                 out.y.push(momentum(k, &b0) - h0 + c);
-                out.x
-                    .push(std::array::from_fn(|col| m[col] - m0[col] + xc[col]));
+                if built {
+                    out.x
+                        .push(std::array::from_fn(|col| m[col] - m0[col] + xc[col]));
+                }
                 k += 1;
                 if k + 1 >= n
                     || k - start >= max_len
@@ -269,17 +293,21 @@ impl TorqueChannel {
             // Free offset per segment: remove the means.
             let len = rows.len() as f64;
             let ym: Vector3<f64> = out.y[rows.clone()].iter().sum::<Vector3<f64>>() / len;
-            let xm: [Vector3<f64>; TORQUE_COLUMNS] = std::array::from_fn(|col| {
-                out.x[rows.clone()]
-                    .iter()
-                    .map(|r| r[col])
-                    .sum::<Vector3<f64>>()
-                    / len
-            });
             for r in rows.clone() {
                 out.y[r] -= ym;
-                for col in 0..TORQUE_COLUMNS {
-                    out.x[r][col] -= xm[col];
+            }
+            if built {
+                let xm: [Vector3<f64>; TORQUE_COLUMNS] = std::array::from_fn(|col| {
+                    out.x[rows.clone()]
+                        .iter()
+                        .map(|r| r[col])
+                        .sum::<Vector3<f64>>()
+                        / len
+                });
+                for r in rows.clone() {
+                    for col in 0..TORQUE_COLUMNS {
+                        out.x[r][col] -= xm[col];
+                    }
                 }
             }
             out.segments.push(rows);

@@ -38,7 +38,7 @@ pub use hard_iron::{ellipsoid_fit, ellipsoid_fit_pairs, sphere_fit};
 pub use information::{Information, information_params, information_supported};
 pub use wheels::WheelModel;
 
-use crate::channels::{TORQUE_COLUMNS, TorqueChannel, WheelChannel};
+use crate::channels::{Regressors, TORQUE_COLUMNS, TorqueChannel, WheelChannel};
 use crate::data::Aligned;
 use crate::effects::{Cause, Kind};
 use crate::error::IdentError;
@@ -337,6 +337,25 @@ impl<'a> Problem<'a> {
         if let Some(s) = self.cache.borrow().get(&key) {
             return Ok(s.clone());
         }
+        let state = Rc::new(self.build_state(config, Regressors::Built)?);
+        self.cache.borrow_mut().insert(key, state.clone());
+        Ok(state)
+    }
+
+    /// The state of `config` to evaluate it as it is: the cached one, else one whose torque
+    /// channel has no regressors (not cached: [`Problem::state`] would return it to a fit).
+    fn state_to_evaluate(&self, config: &ModelConfig) -> Result<Rc<State>, IdentError> {
+        if let Some(s) = self.cache.borrow().get(&SensorKey::of(config)) {
+            return Ok(s.clone());
+        }
+        Ok(Rc::new(self.build_state(config, Regressors::Skipped)?))
+    }
+
+    fn build_state(
+        &self,
+        config: &ModelConfig,
+        regressors: Regressors,
+    ) -> Result<State, IdentError> {
         let recon = self.recon(config)?;
         let torque = TorqueChannel::new(
             self.data,
@@ -344,15 +363,14 @@ impl<'a> Problem<'a> {
             &self.base,
             self.options.torque_segment_s,
             &self.held_out,
+            regressors,
         );
         let wheel = WheelChannel::new(self.data, &recon, &self.base);
-        let state = Rc::new(State {
+        Ok(State {
             recon,
             torque,
             wheel,
-        });
-        self.cache.borrow_mut().insert(key, state.clone());
-        Ok(state)
+        })
     }
 
     /// Forget cached states and filter runs (memory) except the base's and those of `keep`.
@@ -463,7 +481,12 @@ impl<'a> Problem<'a> {
             fitted.extend(f);
             sensor_linearisation = lin.map(Rc::new);
         }
-        let state = self.state(&config)?;
+        // A fold's fit of sensor causes alone is only evaluated: no torque fit on its state.
+        let state = if from.is_some() && set.iter().all(|c| c.kind() == Kind::Sensor) {
+            self.state_to_evaluate(&config)?
+        } else {
+            self.state(&config)?
+        };
 
         let torque: Vec<Cause> = set
             .iter()

@@ -18,7 +18,7 @@
 //! under a correct sensor model: each component is tested by Ljung–Box over
 //! [`INNOVATION_LAGS`] successive samples (Bonferroni over the five components, the same level).
 
-use crate::channels::TorqueChannel;
+use crate::channels::{Regressors, TorqueChannel};
 use crate::data::Aligned;
 use crate::reconstruct::Reconstruction;
 use crate::spectral::{colour_fit, periodogram};
@@ -153,7 +153,14 @@ pub(super) fn whiteness(
     config: &ModelConfig,
 ) -> WhitenessReport {
     let held = vec![false; data.len()];
-    let channel = TorqueChannel::new(data, recon, config, COLOUR_SEGMENT_S, &held);
+    let channel = TorqueChannel::new(
+        data,
+        recon,
+        config,
+        COLOUR_SEGMENT_S,
+        &held,
+        Regressors::Skipped,
+    );
     let mut report = whiteness_of(&channel, data.period_s);
     report.innovations = innovation_whiteness(recon);
     report
