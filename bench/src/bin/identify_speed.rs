@@ -9,11 +9,17 @@
 //! fitted through the attitude filter), each a median of `repeats` runs. The verdicts on one
 //! core and on all must be the same.
 //!
-//! `cargo run --release -p testbed-bench --bin identify_speed [-- --duration 3600 --repeats 3 --folds 5 --json]`
+//! With `--baseline-bin`, another build's `identify_speed` (an earlier commit's, say) is run in
+//! turn with this build's identification, `repeats` times each, and the medians compared.
+//!
+//! `cargo run --release -p testbed-bench --bin identify_speed [-- --duration 3600 --repeats 3 --folds 5 --baseline-bin OTHER/identify_speed --json]`
 
+use anyhow::{Context, bail};
 use clap::Parser;
+use std::path::PathBuf;
+use std::process::Command;
 use std::time::{Duration, Instant};
-use testbed_bench::median_time;
+use testbed_bench::{median, median_time};
 use testbed_ident::experiment::{self, ExperimentOptions};
 use testbed_ident::{Options, identify};
 use testbed_model::ModelConfig;
@@ -33,8 +39,41 @@ struct Args {
     /// Folds of the selection's cross-validation (`Options::folds`; 0: the held-out third).
     #[arg(long, default_value_t = Options::default().folds)]
     folds: usize,
+    /// Another build's `identify_speed`, run in turn with this build's identification.
+    #[arg(long)]
+    baseline_bin: Option<PathBuf>,
     #[arg(long)]
     json: bool,
+}
+
+/// Seconds of one identification of the clean and of the hidden-effect record by `bin` (its
+/// `--json` report, one repeat).
+fn baseline_once(bin: &PathBuf, args: &Args) -> anyhow::Result<(f64, f64, u64)> {
+    let out = Command::new(bin)
+        .args(["--json", "--repeats", "1"])
+        .args(["--duration", &args.duration.to_string()])
+        .args(["--folds", &args.folds.to_string()])
+        .output()
+        .with_context(|| format!("running the baseline {}", bin.display()))?;
+    if !out.status.success() {
+        bail!(
+            "the baseline {} failed: {}",
+            bin.display(),
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout)
+        .with_context(|| format!("the baseline {}'s output", bin.display()))?;
+    let field = |key: &str| {
+        report[key]
+            .as_f64()
+            .with_context(|| format!("the baseline {}'s report has no {key}", bin.display()))
+    };
+    Ok((
+        field("identify_clean_s")?,
+        field("identify_hidden_effect_s")?,
+        field("identify_hidden_effect_filter_runs")? as u64,
+    ))
 }
 
 fn main() -> anyhow::Result<()> {
@@ -99,6 +138,35 @@ fn main() -> anyhow::Result<()> {
         start.elapsed()
     };
     let s = |d: Duration| d.as_secs_f64();
+    // Beside another build: one identification of each record by this build, then one by the
+    // other, `repeats` times.
+    let beside = match &args.baseline_bin {
+        None => None,
+        Some(bin) => {
+            let (mut this, mut other) = ((Vec::new(), Vec::new()), (Vec::new(), Vec::new()));
+            let mut other_runs = 0;
+            for _ in 0..args.repeats {
+                let start = Instant::now();
+                identify(&clean, &nominal, &analysis)?;
+                this.0.push(s(start.elapsed()));
+                let start = Instant::now();
+                identify(&effect, &nominal, &analysis)?;
+                this.1.push(s(start.elapsed()));
+                let (c, e, runs) = baseline_once(bin, &args)?;
+                other.0.push(c);
+                other.1.push(e);
+                other_runs = runs;
+            }
+            Some(serde_json::json!({
+                "bin": bin.display().to_string(),
+                "this_clean_s": median(this.0),
+                "this_hidden_effect_s": median(this.1),
+                "baseline_clean_s": median(other.0),
+                "baseline_hidden_effect_s": median(other.1),
+                "baseline_hidden_effect_filter_runs": other_runs,
+            }))
+        }
+    };
     let rows = clean.gyro.len();
     let report = serde_json::json!({
         "data_s": args.duration,
@@ -122,6 +190,7 @@ fn main() -> anyhow::Result<()> {
         "target_clean_s": CLEAN_TARGET_S,
         "target_hidden_effect_s": EFFECT_TARGET_S,
         "within_target": s(clean_time) <= CLEAN_TARGET_S && s(effect_time) <= EFFECT_TARGET_S,
+        "beside_baseline": beside,
     });
     if args.json {
         println!("{}", serde_json::to_string_pretty(&report)?);
@@ -165,6 +234,22 @@ fn main() -> anyhow::Result<()> {
             "one attitude-filter pass over the record",
             s(filter)
         );
+        if let Some(b) = &beside {
+            let f = |k: &str| b[k].as_f64().unwrap_or(f64::NAN);
+            println!(
+                "beside {} (alternated, medians of {}): clean {:.3} s against {:.3} s ({:.2}×), \
+                 hidden effect {:.3} s against {:.3} s ({:.2}×; {} filter passes there)",
+                b["bin"].as_str().unwrap_or(""),
+                args.repeats,
+                f("this_clean_s"),
+                f("baseline_clean_s"),
+                f("baseline_clean_s") / f("this_clean_s"),
+                f("this_hidden_effect_s"),
+                f("baseline_hidden_effect_s"),
+                f("baseline_hidden_effect_s") / f("this_hidden_effect_s"),
+                b["baseline_hidden_effect_filter_runs"],
+            );
+        }
         println!(
             "identify costs {:.1}× (clean) and {:.1}× (hidden effect) the simulation of the same \
              data; targets ≤ {CLEAN_TARGET_S} s clean, ≤ {EFFECT_TARGET_S} s with the effect: {}",
