@@ -159,9 +159,13 @@ fn correlation_grid() -> impl Iterator<Item = f64> {
         .map(|i| 1.5 * 10f64.powf(i as f64 / 24.0))
 }
 
-/// The null and coloured fits to the pooled periodogram `ordinates` ([`periodogram`]); `None`
-/// with fewer than 32 ordinates.
-pub fn colour_fit(ordinates: &[(f64, f64)]) -> Option<ColourFit> {
+/// The coloured model at one point of the correlation grid: `φ`, the negative
+/// log-likelihood, the coefficients `[W, σ², A]`.
+type GridFit = (f64, f64, Vec<f64>);
+
+/// The null fit's negative log-likelihood, and the coloured model's fit at every point of the
+/// correlation grid; `None` with fewer than 32 ordinates.
+fn grid_fits(ordinates: &[(f64, f64)]) -> Option<(f64, Vec<GridFit>)> {
     if ordinates.len() < 32 {
         return None;
     }
@@ -169,29 +173,68 @@ pub fn colour_fit(ordinates: &[(f64, f64)]) -> Option<ColourFit> {
     let ones = vec![1.0; ordinates.len()];
     let diff: Vec<f64> = ordinates.iter().map(|o| 2.0 * (1.0 - o.0.cos())).collect();
     let (nll0, null) = whittle_linear(&[ones.clone(), diff.clone()], &power, None);
-    let mut best: Option<(f64, f64, Vec<f64>)> = None;
     // Each grid point starts from its neighbour's fit (the first from the null's).
     let mut start = [null, vec![0.0]].concat();
-    for c in correlation_grid() {
-        let phi = (-1.0 / c).exp();
-        let ar: Vec<f64> = ordinates.iter().map(|o| ar1_shape(phi, o.0)).collect();
-        let (nll, coef) = whittle_linear(&[ones.clone(), diff.clone(), ar], &power, Some(&start));
-        start.clone_from(&coef);
-        if best.as_ref().is_none_or(|b| nll < b.0) {
-            best = Some((nll, phi, coef));
-        }
-    }
-    let (nll1, phi, coef) = best?;
-    let lr = (2.0 * (nll0 - nll1)).max(0.0);
-    Some(ColourFit {
-        ordinates: ordinates.len(),
+    let fits = correlation_grid()
+        .map(|c| {
+            let phi = (-1.0 / c).exp();
+            let ar: Vec<f64> = ordinates.iter().map(|o| ar1_shape(phi, o.0)).collect();
+            let (nll, coef) =
+                whittle_linear(&[ones.clone(), diff.clone(), ar], &power, Some(&start));
+            start.clone_from(&coef);
+            (phi, nll, coef)
+        })
+        .collect();
+    Some((nll0, fits))
+}
+
+fn colour_of(ordinates: usize, lr: f64, dof: f64, phi: f64, coef: &[f64]) -> ColourFit {
+    ColourFit {
+        ordinates,
         lr,
-        p: (1.0 - chi_square_cdf(lr, 2.0)).clamp(0.0, 1.0),
+        p: (1.0 - chi_square_cdf(lr, dof)).clamp(0.0, 1.0),
         ar_variance: coef[2],
         phi,
         white_variance: coef[0],
         differenced_variance: coef[1],
-    })
+    }
+}
+
+/// The null and coloured fits to the pooled periodogram `ordinates` ([`periodogram`]); `None`
+/// with fewer than 32 ordinates.
+pub fn colour_fit(ordinates: &[(f64, f64)]) -> Option<ColourFit> {
+    let (nll0, fits) = grid_fits(ordinates)?;
+    let (phi, nll1, coef) = fits.into_iter().min_by(|a, b| a.1.total_cmp(&b.1))?;
+    let lr = (2.0 * (nll0 - nll1)).max(0.0);
+    Some(colour_of(ordinates.len(), lr, 2.0, phi, &coef))
+}
+
+/// The coloured model fitted to several series at once with one correlation time (each its
+/// own variances): a disturbance that wanders on every axis at the same pace is found from
+/// their joint evidence when no one axis holds enough. Per series its fit at the shared `φ`;
+/// the likelihood ratio and p value (χ², one degree of freedom per series plus the shared
+/// `φ`) are the joint ones, the same in every element. `None` when a series has fewer than 32
+/// ordinates.
+pub fn joint_colour_fit(series: &[Vec<(f64, f64)>]) -> Option<Vec<ColourFit>> {
+    let fits: Vec<(f64, Vec<GridFit>)> =
+        series.iter().map(|o| grid_fits(o)).collect::<Option<_>>()?;
+    let points = fits.first()?.1.len();
+    let best = (0..points).min_by(|&a, &b| {
+        let total = |i: usize| fits.iter().map(|f| f.1[i].1).sum::<f64>();
+        total(a).total_cmp(&total(b))
+    })?;
+    let lr = fits
+        .iter()
+        .map(|(nll0, grid)| 2.0 * (nll0 - grid[best].1))
+        .sum::<f64>()
+        .max(0.0);
+    let dof = series.len() as f64 + 1.0;
+    Some(
+        fits.iter()
+            .zip(series)
+            .map(|((_, grid), o)| colour_of(o.len(), lr, dof, grid[best].0, &grid[best].2))
+            .collect(),
+    )
 }
 
 #[cfg(test)]

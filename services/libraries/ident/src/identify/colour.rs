@@ -10,9 +10,11 @@
 //! The residual itself is not white under a correct model (its noise is differenced and
 //! correlated within a segment), so the test is on this pre-whitening model: the Whittle
 //! likelihood ratio of the pooled periodogram of `d` with and without a first-order
-//! Gauss–Markov component ([`crate::spectral`]). A component found at `p · 3 < alpha`
-//! (Bonferroni over the axes) is a coloured disturbance, with rms `√A / Δt` and correlation
-//! time `−Δt / ln φ`.
+//! Gauss–Markov component ([`crate::spectral`]), on each axis and on the three jointly with
+//! one correlation time (a wandering torque from air flow moves every axis at about the same
+//! pace; the joint test finds one too small for any single axis). A component found at
+//! `p · 4 < alpha` (Bonferroni over the three axes and the joint test) is a coloured
+//! disturbance, with rms `√A / Δt` and correlation time `−Δt / ln φ`.
 //!
 //! The attitude filter's innovations, normalised by their predicted covariance, are white
 //! under a correct sensor model: each component is tested by Ljung–Box over
@@ -21,7 +23,7 @@
 use crate::channels::{Regressors, TorqueChannel};
 use crate::data::Aligned;
 use crate::reconstruct::Reconstruction;
-use crate::spectral::{colour_fit, periodogram};
+use crate::spectral::{ColourFit, colour_fit, joint_colour_fit, periodogram};
 use serde::Serialize;
 use testbed_model::ModelConfig;
 
@@ -73,21 +75,39 @@ pub struct InnovationWhiteness {
     pub coloured: bool,
 }
 
-/// The torque channel's whiteness per axis, and the innovations'.
+/// The torque channel's whiteness per axis and on the three axes jointly, and the
+/// innovations'.
 #[derive(Debug, Clone, Serialize)]
 pub struct WhitenessReport {
     pub alpha: f64,
+    /// Per axis, each its own correlation time (p values times 4: Bonferroni over the three
+    /// axes and the joint test).
     pub channels: Vec<ChannelWhiteness>,
+    /// The joint test: one correlation time for the three axes, each its own rms; `lr`, `p`
+    /// and `coloured` are the joint test's, the same on every axis (empty when an axis has too
+    /// few ordinates).
+    pub joint: Vec<ChannelWhiteness>,
     pub innovations: Vec<InnovationWhiteness>,
 }
 
 impl WhitenessReport {
     /// The coloured disturbances, in words.
     pub fn lines(&self) -> Vec<String> {
-        self.channels
-            .iter()
-            .filter(|c| c.coloured)
-            .map(|c| {
+        let joint = self.joint.first().filter(|j| j.coloured).map(|j| {
+            format!(
+                "coloured disturbance on the three torque axes, one correlation time {} s: rms {} Nm (joint whiteness test p = {:.1e})",
+                round_sig(j.correlation_time_s),
+                self.joint
+                    .iter()
+                    .map(|c| format!("{:.2e}", c.rms_nm))
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                j.p
+            )
+        });
+        joint
+            .into_iter()
+            .chain(self.channels.iter().filter(|c| c.coloured).map(|c| {
                 format!(
                     "coloured disturbance on {}: rms {:.2e} Nm, correlation time {} s (whiteness test p = {:.1e})",
                     c.channel,
@@ -95,7 +115,7 @@ impl WhitenessReport {
                     round_sig(c.correlation_time_s),
                     c.p
                 )
-            })
+            }))
             .chain(self.innovations.iter().filter(|c| c.coloured).map(|c| {
                 format!(
                     "coloured residual on {}: lag-1 correlation {:.2}, rms {:.2} of the predicted (whiteness test: Ljung–Box {:.1} on {} lags, p = {:.1e})",
@@ -166,37 +186,53 @@ pub(super) fn whiteness(
     report
 }
 
-/// The test on a torque channel whose rows are `dt_s` apart.
+/// The tests on a torque channel whose rows are `dt_s` apart: each axis, and the three axes
+/// jointly with one correlation time (Bonferroni over the four).
 fn whiteness_of(channel: &TorqueChannel, dt_s: f64) -> WhitenessReport {
-    let mut channels = Vec::new();
-    for axis in 0..3 {
-        let segments: Vec<Vec<f64>> = channel
-            .segments
-            .iter()
-            .map(|rows| {
-                rows.clone()
-                    .skip(1)
-                    .map(|r| channel.y[r][axis] - channel.y[r - 1][axis])
-                    .collect()
-            })
-            .collect();
-        let Some(fit) = colour_fit(&periodogram(&segments)) else {
-            continue;
-        };
-        let p = (fit.p * 3.0).min(1.0);
-        channels.push(ChannelWhiteness {
-            channel: ["torque_x", "torque_y", "torque_z"][axis].to_string(),
+    const AXES: [&str; 3] = ["torque_x", "torque_y", "torque_z"];
+    const TESTS: f64 = AXES.len() as f64 + 1.0;
+    let ordinates: Vec<Vec<(f64, f64)>> = (0..3)
+        .map(|axis| {
+            let segments: Vec<Vec<f64>> = channel
+                .segments
+                .iter()
+                .map(|rows| {
+                    rows.clone()
+                        .skip(1)
+                        .map(|r| channel.y[r][axis] - channel.y[r - 1][axis])
+                        .collect()
+                })
+                .collect();
+            periodogram(&segments)
+        })
+        .collect();
+    let whiteness = |channel: &str, fit: &ColourFit| {
+        let p = (fit.p * TESTS).min(1.0);
+        ChannelWhiteness {
+            channel: channel.to_string(),
             ordinates: fit.ordinates,
             lr: fit.lr,
             p,
             coloured: p < COLOUR_ALPHA,
             rms_nm: fit.ar_variance.sqrt() / dt_s,
             correlation_time_s: fit.correlation_time_s(dt_s),
-        });
-    }
+        }
+    };
+    let channels = AXES
+        .iter()
+        .zip(&ordinates)
+        .filter_map(|(name, o)| Some(whiteness(name, &colour_fit(o)?)))
+        .collect();
+    let joint = joint_colour_fit(&ordinates).map(|fits| {
+        AXES.iter()
+            .zip(&fits)
+            .map(|(name, fit)| whiteness(name, fit))
+            .collect()
+    });
     WhitenessReport {
         alpha: COLOUR_ALPHA,
         channels,
+        joint: joint.unwrap_or_default(),
         innovations: Vec::new(),
     }
 }
