@@ -204,25 +204,42 @@ fn colour_of(ordinates: usize, lr: f64, dof: f64, phi: f64, coef: &[f64]) -> Col
 /// with fewer than 32 ordinates.
 pub fn colour_fit(ordinates: &[(f64, f64)]) -> Option<ColourFit> {
     let (nll0, fits) = grid_fits(ordinates)?;
-    let (phi, nll1, coef) = fits.into_iter().min_by(|a, b| a.1.total_cmp(&b.1))?;
-    let lr = (2.0 * (nll0 - nll1)).max(0.0);
-    Some(colour_of(ordinates.len(), lr, 2.0, phi, &coef))
+    best_of(ordinates.len(), nll0, fits)
 }
 
-/// The coloured model fitted to several series at once with one correlation time (each its
-/// own variances): a disturbance that wanders on every axis at the same pace is found from
-/// their joint evidence when no one axis holds enough. Per series its fit at the shared `φ`;
-/// the likelihood ratio and p value (χ², one degree of freedom per series plus the shared
-/// `φ`) are the joint ones, the same in every element. `None` when a series has fewer than 32
-/// ordinates.
-pub fn joint_colour_fit(series: &[Vec<(f64, f64)>]) -> Option<Vec<ColourFit>> {
-    let fits: Vec<(f64, Vec<GridFit>)> =
-        series.iter().map(|o| grid_fits(o)).collect::<Option<_>>()?;
+fn best_of(ordinates: usize, nll0: f64, fits: Vec<GridFit>) -> Option<ColourFit> {
+    let (phi, nll1, coef) = fits.into_iter().min_by(|a, b| a.1.total_cmp(&b.1))?;
+    let lr = (2.0 * (nll0 - nll1)).max(0.0);
+    Some(colour_of(ordinates, lr, 2.0, phi, &coef))
+}
+
+/// Each series' own coloured fit ([`colour_fit`]), and the coloured model fitted to all of
+/// them at once with one correlation time (each its own variances): a disturbance that
+/// wanders on every axis at the same pace is found from their joint evidence when no one axis
+/// holds enough. The joint fit gives per series its fit at the shared `φ`; its likelihood
+/// ratio and p value (χ², one degree of freedom per series plus the shared `φ`) are the same
+/// in every element. `None` for a series, and for the joint fit, when a series has fewer than
+/// 32 ordinates.
+pub fn colour_fits(series: &[Vec<(f64, f64)>]) -> (Vec<Option<ColourFit>>, Option<Vec<ColourFit>>) {
+    let grids: Vec<Option<(f64, Vec<GridFit>)>> = series.iter().map(|o| grid_fits(o)).collect();
+    let joint = joint_of(series, &grids);
+    let own = grids
+        .into_iter()
+        .zip(series)
+        .map(|(g, o)| g.and_then(|(nll0, fits)| best_of(o.len(), nll0, fits)))
+        .collect();
+    (own, joint)
+}
+
+fn joint_of(
+    series: &[Vec<(f64, f64)>],
+    grids: &[Option<(f64, Vec<GridFit>)>],
+) -> Option<Vec<ColourFit>> {
+    let fits: Vec<&(f64, Vec<GridFit>)> =
+        grids.iter().map(Option::as_ref).collect::<Option<_>>()?;
     let points = fits.first()?.1.len();
-    let best = (0..points).min_by(|&a, &b| {
-        let total = |i: usize| fits.iter().map(|f| f.1[i].1).sum::<f64>();
-        total(a).total_cmp(&total(b))
-    })?;
+    let total = |i: usize| fits.iter().map(|f| f.1[i].1).sum::<f64>();
+    let best = (0..points).min_by(|&a, &b| total(a).total_cmp(&total(b)))?;
     let lr = fits
         .iter()
         .map(|(nll0, grid)| 2.0 * (nll0 - grid[best].1))
@@ -293,5 +310,23 @@ mod tests {
             );
             assert!((t / 50.0).max(50.0 / t) < 1.5, "seed {seed}: T = {t}");
         }
+    }
+
+    /// Three copies of one series: the joint fit is each copy's own (same `φ` and variances)
+    /// with three times its likelihood ratio, tested against χ² with 4 degrees of freedom.
+    #[test]
+    fn the_joint_fit_of_copies_is_the_single_fit_three_times() {
+        let o = periodogram(&series(7, 5, 1200, 0.05, (-1.0_f64 / 20.0).exp()));
+        let (own, joint) = colour_fits(&[o.clone(), o.clone(), o]);
+        let joint = joint.expect("joint fit");
+        let single = own[0].clone().expect("own fit");
+        for (j, s) in joint.iter().zip(&own) {
+            let s = s.as_ref().expect("own fit");
+            assert_eq!(j.phi, s.phi);
+            assert_eq!(j.ar_variance, s.ar_variance);
+        }
+        assert!((joint[0].lr - 3.0 * single.lr).abs() < 1e-9 * single.lr.max(1.0));
+        let p4 = 1.0 - chi_square_cdf(joint[0].lr, 4.0);
+        assert!((joint[0].p - p4).abs() < 1e-12);
     }
 }

@@ -23,7 +23,7 @@
 use crate::channels::{Regressors, TorqueChannel};
 use crate::data::Aligned;
 use crate::reconstruct::Reconstruction;
-use crate::spectral::{ColourFit, colour_fit, joint_colour_fit, periodogram};
+use crate::spectral::{ColourFit, colour_fits, periodogram};
 use serde::Serialize;
 use testbed_model::ModelConfig;
 
@@ -218,12 +218,13 @@ fn whiteness_of(channel: &TorqueChannel, dt_s: f64) -> WhitenessReport {
             correlation_time_s: fit.correlation_time_s(dt_s),
         }
     };
+    let (own, joint) = colour_fits(&ordinates);
     let channels = AXES
         .iter()
-        .zip(&ordinates)
-        .filter_map(|(name, o)| Some(whiteness(name, &colour_fit(o)?)))
+        .zip(&own)
+        .filter_map(|(name, fit)| Some(whiteness(name, fit.as_ref()?)))
         .collect();
-    let joint = joint_colour_fit(&ordinates).map(|fits| {
+    let joint = joint.map(|fits| {
         AXES.iter()
             .zip(&fits)
             .map(|(name, fit)| whiteness(name, fit))
