@@ -15,6 +15,28 @@ pub fn median(mut xs: Vec<f64>) -> f64 {
     xs.get(xs.len() / 2).copied().unwrap_or(f64::NAN)
 }
 
+/// The JSON report another build's benchmark `bin` prints when run with `args` (a baseline
+/// measured in turn with this build); an error naming the binary when it fails or prints
+/// something else.
+pub fn baseline_report(
+    bin: &std::path::Path,
+    args: &[String],
+) -> anyhow::Result<serde_json::Value> {
+    use anyhow::Context;
+    let out = std::process::Command::new(bin)
+        .args(args)
+        .output()
+        .with_context(|| format!("running the baseline {}", bin.display()))?;
+    anyhow::ensure!(
+        out.status.success(),
+        "the baseline {} failed: {}",
+        bin.display(),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout)
+        .with_context(|| format!("the baseline {}'s output", bin.display()))
+}
+
 /// CPU time (user + system) of this process's waited-for descendants so far.
 pub fn children_cpu() -> Duration {
     rusage_cpu(libc::RUSAGE_CHILDREN)

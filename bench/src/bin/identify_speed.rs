@@ -14,12 +14,11 @@
 //!
 //! `cargo run --release -p testbed-bench --bin identify_speed [-- --duration 3600 --repeats 3 --folds 5 --baseline-bin OTHER/identify_speed --json]`
 
-use anyhow::{Context, bail};
+use anyhow::Context;
 use clap::Parser;
 use std::path::PathBuf;
-use std::process::Command;
 use std::time::{Duration, Instant};
-use testbed_bench::{median, median_time};
+use testbed_bench::{baseline_report, median, median_time};
 use testbed_ident::experiment::{self, ExperimentOptions};
 use testbed_ident::{Options, identify};
 use testbed_model::ModelConfig;
@@ -48,22 +47,19 @@ struct Args {
 
 /// Seconds of one identification of the clean and of the hidden-effect record by `bin` (its
 /// `--json` report, one repeat).
-fn baseline_once(bin: &PathBuf, args: &Args) -> anyhow::Result<(f64, f64, u64)> {
-    let out = Command::new(bin)
-        .args(["--json", "--repeats", "1"])
-        .args(["--duration", &args.duration.to_string()])
-        .args(["--folds", &args.folds.to_string()])
-        .output()
-        .with_context(|| format!("running the baseline {}", bin.display()))?;
-    if !out.status.success() {
-        bail!(
-            "the baseline {} failed: {}",
-            bin.display(),
-            String::from_utf8_lossy(&out.stderr)
-        );
-    }
-    let report: serde_json::Value = serde_json::from_slice(&out.stdout)
-        .with_context(|| format!("the baseline {}'s output", bin.display()))?;
+fn baseline_once(bin: &std::path::Path, args: &Args) -> anyhow::Result<(f64, f64, u64)> {
+    let report = baseline_report(
+        bin,
+        &[
+            "--json".into(),
+            "--repeats".into(),
+            "1".into(),
+            "--duration".into(),
+            args.duration.to_string(),
+            "--folds".into(),
+            args.folds.to_string(),
+        ],
+    )?;
     let field = |key: &str| {
         report[key]
             .as_f64()

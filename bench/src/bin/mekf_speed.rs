@@ -16,7 +16,7 @@ use anyhow::{Context, Result, bail};
 use clap::Parser;
 use nalgebra::Vector3;
 use std::path::PathBuf;
-use std::process::Command;
+
 use std::time::Instant;
 use testbed_bench::median;
 use testbed_config::RunConfig;
@@ -139,22 +139,19 @@ fn measure(config: &MekfConfig, ticks: &[Tick], passes: usize) -> Result<Costs> 
     })
 }
 
-fn baseline_repeat(bin: &PathBuf, args: &Args) -> Result<Costs> {
-    let out = Command::new(bin)
-        .args(["--json", "--repeats", "1"])
-        .args(["--duration", &args.duration.to_string()])
-        .args(["--passes", &args.passes.to_string()])
-        .output()
-        .with_context(|| format!("running the baseline {}", bin.display()))?;
-    if !out.status.success() {
-        bail!(
-            "the baseline {} failed: {}",
-            bin.display(),
-            String::from_utf8_lossy(&out.stderr)
-        );
-    }
-    let report: serde_json::Value = serde_json::from_slice(&out.stdout)
-        .with_context(|| format!("the baseline {}'s output", bin.display()))?;
+fn baseline_repeat(bin: &std::path::Path, args: &Args) -> Result<Costs> {
+    let report = testbed_bench::baseline_report(
+        bin,
+        &[
+            "--json".into(),
+            "--repeats".into(),
+            "1".into(),
+            "--duration".into(),
+            args.duration.to_string(),
+            "--passes".into(),
+            args.passes.to_string(),
+        ],
+    )?;
     Ok(serde_json::from_value(report["this_build"].clone())?)
 }
 
