@@ -15,15 +15,16 @@ pub fn median(mut xs: Vec<f64>) -> f64 {
     xs.get(xs.len() / 2).copied().unwrap_or(f64::NAN)
 }
 
-/// The JSON report another build's benchmark `bin` prints when run with `args` (a baseline
-/// measured in turn with this build); an error naming the binary when it fails or prints
-/// something else.
+/// The JSON report another build's benchmark `bin` prints for one repeat (`--json --repeats
+/// 1`, then `args`): a baseline measured in turn with this build. An error naming the binary
+/// when it fails or prints something else.
 pub fn baseline_report(
     bin: &std::path::Path,
     args: &[String],
 ) -> anyhow::Result<serde_json::Value> {
     use anyhow::Context;
     let out = std::process::Command::new(bin)
+        .args(["--json", "--repeats", "1"])
         .args(args)
         .output()
         .with_context(|| format!("running the baseline {}", bin.display()))?;

@@ -51,9 +51,6 @@ fn baseline_once(bin: &std::path::Path, args: &Args) -> anyhow::Result<(f64, f64
     let report = baseline_report(
         bin,
         &[
-            "--json".into(),
-            "--repeats".into(),
-            "1".into(),
             "--duration".into(),
             args.duration.to_string(),
             "--folds".into(),

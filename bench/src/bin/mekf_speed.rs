@@ -143,9 +143,6 @@ fn baseline_repeat(bin: &std::path::Path, args: &Args) -> Result<Costs> {
     let report = testbed_bench::baseline_report(
         bin,
         &[
-            "--json".into(),
-            "--repeats".into(),
-            "1".into(),
             "--duration".into(),
             args.duration.to_string(),
             "--passes".into(),
