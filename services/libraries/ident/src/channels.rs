@@ -261,8 +261,10 @@ impl TorqueChannel {
                     // The thrusters' impulse over the interval, exact (valve switches inside).
                     if let Some(th) = &thrusters {
                         c -= th.impulse_nms(k - 1);
-                        for i in 0..THRUSTER_COUNT {
-                            xc[18 + i] += th.torque_nm[i] * th.thrust_s[k - 1][i];
+                        if built {
+                            for i in 0..THRUSTER_COUNT {
+                                xc[18 + i] += th.torque_nm[i] * th.thrust_s[k - 1][i];
+                            }
                         }
                     }
                     prev_f = fk;

@@ -403,27 +403,23 @@ impl Reconstruction {
     /// Whitened innovation components of the updates on the ticks `keep` accepts, flattened
     /// (present components only), for fits.
     pub fn innovation_vector(&self, keep: impl Fn(usize) -> bool) -> Vec<f64> {
-        let mut v = Vec::with_capacity(self.innovations.len() * INNOVATION_LEN);
-        for i in self.innovations.iter().filter(|i| keep(i.tick)) {
-            for c in 0..INNOVATION_LEN {
-                if i.mask & (1 << c) != 0 {
-                    v.push(i.values[c]);
-                }
-            }
-        }
-        v
+        self.innovation_rows(keep).map(|(_, v)| v).collect()
     }
 
     /// The tick of each row of [`Reconstruction::innovation_vector`] with the same `keep`.
     pub fn innovation_ticks(&self, keep: impl Fn(usize) -> bool) -> Vec<usize> {
-        let mut v = Vec::with_capacity(self.innovations.len() * INNOVATION_LEN);
-        for i in self.innovations.iter().filter(|i| keep(i.tick)) {
-            let rows = (0..INNOVATION_LEN)
-                .filter(|c| i.mask & (1 << c) != 0)
-                .count();
-            v.extend(std::iter::repeat_n(i.tick, rows));
-        }
-        v
+        self.innovation_rows(keep).map(|(tick, _)| tick).collect()
+    }
+
+    fn innovation_rows(&self, keep: impl Fn(usize) -> bool) -> impl Iterator<Item = (usize, f64)> {
+        self.innovations
+            .iter()
+            .filter(move |i| keep(i.tick))
+            .flat_map(|i| {
+                (0..INNOVATION_LEN)
+                    .filter(move |c| i.mask & (1 << c) != 0)
+                    .map(move |c| (i.tick, i.values[c]))
+            })
     }
 }
 

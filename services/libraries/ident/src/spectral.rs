@@ -200,21 +200,15 @@ fn colour_of(ordinates: usize, lr: f64, dof: f64, phi: f64, coef: &[f64]) -> Col
     }
 }
 
-/// The null and coloured fits to the pooled periodogram `ordinates` ([`periodogram`]); `None`
-/// with fewer than 32 ordinates.
-pub fn colour_fit(ordinates: &[(f64, f64)]) -> Option<ColourFit> {
-    let (nll0, fits) = grid_fits(ordinates)?;
-    best_of(ordinates.len(), nll0, fits)
-}
-
+/// The coloured model at the grid point that fits best, against the null.
 fn best_of(ordinates: usize, nll0: f64, fits: Vec<GridFit>) -> Option<ColourFit> {
     let (phi, nll1, coef) = fits.into_iter().min_by(|a, b| a.1.total_cmp(&b.1))?;
     let lr = (2.0 * (nll0 - nll1)).max(0.0);
     Some(colour_of(ordinates, lr, 2.0, phi, &coef))
 }
 
-/// Each series' own coloured fit ([`colour_fit`]), and the coloured model fitted to all of
-/// them at once with one correlation time (each its own variances): a disturbance that
+/// The null and coloured fits to each series' pooled periodogram ([`periodogram`]), and the
+/// coloured model fitted to all of them at once with one correlation time (each its own variances): a disturbance that
 /// wanders on every axis at the same pace is found from their joint evidence when no one axis
 /// holds enough. The joint fit gives per series its fit at the shared `φ`; its likelihood
 /// ratio and p value (χ², one degree of freedom per series plus the shared `φ`) are the same
@@ -260,6 +254,11 @@ mod tests {
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
     use rand_distr::StandardNormal;
+
+    /// One series' own fit.
+    fn colour_fit(ordinates: &[(f64, f64)]) -> Option<ColourFit> {
+        colour_fits(&[ordinates.to_vec()]).0.pop().flatten()
+    }
 
     /// `e_k − e_{k−1}` (+ an AR(1) of variance `a`, coefficient `phi`), segments of `len`.
     fn series(seed: u64, segments: usize, len: usize, a: f64, phi: f64) -> Vec<Vec<f64>> {

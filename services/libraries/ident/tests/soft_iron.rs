@@ -39,19 +39,7 @@ fn named(label: &str, id: &Identification, want: &[Cause]) {
             .collect::<Vec<_>>()
     );
     if found != want {
-        for (i, step) in id.report.steps.iter().enumerate() {
-            for r in step {
-                println!(
-                    "{label}: step {i}: {}: LR {:.1} (threshold {:.1}), held-out {:.1}{}; {}",
-                    r.name,
-                    r.lr_fit,
-                    r.threshold,
-                    r.lr_held_out,
-                    if r.chosen { ", chosen" } else { "" },
-                    r.note
-                );
-            }
-        }
+        print_steps(label, id);
         for t in &id.report.cause_tests {
             println!("{label}: test {}: {}", t.name, t.verdict);
         }

@@ -47,20 +47,7 @@ fn report(label: &str, data: &Dataset, id: &Identification) {
         }
     }
     println!("{label}: commanded on-time per thruster {on:.2?} s");
-    for (i, step) in id.report.steps.iter().enumerate() {
-        for r in step {
-            println!(
-                "{label}: step {i}: {} k {} lr {:.1} threshold {:.1} held-out {:.1} {}{}",
-                r.name,
-                r.k,
-                r.lr_fit,
-                r.threshold,
-                r.lr_held_out,
-                if r.chosen { "CHOSEN " } else { "" },
-                r.note
-            );
-        }
-    }
+    print_steps(label, id);
     println!(
         "{label}: verdict {} gain {:.3} remaining {}",
         id.report.verdict, id.report.gain, id.report.remaining.message

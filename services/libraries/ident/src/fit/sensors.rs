@@ -32,22 +32,21 @@ impl Problem<'_> {
             }
             return Ok((config, fitted, None));
         }
-        let mut theta: Vec<f64> = Vec::new();
-        let mut layout: Vec<(Cause, usize)> = Vec::new();
-        for &cause in set {
-            let start = match warm.get(&cause) {
-                Some(f) => f.values.clone(),
-                None => self.initial_sensor_values(cause)?,
-            };
-            layout.push((cause, start.len()));
-            theta.extend(start);
-        }
+        let layout: Vec<(Cause, usize)> = set.iter().map(|&c| (c, c.len())).collect();
         if let Some(from) = from.filter(|f| f.layout == layout) {
             let (theta, fit) = self.step_from(from)?;
             let config = build_sensors(&self.base, &layout, &theta);
             let fitted = fitted_causes(&layout, &theta, &fit.stderr());
             return Ok((config, fitted, None));
         }
+        let mut theta: Vec<f64> = Vec::new();
+        for &cause in set {
+            theta.extend(match warm.get(&cause) {
+                Some(f) => f.values.clone(),
+                None => self.initial_sensor_values(cause)?,
+            });
+        }
+        debug_assert_eq!(theta.len(), layout.iter().map(|l| l.1).sum::<usize>());
         let build = |theta: &[f64]| build_sensors(&self.base, &layout, theta);
         let clamp = |theta: &mut [f64]| clamp_to_bounds(&layout, theta);
         let steps: Vec<f64> = layout
@@ -164,12 +163,14 @@ impl Problem<'_> {
         let fit = last.ok_or_else(|| IdentError::Failed("sensor fit did not run".into()))?;
         // Standard errors: residual-scaled Gauss–Newton covariance at the last linearisation.
         let fitted = fitted_causes(&layout, &theta, &fit.stderr());
-        let linearisation = linearisation.map(|mut l| {
-            let recon = self.recon(&build(&l.theta)).ok()?;
-            l.ticks = recon.innovation_ticks(|k| !self.held_out[k]);
-            (l.ticks.len() == l.residual.len()).then_some(l)
-        });
-        Ok((config, fitted, linearisation.flatten()))
+        // The rows' ticks, from the filter run the linearisation was taken on (cached).
+        if let Some(l) = &mut linearisation {
+            l.ticks = self
+                .recon(&build(&l.theta))?
+                .innovation_ticks(|k| !self.held_out[k]);
+            debug_assert_eq!(l.ticks.len(), l.residual.len());
+        }
+        Ok((config, fitted, linearisation))
     }
 
     /// One Gauss–Newton step from `from` on this problem's fit rows: the parameters (within

@@ -6,11 +6,11 @@ use super::falsify::{
     CauseTest, Evidence, Failures, Levels, RowSink, compete, consistency, falsified_text,
     significance_beside,
 };
-use super::unexplained::{UnexplainedEffect, competing, effect, fold_of};
+use super::unexplained::{UnexplainedEffect, competing, fold_of, search_equations};
 use crate::channels::{TORQUE_COLUMNS, TorqueChannel, column_cause, torque_columns};
 use crate::effects::{Cause, Kind};
 use crate::fit::{Problem, SetFit};
-use crate::sparse::{Design, Rows, SparseOptions, search};
+use crate::sparse::{Design, Rows, SparseOptions};
 use crate::stats::{LsFit, NormalEquations};
 use testbed_model::attitude;
 
@@ -206,17 +206,13 @@ pub(super) fn search_torque(
     ) else {
         return (Vec::new(), None);
     };
-    let mut cv_total = 0.0;
-    let mut out = Vec::new();
-    for (axis, design) in designs {
-        let result = search(&design, options);
-        let sigma = fit.state.torque.sigma[axis];
-        cv_total += result.cv_rss / (sigma * sigma);
-        if let Some(e) = effect(torque_equation(axis), "Nm", result, &design) {
-            out.push(e);
-        }
-    }
-    (out, Some(cv_total))
+    let sigma = fit.state.torque.sigma;
+    search_equations(
+        designs
+            .into_iter()
+            .map(|(axis, design)| (torque_equation(axis), sigma[axis] * sigma[axis], design)),
+        options,
+    )
 }
 
 /// Name of the torque channel's equation about body axis `axis`: `torque_x` …

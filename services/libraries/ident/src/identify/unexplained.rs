@@ -4,7 +4,7 @@
 
 use super::rounding::round_to;
 use crate::effects::Cause;
-use crate::sparse::{Design, SparseResult, Term};
+use crate::sparse::{Design, SparseOptions, SparseResult, Term, search};
 use serde::Serialize;
 use testbed_model::physics::fitted_torque::{FittedTorque, FittedTorqueTerm, TorqueFunction};
 use testbed_model::physics::fitted_wheel_torque::{
@@ -54,6 +54,23 @@ pub(super) fn competing(
 /// Folds and clusters: interleaved blocks of `block_s` (block b in fold `b mod folds`).
 pub(super) fn fold_of(t: f64, block_s: f64) -> usize {
     (t / block_s).floor().max(0.0) as usize
+}
+
+/// The sparse search of each equation `(name, noise variance, design)` of a channel in Nm: the
+/// effects found, and the cross-validated residual sum over the equations, each whitened by its
+/// noise (`None` without equations).
+pub(super) fn search_equations(
+    equations: impl IntoIterator<Item = (String, f64, Design)>,
+    options: &SparseOptions,
+) -> (Vec<UnexplainedEffect>, Option<f64>) {
+    let mut cv_total = None;
+    let mut out = Vec::new();
+    for (equation, variance, design) in equations {
+        let result = search(&design, options);
+        *cv_total.get_or_insert(0.0) += result.cv_rss / variance;
+        out.extend(effect(equation, "Nm", result, &design));
+    }
+    (out, cv_total)
 }
 
 /// The unexplained effect the sparse search `result` found in `equation` (`None`: no term).

@@ -48,11 +48,11 @@ use super::falsify::{
     CauseTest, Evidence, Failures, Levels, RowSink, Whiteness, compete, consistency,
     falsified_text, rss_of, significance_beside,
 };
-use super::unexplained::{UnexplainedEffect, competing, effect, fold_of};
+use super::unexplained::{UnexplainedEffect, competing, fold_of, search_equations};
 use crate::channels::{WheelChannel, WheelInterval, friction_regressors, speed_integral};
 use crate::effects::{Cause, Kind};
 use crate::fit::{Problem, SetFit, WheelModel};
-use crate::sparse::{Design, Rows, SparseOptions, search as sparse_search};
+use crate::sparse::{Design, Rows, SparseOptions};
 use crate::stats::{NormalEquations, chi_square_cdf, series_stats};
 use testbed_model::ModelConfig;
 
@@ -254,16 +254,12 @@ fn search(
         excluded,
     );
     let sigma2 = fit.state.wheel.sigma.max(1e-300).powi(2);
-    let mut cv_total = None;
-    let mut out = Vec::new();
-    for (w, design) in designs {
-        let result = sparse_search(&design, options);
-        *cv_total.get_or_insert(0.0) += result.cv_rss / sigma2;
-        if let Some(e) = effect(wheel_equation(w), "Nm", result, &design) {
-            out.push(e);
-        }
-    }
-    (out, cv_total)
+    search_equations(
+        designs
+            .into_iter()
+            .map(|(w, design)| (wheel_equation(w), sigma2, design)),
+        options,
+    )
 }
 
 /// The wheel search's equations, one design per wheel with enough rows: the named wheel causes'

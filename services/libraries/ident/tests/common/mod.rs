@@ -188,6 +188,25 @@ pub fn wheel_speed_rms_from_truth(
     (nom, ext)
 }
 
+/// Prints every candidate of every selection step: its likelihood ratio against the threshold,
+/// its held-out ratio, whether it was chosen, and the fit's note.
+pub fn print_steps(label: &str, id: &Identification) {
+    for (i, step) in id.report.steps.iter().enumerate() {
+        for r in step {
+            println!(
+                "{label}: step {i}: {} (k {}): LR {:.1} (threshold {:.1}), held-out {:.1}{}; {}",
+                r.name,
+                r.k,
+                r.lr_fit,
+                r.threshold,
+                r.lr_held_out,
+                if r.chosen { ", chosen" } else { "" },
+                r.note
+            );
+        }
+    }
+}
+
 /// Prints a named cause's values beside the truth, with their standard errors, and requires each
 /// within `k` standard errors (finite and positive) and within `abs` of the truth.
 pub fn check_within(
