@@ -403,7 +403,9 @@ impl Reconstruction {
     /// Whitened innovation components of the updates on the ticks `keep` accepts, flattened
     /// (present components only), for fits.
     pub fn innovation_vector(&self, keep: impl Fn(usize) -> bool) -> Vec<f64> {
-        self.innovation_rows(keep).map(|(_, v)| v).collect()
+        let mut v = Vec::with_capacity(self.innovations.len() * INNOVATION_LEN);
+        v.extend(self.innovation_rows(keep).map(|(_, v)| v));
+        v
     }
 
     /// The tick of each row of [`Reconstruction::innovation_vector`] with the same `keep`.
