@@ -158,6 +158,9 @@ pub struct Consistency {
     pub stderr: Vec<Vec<f64>>,
     /// The same blocks against a linear trend in time (`None` with fewer than three blocks).
     pub trend: Option<Trend>,
+    /// The terms of another form the blocks were fitted beside, when they disagreed without
+    /// them (`equation ≈ …` each; empty: only the terms found with the cause).
+    pub beside: Vec<String>,
 }
 
 /// The block values of a cause against a linear trend, `θ_b = a + ṙ (t_b − t̄)` (`t_b` the
@@ -504,6 +507,7 @@ pub(super) fn consistency(
             })
             .collect(),
         trend,
+        beside: Vec::new(),
     })
 }
 
