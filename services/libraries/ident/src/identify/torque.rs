@@ -12,6 +12,7 @@ use crate::effects::{Cause, Kind};
 use crate::fit::{Problem, SetFit};
 use crate::sparse::{Design, Rows, SparseOptions};
 use crate::stats::{LsFit, NormalEquations};
+use std::cell::OnceCell;
 use testbed_model::attitude;
 
 /// Per-row values of every torque candidate, already in the channel's integral form.
@@ -463,6 +464,24 @@ pub(super) fn torque_tests(
         let idx: Vec<usize> = (0..cols.len())
             .filter(|&j| cols[j].0 == Some(cause))
             .collect();
+        // The search without the cause and its own form, for the consistency test's second
+        // look and the competition: computed when first needed.
+        let competitor = OnceCell::new();
+        let competitor = || {
+            competitor
+                .get_or_init(|| {
+                    competing_explanation(
+                        problem,
+                        fit,
+                        named,
+                        cause,
+                        candidates,
+                        levels.block_s,
+                        levels.sparse,
+                    )
+                })
+                .as_ref()
+        };
         let span = (t1 - t0) / blocks as f64;
         let mut evidence = Evidence {
             consistency: consistency(&per_block, &idx, span),
@@ -481,16 +500,8 @@ pub(super) fn torque_tests(
                 .trend
                 .as_ref()
                 .is_some_and(|t| t.drifts(alpha_consistency))
-            && let Some((rival, _)) = competing_explanation(
-                problem,
-                fit,
-                named,
-                cause,
-                candidates,
-                levels.block_s,
-                levels.sparse,
-            )
-            && let beside_terms = not_of_time(&rival)
+            && let Some((rival, _)) = competitor()
+            && let beside_terms = not_of_time(rival)
             && !beside_terms.is_empty()
         {
             let (_, rival_extra) = joint_columns(named, &beside_terms, candidates, ch);
@@ -581,19 +592,11 @@ pub(super) fn torque_tests(
         // another harmonic); here the null model is the best explanation without it.
         if failures.none()
             && let Some(with) = cv_with
-            && let Some((rival, without)) = competing_explanation(
-                problem,
-                fit,
-                named,
-                cause,
-                candidates,
-                levels.block_s,
-                levels.sparse,
-            )
+            && let Some((rival, without)) = competitor()
         {
-            let (rival_cols, rival_extra) = joint_columns(named, &rival, candidates, ch);
+            let (rival_cols, rival_extra) = joint_columns(named, rival, candidates, ch);
             debug_assert_eq!(rival_cols, cols);
-            let (c, dropped) = compete("torque", with, without, &rival, || {
+            let (c, dropped) = compete("torque", with, *without, rival, || {
                 torque_significance(
                     fit,
                     &cols,
