@@ -24,6 +24,7 @@ use crate::error::IdentError;
 use crate::reconstruct::{Reconstruction, SensorModel};
 use crate::thrusters::ThrusterHistory;
 use nalgebra::{Matrix3, Vector3, Vector4};
+use rayon::prelude::*;
 use serde::Serialize;
 use testbed_model::ModelConfig;
 use testbed_model::attitude::{self, Attitude};
@@ -245,9 +246,10 @@ pub fn predict(
         ..Predictions::default()
     };
     let average = ((2.0 / data.period_s).round() as usize).max(1);
-    for &(k0, k1) in windows {
+    // Each window on its own (across the cores), then gathered in window order.
+    let window = |k0: usize, k1: usize| -> Option<[Vec<(f64, f64)>; 11]> {
         if k0 < recon.start || k1 >= data.len() {
-            continue;
+            return None;
         }
         // Initial rate from the averaged total momentum.
         let half = average
@@ -281,11 +283,9 @@ pub fn predict(
         if let Some(fitted) = window_config.effects.fitted_wheel_torque.as_mut() {
             fitted.start_time_s += data.t[k0] - data.t[0];
         }
-        let Ok(mut plant) = Plant::new(&window_config, state) else {
-            continue;
-        };
+        let mut plant = Plant::new(&window_config, state).ok()?;
         let bias = recon.bias[k0];
-        let window = out.windows.len();
+        let mut residuals: [Vec<(f64, f64)>; 11] = Default::default();
         let mut attitudes: Vec<Attitude> = Vec::with_capacity(k1 - k0 + 1);
         let mut failed = false;
         for k in k0..=k1 {
@@ -293,11 +293,11 @@ pub fn predict(
             attitudes.push(s.q);
             let gyro = sensors.gyro_reading(&s.rate_b, &s.q, &bias);
             for c in 0..3 {
-                out.residuals[c].push((data.t[k], data.gyro[k][c] - gyro[c], window));
+                residuals[c].push((data.t[k], data.gyro[k][c] - gyro[c]));
             }
             if let Some(speeds) = &data.wheel_speed {
                 for c in 0..3 {
-                    out.residuals[8 + c].push((data.t[k], speeds[k][c] - s.wheel_speed[c], window));
+                    residuals[8 + c].push((data.t[k], speeds[k][c] - s.wheel_speed[c]));
                 }
             }
             if k == k1 {
@@ -321,12 +321,7 @@ pub fn predict(
             }
         }
         if failed {
-            for r in out.residuals.iter_mut() {
-                while r.last().is_some_and(|x| x.2 == window) {
-                    r.pop();
-                }
-            }
-            continue;
+            return None;
         }
         // Vector samples inside the window, at the nearest tick.
         let (ta, tb) = (data.t[k0], data.t[k1]);
@@ -351,7 +346,7 @@ pub fn predict(
             if let Some(k) = nearest(t) {
                 let predicted = sensors.tilt_reading(&attitudes[k - k0]);
                 for c in 0..2 {
-                    out.residuals[3 + c].push((t, tilt[c] - predicted[c], window));
+                    residuals[3 + c].push((t, tilt[c] - predicted[c]));
                 }
             }
         }
@@ -367,9 +362,21 @@ pub fn predict(
             if let Some(k) = nearest(t) {
                 let predicted = sensors.field_reading(&attitudes[k - k0]);
                 for c in 0..3 {
-                    out.residuals[5 + c].push((t, field[c] - predicted[c], window));
+                    residuals[5 + c].push((t, field[c] - predicted[c]));
                 }
             }
+        }
+        Some(residuals)
+    };
+    let per_window: Vec<Option<[Vec<(f64, f64)>; 11]>> =
+        windows.par_iter().map(|&(k0, k1)| window(k0, k1)).collect();
+    for (&(k0, k1), residuals) in windows.iter().zip(per_window) {
+        let Some(residuals) = residuals else {
+            continue;
+        };
+        let index = out.windows.len();
+        for (all, own) in out.residuals.iter_mut().zip(residuals) {
+            all.extend(own.into_iter().map(|(t, r)| (t, r, index)));
         }
         out.windows.push((k0, k1));
     }

@@ -20,6 +20,7 @@
 
 use crate::stats::chi_square_cdf;
 use nalgebra::{DMatrix, DVector};
+use rayon::prelude::*;
 
 /// Periodogram ordinates `(ω_j, I_j)` of each segment (`I = |Σ x_t e^{−iω t}|² / n` at the
 /// Fourier frequencies `ω_j = 2π j / n`, `0 < j < n/2`), pooled. Segments shorter than 16
@@ -73,15 +74,16 @@ impl ColourFit {
     }
 }
 
-/// Spectral shape of a unit-variance AR(1) of coefficient `phi` at `w`.
-fn ar1_shape(phi: f64, w: f64) -> f64 {
-    (1.0 - phi * phi) / (1.0 - 2.0 * phi * w.cos() + phi * phi)
+/// Spectral shape of a unit-variance AR(1) of coefficient `phi` at the frequency whose cosine
+/// is `cos_w`.
+fn ar1_shape(phi: f64, cos_w: f64) -> f64 {
+    (1.0 - phi * phi) / (1.0 - 2.0 * phi * cos_w + phi * phi)
 }
 
 /// Whittle negative log-likelihood and non-negative coefficients of `S = Σ c_i b_i(ω)`, by
 /// iteratively reweighted least squares from `start` (coefficients; the flat spectrum at the
 /// mean power without). The fit is the same from any start; one near it needs fewer passes.
-fn whittle_linear(basis: &[Vec<f64>], power: &[f64], start: Option<&[f64]>) -> (f64, Vec<f64>) {
+fn whittle_linear(basis: &[&[f64]], power: &[f64], start: Option<&[f64]>) -> (f64, Vec<f64>) {
     let k = basis.len();
     let n = power.len();
     let mean = power.iter().sum::<f64>() / n.max(1) as f64;
@@ -170,17 +172,20 @@ fn grid_fits(ordinates: &[(f64, f64)]) -> Option<(f64, Vec<GridFit>)> {
         return None;
     }
     let power: Vec<f64> = ordinates.iter().map(|o| o.1).collect();
+    let cos_w: Vec<f64> = ordinates.iter().map(|o| o.0.cos()).collect();
     let ones = vec![1.0; ordinates.len()];
-    let diff: Vec<f64> = ordinates.iter().map(|o| 2.0 * (1.0 - o.0.cos())).collect();
-    let (nll0, null) = whittle_linear(&[ones.clone(), diff.clone()], &power, None);
+    let diff: Vec<f64> = cos_w.iter().map(|c| 2.0 * (1.0 - c)).collect();
+    let (nll0, null) = whittle_linear(&[&ones, &diff], &power, None);
     // Each grid point starts from its neighbour's fit (the first from the null's).
     let mut start = [null, vec![0.0]].concat();
+    let mut ar = vec![0.0; ordinates.len()];
     let fits = correlation_grid()
         .map(|c| {
             let phi = (-1.0 / c).exp();
-            let ar: Vec<f64> = ordinates.iter().map(|o| ar1_shape(phi, o.0)).collect();
-            let (nll, coef) =
-                whittle_linear(&[ones.clone(), diff.clone(), ar], &power, Some(&start));
+            for (a, c) in ar.iter_mut().zip(&cos_w) {
+                *a = ar1_shape(phi, *c);
+            }
+            let (nll, coef) = whittle_linear(&[&ones, &diff, &ar], &power, Some(&start));
             start.clone_from(&coef);
             (phi, nll, coef)
         })
@@ -215,7 +220,7 @@ fn best_of(ordinates: usize, nll0: f64, fits: Vec<GridFit>) -> Option<ColourFit>
 /// in every element. `None` for a series, and for the joint fit, when a series has fewer than
 /// 32 ordinates.
 pub fn colour_fits(series: &[Vec<(f64, f64)>]) -> (Vec<Option<ColourFit>>, Option<Vec<ColourFit>>) {
-    let grids: Vec<Option<(f64, Vec<GridFit>)>> = series.iter().map(|o| grid_fits(o)).collect();
+    let grids: Vec<Option<(f64, Vec<GridFit>)>> = series.par_iter().map(|o| grid_fits(o)).collect();
     let joint = joint_of(series, &grids);
     let own = grids
         .into_iter()

@@ -24,6 +24,7 @@ use crate::channels::{Regressors, TorqueChannel};
 use crate::data::Aligned;
 use crate::reconstruct::Reconstruction;
 use crate::spectral::{ColourFit, colour_fits, periodogram};
+use rayon::prelude::*;
 use serde::Serialize;
 use testbed_model::ModelConfig;
 
@@ -192,6 +193,7 @@ fn whiteness_of(channel: &TorqueChannel, dt_s: f64) -> WhitenessReport {
     const AXES: [&str; 3] = ["torque_x", "torque_y", "torque_z"];
     const TESTS: f64 = AXES.len() as f64 + 1.0;
     let ordinates: Vec<Vec<(f64, f64)>> = (0..3)
+        .into_par_iter()
         .map(|axis| {
             let segments: Vec<Vec<f64>> = channel
                 .segments
