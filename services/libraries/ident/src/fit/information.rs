@@ -20,6 +20,7 @@
 
 use super::jacobian::{forward_jacobian, normal_equations};
 use super::torque::torque_normal_equations;
+use super::wheels::WheelRows;
 use super::{Problem, State, WheelModel};
 use crate::channels::{column_cause, torque_columns};
 use crate::effects::{Cause, Kind};
@@ -112,15 +113,14 @@ impl Problem<'_> {
             let base = WheelModel::from_config(&self.base);
             let index = |c: Cause, off: usize| params.iter().position(|p| *p == (c, off));
             for w in 0..3 {
-                let (ne, _) = self.wheel_normal_equations(
-                    &state.wheel,
-                    &base,
-                    w,
-                    base.delay_s,
-                    fit_scale,
-                    fit_friction,
-                    None,
-                );
+                let rows = WheelRows {
+                    data: self.data,
+                    held_out: &self.held_out,
+                    channel: &state.wheel,
+                };
+                let drive = rows.drive_integrals(w, base.delay_s);
+                let (ne, _) =
+                    rows.normal_equations(&base, w, &drive, fit_scale, fit_friction, None);
                 let f = ne.information();
                 // (unknown of the wheel fit, parameter index)
                 let map: Vec<(usize, usize)> = [

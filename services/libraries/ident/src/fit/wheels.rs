@@ -10,6 +10,7 @@ use crate::effects::Cause;
 use crate::error::IdentError;
 use crate::stats::{NormalEquations, chi_square_quantile};
 use nalgebra::DVector;
+use rayon::prelude::*;
 use testbed_model::ModelConfig;
 use testbed_model::physics::fitted_wheel_torque::FittedWheelTorqueModel;
 use testbed_model::physics::{Wheel, WheelFrictionModel};
@@ -30,6 +31,11 @@ impl Problem<'_> {
         let fit_friction = set.contains(&Cause::WheelFriction);
         let fit_delay = set.contains(&Cause::ActuatorDelay);
         let base = WheelModel::from_config(&self.base);
+        let wheel_rows = WheelRows {
+            data: self.data,
+            held_out: &self.held_out,
+            channel: ch,
+        };
         let mut delay = base.delay_s;
         // Friction model per wheel: None = no Stribeck term.
         let mut stribeck: [Option<f64>; 3] = [None; 3];
@@ -41,7 +47,9 @@ impl Problem<'_> {
                 let total = |d: f64| -> f64 {
                     (0..3)
                         .map(|w| {
-                            self.solve_wheel(ch, &base, w, d, fit_scale, fit_friction, stribeck[w])
+                            let drive = wheel_rows.drive_integrals(w, d);
+                            wheel_rows
+                                .solve(&base, w, &drive, fit_scale, fit_friction, stribeck[w])
                                 .map_or(0.0, |s| s.rss)
                         })
                         .sum()
@@ -51,16 +59,20 @@ impl Problem<'_> {
                 delay_se = se;
             }
             for w in 0..3 {
+                // The commanded torque's integrals at this delay, shared by the friction
+                // search's many solves.
+                let drive = wheel_rows.drive_integrals(w, delay);
                 if fit_friction {
-                    let none = self.solve_wheel(ch, &base, w, delay, fit_scale, true, None);
+                    let none = wheel_rows.solve(&base, w, &drive, fit_scale, true, None);
                     let rss_of = |ns: f64| {
-                        self.solve_wheel(ch, &base, w, delay, fit_scale, true, Some(ns))
+                        wheel_rows
+                            .solve(&base, w, &drive, fit_scale, true, Some(ns))
                             .map_or(f64::INFINITY, |s| s.rss)
                     };
                     let (log_ns, log_se) =
                         search_1d(|x: f64| rss_of(x.exp()), 0.02f64.ln(), 30.0f64.ln(), 31);
                     let with =
-                        self.solve_wheel(ch, &base, w, delay, fit_scale, true, Some(log_ns.exp()));
+                        wheel_rows.solve(&base, w, &drive, fit_scale, true, Some(log_ns.exp()));
                     let threshold = stribeck_threshold(ch.rows[w].len(), self.options.alpha);
                     let (choice, model) = match (none, with) {
                         (Some(a), Some(b)) if a.rss - b.rss > threshold && b.theta[3] > 0.0 => {
@@ -75,8 +87,8 @@ impl Problem<'_> {
                     stribeck[w] = model;
                     result[w] = choice;
                 } else {
-                    result[w] = self
-                        .solve_wheel(ch, &base, w, delay, fit_scale, false, None)
+                    result[w] = wheel_rows
+                        .solve(&base, w, &drive, fit_scale, false, None)
                         .unwrap_or_default();
                 }
             }
@@ -164,22 +176,46 @@ impl Problem<'_> {
         }
         Ok(out)
     }
+}
 
-    /// Least squares of one wheel at delay `delay` with the chosen unknowns. The unknown vector
-    /// is always reported as `[scale, coulomb_pos, coulomb_neg, stribeck, viscous]`, with the
-    /// base values where not fitted.
-    #[allow(clippy::too_many_arguments)]
-    fn solve_wheel(
+/// A wheel channel's rows as a fit sees them (those not held out), for the least squares of
+/// each wheel: shared by threads, so the 1-D searches spread over the cores.
+#[derive(Clone, Copy)]
+pub(crate) struct WheelRows<'a> {
+    pub data: &'a Aligned,
+    pub held_out: &'a [bool],
+    pub channel: &'a WheelChannel,
+}
+
+impl WheelRows<'_> {
+    /// The commanded torque of wheel `w` integrated over each of its rows not held out, the
+    /// commands acting `delay` s late (the drive column of [`WheelRows::normal_equations`]).
+    pub(crate) fn drive_integrals(&self, w: usize, delay: f64) -> Vec<f64> {
+        let ch = self.channel;
+        ch.rows[w]
+            .iter()
+            .filter(|r| !self.held_out[r.k])
+            .map(|row| {
+                self.data
+                    .wheel_cmd_integral(row.t0, row.t1, delay, ch.max_torque_nm)[w]
+            })
+            .collect()
+    }
+
+    /// Least squares of one wheel with the chosen unknowns, its commands' integrals `drive`
+    /// ([`WheelRows::drive_integrals`]). The unknown vector is always reported as
+    /// `[scale, coulomb_pos, coulomb_neg, stribeck, viscous]`, with the base values where not
+    /// fitted.
+    fn solve(
         &self,
-        ch: &WheelChannel,
         base: &WheelModel,
         w: usize,
-        delay: f64,
+        drive: &[f64],
         fit_scale: bool,
         fit_friction: bool,
         ns: Option<f64>,
     ) -> Option<WheelSolve> {
-        let (ne, n) = self.wheel_normal_equations(ch, base, w, delay, fit_scale, fit_friction, ns);
+        let (ne, n) = self.normal_equations(base, w, drive, fit_scale, fit_friction, ns);
         let base_friction = &base.friction[w];
         if n < 10 {
             return None;
@@ -245,31 +281,28 @@ impl Problem<'_> {
         })
     }
 
-    /// Normal equations of wheel `w`'s least squares at delay `delay` (unknowns
-    /// `[scale, coulomb_pos, coulomb_neg, stribeck, viscous]`, a column zero where not fitted)
-    /// on the intervals not held out, rows whitened by the channel's σ: `XᵀX` is the Fisher
-    /// information of those unknowns for noise as modelled. Also the number of rows.
-    #[allow(clippy::too_many_arguments)]
-    pub(crate) fn wheel_normal_equations(
+    /// Normal equations of wheel `w`'s least squares with its commands' integrals `drive`
+    /// ([`WheelRows::drive_integrals`]; unknowns `[scale, coulomb_pos, coulomb_neg, stribeck,
+    /// viscous]`, a column zero where not fitted) on the intervals not held out, rows whitened by
+    /// the channel's σ: `XᵀX` is the Fisher information of those unknowns for noise as modelled.
+    /// Also the number of rows.
+    pub(crate) fn normal_equations(
         &self,
-        ch: &WheelChannel,
         base: &WheelModel,
         w: usize,
-        delay: f64,
+        drive: &[f64],
         fit_scale: bool,
         fit_friction: bool,
         ns: Option<f64>,
     ) -> (NormalEquations, usize) {
+        let ch = self.channel;
         let rows = &ch.rows[w];
         // Unknown layout: [s, c_pos, c_neg, t_s, k]; the Stribeck column only with `ns`.
         let mut ne = NormalEquations::new(5);
         let mut x = [0.0; 5];
         let mut n = 0usize;
         let base_friction = &base.friction[w];
-        for row in rows.iter().filter(|r| !self.held_out[r.k]) {
-            let tau = self
-                .data
-                .wheel_cmd_integral(row.t0, row.t1, delay, ch.max_torque_nm)[w];
+        for (row, &tau) in rows.iter().filter(|r| !self.held_out[r.k]).zip(drive) {
             let mut y = row.ja;
             if fit_scale {
                 x[0] = tau;
@@ -408,12 +441,13 @@ fn column_negligible(ne: &NormalEquations, j: usize) -> bool {
 /// best point's neighbours. Returns the minimiser and its standard error from the curvature,
 /// `sqrt(2 s² / f'')` with `s² = 1` (f is a whitened residual sum); NaN when the minimum is on a
 /// bound or flat.
-fn search_1d(f: impl Fn(f64) -> f64, lo: f64, hi: f64, points: usize) -> (f64, f64) {
+fn search_1d(f: impl Fn(f64) -> f64 + Sync, lo: f64, hi: f64, points: usize) -> (f64, f64) {
     let n = points.max(3);
     let xs: Vec<f64> = (0..n)
         .map(|i| lo + (hi - lo) * i as f64 / (n - 1) as f64)
         .collect();
-    let fs: Vec<f64> = xs.iter().map(|&x| f(x)).collect();
+    // The grid's points are independent: across the cores.
+    let fs: Vec<f64> = xs.par_iter().map(|&x| f(x)).collect();
     let best = (0..n).min_by(|a, b| fs[*a].total_cmp(&fs[*b])).unwrap_or(0);
     let (mut a, mut b) = (xs[best.saturating_sub(1)], xs[(best + 1).min(n - 1)]);
     let g = 0.618_033_988_749_895;
