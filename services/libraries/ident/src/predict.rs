@@ -64,6 +64,9 @@ pub struct Predictions {
     pub sigma: [f64; 11],
 }
 
+/// One window's residuals, per component `(t s, residual)`.
+type WindowResiduals = [Vec<(f64, f64)>; 11];
+
 /// RMS of the residuals of one component, normalised RMS, count.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct ComponentRms {
@@ -247,7 +250,7 @@ pub fn predict(
     };
     let average = ((2.0 / data.period_s).round() as usize).max(1);
     // Each window on its own (across the cores), then gathered in window order.
-    let window = |k0: usize, k1: usize| -> Option<[Vec<(f64, f64)>; 11]> {
+    let window = |k0: usize, k1: usize| -> Option<WindowResiduals> {
         if k0 < recon.start || k1 >= data.len() {
             return None;
         }
@@ -285,7 +288,7 @@ pub fn predict(
         }
         let mut plant = Plant::new(&window_config, state).ok()?;
         let bias = recon.bias[k0];
-        let mut residuals: [Vec<(f64, f64)>; 11] = Default::default();
+        let mut residuals: WindowResiduals = Default::default();
         let mut attitudes: Vec<Attitude> = Vec::with_capacity(k1 - k0 + 1);
         let mut failed = false;
         for k in k0..=k1 {
@@ -368,7 +371,7 @@ pub fn predict(
         }
         Some(residuals)
     };
-    let per_window: Vec<Option<[Vec<(f64, f64)>; 11]>> =
+    let per_window: Vec<Option<WindowResiduals>> =
         windows.par_iter().map(|&(k0, k1)| window(k0, k1)).collect();
     for (&(k0, k1), residuals) in windows.iter().zip(per_window) {
         let Some(residuals) = residuals else {

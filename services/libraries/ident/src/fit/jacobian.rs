@@ -16,7 +16,27 @@ pub fn forward_jacobian<E>(
     bounds: impl Fn(usize) -> (f64, f64),
     residuals: impl FnOnce(&[Vec<f64>]) -> Result<Vec<Vec<f64>>, E>,
 ) -> Result<Vec<Vec<f64>>, E> {
-    let perturbed: Vec<Vec<f64>> = which
+    let perturbed = perturbations(theta, which, steps, bounds);
+    let values = residuals(&perturbed)?;
+    Ok(which
+        .iter()
+        .zip(&perturbed)
+        .zip(values)
+        .map(|((&j, t), rj)| {
+            let hh = t[j] - theta[j];
+            rj.iter().zip(r0).map(|(a, b)| (a - b) / hh).collect()
+        })
+        .collect())
+}
+
+/// The parameter vectors [`forward_jacobian`] evaluates the residuals at, in `which` order.
+pub fn perturbations(
+    theta: &[f64],
+    which: &[usize],
+    steps: &[f64],
+    bounds: impl Fn(usize) -> (f64, f64),
+) -> Vec<Vec<f64>> {
+    which
         .iter()
         .map(|&j| {
             let mut t = theta.to_vec();
@@ -29,17 +49,7 @@ pub fn forward_jacobian<E>(
             t[j] = (theta[j] + h).clamp(lo, hi);
             t
         })
-        .collect();
-    let values = residuals(&perturbed)?;
-    Ok(which
-        .iter()
-        .zip(&perturbed)
-        .zip(values)
-        .map(|((&j, t), rj)| {
-            let hh = t[j] - theta[j];
-            rj.iter().zip(r0).map(|(a, b)| (a - b) / hh).collect()
-        })
-        .collect())
+        .collect()
 }
 
 /// Normal equations of the linearised problem `J δ = −r0` (columns of `J` as

@@ -206,6 +206,9 @@ pub struct Problem<'a> {
     recons: Rc<RefCell<HashMap<SensorKey, Rc<Reconstruction>>>>,
     /// Filter runs so far (for the benchmark and the report).
     pub filter_runs: Cell<usize>,
+    /// The fit ticks' innovations of finite-difference filter runs made ahead
+    /// ([`Problem::prefetch_screens`]), each taken by the first Jacobian that asks for it.
+    steps_ahead: RefCell<HashMap<SensorKey, Vec<f64>>>,
     sphere: RefCell<Option<Option<[f64; 3]>>>,
     ellipsoid: RefCell<Option<Option<HardAndSoftIron>>>,
 }
@@ -260,6 +263,7 @@ impl<'a> Problem<'a> {
             cache: RefCell::new(HashMap::new()),
             recons: Rc::new(RefCell::new(HashMap::new())),
             filter_runs: Cell::new(0),
+            steps_ahead: RefCell::new(HashMap::new()),
             sphere: RefCell::new(None),
             ellipsoid: RefCell::new(None),
         }
@@ -277,6 +281,7 @@ impl<'a> Problem<'a> {
             cache: RefCell::new(HashMap::new()),
             recons: Rc::clone(&self.recons),
             filter_runs: Cell::new(0),
+            steps_ahead: RefCell::new(HashMap::new()),
             sphere: RefCell::new(*self.sphere.borrow()),
             ellipsoid: RefCell::new(*self.ellipsoid.borrow()),
         }
@@ -318,17 +323,77 @@ impl<'a> Problem<'a> {
             .collect()
     }
 
-    /// The fit ticks' whitened innovations of a filter run per configuration (see
-    /// [`Problem::run_filters`]).
+    /// The fit ticks' whitened innovations of a filter run per configuration: those made ahead
+    /// ([`Problem::prefetch_screens`]), the others run now ([`Problem::run_filters`]).
     pub(crate) fn perturbed_innovations(
         &self,
         configs: &[ModelConfig],
     ) -> Result<Vec<Vec<f64>>, IdentError> {
-        Ok(self
-            .run_filters(configs)?
+        let ahead: Vec<Option<Vec<f64>>> = {
+            let mut steps = self.steps_ahead.borrow_mut();
+            configs
+                .iter()
+                .map(|c| steps.remove(&SensorKey::of(c)))
+                .collect()
+        };
+        let todo: Vec<ModelConfig> = configs
             .iter()
-            .map(|r| self.fit_innovations(r))
+            .zip(&ahead)
+            .filter(|(_, a)| a.is_none())
+            .map(|(c, _)| c.clone())
+            .collect();
+        let mut runs = self
+            .run_filters(&todo)?
+            .into_iter()
+            .map(|r| self.fit_innovations(&r));
+        // `run_filters` gives one run per configuration: every one not made ahead has its run.
+        Ok(ahead
+            .into_iter()
+            .map(|a| a.or_else(|| runs.next()).unwrap_or_default())
             .collect())
+    }
+
+    /// Run ahead, in one batch across the cores, the filter runs the screened fits of several
+    /// candidates begin with ([`Problem::screen_runs`]): those at their starting values kept
+    /// like any other, those at finite-difference steps kept as the fit ticks' innovations
+    /// until a Jacobian takes them.
+    pub fn prefetch_screens(
+        &self,
+        starts: &[ModelConfig],
+        steps: &[ModelConfig],
+    ) -> Result<(), IdentError> {
+        let mut todo: Vec<(SensorKey, &ModelConfig, bool)> = Vec::new();
+        {
+            let recons = self.recons.borrow();
+            let ahead = self.steps_ahead.borrow();
+            for (c, step) in starts
+                .iter()
+                .map(|c| (c, false))
+                .chain(steps.iter().map(|c| (c, true)))
+            {
+                let key = SensorKey::of(c);
+                let done = recons.contains_key(&key) || (step && ahead.contains_key(&key));
+                if !done && !todo.iter().any(|(k, _, s)| *k == key && *s == step) {
+                    todo.push((key, c, step));
+                }
+            }
+        }
+        self.filter_runs.set(self.filter_runs.get() + todo.len());
+        let (data, held_out) = (self.data, &self.held_out);
+        let runs: Vec<Result<Reconstruction, IdentError>> = todo
+            .par_iter()
+            .map(|(_, c, _)| reconstruct(data, c))
+            .collect();
+        let (mut recons, mut ahead) = (self.recons.borrow_mut(), self.steps_ahead.borrow_mut());
+        for ((key, _, step), run) in todo.into_iter().zip(runs) {
+            let run = run?;
+            if step {
+                ahead.insert(key, run.innovation_vector(|k| !held_out[k]));
+            } else {
+                recons.insert(key, Rc::new(run));
+            }
+        }
+        Ok(())
     }
 
     /// The state and channels for the sensor effects of `config` (cached).
@@ -375,6 +440,7 @@ impl<'a> Problem<'a> {
 
     /// Forget cached states and filter runs (memory) except the base's and those of `keep`.
     pub fn trim_cache(&self, keep: &[&ModelConfig]) {
+        self.steps_ahead.borrow_mut().clear();
         let keys: Vec<SensorKey> = keep.iter().map(|c| SensorKey::of(c)).collect();
         self.cache
             .borrow_mut()

@@ -3,15 +3,109 @@
 //! differences through the filter ([`super::jacobian`]), an optional first-order screen, and
 //! damped steps within the causes' bounds.
 
-use super::jacobian::{forward_jacobian, normal_equations};
+use super::jacobian::{forward_jacobian, normal_equations, perturbations};
 use super::{FittedCause, Problem, SensorLinearisation, build_sensors};
-use crate::effects::Cause;
+use crate::effects::{Cause, Kind};
 use crate::error::IdentError;
 use crate::stats::LsFit;
 use std::collections::HashMap;
 use testbed_model::ModelConfig;
 
+/// Where a sensor fit of a set of causes starts.
+struct Start {
+    layout: Vec<(Cause, usize)>,
+    /// Starting values: the fitted values of the causes in `warm`, the others' initial guesses.
+    theta: Vec<f64>,
+    /// Finite-difference step of each parameter.
+    steps: Vec<f64>,
+    /// The parameters the screen linearises first (of the causes not fitted before).
+    new_params: Vec<bool>,
+}
+
 impl Problem<'_> {
+    /// Where a fit of the sensor causes `set` starts ([`Start`]).
+    fn start(
+        &self,
+        set: &[Cause],
+        warm: &HashMap<Cause, FittedCause>,
+    ) -> Result<Start, IdentError> {
+        let layout: Vec<(Cause, usize)> = set.iter().map(|&c| (c, c.len())).collect();
+        let mut theta: Vec<f64> = Vec::new();
+        for &cause in set {
+            theta.extend(match warm.get(&cause) {
+                Some(f) => f.values.clone(),
+                None => self.initial_sensor_values(cause)?,
+            });
+        }
+        debug_assert_eq!(theta.len(), layout.iter().map(|l| l.1).sum::<usize>());
+        let steps: Vec<f64> = layout
+            .iter()
+            .flat_map(|&(cause, _)| {
+                cause
+                    .params()
+                    .iter()
+                    .flat_map(|p| std::iter::repeat_n(p.step, p.len))
+            })
+            .collect();
+        // Screening with causes already fitted (warm): only the new causes' columns are
+        // linearised first; the fitted ones sit at their optimum. Except the magnetometer's two:
+        // a soft iron fitted alone takes up part of a hard iron (its column on the nearly
+        // constant vertical field is one) and a hard iron part of a soft iron, so each is
+        // screened with the other free, or the second would never be tried.
+        let new_magnetometer = layout
+            .iter()
+            .any(|&(c, _)| c.magnetometer() && !warm.contains_key(&c));
+        let new_params: Vec<bool> = layout
+            .iter()
+            .flat_map(|&(cause, len)| {
+                let screened =
+                    !warm.contains_key(&cause) || (new_magnetometer && cause.magnetometer());
+                std::iter::repeat_n(screened, len)
+            })
+            .collect();
+        Ok(Start {
+            layout,
+            theta,
+            steps,
+            new_params,
+        })
+    }
+
+    /// The filter runs a screened fit of the sensor causes of `set` begins with: at its
+    /// starting values, and at the steps of its first Jacobian (the screen's). Run together
+    /// ahead of the fits ([`Problem::prefetch`], [`Problem::prefetch_steps`]), the runs of many
+    /// candidates fill the cores where each fit's own few would not. Empty when the fit would
+    /// keep its warm values.
+    pub fn screen_runs(
+        &self,
+        set: &[Cause],
+        warm: &HashMap<Cause, FittedCause>,
+    ) -> Result<(Vec<ModelConfig>, Vec<ModelConfig>), IdentError> {
+        let sensor: Vec<Cause> = set
+            .iter()
+            .copied()
+            .filter(|c| c.kind() == Kind::Sensor)
+            .collect();
+        if sensor.is_empty() || sensor.iter().all(|c| warm.contains_key(c)) {
+            return Ok((Vec::new(), Vec::new()));
+        }
+        let start = self.start(&sensor, warm)?;
+        let build = |theta: &[f64]| build_sensors(&self.base, &start.layout, theta);
+        let p = start.theta.len();
+        let which: Vec<usize> = if start.new_params.iter().any(|n| !n) {
+            (0..p).filter(|&j| start.new_params[j]).collect()
+        } else {
+            (0..p).collect()
+        };
+        let steps = perturbations(&start.theta, &which, &start.steps, |j| {
+            bound_of(&start.layout, j)
+        });
+        Ok((
+            vec![build(&start.theta)],
+            steps.iter().map(|t| build(t)).collect(),
+        ))
+    }
+
     /// Fit the sensor causes `set` jointly (see [`Problem::fit_screened`] for `warm` and
     /// `screen`, [`Problem::fit_from`] for `from`): the configuration with the fitted values,
     /// the fitted causes, and the last linearisation (none when the values were kept or
@@ -39,25 +133,14 @@ impl Problem<'_> {
             let fitted = fitted_causes(&layout, &theta, &fit.stderr());
             return Ok((config, fitted, None));
         }
-        let mut theta: Vec<f64> = Vec::new();
-        for &cause in set {
-            theta.extend(match warm.get(&cause) {
-                Some(f) => f.values.clone(),
-                None => self.initial_sensor_values(cause)?,
-            });
-        }
-        debug_assert_eq!(theta.len(), layout.iter().map(|l| l.1).sum::<usize>());
+        let Start {
+            layout,
+            mut theta,
+            steps,
+            new_params,
+        } = self.start(set, warm)?;
         let build = |theta: &[f64]| build_sensors(&self.base, &layout, theta);
         let clamp = |theta: &mut [f64]| clamp_to_bounds(&layout, theta);
-        let steps: Vec<f64> = layout
-            .iter()
-            .flat_map(|&(cause, _)| {
-                cause
-                    .params()
-                    .iter()
-                    .flat_map(|p| std::iter::repeat_n(p.step, p.len))
-            })
-            .collect();
         let p = theta.len();
         // Innovations at finite-difference steps (filter runs not worth caching).
         let perturbed = |ts: &[Vec<f64>]| -> Result<Vec<Vec<f64>>, IdentError> {
@@ -66,22 +149,6 @@ impl Problem<'_> {
         let mut r0 = self.fit_innovations(&*self.recon(&build(&theta))?);
         let mut last: Option<LsFit> = None;
         let mut linearisation: Option<SensorLinearisation> = None;
-        // Screening with causes already fitted (warm): only the new causes' columns are
-        // linearised first; the fitted ones sit at their optimum. Except the magnetometer's two:
-        // a soft iron fitted alone takes up part of a hard iron (its column on the nearly
-        // constant vertical field is one) and a hard iron part of a soft iron, so each is
-        // screened with the other free, or the second would never be tried.
-        let new_magnetometer = layout
-            .iter()
-            .any(|&(c, _)| c.magnetometer() && !warm.contains_key(&c));
-        let new_params: Vec<bool> = layout
-            .iter()
-            .flat_map(|&(cause, len)| {
-                let screened =
-                    !warm.contains_key(&cause) || (new_magnetometer && cause.magnetometer());
-                std::iter::repeat_n(screened, len)
-            })
-            .collect();
         if let Some((threshold, reference)) = screen.filter(|_| new_params.iter().any(|n| !n)) {
             let idx: Vec<usize> = (0..p).filter(|&j| new_params[j]).collect();
             let cols = forward_jacobian(

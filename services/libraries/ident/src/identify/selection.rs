@@ -50,6 +50,20 @@ pub(super) fn forward_selection(
     let mut chosen_rows: Vec<CandidateRow> = Vec::new();
     let mut warm: HashMap<Cause, FittedCause> = HashMap::new();
     for _ in 0..options.max_causes {
+        // The sensor candidates' screens begin with a few filter runs each: all in one batch.
+        let (mut starts, mut step_runs) = (Vec::new(), Vec::new());
+        for &cause in available
+            .iter()
+            .filter(|c| !selected.contains(c) && c.kind() == Kind::Sensor)
+        {
+            let set = [selected.as_slice(), &[cause]].concat();
+            if let Ok((start, step)) = problem.screen_runs(&set, &warm) {
+                starts.extend(start);
+                step_runs.extend(step);
+            }
+        }
+        // A run that fails here fails again in its candidate's fit, which reports it.
+        let _ = problem.prefetch_screens(&starts, &step_runs);
         let mut rows = Vec::new();
         let mut best: Option<(usize, SetFit, Vec<SetFit>)> = None;
         for &cause in available.iter().filter(|c| !selected.contains(c)) {
