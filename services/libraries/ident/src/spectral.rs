@@ -80,11 +80,15 @@ fn ar1_shape(phi: f64, cos_w: f64) -> f64 {
     (1.0 - phi * phi) / (1.0 - 2.0 * phi * cos_w + phi * phi)
 }
 
+/// Most spectral shapes a fit combines (white, differenced, AR(1)).
+const MAX_BASIS: usize = 3;
+
 /// Whittle negative log-likelihood and non-negative coefficients of `S = Σ c_i b_i(ω)`, by
 /// iteratively reweighted least squares from `start` (coefficients; the flat spectrum at the
 /// mean power without). The fit is the same from any start; one near it needs fewer passes.
 fn whittle_linear(basis: &[&[f64]], power: &[f64], start: Option<&[f64]>) -> (f64, Vec<f64>) {
     let k = basis.len();
+    assert!(k <= MAX_BASIS, "at most {MAX_BASIS} spectral shapes");
     let n = power.len();
     let mean = power.iter().sum::<f64>() / n.max(1) as f64;
     let floor = mean.max(1e-300) * 1e-9;
@@ -102,17 +106,25 @@ fn whittle_linear(basis: &[&[f64]], power: &[f64], start: Option<&[f64]>) -> (f6
     for _ in 0..60 {
         let mut active: Vec<usize> = (0..k).collect();
         let solved = loop {
-            let mut a = DMatrix::<f64>::zeros(active.len(), active.len());
-            let mut b = DVector::<f64>::zeros(active.len());
+            // The weighted normal equations, accumulated in fixed arrays (the hot loop), then
+            // solved as a matrix.
+            let m = active.len();
+            let (mut a, mut b) = ([[0.0; MAX_BASIS]; MAX_BASIS], [0.0; MAX_BASIS]);
+            let mut row = [0.0; MAX_BASIS];
             for j in 0..n {
                 let w = 1.0 / (s[j] * s[j]);
-                for (p, &ip) in active.iter().enumerate() {
-                    b[p] += w * basis[ip][j] * power[j];
-                    for (q, &iq) in active.iter().enumerate() {
-                        a[(p, q)] += w * basis[ip][j] * basis[iq][j];
+                for (r, &i) in row.iter_mut().zip(&active) {
+                    *r = basis[i][j];
+                }
+                for p in 0..m {
+                    b[p] += w * row[p] * power[j];
+                    for q in 0..m {
+                        a[p][q] += w * row[p] * row[q];
                     }
                 }
             }
+            let a = DMatrix::from_fn(m, m, |p, q| a[p][q]);
+            let b = DVector::from_fn(m, |p, _| b[p]);
             let Some(x) = a.lu().solve(&b) else {
                 break None;
             };
