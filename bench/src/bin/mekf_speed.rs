@@ -16,7 +16,6 @@ use anyhow::{Context, Result, bail};
 use clap::Parser;
 use nalgebra::Vector3;
 use std::path::PathBuf;
-
 use std::time::Instant;
 use testbed_bench::median;
 use testbed_config::RunConfig;

@@ -290,7 +290,7 @@ pub fn predict(
         let bias = recon.bias[k0];
         let mut residuals: WindowResiduals = Default::default();
         let mut attitudes: Vec<Attitude> = Vec::with_capacity(k1 - k0 + 1);
-        let mut failed = false;
+        // A window whose plant refuses a command or a step is left out.
         for k in k0..=k1 {
             let s = plant.state();
             attitudes.push(s.q);
@@ -308,23 +308,11 @@ pub fn predict(
             }
             // Step to the next tick, splitting where the (delayed) commands change.
             for (dt, command, thrust) in command_pieces(data, data.t[k], data.t[k + 1], delay) {
-                if let Some(thrust) = thrust
-                    && plant.command_thrusters(&thrust).is_err()
-                {
-                    failed = true;
-                    break;
+                if let Some(thrust) = thrust {
+                    plant.command_thrusters(&thrust).ok()?;
                 }
-                if plant.step(&command, dt).is_err() {
-                    failed = true;
-                    break;
-                }
+                plant.step(&command, dt).ok()?;
             }
-            if failed {
-                break;
-            }
-        }
-        if failed {
-            return None;
         }
         // Vector samples inside the window, at the nearest tick.
         let (ta, tb) = (data.t[k0], data.t[k1]);

@@ -413,6 +413,7 @@ impl Reconstruction {
         self.innovation_rows(keep).map(|(tick, _)| tick).collect()
     }
 
+    /// `(tick, value)` of each present component of the innovations whose tick `keep` accepts.
     fn innovation_rows(&self, keep: impl Fn(usize) -> bool) -> impl Iterator<Item = (usize, f64)> {
         self.innovations
             .iter()

@@ -10,6 +10,7 @@ mod common;
 use common::*;
 use testbed_ident::Options;
 use testbed_ident::identify::Identification;
+use testbed_model::config::GAUSS;
 
 /// A constant torque about X and Y (a library cause, truly acting).
 const CONSTANT_XY: &str = "[effects.constant_torque]\ntorque_nm = [1.5e-3, -1.0e-3, 0.0]\n";
@@ -142,7 +143,7 @@ fn a_constant_torque_standing_in_for_a_dipole_in_the_lab_field_partly_explains_i
     let t = truth(&format!(
         "{CONSTANT_XY}[effects.dipole_torque]\nmoment_am2 = [0.0, {moment_am2:e}, 0.0]\n"
     ));
-    let b_north_t = t.platform.field_l_gauss[0] * 1e-4;
+    let b_north_t = t.platform.field_l_gauss[0] * GAUSS;
     for seed in [82, 83] {
         let label = format!("dipole {moment_am2} A m² along Y + constant torque, seed {seed}");
         let data = experiment_data(&t, seed, 1200.0);
@@ -206,7 +207,7 @@ fn blocks_that_disagree_only_through_the_remainder_keep_the_cause() {
             .map(|e| &e.proposed)
             .collect::<Vec<_>>()
     );
-    let b_vertical_t = t.platform.field_l_gauss[2] * 1e-4;
+    let b_vertical_t = t.platform.field_l_gauss[2] * GAUSS;
     let fitted = testbed_ident::Cause::ConstantTorque.values(&id.extended);
     let com = testbed_ident::Cause::ComOffset.values(&id.extended);
     let weight_n = t.platform.mass_kg * t.platform.gravity_mps2;

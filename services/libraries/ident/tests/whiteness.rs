@@ -12,16 +12,23 @@ const DURATION_S: f64 = 600.0;
 const RMS_NM: f64 = 2e-4;
 const CORRELATION_TIME_S: f64 = 5.0;
 
-fn gauss_markov(seed: u64) -> String {
+/// A Gauss–Markov torque of `rms_nm` on every axis, correlation time [`CORRELATION_TIME_S`].
+fn gauss_markov(rms_nm: f64, seed: u64) -> String {
     format!(
-        "[effects.gauss_markov_torque]\nrms_nm = [{RMS_NM:e}, {RMS_NM:e}, {RMS_NM:e}]\ncorrelation_time_s = {CORRELATION_TIME_S}\nseed = {seed}\n"
+        "[effects.gauss_markov_torque]\nrms_nm = [{rms_nm:e}, {rms_nm:e}, {rms_nm:e}]\ncorrelation_time_s = {CORRELATION_TIME_S}\nseed = {seed}\n"
     )
 }
 
+/// Each axis's test, then the joint test's fit on each axis.
 fn print(label: &str, w: &WhitenessReport) {
-    for c in &w.channels {
+    for (test, c) in w
+        .channels
+        .iter()
+        .map(|c| ("", c))
+        .chain(w.joint.iter().map(|c| (" (joint)", c)))
+    {
         println!(
-            "{label} {}: LR {:.1}, p {:.2e}, coloured {}, rms {:.3e} Nm, T {:.2} s",
+            "{label} {}{test}: LR {:.1}, p {:.2e}, coloured {}, rms {:.3e} Nm, T {:.2} s",
             c.channel, c.lr, c.p, c.coloured, c.rms_nm, c.correlation_time_s
         );
     }
@@ -73,7 +80,7 @@ fn clean_records_are_not_flagged() {
 #[test]
 fn gauss_markov_torque_is_a_coloured_disturbance() {
     for seed in 1..=3u64 {
-        let data = experiment_data(&truth(&gauss_markov(seed)), seed, DURATION_S);
+        let data = experiment_data(&truth(&gauss_markov(RMS_NM, seed)), seed, DURATION_S);
         let w = torque_whiteness(&data, &nominal()).expect("test runs");
         print(&format!("gauss-markov seed {seed}"), &w);
         assert_eq!(w.channels.len(), 3);
@@ -101,7 +108,7 @@ fn gauss_markov_torque_is_a_coloured_disturbance() {
 /// a clean record.
 #[test]
 fn identify_reports_the_coloured_disturbance() {
-    let id = identify_blind(&truth(&gauss_markov(4)), 4, DURATION_S);
+    let id = identify_blind(&truth(&gauss_markov(RMS_NM, 4)), 4, DURATION_S);
     print("identify, gauss-markov seed 4", &id.report.whiteness);
     for l in &id.report.summary {
         println!("    {l}");
@@ -139,17 +146,9 @@ fn a_small_wandering_torque_on_every_axis_is_found_jointly() {
     const SMALL_RMS_NM: f64 = 5e-5;
     let mut correlation_times = Vec::new();
     for seed in 1..=3u64 {
-        let config = format!(
-            "[effects.gauss_markov_torque]\nrms_nm = [{SMALL_RMS_NM:e}, {SMALL_RMS_NM:e}, {SMALL_RMS_NM:e}]\ncorrelation_time_s = {CORRELATION_TIME_S}\nseed = {seed}\n"
-        );
-        let data = experiment_data(&truth(&config), seed, 3600.0);
+        let data = experiment_data(&truth(&gauss_markov(SMALL_RMS_NM, seed)), seed, 3600.0);
         let w = torque_whiteness(&data, &nominal()).expect("test runs");
         print(&format!("small seed {seed}"), &w);
-        let joint = WhitenessReport {
-            channels: w.joint.clone(),
-            ..w.clone()
-        };
-        print(&format!("small seed {seed} joint"), &joint);
         assert_eq!(
             w.joint.len(),
             3,

@@ -20,7 +20,6 @@
 
 use super::jacobian::{forward_jacobian, normal_equations};
 use super::torque::torque_normal_equations;
-use super::wheels::WheelRows;
 use super::{Problem, State, WheelModel};
 use crate::channels::{column_cause, torque_columns};
 use crate::effects::{Cause, Kind};
@@ -112,12 +111,8 @@ impl Problem<'_> {
         if fit_scale || fit_friction {
             let base = WheelModel::from_config(&self.base);
             let index = |c: Cause, off: usize| params.iter().position(|p| *p == (c, off));
+            let rows = self.wheel_rows(&state.wheel);
             for w in 0..3 {
-                let rows = WheelRows {
-                    data: self.data,
-                    held_out: &self.held_out,
-                    channel: &state.wheel,
-                };
                 let drive = rows.drive_integrals(w, base.delay_s);
                 let (ne, _) =
                     rows.normal_equations(&base, w, &drive, fit_scale, fit_friction, None);

@@ -11,6 +11,12 @@ use crate::stats::LsFit;
 use std::collections::HashMap;
 use testbed_model::ModelConfig;
 
+/// Each cause of `set` with its number of parameters: the layout of a sensor fit's parameter
+/// vector.
+fn layout_of(set: &[Cause]) -> Vec<(Cause, usize)> {
+    set.iter().map(|&c| (c, c.len())).collect()
+}
+
 /// Where a sensor fit of a set of causes starts.
 struct Start {
     layout: Vec<(Cause, usize)>,
@@ -29,7 +35,7 @@ impl Problem<'_> {
         set: &[Cause],
         warm: &HashMap<Cause, FittedCause>,
     ) -> Result<Start, IdentError> {
-        let layout: Vec<(Cause, usize)> = set.iter().map(|&c| (c, c.len())).collect();
+        let layout = layout_of(set);
         let mut theta: Vec<f64> = Vec::new();
         for &cause in set {
             theta.extend(match warm.get(&cause) {
@@ -73,7 +79,7 @@ impl Problem<'_> {
 
     /// The filter runs a screened fit of the sensor causes of `set` begins with: at its
     /// starting values, and at the steps of its first Jacobian (the screen's). Run together
-    /// ahead of the fits ([`Problem::prefetch`], [`Problem::prefetch_steps`]), the runs of many
+    /// ahead of the fits ([`Problem::prefetch_screens`]), the runs of many
     /// candidates fill the cores where each fit's own few would not. Empty when the fit would
     /// keep its warm values.
     pub fn screen_runs(
@@ -126,7 +132,7 @@ impl Problem<'_> {
             }
             return Ok((config, fitted, None));
         }
-        let layout: Vec<(Cause, usize)> = set.iter().map(|&c| (c, c.len())).collect();
+        let layout = layout_of(set);
         if let Some(from) = from.filter(|f| f.layout == layout) {
             let (theta, fit) = self.step_from(from)?;
             let config = build_sensors(&self.base, &layout, &theta);

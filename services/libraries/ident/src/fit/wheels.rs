@@ -31,11 +31,7 @@ impl Problem<'_> {
         let fit_friction = set.contains(&Cause::WheelFriction);
         let fit_delay = set.contains(&Cause::ActuatorDelay);
         let base = WheelModel::from_config(&self.base);
-        let wheel_rows = WheelRows {
-            data: self.data,
-            held_out: &self.held_out,
-            channel: ch,
-        };
+        let wheel_rows = self.wheel_rows(ch);
         let mut delay = base.delay_s;
         // Friction model per wheel: None = no Stribeck term.
         let mut stribeck: [Option<f64>; 3] = [None; 3];
@@ -185,6 +181,17 @@ pub(crate) struct WheelRows<'a> {
     pub data: &'a Aligned,
     pub held_out: &'a [bool],
     pub channel: &'a WheelChannel,
+}
+
+impl Problem<'_> {
+    /// The rows of the wheel channel `channel` this problem fits.
+    pub(crate) fn wheel_rows<'s>(&'s self, channel: &'s WheelChannel) -> WheelRows<'s> {
+        WheelRows {
+            data: self.data,
+            held_out: &self.held_out,
+            channel,
+        }
+    }
 }
 
 impl WheelRows<'_> {

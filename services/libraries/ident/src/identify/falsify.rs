@@ -159,7 +159,8 @@ pub struct Consistency {
     /// The same blocks against a linear trend in time (`None` with fewer than three blocks).
     pub trend: Option<Trend>,
     /// The terms of another form the blocks were fitted beside, when they disagreed without
-    /// them (`equation ≈ …` each; empty: only the terms found with the cause).
+    /// them (`equation: function` each, e.g. `torque_z: cos ψ`; empty: only the terms found
+    /// with the cause).
     pub beside: Vec<String>,
 }
 
