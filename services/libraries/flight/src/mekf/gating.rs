@@ -5,7 +5,7 @@
 //! block's tangent basis).
 
 use super::spd_factor::SpdFactor;
-use super::update::{Blocks, Linearised};
+use super::update::{Accepted, Blocks, Linearised};
 use super::{Block, BlockStatus, InnovationStats, Mekf, MekfError, UpdateReport};
 use crate::stats::chi_square_quantile;
 use nalgebra::{Matrix3, Matrix6, SVector, Vector3};
@@ -13,15 +13,16 @@ use nalgebra::{Matrix3, Matrix6, SVector, Vector3};
 impl Mekf {
     /// Gate each block on its own innovation, computed with the prior state and the rate
     /// estimate; records each block's statistics and status (`Applied` provisionally, confirmed
-    /// by the update) in `report` and returns the accepted blocks, indexed by [`Block`].
+    /// by the update) in `report` and returns the accepted blocks with their linearisations,
+    /// indexed by [`Block`].
     pub(super) fn gate_blocks(
         &self,
         blocks: &Blocks,
         lag_s: f64,
         report: &mut UpdateReport,
-    ) -> Blocks {
+    ) -> Accepted {
         let w_hat = self.last_w_meas.unwrap_or(self.bias) - self.bias;
-        let mut accepted: Blocks = [None; 2];
+        let mut accepted: Accepted = [None; 2];
         for (block, data) in [Block::Gravity, Block::Magnetic]
             .into_iter()
             .zip(blocks)
@@ -49,7 +50,7 @@ impl Mekf {
             result.stats = Some(stats);
             if stats.nis.is_finite() && stats.nis <= threshold {
                 result.status = BlockStatus::Applied; // provisional; confirmed below
-                accepted[block as usize] = Some(*data);
+                accepted[block as usize] = Some((*data, lin));
             } else {
                 result.status = BlockStatus::Rejected;
             }

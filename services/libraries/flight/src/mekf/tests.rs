@@ -315,3 +315,24 @@ fn out_of_order_refused_missing_skipped_all_counted() {
     assert_eq!(est.counters, c);
     assert_eq!(est.t_ns, ahead);
 }
+
+/// The propagation's block product equals the full `Φ P Φᵀ` (to rounding, relative 1e-14) for
+/// transition matrices of slow and fast rates and a dense positive definite covariance.
+#[test]
+fn block_covariance_propagation_equals_the_full_product() {
+    let mut rng = ChaCha8Rng::seed_from_u64(3);
+    let m = Matrix6::from_fn(|_, _| normal(&mut rng));
+    let p = m * m.transpose() + Matrix6::identity();
+    for (w, dt) in [
+        (Vector3::new(1e-4, -2e-4, 3e-4), 0.1),
+        (Vector3::new(0.3, -0.2, 0.5), 0.4),
+    ] {
+        let phi = transition_matrix(&w, dt);
+        let full = phi * p * phi.transpose();
+        let blocks = propagate_covariance(&phi, &p);
+        assert!(
+            (full - blocks).abs().max() <= 1e-14 * full.abs().max(),
+            "{w} {dt}"
+        );
+    }
+}

@@ -29,6 +29,10 @@ pub struct VectorMeasurements {
 /// The usable blocks of an update, indexed by [`Block`] (`None`: absent, invalid or rejected).
 pub(super) type Blocks = [Option<BlockData>; 2];
 
+/// The blocks the gate accepted, each with its linearisation about the prior state (the first
+/// iteration's), indexed by [`Block`].
+pub(super) type Accepted = [Option<(BlockData, Linearised)>; 2];
+
 /// One measurement block ready for linearisation.
 #[derive(Debug, Clone, Copy)]
 pub(super) enum BlockData {
@@ -41,6 +45,7 @@ pub(super) enum BlockData {
 /// A block linearised about one state, in the leading `dim` rows (and columns) of fixed 3-row
 /// storage: 2 for the gravity block, 3 for the magnetic block (the rest is zero). Fixed sizes
 /// keep the update on the stack.
+#[derive(Debug, Clone, Copy)]
 pub(super) struct Linearised {
     /// Rows the block contributes: 2 (gravity, tangent plane) or 3 (magnetic field).
     pub(super) dim: usize,
@@ -242,11 +247,12 @@ impl Mekf {
     }
 
     /// Joint (iterated) update with the accepted blocks, stacked in `M` rows (2 gravity, 3
-    /// magnetic field, 5 both). Returns the number of linearisations and the applied correction,
-    /// or `None` (state untouched) if `S` is not invertible.
+    /// magnetic field, 5 both), each with its linearisation about the prior state (the gate's,
+    /// which the first iteration uses). Returns the number of linearisations and the applied
+    /// correction, or `None` (state untouched) if `S` is not invertible.
     fn apply<const M: usize>(
         &mut self,
-        blocks: &[BlockData],
+        blocks: &[(BlockData, Linearised)],
         lag_s: f64,
     ) -> Option<(u32, Vector6<f64>)> {
         let p = self.p;
@@ -264,8 +270,12 @@ impl Mekf {
             let mut nu = SVector::<f64, M>::zeros();
             let mut r = SMatrix::<f64, M, M>::zeros();
             let mut row = 0;
-            for block in blocks {
-                let l = self.linearise(block, &q_i, &w_hat, lag_s);
+            for (block, prior) in blocks {
+                let l = if iterations == 1 {
+                    *prior
+                } else {
+                    self.linearise(block, &q_i, &w_hat, lag_s)
+                };
                 let k = l.dim;
                 h.view_mut((row, 0), (k, 6)).copy_from(&l.h.rows(0, k));
                 nu.rows_mut(row, k).copy_from(&l.nu.rows(0, k));
@@ -274,10 +284,11 @@ impl Mekf {
                 row += k;
             }
             debug_assert_eq!(row, M, "the blocks stack to M rows");
-            let s = h * p * h.transpose() + r;
+            let hp = h * p;
+            let s = hp * h.transpose() + r;
             let factor = SpdFactor::new(&s)?;
             // K = P Hᵀ S⁻¹  ⇔  Kᵀ = S⁻¹ H P (S, P symmetric).
-            let gain = factor.solve(&(h * p)).transpose();
+            let gain = factor.solve(&hp).transpose();
             // Gauss–Newton step of the iterated EKF: δ_{i+1} = K_i (ν_i + H_i δ_i).
             let next = gain * (nu + h * delta);
             let change = (next.fixed_rows::<3>(0) - delta.fixed_rows::<3>(0)).norm();
