@@ -21,32 +21,28 @@
 use crate::stats::chi_square_cdf;
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
+use rustfft::FftPlanner;
+use rustfft::num_complex::Complex;
 
 /// Periodogram ordinates `(ω_j, I_j)` of each segment (`I = |Σ x_t e^{−iω t}|² / n` at the
 /// Fourier frequencies `ω_j = 2π j / n`, `0 < j < n/2`), pooled. Segments shorter than 16
-/// samples are left out.
+/// samples are left out. The sums are one FFT per segment (`rustfft`, any length).
 pub fn periodogram(segments: &[Vec<f64>]) -> Vec<(f64, f64)> {
+    let mut planner = FftPlanner::<f64>::new();
     let mut out = Vec::new();
+    let mut buffer: Vec<Complex<f64>> = Vec::new();
     for x in segments {
         let n = x.len();
         if n < 16 {
             continue;
         }
-        for j in 1..n.div_ceil(2) {
+        buffer.clear();
+        buffer.extend(x.iter().map(|&v| Complex::new(v, 0.0)));
+        planner.plan_fft_forward(n).process(&mut buffer);
+        out.extend((1..n.div_ceil(2)).map(|j| {
             let w = 2.0 * std::f64::consts::PI * j as f64 / n as f64;
-            let (c1, s1) = (w.cos(), w.sin());
-            // e^{−iωt} by recurrence.
-            let (mut c, mut s) = (1.0, 0.0);
-            let (mut re, mut im) = (0.0, 0.0);
-            for &v in x {
-                re += v * c;
-                im -= v * s;
-                let c2 = c * c1 - s * s1;
-                s = s * c1 + c * s1;
-                c = c2;
-            }
-            out.push((w, (re * re + im * im) / n as f64));
-        }
+            (w, buffer[j].norm_sqr() / n as f64)
+        }));
     }
     out
 }
@@ -275,6 +271,50 @@ mod tests {
     /// One series' own fit.
     fn colour_fit(ordinates: &[(f64, f64)]) -> Option<ColourFit> {
         colour_fits(&[ordinates.to_vec()]).0.pop().flatten()
+    }
+
+    /// The FFT's ordinates are the defining sums `|Σ x_t e^{−iωt}|² / n` (relative 1e-12) on
+    /// segments of prime, odd and even length; a cosine of amplitude `a` at the Fourier frequency
+    /// `j₀` has `I = n a² / 4` there and nothing elsewhere; short segments are left out.
+    #[test]
+    fn periodogram_is_the_defining_sum() {
+        let mut rng = ChaCha8Rng::seed_from_u64(4);
+        let segments: Vec<Vec<f64>> = [17, 120, 1201, 8]
+            .iter()
+            .map(|&n| (0..n).map(|_| rng.sample(StandardNormal)).collect())
+            .collect();
+        let got = periodogram(&segments);
+        let mut want = Vec::new();
+        for x in segments.iter().filter(|x| x.len() >= 16) {
+            let n = x.len();
+            for j in 1..n.div_ceil(2) {
+                let w = 2.0 * std::f64::consts::PI * j as f64 / n as f64;
+                let (re, im) = x.iter().enumerate().fold((0.0, 0.0), |(re, im), (t, v)| {
+                    (re + v * (w * t as f64).cos(), im - v * (w * t as f64).sin())
+                });
+                want.push((w, (re * re + im * im) / n as f64));
+            }
+        }
+        assert_eq!(got.len(), want.len());
+        for ((wg, ig), (ww, iw)) in got.iter().zip(&want) {
+            assert_eq!(wg, ww);
+            assert!(
+                (ig - iw).abs() <= 1e-12 * iw.max(1.0),
+                "{wg}: {ig} against {iw}"
+            );
+        }
+        let (n, j0, a) = (64, 5, 0.3);
+        let cosine: Vec<f64> = (0..n)
+            .map(|t| a * (2.0 * std::f64::consts::PI * (j0 * t) as f64 / n as f64).cos())
+            .collect();
+        for (j, (_, i)) in periodogram(&[cosine])
+            .iter()
+            .enumerate()
+            .map(|(k, o)| (k + 1, o))
+        {
+            let expected = if j == j0 { n as f64 * a * a / 4.0 } else { 0.0 };
+            assert!((i - expected).abs() < 1e-12, "j = {j}: {i}");
+        }
     }
 
     /// `e_k − e_{k−1}` (+ an AR(1) of variance `a`, coefficient `phi`), segments of `len`.
