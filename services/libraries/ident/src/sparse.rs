@@ -26,6 +26,7 @@
 //! Folds are interleaved blocks of time (block b goes to fold `b mod k`), so a fold is held out
 //! as whole clusters and a slow effect is interpolated, never fitted on its own samples.
 
+use crate::stats::wald_statistic;
 use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
 
@@ -302,17 +303,15 @@ impl Design {
 
     /// Cluster-robust Wald statistic `θ_Sᵀ V_SS⁻¹ θ_S` of the columns `cols[i]`, `i ∈ idx`, in the
     /// fit of `cols` on all rows (χ² on `idx.len()` degrees of freedom under the null that they
-    /// are zero, residuals independent between clusters); `None` if not determined.
+    /// are zero, residuals independent between clusters); `None` if not determined: `G`
+    /// clusters determine the covariance of at most `G − 1` parameters (their scores sum to
+    /// zero), and [`wald_statistic`] refuses a singular one.
     pub fn wald(&self, cols: &[usize], idx: &[usize]) -> Option<f64> {
-        let (theta, cov) = self.sandwich(cols)?;
-        let k = idx.len();
-        if k == 0 || idx.iter().any(|&i| i >= cols.len()) {
+        if idx.iter().any(|&i| i >= cols.len()) || self.clusters.len() <= idx.len() {
             return None;
         }
-        let v = DMatrix::from_fn(k, k, |a, b| cov[(idx[a], idx[b])]);
-        let t = DVector::from_fn(k, |a, _| theta[idx[a]]);
-        let w = (t.transpose() * v.try_inverse()? * &t)[(0, 0)];
-        w.is_finite().then_some(w)
+        let (theta, cov) = self.sandwich(cols)?;
+        wald_statistic(&theta, &cov, idx)
     }
 
     /// Least squares on all rows with the cluster-robust (sandwich) covariance, both in the

@@ -54,8 +54,7 @@ impl LsFit {
     ///
     /// `None` when the clusters do not determine `V_SS`: the scores sum to zero at θ̂, so `G`
     /// clusters give a sandwich of rank at most `G − 1`, and `|idx|` parameters need more; and
-    /// when `V_SS`, scaled to unit diagonal, has an eigenvalue below [`MIN_CORRELATION_EIGEN`]
-    /// (its inverse would be rounding, of either sign).
+    /// when [`wald_statistic`] finds it singular.
     pub fn cluster_robust_wald(&self, scores: &[DVector<f64>], idx: &[usize]) -> Option<f64> {
         let p = self.theta.len();
         if idx.is_empty() || idx.iter().any(|&j| j >= p) {
@@ -71,33 +70,40 @@ impl LsFit {
             meat += s * s.transpose();
         }
         let v = &self.cov_unit * meat * &self.cov_unit;
-        let scale: Vec<f64> = idx.iter().map(|&j| v[(j, j)].sqrt()).collect();
-        if !scale.iter().all(|d| d.is_finite() && *d > 0.0) {
-            return None;
-        }
-        let correlation =
-            DMatrix::from_fn(k, k, |a, b| v[(idx[a], idx[b])] / (scale[a] * scale[b]));
-        let z = DVector::from_fn(k, |a, _| self.theta[idx[a]] / scale[a]);
-        let eigen = correlation.symmetric_eigen();
-        if eigen
-            .eigenvalues
-            .iter()
-            .any(|&l| l.is_nan() || l <= MIN_CORRELATION_EIGEN)
-        {
-            return None;
-        }
-        let w: f64 = eigen
-            .eigenvalues
-            .iter()
-            .zip(eigen.eigenvectors.column_iter())
-            .map(|(l, u)| u.dot(&z).powi(2) / l)
-            .sum();
-        w.is_finite().then_some(w)
+        wald_statistic(&self.theta, &v, idx)
     }
 }
 
-/// Smallest eigenvalue of a covariance scaled to unit diagonal that [`LsFit::cluster_robust_wald`]
-/// inverts: a condition number of about 1e10, far beyond any real correlation of the test bed's
+/// Wald statistic `θ_Sᵀ V_SS⁻¹ θ_S` of the parameters `idx` of `theta` with covariance `v`, or
+/// `None` when `V_SS` is not determined: a variance that is not positive, or, scaled to unit
+/// diagonal, an eigenvalue below [`MIN_CORRELATION_EIGEN`] (its inverse would be rounding, of
+/// either sign).
+pub fn wald_statistic(theta: &DVector<f64>, v: &DMatrix<f64>, idx: &[usize]) -> Option<f64> {
+    let k = idx.len();
+    let scale: Vec<f64> = idx.iter().map(|&j| v[(j, j)].sqrt()).collect();
+    if k == 0 || !scale.iter().all(|d| d.is_finite() && *d > 0.0) {
+        return None;
+    }
+    let correlation = DMatrix::from_fn(k, k, |a, b| v[(idx[a], idx[b])] / (scale[a] * scale[b]));
+    let z = DVector::from_fn(k, |a, _| theta[idx[a]] / scale[a]);
+    let eigen = correlation.symmetric_eigen();
+    if eigen
+        .eigenvalues
+        .iter()
+        .any(|&l| l.is_nan() || l <= MIN_CORRELATION_EIGEN)
+    {
+        return None;
+    }
+    let w: f64 = eigen
+        .eigenvalues
+        .iter()
+        .zip(eigen.eigenvectors.column_iter())
+        .map(|(l, u)| u.dot(&z).powi(2) / l)
+        .sum();
+    w.is_finite().then_some(w)
+}
+
+/// Smallest eigenvalue of a covariance scaled to unit diagonal that [`wald_statistic`] inverts: a condition number of about 1e10, far beyond any real correlation of the test bed's
 /// parameters and far above rounding (1e-16).
 pub const MIN_CORRELATION_EIGEN: f64 = 1e-10;
 
