@@ -46,6 +46,7 @@ pub mod separability;
 pub mod sparse;
 pub mod spectral;
 pub mod stats;
+pub mod tangent;
 pub mod thrusters;
 
 pub use data::Dataset;

@@ -11,6 +11,7 @@
 
 use crate::data::{Aligned, median_period};
 use crate::error::IdentError;
+use crate::tangent::{Rate, Sensitivities, Tangent};
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 use testbed_flight::mekf::{Mekf, MekfConfig, VectorMeasurements};
 use testbed_model::ModelConfig;
@@ -199,6 +200,50 @@ fn t_ns(t: f64) -> u64 {
 
 /// Run the filter over the record with the sensor model of `config`.
 pub fn reconstruct(data: &Aligned, config: &ModelConfig) -> Result<Reconstruction, IdentError> {
+    run(data, config, None)
+}
+
+/// [`reconstruct`], and the whitened innovations' sensitivities to the sensor parameters of the
+/// directions: each a configuration with one parameter stepped from `config`'s, and the step
+/// ([`Tangent`]). Per innovation of the reconstruction, per direction, the change of its values
+/// per unit of the parameter.
+pub fn reconstruct_with_sensitivities(
+    data: &Aligned,
+    config: &ModelConfig,
+    directions: &[(ModelConfig, f64)],
+) -> Result<(Reconstruction, Sensitivities), IdentError> {
+    let mut tangent = Tangent::new(
+        directions
+            .iter()
+            .map(|(c, step)| (SensorModel::from_config(c), *step))
+            .collect(),
+    );
+    let recon = run(data, config, Some(&mut tangent))?;
+    debug_assert_eq!(tangent.innovations.len(), recon.innovations.len());
+    Ok((recon, tangent.innovations))
+}
+
+/// Propagate the filter (and the tangent beside it) to `t_ns` with the gyro sample `w`.
+fn propagate(
+    f: &mut Mekf,
+    t_ns: u64,
+    w: &Vector3<f64>,
+    tangent: Option<&mut Tangent>,
+    rate: Rate,
+) -> Result<(), IdentError> {
+    if let Some(tangent) = tangent {
+        let dt_s = t_ns.saturating_sub(f.time_ns()) as f64 / 1e9;
+        tangent.propagate(&(w - f.bias()), dt_s, rate);
+    }
+    f.propagate(t_ns, w)?;
+    Ok(())
+}
+
+fn run(
+    data: &Aligned,
+    config: &ModelConfig,
+    mut tangent: Option<&mut Tangent>,
+) -> Result<Reconstruction, IdentError> {
     let sensors = SensorModel::from_config(config);
     let filter_cfg = filter_config(config);
     let n = data.len();
@@ -226,6 +271,9 @@ pub fn reconstruct(data: &Aligned, config: &ModelConfig) -> Result<Reconstructio
         let tk = data.t[k];
         let q_now = mekf.as_ref().map_or(q_prior, Mekf::attitude);
         let w = sensors.correct_gyro(&data.gyro[k], &q_now);
+        if let Some(t) = tangent.as_deref_mut() {
+            t.gyro(&data.gyro[k], &q_now, &w);
+        }
         let mean = previous.map_or(w, |p| 0.5 * (p + w));
         previous = Some(w);
         // Vector samples up to this tick, grouped by time.
@@ -252,10 +300,11 @@ pub fn reconstruct(data: &Aligned, config: &ModelConfig) -> Result<Reconstructio
             if let Some(f) = mekf.as_mut() {
                 let at = if tk - t_sample <= 1e-6 { tk } else { t_sample };
                 if t_ns(at) > f.time_ns() {
-                    f.propagate(t_ns(at), &mean)?;
+                    propagate(f, t_ns(at), &mean, tangent.as_deref_mut(), Rate::Mean)?;
                 }
             }
             let mut meas = VectorMeasurements::default();
+            let (mut raw_tilt, mut raw_field) = (None, None);
             if let Some(&(_, tilt)) = data
                 .tilt
                 .get(i_tilt)
@@ -264,6 +313,7 @@ pub fn reconstruct(data: &Aligned, config: &ModelConfig) -> Result<Reconstructio
                 i_tilt += 1;
                 if tilt[0].abs() < tilt_range && tilt[1].abs() < tilt_range {
                     meas.tilt_rad = Some(sensors.correct_tilt(&tilt));
+                    raw_tilt = Some(tilt);
                 }
             }
             if let Some(&(_, field)) = data
@@ -275,6 +325,7 @@ pub fn reconstruct(data: &Aligned, config: &ModelConfig) -> Result<Reconstructio
                 if field.iter().all(|x| x.abs() < field_range) {
                     let q_now = mekf.as_ref().map_or(q_prior, Mekf::attitude);
                     meas.field_b_t = Some(sensors.correct_field(&field, &q_now));
+                    raw_field = Some((field, q_now));
                 }
             }
             if t_sample < -1e-9 || (meas.tilt_rad.is_none() && meas.field_b_t.is_none()) {
@@ -282,7 +333,19 @@ pub fn reconstruct(data: &Aligned, config: &ModelConfig) -> Result<Reconstructio
             }
             match mekf.as_mut() {
                 Some(f) => {
+                    if let Some(t) = tangent.as_deref_mut() {
+                        let q = raw_field.map_or_else(|| f.attitude(), |(_, q)| q);
+                        t.readings(
+                            &sensors,
+                            raw_tilt.as_ref(),
+                            raw_field.as_ref().map(|(m, _)| m),
+                            &q,
+                        );
+                    }
                     let report = f.update(t_ns(t_sample), &meas)?;
+                    let changes = tangent
+                        .as_deref_mut()
+                        .map(|t| t.update(f.last_linearisation()));
                     let (values, mask) = report.whitened_array();
                     // [g_t1, g_t2, (radial), m_x, m_y, m_z] → 5 components.
                     let v = [values[0], values[1], values[3], values[4], values[5]];
@@ -299,6 +362,9 @@ pub fn reconstruct(data: &Aligned, config: &ModelConfig) -> Result<Reconstructio
                             mask: m,
                             field_residual_t,
                         });
+                        if let (Some(t), Some(changes)) = (tangent.as_deref_mut(), changes) {
+                            t.innovations.push(changes);
+                        }
                     }
                 }
                 None => {
@@ -322,7 +388,10 @@ pub fn reconstruct(data: &Aligned, config: &ModelConfig) -> Result<Reconstructio
                         has_field,
                     ) {
                         let mut f = f;
-                        f.propagate(t_ns(tk), &w)?;
+                        if let Some(t) = tangent.as_deref_mut() {
+                            t.start();
+                        }
+                        propagate(&mut f, t_ns(tk), &w, tangent.as_deref_mut(), Rate::Current)?;
                         q_prior = f.attitude();
                         mekf = Some(f);
                         out.start = k;
@@ -333,7 +402,7 @@ pub fn reconstruct(data: &Aligned, config: &ModelConfig) -> Result<Reconstructio
         if let Some(f) = mekf.as_mut()
             && t_ns(tk) > f.time_ns()
         {
-            f.propagate(t_ns(tk), &mean)?;
+            propagate(f, t_ns(tk), &mean, tangent.as_deref_mut(), Rate::Mean)?;
         }
         match mekf.as_ref() {
             Some(f) => {

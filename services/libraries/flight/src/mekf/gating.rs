@@ -6,7 +6,9 @@
 
 use super::spd_factor::SpdFactor;
 use super::update::{Accepted, Blocks, Linearised};
-use super::{Block, BlockStatus, InnovationStats, Mekf, MekfError, UpdateReport};
+use super::{
+    Block, BlockLinearisation, BlockStatus, InnovationStats, Mekf, MekfError, UpdateReport,
+};
 use crate::stats::chi_square_quantile;
 use nalgebra::{Matrix3, Matrix6, SVector, Vector3};
 
@@ -14,15 +16,16 @@ impl Mekf {
     /// Gate each block on its own innovation, computed with the prior state and the rate
     /// estimate; records each block's statistics and status (`Applied` provisionally, confirmed
     /// by the update) in `report` and returns the accepted blocks with their linearisations,
-    /// indexed by [`Block`].
+    /// and every block's as its innovation was whitened, indexed by [`Block`].
     pub(super) fn gate_blocks(
         &self,
         blocks: &Blocks,
         lag_s: f64,
         report: &mut UpdateReport,
-    ) -> Accepted {
+    ) -> (Accepted, [Option<BlockLinearisation>; 2]) {
         let w_hat = self.last_w_meas.unwrap_or(self.bias) - self.bias;
         let mut accepted: Accepted = [None; 2];
+        let mut whitened: [Option<BlockLinearisation>; 2] = [None; 2];
         for (block, data) in [Block::Gravity, Block::Magnetic]
             .into_iter()
             .zip(blocks)
@@ -43,11 +46,12 @@ impl Mekf {
                 Block::Gravity => innovation_stats::<2>(&lin, &self.p, threshold),
                 Block::Magnetic => innovation_stats::<3>(&lin, &self.p, threshold),
             };
-            let Some(stats) = stats else {
+            let Some((stats, linearisation)) = stats else {
                 result.status = BlockStatus::NotInvertible;
                 continue;
             };
             result.stats = Some(stats);
+            whitened[block as usize] = Some(linearisation);
             if stats.nis.is_finite() && stats.nis <= threshold {
                 result.status = BlockStatus::Applied; // provisional; confirmed below
                 accepted[block as usize] = Some((*data, lin));
@@ -55,7 +59,7 @@ impl Mekf {
                 result.status = BlockStatus::Rejected;
             }
         }
-        accepted
+        (accepted, whitened)
     }
 }
 
@@ -74,15 +78,30 @@ pub(super) fn gate_thresholds(p: f64) -> Result<[f64; 2], MekfError> {
 }
 
 /// NIS, whitened and normalised innovations of one linearised block of `D` rows with the prior
-/// covariance `p`, or `None` if its innovation covariance `S` is not invertible.
+/// covariance `p`, and the block's linearisation as it was whitened, or `None` if its
+/// innovation covariance `S` is not invertible.
 fn innovation_stats<const D: usize>(
     lin: &Linearised,
     p: &Matrix6<f64>,
     threshold: f64,
-) -> Option<InnovationStats> {
+) -> Option<(InnovationStats, BlockLinearisation)> {
     let (nu, h, r) = lin.sized::<D>();
     let s = h * p * h.transpose() + r;
     let factor = SpdFactor::new(&s)?;
+    let mut whitening = Matrix3::zeros();
+    if let Some(w) = factor.whitening() {
+        whitening.fixed_view_mut::<D, D>(0, 0).copy_from(&w);
+    }
+    let linearisation = BlockLinearisation {
+        dim: D,
+        projection: lin.basis.map_or_else(Matrix3::identity, |t| {
+            let mut p = Matrix3::zeros();
+            p.fixed_rows_mut::<2>(0).copy_from(&t.transpose());
+            p
+        }),
+        h: lin.h,
+        whitening,
+    };
     let w = factor
         .whiten(&nu)
         .unwrap_or_else(|| SVector::<f64, D>::from_element(f64::NAN));
@@ -110,7 +129,7 @@ fn innovation_stats<const D: usize>(
             mask[i] = true;
         }
     }
-    Some(InnovationStats {
+    let stats = InnovationStats {
         residual: lin.residual,
         whitened,
         normalised,
@@ -118,7 +137,8 @@ fn innovation_stats<const D: usize>(
         nis,
         dof: D,
         threshold,
-    })
+    };
+    Some((stats, linearisation))
 }
 
 #[cfg(test)]

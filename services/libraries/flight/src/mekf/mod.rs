@@ -107,8 +107,8 @@ pub use model::{
     inclinometer_covariance, measurement_jacobian, process_noise, tangent_basis, transition_matrix,
 };
 pub use report::{
-    Block, BlockCounters, BlockResult, BlockStatus, InnovationStats, MekfCounters, MekfEstimate,
-    UpdateReport,
+    Block, BlockCounters, BlockLinearisation, BlockResult, BlockStatus, InnovationStats,
+    MekfCounters, MekfEstimate, UpdateLinearisation, UpdateReport,
 };
 pub use triad::triad;
 pub use update::VectorMeasurements;
@@ -191,6 +191,7 @@ pub struct Mekf {
     last_w_meas: Option<Vector3<f64>>,
     counters: MekfCounters,
     last_update: Option<UpdateReport>,
+    last_linearisation: UpdateLinearisation,
 }
 
 impl Mekf {
@@ -242,6 +243,7 @@ impl Mekf {
             last_w_meas: None,
             counters: MekfCounters::default(),
             last_update: None,
+            last_linearisation: UpdateLinearisation::default(),
         })
     }
 
@@ -302,6 +304,11 @@ impl Mekf {
     /// The latest update report.
     pub fn last_update(&self) -> Option<UpdateReport> {
         self.last_update
+    }
+    /// The latest update's linearisation (each block's as it was whitened, the gain applied),
+    /// for sensitivity analyses; empty before any update.
+    pub fn last_linearisation(&self) -> &UpdateLinearisation {
+        &self.last_linearisation
     }
     /// Precomputed chi-square gate thresholds `[gravity (2 dof), magnetic (3 dof)]`.
     pub fn gate_thresholds(&self) -> [f64; 2] {

@@ -4,7 +4,7 @@
 //! dimensionless), the counters since construction ([`MekfCounters`]) and the published
 //! snapshot ([`MekfEstimate`]: attitude L→B, rates in rad/s, body axes, time in ns).
 
-use nalgebra::{Matrix6, Vector3, Vector6};
+use nalgebra::{Matrix3, Matrix3x6, Matrix6, SMatrix, Vector3, Vector6};
 use testbed_model::attitude::Attitude;
 
 /// The two measurement blocks.
@@ -56,6 +56,37 @@ pub struct InnovationStats {
     pub dof: usize,
     /// Gate threshold the NIS was compared with (infinite with gating off).
     pub threshold: f64,
+}
+
+/// One block of an update linearised about the prior state, as its whitened innovation saw it:
+/// for sensitivity analyses (identification's first-order screens), which carry a change of
+/// the measurement `dy` to the whitened innovation, `W (P dy − H dx)`, with the state's change
+/// `dx` (`[δθ, δb]`, in the error state's convention).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BlockLinearisation {
+    /// Rows of the block: 2 (gravity, in its tangent plane) or 3 (magnetic field).
+    pub dim: usize,
+    /// `P`: the projection of a 3-D change of the measurement onto the block's rows (the
+    /// tangent basis' transpose for gravity, the identity for the field), leading `dim` rows.
+    pub projection: Matrix3<f64>,
+    /// `H`: the rows' sensitivity to the error state, leading `dim` rows.
+    pub h: Matrix3x6<f64>,
+    /// `W = L_S⁻¹` (`S = L_S L_Sᵀ`, the block's innovation covariance): the whitening, leading
+    /// `dim × dim`.
+    pub whitening: Matrix3<f64>,
+}
+
+/// The last update's linearisation ([`crate::mekf::Mekf::last_linearisation`]): each block's as
+/// it was gated and whitened (with the prior), and the gain applied to the stacked innovation
+/// of the applied blocks (gravity's rows first), at the last iteration.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct UpdateLinearisation {
+    /// Indexed by [`Block`]; `None` where the block had no innovation.
+    pub blocks: [Option<BlockLinearisation>; 2],
+    /// The blocks applied, indexed by [`Block`].
+    pub applied: [bool; 2],
+    /// `K`, leading columns: one per row of the applied blocks, stacked; zero without an update.
+    pub gain: SMatrix<f64, 6, 5>,
 }
 
 /// Result of one block in an update.

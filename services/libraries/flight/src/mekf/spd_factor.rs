@@ -56,6 +56,12 @@ impl<const D: usize> SpdFactor<D> {
         y
     }
 
+    /// The whitening `L_S⁻¹ = L⁻¹ D` ([`SpdFactor::whiten`] as a matrix).
+    pub(super) fn whitening(&self) -> Option<SMatrix<f64, D, D>> {
+        self.l
+            .solve_lower_triangular(&SMatrix::<f64, D, D>::from_diagonal(&self.d))
+    }
+
     /// Whitened vector `L_S⁻¹ v` with `S = L_S L_Sᵀ` (`L_S = D⁻¹ L`, lower triangular).
     pub(super) fn whiten(&self, v: &SVector<f64, D>) -> Option<SVector<f64, D>> {
         self.l.solve_lower_triangular(&v.component_mul(&self.d))

@@ -6,7 +6,10 @@
 
 use super::model::{MIN_GRAVITY_Z, inclinometer_covariance, measurement_jacobian, tangent_basis};
 use super::spd_factor::SpdFactor;
-use super::{Block, BlockResult, BlockStatus, Mekf, MekfError, NS_PER_S, UpdateReport, symmetrise};
+use super::{
+    Block, BlockResult, BlockStatus, Mekf, MekfError, NS_PER_S, UpdateLinearisation, UpdateReport,
+    symmetrise,
+};
 use nalgebra::{
     Matrix2x3, Matrix3, Matrix3x2, Matrix3x6, Matrix6, SMatrix, SVector, Vector3, Vector6,
 };
@@ -135,7 +138,11 @@ impl Mekf {
         }
 
         // Gate each block on its own innovation, with the prior.
-        let accepted = self.gate_blocks(&blocks, lag_s, &mut report);
+        let (accepted, whitened) = self.gate_blocks(&blocks, lag_s, &mut report);
+        self.last_linearisation = UpdateLinearisation {
+            blocks: whitened,
+            ..UpdateLinearisation::default()
+        };
 
         // The joint update at the size of the accepted blocks stacked.
         let applied = match accepted {
@@ -148,6 +155,7 @@ impl Mekf {
             Some(Some((iterations, correction))) => {
                 report.iterations = iterations;
                 report.correction = correction;
+                self.last_linearisation.applied = accepted.map(|a| a.is_some());
             }
             Some(None) => {
                 for r in [&mut report.gravity, &mut report.magnetic] {
@@ -302,6 +310,10 @@ impl Mekf {
             }
         }
         let (gain, h, r) = last?;
+        self.last_linearisation
+            .gain
+            .fixed_columns_mut::<M>(0)
+            .copy_from(&gain);
         // Joseph form: P⁺ = (I − K H) P (I − K H)ᵀ + K R Kᵀ.
         let i_kh = Matrix6::<f64>::identity() - gain * h;
         let p_new = i_kh * p * i_kh.transpose() + gain * r * gain.transpose();

@@ -42,7 +42,9 @@ use crate::channels::{Regressors, TORQUE_COLUMNS, TorqueChannel, WheelChannel};
 use crate::data::Aligned;
 use crate::effects::{Cause, Kind};
 use crate::error::IdentError;
-use crate::reconstruct::{Reconstruction, reconstruct};
+use crate::reconstruct::{
+    INNOVATION_LEN, Reconstruction, reconstruct, reconstruct_with_sensitivities,
+};
 use crate::stats::NormalEquations;
 use rayon::prelude::*;
 use serde::Serialize;
@@ -206,11 +208,34 @@ pub struct Problem<'a> {
     recons: Rc<RefCell<HashMap<SensorKey, Rc<Reconstruction>>>>,
     /// Filter runs so far (for the benchmark and the report).
     pub filter_runs: Cell<usize>,
-    /// The fit ticks' innovations of finite-difference filter runs made ahead
-    /// ([`Problem::prefetch_screens`]), each taken by the first Jacobian that asks for it.
-    steps_ahead: RefCell<HashMap<SensorKey, Vec<f64>>>,
+    /// Screens' Jacobian columns on the fit ticks by the filter's sensitivities
+    /// ([`Problem::screen_columns`]), by start and directions.
+    screens: RefCell<HashMap<ScreenKey, Vec<Vec<f64>>>>,
     sphere: RefCell<Option<Option<[f64; 3]>>>,
     ellipsoid: RefCell<Option<Option<HardAndSoftIron>>>,
+}
+
+/// A screen's filter run: its start's key and its directions' keys.
+type ScreenKey = (SensorKey, Vec<SensorKey>);
+
+/// A first-order screen of sensor parameters: the configuration it linearises at, and one
+/// direction per screened parameter (the configuration with it stepped, and the step).
+#[derive(Debug, Clone)]
+pub struct ScreenRequest {
+    pub start: ModelConfig,
+    pub directions: Vec<(ModelConfig, f64)>,
+}
+
+impl ScreenRequest {
+    fn key(&self) -> ScreenKey {
+        (
+            SensorKey::of(&self.start),
+            self.directions
+                .iter()
+                .map(|(c, _)| SensorKey::of(c))
+                .collect(),
+        )
+    }
 }
 
 /// Hard iron (gauss) and the soft iron's six values, from [`ellipsoid_fit`].
@@ -263,7 +288,7 @@ impl<'a> Problem<'a> {
             cache: RefCell::new(HashMap::new()),
             recons: Rc::new(RefCell::new(HashMap::new())),
             filter_runs: Cell::new(0),
-            steps_ahead: RefCell::new(HashMap::new()),
+            screens: RefCell::new(HashMap::new()),
             sphere: RefCell::new(None),
             ellipsoid: RefCell::new(None),
         }
@@ -281,7 +306,7 @@ impl<'a> Problem<'a> {
             cache: RefCell::new(HashMap::new()),
             recons: Rc::clone(&self.recons),
             filter_runs: Cell::new(0),
-            steps_ahead: RefCell::new(HashMap::new()),
+            screens: RefCell::new(HashMap::new()),
             sphere: RefCell::new(*self.sphere.borrow()),
             ellipsoid: RefCell::new(*self.ellipsoid.borrow()),
         }
@@ -323,75 +348,78 @@ impl<'a> Problem<'a> {
             .collect()
     }
 
-    /// The fit ticks' whitened innovations of a filter run per configuration: those made ahead
-    /// ([`Problem::prefetch_screens`]), the others run now ([`Problem::run_filters`]).
+    /// The fit ticks' whitened innovations of a filter run per configuration
+    /// ([`Problem::run_filters`]).
     pub(crate) fn perturbed_innovations(
         &self,
         configs: &[ModelConfig],
     ) -> Result<Vec<Vec<f64>>, IdentError> {
-        let ahead: Vec<Option<Vec<f64>>> = {
-            let mut steps = self.steps_ahead.borrow_mut();
-            configs
-                .iter()
-                .map(|c| steps.remove(&SensorKey::of(c)))
-                .collect()
-        };
-        let todo: Vec<ModelConfig> = configs
+        Ok(self
+            .run_filters(configs)?
             .iter()
-            .zip(&ahead)
-            .filter(|(_, a)| a.is_none())
-            .map(|(c, _)| c.clone())
-            .collect();
-        let mut runs = self
-            .run_filters(&todo)?
-            .into_iter()
-            .map(|r| self.fit_innovations(&r));
-        // `run_filters` gives one run per configuration: every one not made ahead has its run.
-        Ok(ahead
-            .into_iter()
-            .map(|a| a.or_else(|| runs.next()).unwrap_or_default())
+            .map(|r| self.fit_innovations(r))
             .collect())
     }
 
-    /// Run ahead, in one batch across the cores, the filter runs the screened fits of several
-    /// candidates begin with ([`Problem::screen_runs`]): those at their starting values kept
-    /// like any other, those at finite-difference steps kept as the fit ticks' innovations
-    /// until a Jacobian takes them.
-    pub fn prefetch_screens(
-        &self,
-        starts: &[ModelConfig],
-        steps: &[ModelConfig],
-    ) -> Result<(), IdentError> {
-        let mut todo: Vec<(SensorKey, &ModelConfig, bool)> = Vec::new();
+    /// The Jacobian columns of a screen on the fit ticks: the whitened innovations'
+    /// sensitivities to each direction, from one filter run beside its tangent
+    /// ([`crate::tangent`]; kept with the run of the start), or made ahead
+    /// ([`Problem::prefetch_screens`]).
+    pub fn screen_columns(&self, request: &ScreenRequest) -> Result<Vec<Vec<f64>>, IdentError> {
+        let key = request.key();
+        if let Some(columns) = self.screens.borrow().get(&key) {
+            return Ok(columns.clone());
+        }
+        self.prefetch_screens(std::slice::from_ref(request))?;
+        self.screens
+            .borrow()
+            .get(&key)
+            .cloned()
+            .ok_or_else(|| IdentError::Failed("a screen's filter run was not kept".into()))
+    }
+
+    /// Run ahead, in one batch across the cores, the screens of several candidates
+    /// ([`Problem::screen_request`]): each one filter run beside its tangent, whose run is kept
+    /// like any other and whose columns wait for [`Problem::screen_columns`].
+    pub fn prefetch_screens(&self, requests: &[ScreenRequest]) -> Result<(), IdentError> {
+        let mut todo: Vec<(ScreenKey, &ScreenRequest)> = Vec::new();
         {
-            let recons = self.recons.borrow();
-            let ahead = self.steps_ahead.borrow();
-            for (c, step) in starts
-                .iter()
-                .map(|c| (c, false))
-                .chain(steps.iter().map(|c| (c, true)))
-            {
-                let key = SensorKey::of(c);
-                let done = recons.contains_key(&key) || (step && ahead.contains_key(&key));
-                if !done && !todo.iter().any(|(k, _, s)| *k == key && *s == step) {
-                    todo.push((key, c, step));
+            let screens = self.screens.borrow();
+            for r in requests {
+                let key = r.key();
+                if !screens.contains_key(&key) && !todo.iter().any(|(k, _)| *k == key) {
+                    todo.push((key, r));
                 }
             }
         }
         self.filter_runs.set(self.filter_runs.get() + todo.len());
-        let (data, held_out) = (self.data, &self.held_out);
-        let runs: Vec<Result<Reconstruction, IdentError>> = todo
+        let data = self.data;
+        let runs: Vec<_> = todo
             .par_iter()
-            .map(|(_, c, _)| reconstruct(data, c))
+            .map(|(_, r)| reconstruct_with_sensitivities(data, &r.start, &r.directions))
             .collect();
-        let (mut recons, mut ahead) = (self.recons.borrow_mut(), self.steps_ahead.borrow_mut());
-        for ((key, _, step), run) in todo.into_iter().zip(runs) {
-            let run = run?;
-            if step {
-                ahead.insert(key, run.innovation_vector(|k| !held_out[k]));
-            } else {
-                recons.insert(key, Rc::new(run));
-            }
+        let (mut recons, mut screens) = (self.recons.borrow_mut(), self.screens.borrow_mut());
+        for ((key, _), run) in todo.into_iter().zip(runs) {
+            let (recon, sensitivities) = run?;
+            let columns = (0..key.1.len())
+                .map(|j| {
+                    recon
+                        .innovations
+                        .iter()
+                        .zip(&sensitivities)
+                        .filter(|(i, _)| !self.held_out[i.tick])
+                        .flat_map(|(i, s)| {
+                            (0..INNOVATION_LEN)
+                                .filter(move |c| i.mask & (1 << c) != 0)
+                                .map(move |c| s[j][c])
+                        })
+                        .collect()
+                })
+                .collect();
+            recons
+                .entry(key.0.clone())
+                .or_insert_with(|| Rc::new(recon));
+            screens.insert(key, columns);
         }
         Ok(())
     }
@@ -440,7 +468,7 @@ impl<'a> Problem<'a> {
 
     /// Forget cached states and filter runs (memory) except the base's and those of `keep`.
     pub fn trim_cache(&self, keep: &[&ModelConfig]) {
-        self.steps_ahead.borrow_mut().clear();
+        self.screens.borrow_mut().clear();
         let keys: Vec<SensorKey> = keep.iter().map(|c| SensorKey::of(c)).collect();
         self.cache
             .borrow_mut()

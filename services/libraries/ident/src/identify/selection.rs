@@ -50,33 +50,43 @@ pub(super) fn forward_selection(
     let mut chosen_rows: Vec<CandidateRow> = Vec::new();
     let mut warm: HashMap<Cause, FittedCause> = HashMap::new();
     for _ in 0..options.max_causes {
-        // The sensor candidates' screens begin with a few filter runs each: all in one batch.
-        let (mut starts, mut step_runs) = (Vec::new(), Vec::new());
-        for &cause in available
+        let threshold_for = |k: usize| {
+            (k as f64 * n_fit.ln()).max(
+                chi_square_quantile(1.0 - options.alpha, k.max(1) as f64).unwrap_or(f64::INFINITY),
+            )
+        };
+        let screen_of = |cause: Cause| (threshold_for(cause.len()), current.evaluation.fit.rss[0]);
+        // The sensor candidates' screens are a filter run each, and those that pass begin
+        // their fits with a finite-difference Jacobian: each in one batch across the cores. A
+        // run that fails here fails again in its candidate's fit, which reports it.
+        let screened: Vec<(Cause, Vec<Cause>, _)> = available
             .iter()
             .filter(|c| !selected.contains(c) && c.kind() == Kind::Sensor)
-        {
-            let set = [selected.as_slice(), &[cause]].concat();
-            if let Ok((start, step)) = problem.screen_runs(&set, &warm) {
-                starts.extend(start);
-                step_runs.extend(step);
-            }
-        }
-        // A run that fails here fails again in its candidate's fit, which reports it.
-        let _ = problem.prefetch_screens(&starts, &step_runs);
+            .filter_map(|&cause| {
+                let set = [selected.as_slice(), &[cause]].concat();
+                let request = problem.screen_request(&set, &warm).ok().flatten()?;
+                Some((cause, set, request))
+            })
+            .collect();
+        let requests: Vec<_> = screened.iter().map(|(_, _, r)| r.clone()).collect();
+        let _ = problem.prefetch_screens(&requests);
+        let first_steps: Vec<ModelConfig> = screened
+            .iter()
+            .filter(|(cause, _, request)| {
+                problem
+                    .screen_passes(request, screen_of(*cause))
+                    .unwrap_or(false)
+            })
+            .filter_map(|(_, set, _)| problem.first_jacobian_runs(set, &warm).ok())
+            .flatten()
+            .collect();
+        let _ = problem.prefetch(&first_steps);
         let mut rows = Vec::new();
         let mut best: Option<(usize, SetFit, Vec<SetFit>)> = None;
         for &cause in available.iter().filter(|c| !selected.contains(c)) {
             let mut set = selected.clone();
             set.push(cause);
-            let threshold_for = |k: usize| {
-                (k as f64 * n_fit.ln()).max(
-                    chi_square_quantile(1.0 - options.alpha, k.max(1) as f64)
-                        .unwrap_or(f64::INFINITY),
-                )
-            };
-            let screen = (cause.kind() == Kind::Sensor)
-                .then(|| (threshold_for(cause.len()), current.evaluation.fit.rss[0]));
+            let screen = (cause.kind() == Kind::Sensor).then(|| screen_of(cause));
             match problem.fit_screened(&set, &warm, screen) {
                 Ok(fit) => {
                     let lr = current.evaluation.fit.log_ratio(&fit.evaluation.fit);
