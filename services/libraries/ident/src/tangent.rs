@@ -9,9 +9,9 @@
 //! * **propagation**, with `Φ` the filter's transition matrix over the interval and `dw` the
 //!   change of the corrected gyro reading: `x ← Φ x − Φ₁₂ dw` (a rate change enters as a
 //!   bias change of the opposite sign);
-//! * **update**, per block with the filter's projection `P`, sensitivity `H` and whitening `W`
-//!   and the change `dy` of the corrected reading: the whitened innovation changes by
-//!   `W (P dy − H x)`, and the applied blocks' stacked `dν = P dy − H x` moves the state by
+//! * **update**, per block with the filter's projection `P`, sensitivity `H` and whitening
+//!   `L_S⁻¹` and the change `dy` of the corrected reading: the whitened innovation changes by
+//!   `L_S⁻¹ (P dy − H x)`, and the applied blocks' stacked `dν = P dy − H x` moves the state by
 //!   `K dν`.
 //!
 //! The corrected readings' changes `dw`, `dy` are differences of the sensor models' corrections
@@ -148,7 +148,10 @@ impl Tangent {
                     continue;
                 };
                 let dnu = b.projection * dy.unwrap_or_else(Vector3::zeros) - b.h * x;
-                let white = b.whitening * dnu;
+                let white = b
+                    .factor_lower
+                    .solve_lower_triangular(&dnu)
+                    .unwrap_or_else(Vector3::zeros);
                 for i in 0..b.dim {
                     values[first + i] = white[i];
                 }

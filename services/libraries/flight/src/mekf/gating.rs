@@ -88,10 +88,10 @@ fn innovation_stats<const D: usize>(
     let (nu, h, r) = lin.sized::<D>();
     let s = h * p * h.transpose() + r;
     let factor = SpdFactor::new(&s)?;
-    let mut whitening = Matrix3::zeros();
-    if let Some(w) = factor.whitening() {
-        whitening.fixed_view_mut::<D, D>(0, 0).copy_from(&w);
-    }
+    let mut factor_lower = Matrix3::identity();
+    factor_lower
+        .fixed_view_mut::<D, D>(0, 0)
+        .copy_from(&factor.lower());
     let linearisation = BlockLinearisation {
         dim: D,
         projection: lin.basis.map_or_else(Matrix3::identity, |t| {
@@ -100,7 +100,7 @@ fn innovation_stats<const D: usize>(
             p
         }),
         h: lin.h,
-        whitening,
+        factor_lower,
     };
     let w = factor
         .whiten(&nu)

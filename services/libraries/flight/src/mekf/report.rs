@@ -60,7 +60,7 @@ pub struct InnovationStats {
 
 /// One block of an update linearised about the prior state, as its whitened innovation saw it:
 /// for sensitivity analyses (identification's first-order screens), which carry a change of
-/// the measurement `dy` to the whitened innovation, `W (P dy − H dx)`, with the state's change
+/// the measurement `dy` to the whitened innovation, `L_S⁻¹ (P dy − H dx)`, with the state's change
 /// `dx` (`[δθ, δb]`, in the error state's convention).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct BlockLinearisation {
@@ -71,9 +71,9 @@ pub struct BlockLinearisation {
     pub projection: Matrix3<f64>,
     /// `H`: the rows' sensitivity to the error state, leading `dim` rows.
     pub h: Matrix3x6<f64>,
-    /// `W = L_S⁻¹` (`S = L_S L_Sᵀ`, the block's innovation covariance): the whitening, leading
-    /// `dim × dim`.
-    pub whitening: Matrix3<f64>,
+    /// `L_S`, lower triangular with `S = L_S L_Sᵀ` (the block's innovation covariance): the
+    /// whitening is `W = L_S⁻¹`. Leading `dim × dim`, the identity past it.
+    pub factor_lower: Matrix3<f64>,
 }
 
 /// The last update's linearisation ([`crate::mekf::Mekf::last_linearisation`]): each block's as

@@ -56,10 +56,10 @@ impl<const D: usize> SpdFactor<D> {
         y
     }
 
-    /// The whitening `L_S⁻¹ = L⁻¹ D` ([`SpdFactor::whiten`] as a matrix).
-    pub(super) fn whitening(&self) -> Option<SMatrix<f64, D, D>> {
-        self.l
-            .solve_lower_triangular(&SMatrix::<f64, D, D>::from_diagonal(&self.d))
+    /// `L_S = D⁻¹ L`, the lower-triangular factor of `S = L_S L_Sᵀ` ([`SpdFactor::whiten`]
+    /// solves with it).
+    pub(super) fn lower(&self) -> SMatrix<f64, D, D> {
+        SMatrix::<f64, D, D>::from_fn(|i, j| self.l[(i, j)] / self.d[i])
     }
 
     /// Whitened vector `L_S⁻¹ v` with `S = L_S L_Sᵀ` (`L_S = D⁻¹ L`, lower triangular).
