@@ -18,7 +18,7 @@
 //! fit reports the whitened residual sum of squares of each channel on the fit data and on the
 //! held-out data.
 //!
-//! * `sensors`: Gauss–Newton of the sensor causes through the filter;
+//! * `sensors`: Gauss–Newton of the sensor causes through the filter, and their screens;
 //! * `hard_iron`: the hard and soft iron's starting values (sphere and ellipsoid fits of the
 //!   field readings);
 //! * `torque`: weighted least squares of the torque causes;

@@ -1,7 +1,9 @@
 //! Sensor causes (gyro scale and misalignment, Earth rate, hard and soft iron, inclinometer
-//! offset and scale): Gauss–Newton on the filter's whitened innovations (the prediction-error method), with the Jacobian by finite
-//! differences through the filter ([`super::jacobian`]), an optional first-order screen, and
-//! damped steps within the causes' bounds.
+//! offset and scale): Gauss–Newton on the filter's whitened innovations (the prediction-error
+//! method), with the Jacobian by finite differences through the filter ([`super::jacobian`]),
+//! and damped steps within the causes' bounds. Before it, an optional first-order screen whose
+//! Jacobian is the filter's sensitivities from one run ([`crate::tangent`]): a candidate whose
+//! predicted fall of the residual sum is under half the selection's threshold is not fitted.
 
 use super::jacobian::{forward_jacobian, normal_equations, perturbations};
 use super::{FittedCause, Problem, ScreenRequest, SensorLinearisation, build_sensors};
