@@ -18,9 +18,9 @@
 //! [`torque`]: super::torque
 //! [`wheels`]: super::wheels
 
-use super::jacobian::{forward_jacobian, normal_equations};
+use super::jacobian::{normal_equations, perturbations};
 use super::torque::torque_normal_equations;
-use super::{Problem, State, WheelModel};
+use super::{Problem, State, TangentRun, WheelModel};
 use crate::channels::{column_cause, torque_columns};
 use crate::effects::{Cause, Kind};
 use crate::error::IdentError;
@@ -135,8 +135,9 @@ impl Problem<'_> {
             }
         }
         // Attitude block: the sensor causes jointly, from the Jacobian of the filter's whitened
-        // innovations by forward differences (the sensor fit's own Jacobian), at the base
-        // configuration's values of the causes (Earth rate on at the lab's latitude).
+        // innovations by its sensitivities (one run, `crate::tangent`; the sensor fit's own
+        // Jacobian is finite differences at the same steps), at the base configuration's values
+        // of the causes (Earth rate on at the lab's latitude).
         let sensor: Vec<(usize, Cause, usize)> = params
             .iter()
             .enumerate()
@@ -166,18 +167,18 @@ impl Problem<'_> {
                 config
             };
             let steps: Vec<f64> = sensor.iter().map(|&(_, c, off)| step_of(c, off)).collect();
-            let r0 = self.fit_innovations(&*self.recon(&build(&theta))?);
             let all: Vec<usize> = (0..sensor.len()).collect();
-            let columns = forward_jacobian(
-                &theta,
-                &r0,
-                &all,
-                &steps,
-                |k| sensor[k].1.bounds(sensor[k].2),
-                |ts: &[Vec<f64>]| -> Result<Vec<Vec<f64>>, IdentError> {
-                    self.perturbed_innovations(&ts.iter().map(|t| build(t)).collect::<Vec<_>>())
-                },
-            )?;
+            let stepped = perturbations(&theta, &all, &steps, |k| sensor[k].1.bounds(sensor[k].2));
+            let run = TangentRun {
+                start: build(&theta),
+                directions: stepped
+                    .iter()
+                    .enumerate()
+                    .map(|(k, t)| (build(t), t[k] - theta[k]))
+                    .collect(),
+            };
+            let columns = self.tangent_columns(&run)?;
+            let r0 = self.fit_innovations(&*self.recon(&run.start)?);
             let f = normal_equations(&columns, &r0).information();
             for (a, &(ja, _, _)) in sensor.iter().enumerate() {
                 for (b, &(jb, _, _)) in sensor.iter().enumerate() {

@@ -208,26 +208,27 @@ pub struct Problem<'a> {
     recons: Rc<RefCell<HashMap<SensorKey, Rc<Reconstruction>>>>,
     /// Filter runs so far (for the benchmark and the report).
     pub filter_runs: Cell<usize>,
-    /// Screens' Jacobian columns on the fit ticks by the filter's sensitivities
-    /// ([`Problem::screen_columns`]), by start and directions.
-    screens: RefCell<HashMap<ScreenKey, Vec<Vec<f64>>>>,
+    /// Jacobian columns on the fit ticks by the filter's sensitivities
+    /// ([`Problem::tangent_columns`]), by start and directions.
+    tangents: RefCell<HashMap<TangentKey, Vec<Vec<f64>>>>,
     sphere: RefCell<Option<Option<[f64; 3]>>>,
     ellipsoid: RefCell<Option<Option<HardAndSoftIron>>>,
 }
 
-/// A screen's filter run: its start's key and its directions' keys.
-type ScreenKey = (SensorKey, Vec<SensorKey>);
+/// A tangent run's key: its start's key and its directions' keys.
+type TangentKey = (SensorKey, Vec<SensorKey>);
 
-/// A first-order screen of sensor parameters: the configuration it linearises at, and one
-/// direction per screened parameter (the configuration with it stepped, and the step).
+/// A filter run with its sensitivities to sensor parameters ([`crate::tangent`]): the
+/// configuration it linearises at, and one direction per parameter (the configuration with it
+/// stepped, and the step). A sensor candidate's screen, and the information of sensor causes.
 #[derive(Debug, Clone)]
-pub struct ScreenRequest {
+pub struct TangentRun {
     pub start: ModelConfig,
     pub directions: Vec<(ModelConfig, f64)>,
 }
 
-impl ScreenRequest {
-    fn key(&self) -> ScreenKey {
+impl TangentRun {
+    fn key(&self) -> TangentKey {
         (
             SensorKey::of(&self.start),
             self.directions
@@ -288,7 +289,7 @@ impl<'a> Problem<'a> {
             cache: RefCell::new(HashMap::new()),
             recons: Rc::new(RefCell::new(HashMap::new())),
             filter_runs: Cell::new(0),
-            screens: RefCell::new(HashMap::new()),
+            tangents: RefCell::new(HashMap::new()),
             sphere: RefCell::new(None),
             ellipsoid: RefCell::new(None),
         }
@@ -306,7 +307,7 @@ impl<'a> Problem<'a> {
             cache: RefCell::new(HashMap::new()),
             recons: Rc::clone(&self.recons),
             filter_runs: Cell::new(0),
-            screens: RefCell::new(HashMap::new()),
+            tangents: RefCell::new(HashMap::new()),
             sphere: RefCell::new(*self.sphere.borrow()),
             ellipsoid: RefCell::new(*self.ellipsoid.borrow()),
         }
@@ -361,33 +362,34 @@ impl<'a> Problem<'a> {
             .collect())
     }
 
-    /// The Jacobian columns of a screen on the fit ticks: the whitened innovations'
+    /// The Jacobian columns of a tangent run on the fit ticks: the whitened innovations'
     /// sensitivities to each direction, from one filter run beside its tangent
     /// ([`crate::tangent`]; kept with the run of the start), or made ahead
-    /// ([`Problem::prefetch_screens`]).
-    pub fn screen_columns(&self, request: &ScreenRequest) -> Result<Vec<Vec<f64>>, IdentError> {
+    /// ([`Problem::prefetch_tangents`]).
+    pub fn tangent_columns(&self, request: &TangentRun) -> Result<Vec<Vec<f64>>, IdentError> {
         let key = request.key();
-        if let Some(columns) = self.screens.borrow().get(&key) {
+        if let Some(columns) = self.tangents.borrow().get(&key) {
             return Ok(columns.clone());
         }
-        self.prefetch_screens(std::slice::from_ref(request))?;
-        self.screens
+        self.prefetch_tangents(std::slice::from_ref(request))?;
+        self.tangents
             .borrow()
             .get(&key)
             .cloned()
-            .ok_or_else(|| IdentError::Failed("a screen's filter run was not kept".into()))
+            .ok_or_else(|| IdentError::Failed("a tangent run was not kept".into()))
     }
 
-    /// Run ahead, in one batch across the cores, the screens of several candidates
-    /// ([`Problem::screen_request`]): each one filter run beside its tangent, whose run is kept
-    /// like any other and whose columns wait for [`Problem::screen_columns`].
-    pub fn prefetch_screens(&self, requests: &[ScreenRequest]) -> Result<(), IdentError> {
-        let mut todo: Vec<(ScreenKey, &ScreenRequest)> = Vec::new();
+    /// Run ahead, in one batch across the cores, several tangent runs (the screens of a
+    /// selection step's candidates, [`Problem::screen_request`]): each one filter run beside
+    /// its tangent, whose run is kept like any other and whose columns wait for
+    /// [`Problem::tangent_columns`].
+    pub fn prefetch_tangents(&self, requests: &[TangentRun]) -> Result<(), IdentError> {
+        let mut todo: Vec<(TangentKey, &TangentRun)> = Vec::new();
         {
-            let screens = self.screens.borrow();
+            let tangents = self.tangents.borrow();
             for r in requests {
                 let key = r.key();
-                if !screens.contains_key(&key) && !todo.iter().any(|(k, _)| *k == key) {
+                if !tangents.contains_key(&key) && !todo.iter().any(|(k, _)| *k == key) {
                     todo.push((key, r));
                 }
             }
@@ -398,7 +400,7 @@ impl<'a> Problem<'a> {
             .par_iter()
             .map(|(_, r)| reconstruct_with_sensitivities(data, &r.start, &r.directions))
             .collect();
-        let (mut recons, mut screens) = (self.recons.borrow_mut(), self.screens.borrow_mut());
+        let (mut recons, mut tangents) = (self.recons.borrow_mut(), self.tangents.borrow_mut());
         for ((key, _), run) in todo.into_iter().zip(runs) {
             let (recon, sensitivities) = run?;
             let columns = (0..key.1.len())
@@ -419,7 +421,7 @@ impl<'a> Problem<'a> {
             recons
                 .entry(key.0.clone())
                 .or_insert_with(|| Rc::new(recon));
-            screens.insert(key, columns);
+            tangents.insert(key, columns);
         }
         Ok(())
     }
@@ -468,7 +470,7 @@ impl<'a> Problem<'a> {
 
     /// Forget cached states and filter runs (memory) except the base's and those of `keep`.
     pub fn trim_cache(&self, keep: &[&ModelConfig]) {
-        self.screens.borrow_mut().clear();
+        self.tangents.borrow_mut().clear();
         let keys: Vec<SensorKey> = keep.iter().map(|c| SensorKey::of(c)).collect();
         self.cache
             .borrow_mut()

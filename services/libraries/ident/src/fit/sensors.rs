@@ -6,7 +6,7 @@
 //! predicted fall of the residual sum is under half the selection's threshold is not fitted.
 
 use super::jacobian::{forward_jacobian, normal_equations, perturbations};
-use super::{FittedCause, Problem, ScreenRequest, SensorLinearisation, build_sensors};
+use super::{FittedCause, Problem, SensorLinearisation, TangentRun, build_sensors};
 use crate::effects::{Cause, Kind};
 use crate::error::IdentError;
 use crate::stats::LsFit;
@@ -43,13 +43,13 @@ impl Start {
 
     /// The screen at this start on `base`: a direction per screened parameter, its step away
     /// from the nearer bound.
-    fn screen(&self, base: &ModelConfig) -> ScreenRequest {
+    fn screen(&self, base: &ModelConfig) -> TangentRun {
         let build = |theta: &[f64]| build_sensors(base, &self.layout, theta);
         let which = self.screened();
         let stepped = perturbations(&self.theta, &which, &self.steps, |j| {
             bound_of(&self.layout, j)
         });
-        ScreenRequest {
+        TangentRun {
             start: build(&self.theta),
             directions: which
                 .iter()
@@ -111,14 +111,14 @@ impl Problem<'_> {
 
     /// The screen a screened fit of the sensor causes of `set` begins with: linearised at its
     /// starting values, in the directions of the parameters not fitted before (all of them
-    /// when none was). Run together ahead of the fits ([`Problem::prefetch_screens`]), the
+    /// when none was). Run together ahead of the fits ([`Problem::prefetch_tangents`]), the
     /// screens of many candidates fill the cores. `None` when the fit would keep its warm
     /// values.
     pub fn screen_request(
         &self,
         set: &[Cause],
         warm: &HashMap<Cause, FittedCause>,
-    ) -> Result<Option<ScreenRequest>, IdentError> {
+    ) -> Result<Option<TangentRun>, IdentError> {
         let sensor: Vec<Cause> = set
             .iter()
             .copied()
@@ -136,11 +136,11 @@ impl Problem<'_> {
     /// (the set chosen so far).
     pub fn screen_passes(
         &self,
-        request: &ScreenRequest,
+        request: &TangentRun,
         (threshold, reference): (f64, f64),
     ) -> Result<bool, IdentError> {
         // The columns first: their filter run is the start's.
-        let columns = self.screen_columns(request)?;
+        let columns = self.tangent_columns(request)?;
         let r0 = self.fit_innovations(&*self.recon(&request.start)?);
         let predicted = normal_equations(&columns, &r0)
             .solve()
@@ -426,7 +426,7 @@ mod tests {
     /// for a gyro misalignment at 11; the screen compares it with half the selection's
     /// threshold, at least 12).
     #[test]
-    fn screen_columns_are_the_finite_differences_of_filter_runs() {
+    fn tangent_columns_are_the_finite_differences_of_filter_runs() {
         const PREDICTED_TOLERANCE: f64 = 0.2;
         const PREDICTED_FLOOR: f64 = 10.0;
         const COLUMN_TOLERANCE: f64 = 0.15;
@@ -457,7 +457,7 @@ mod tests {
             else {
                 continue;
             };
-            let columns = problem.screen_columns(&request).expect("sensitivities");
+            let columns = problem.tangent_columns(&request).expect("sensitivities");
             let r0 = problem.fit_innovations(&problem.recon(&request.start).expect("run"));
             let finite: Vec<Vec<f64>> = request
                 .directions

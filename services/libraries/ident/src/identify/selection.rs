@@ -69,7 +69,7 @@ pub(super) fn forward_selection(
             })
             .collect();
         let requests: Vec<_> = screened.iter().map(|(_, _, r)| r.clone()).collect();
-        let _ = problem.prefetch_screens(&requests);
+        let _ = problem.prefetch_tangents(&requests);
         let first_steps: Vec<ModelConfig> = screened
             .iter()
             .filter(|(cause, _, request)| {
