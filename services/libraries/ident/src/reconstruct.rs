@@ -239,6 +239,8 @@ fn propagate(
     Ok(())
 }
 
+/// The filter over the record with the sensor model of `config`, and `tangent` (if any)
+/// carried beside it.
 fn run(
     data: &Aligned,
     config: &ModelConfig,
