@@ -338,9 +338,9 @@ fn run(
                     if let Some(t) = tangent.as_deref_mut() {
                         let q = raw_field.map_or_else(|| f.attitude(), |(_, q)| q);
                         t.readings(
-                            &sensors,
                             raw_tilt.as_ref(),
                             raw_field.as_ref().map(|(m, _)| m),
+                            &meas,
                             &q,
                         );
                     }
@@ -484,15 +484,41 @@ impl Reconstruction {
         self.innovation_rows(keep).map(|(tick, _)| tick).collect()
     }
 
+    /// The rows of [`Reconstruction::innovation_vector`] with the same `keep` of each direction
+    /// of `sensitivities` (of this run, [`reconstruct_with_sensitivities`]): its Jacobian
+    /// columns.
+    pub fn sensitivity_columns(
+        &self,
+        sensitivities: &Sensitivities,
+        directions: usize,
+        keep: impl Fn(usize) -> bool + Copy,
+    ) -> Vec<Vec<f64>> {
+        (0..directions)
+            .map(|j| {
+                self.present(keep)
+                    .map(|(i, c)| sensitivities[i][j][c])
+                    .collect()
+            })
+            .collect()
+    }
+
     /// `(tick, value)` of each present component of the innovations whose tick `keep` accepts.
     fn innovation_rows(&self, keep: impl Fn(usize) -> bool) -> impl Iterator<Item = (usize, f64)> {
+        self.present(keep)
+            .map(|(i, c)| (self.innovations[i].tick, self.innovations[i].values[c]))
+    }
+
+    /// `(innovation, component)` of each present component of the innovations whose tick
+    /// `keep` accepts: the rows of the fits.
+    fn present(&self, keep: impl Fn(usize) -> bool) -> impl Iterator<Item = (usize, usize)> {
         self.innovations
             .iter()
-            .filter(move |i| keep(i.tick))
-            .flat_map(|i| {
+            .enumerate()
+            .filter(move |(_, i)| keep(i.tick))
+            .flat_map(|(n, i)| {
                 (0..INNOVATION_LEN)
                     .filter(move |c| i.mask & (1 << c) != 0)
-                    .map(move |c| (i.tick, i.values[c]))
+                    .map(move |c| (n, c))
             })
     }
 }

@@ -20,7 +20,7 @@
 
 use crate::reconstruct::{INNOVATION_LEN, SensorModel};
 use nalgebra::{SMatrix, Vector3, Vector6};
-use testbed_flight::mekf::{Block, UpdateLinearisation, transition_matrix};
+use testbed_flight::mekf::{Block, UpdateLinearisation, VectorMeasurements, transition_matrix};
 use testbed_model::attitude::{self, Attitude};
 
 /// Which of a tick's gyro changes a propagation uses: the mean over the interval (the filter's
@@ -106,27 +106,23 @@ impl Tangent {
         }
     }
 
-    /// The pending update's readings: the tilt (rad) and the field (tesla) at the filter's
-    /// attitude `q`, as the run's model `base` corrected them.
+    /// The pending update's readings, `raw` (the tilt, rad; the field, tesla, taken out at the
+    /// filter's attitude `q`) and as the run's model corrected them (`corrected`).
     pub fn readings(
         &mut self,
-        base: &SensorModel,
-        tilt: Option<&[f64; 2]>,
-        field: Option<&Vector3<f64>>,
+        raw_tilt: Option<&[f64; 2]>,
+        raw_field: Option<&Vector3<f64>>,
+        corrected: &VectorMeasurements,
         q: &Attitude,
     ) {
-        let down = |model: &SensorModel, tilt: &[f64; 2]| {
-            let [a, b] = model.correct_tilt(tilt);
-            attitude::gravity_from_tilt(a, b)
-        };
-        let down0 = tilt.and_then(|t| down(base, t));
-        let field0 = field.map(|m| base.correct_field(m, q));
+        let down = |[a, b]: [f64; 2]| attitude::gravity_from_tilt(a, b);
+        let down0 = corrected.tilt_rad.and_then(down);
         for (j, (model, step)) in self.models.iter().enumerate() {
-            self.gravity[j] = tilt
+            self.gravity[j] = raw_tilt
                 .zip(down0)
-                .and_then(|(t, g0)| Some((down(model, t)? - g0) / *step));
-            self.field[j] = field
-                .zip(field0)
+                .and_then(|(t, g0)| Some((down(model.correct_tilt(t))? - g0) / *step));
+            self.field[j] = raw_field
+                .zip(corrected.field_b_t)
                 .map(|(m, f0)| (model.correct_field(m, q) - f0) / *step);
         }
     }

@@ -25,7 +25,7 @@ impl Mekf {
     ) -> (Accepted, [Option<BlockLinearisation>; 2]) {
         let w_hat = self.last_w_meas.unwrap_or(self.bias) - self.bias;
         let mut accepted: Accepted = [None; 2];
-        let mut whitened: [Option<BlockLinearisation>; 2] = [None; 2];
+        let mut linearisations: [Option<BlockLinearisation>; 2] = [None; 2];
         for (block, data) in [Block::Gravity, Block::Magnetic]
             .into_iter()
             .zip(blocks)
@@ -51,7 +51,7 @@ impl Mekf {
                 continue;
             };
             result.stats = Some(stats);
-            whitened[block as usize] = Some(linearisation);
+            linearisations[block as usize] = Some(linearisation);
             if stats.nis.is_finite() && stats.nis <= threshold {
                 result.status = BlockStatus::Applied; // provisional; confirmed below
                 accepted[block as usize] = Some((*data, lin));
@@ -59,7 +59,7 @@ impl Mekf {
                 result.status = BlockStatus::Rejected;
             }
         }
-        (accepted, whitened)
+        (accepted, linearisations)
     }
 }
 

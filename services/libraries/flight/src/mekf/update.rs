@@ -138,9 +138,9 @@ impl Mekf {
         }
 
         // Gate each block on its own innovation, with the prior.
-        let (accepted, whitened) = self.gate_blocks(&blocks, lag_s, &mut report);
+        let (accepted, linearisations) = self.gate_blocks(&blocks, lag_s, &mut report);
         self.last_linearisation = UpdateLinearisation {
-            blocks: whitened,
+            blocks: linearisations,
             ..UpdateLinearisation::default()
         };
 

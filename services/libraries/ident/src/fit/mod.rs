@@ -42,9 +42,7 @@ use crate::channels::{Regressors, TORQUE_COLUMNS, TorqueChannel, WheelChannel};
 use crate::data::Aligned;
 use crate::effects::{Cause, Kind};
 use crate::error::IdentError;
-use crate::reconstruct::{
-    INNOVATION_LEN, Reconstruction, reconstruct, reconstruct_with_sensitivities,
-};
+use crate::reconstruct::{Reconstruction, reconstruct, reconstruct_with_sensitivities};
 use crate::stats::NormalEquations;
 use rayon::prelude::*;
 use serde::Serialize;
@@ -366,12 +364,12 @@ impl<'a> Problem<'a> {
     /// sensitivities to each direction, from one filter run beside its tangent
     /// ([`crate::tangent`]; kept with the run of the start), or made ahead
     /// ([`Problem::prefetch_tangents`]).
-    pub fn tangent_columns(&self, request: &TangentRun) -> Result<Vec<Vec<f64>>, IdentError> {
-        let key = request.key();
+    pub fn tangent_columns(&self, run: &TangentRun) -> Result<Vec<Vec<f64>>, IdentError> {
+        let key = run.key();
         if let Some(columns) = self.tangents.borrow().get(&key) {
             return Ok(columns.clone());
         }
-        self.prefetch_tangents(std::slice::from_ref(request))?;
+        self.prefetch_tangents(std::slice::from_ref(run))?;
         self.tangents
             .borrow()
             .get(&key)
@@ -383,11 +381,11 @@ impl<'a> Problem<'a> {
     /// selection step's candidates, [`Problem::screen_request`]): each one filter run beside
     /// its tangent, whose run is kept like any other and whose columns wait for
     /// [`Problem::tangent_columns`].
-    pub fn prefetch_tangents(&self, requests: &[TangentRun]) -> Result<(), IdentError> {
+    pub fn prefetch_tangents(&self, runs: &[TangentRun]) -> Result<(), IdentError> {
         let mut todo: Vec<(TangentKey, &TangentRun)> = Vec::new();
         {
             let tangents = self.tangents.borrow();
-            for r in requests {
+            for r in runs {
                 let key = r.key();
                 if !tangents.contains_key(&key) && !todo.iter().any(|(k, _)| *k == key) {
                     todo.push((key, r));
@@ -403,21 +401,8 @@ impl<'a> Problem<'a> {
         let (mut recons, mut tangents) = (self.recons.borrow_mut(), self.tangents.borrow_mut());
         for ((key, _), run) in todo.into_iter().zip(runs) {
             let (recon, sensitivities) = run?;
-            let columns = (0..key.1.len())
-                .map(|j| {
-                    recon
-                        .innovations
-                        .iter()
-                        .zip(&sensitivities)
-                        .filter(|(i, _)| !self.held_out[i.tick])
-                        .flat_map(|(i, s)| {
-                            (0..INNOVATION_LEN)
-                                .filter(move |c| i.mask & (1 << c) != 0)
-                                .map(move |c| s[j][c])
-                        })
-                        .collect()
-                })
-                .collect();
+            let columns =
+                recon.sensitivity_columns(&sensitivities, key.1.len(), |k| !self.held_out[k]);
             recons
                 .entry(key.0.clone())
                 .or_insert_with(|| Rc::new(recon));

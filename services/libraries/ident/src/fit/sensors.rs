@@ -109,6 +109,24 @@ impl Problem<'_> {
         })
     }
 
+    /// Where a screened fit of the sensor causes of `set` starts, or `None` when it would keep
+    /// its warm values (or `set` has no sensor cause).
+    fn sensor_start(
+        &self,
+        set: &[Cause],
+        warm: &HashMap<Cause, FittedCause>,
+    ) -> Result<Option<Start>, IdentError> {
+        let sensor: Vec<Cause> = set
+            .iter()
+            .copied()
+            .filter(|c| c.kind() == Kind::Sensor)
+            .collect();
+        if sensor.is_empty() || sensor.iter().all(|c| warm.contains_key(c)) {
+            return Ok(None);
+        }
+        self.start(&sensor, warm).map(Some)
+    }
+
     /// The screen a screened fit of the sensor causes of `set` begins with: linearised at its
     /// starting values, in the directions of the parameters not fitted before (all of them
     /// when none was). Run together ahead of the fits ([`Problem::prefetch_tangents`]), the
@@ -119,15 +137,7 @@ impl Problem<'_> {
         set: &[Cause],
         warm: &HashMap<Cause, FittedCause>,
     ) -> Result<Option<TangentRun>, IdentError> {
-        let sensor: Vec<Cause> = set
-            .iter()
-            .copied()
-            .filter(|c| c.kind() == Kind::Sensor)
-            .collect();
-        if sensor.is_empty() || sensor.iter().all(|c| warm.contains_key(c)) {
-            return Ok(None);
-        }
-        Ok(Some(self.start(&sensor, warm)?.screen(&self.base)))
+        Ok(self.sensor_start(set, warm)?.map(|s| s.screen(&self.base)))
     }
 
     /// The screen of a sensor fit: whether the fall of the residual sum it predicts to first
@@ -136,26 +146,29 @@ impl Problem<'_> {
     /// (the set chosen so far).
     pub fn screen_passes(
         &self,
-        request: &TangentRun,
+        run: &TangentRun,
         (threshold, reference): (f64, f64),
     ) -> Result<bool, IdentError> {
         // The columns first: their filter run is the start's.
-        let columns = self.tangent_columns(request)?;
-        let r0 = self.fit_innovations(&*self.recon(&request.start)?);
+        let columns = self.tangent_columns(run)?;
+        let r0 = self.fit_innovations(&*self.recon(&run.start)?);
         let predicted = normal_equations(&columns, &r0)
             .solve()
             .map_or(0.0, |f| (reference - f.rss) / f.sigma2().max(1e-300));
         Ok(predicted >= 0.5 * threshold)
     }
 
-    /// The filter runs of the first finite-difference Jacobian of a fit of `set` (at its start,
-    /// every parameter stepped): run ahead, in one batch, for the candidates whose screens pass.
+    /// The filter runs of the first finite-difference Jacobian of a fit of the sensor causes of
+    /// `set` (at its start, every parameter stepped): run ahead, in one batch, for the
+    /// candidates whose screens pass.
     pub fn first_jacobian_runs(
         &self,
         set: &[Cause],
         warm: &HashMap<Cause, FittedCause>,
     ) -> Result<Vec<ModelConfig>, IdentError> {
-        let start = self.start(set, warm)?;
+        let Some(start) = self.sensor_start(set, warm)? else {
+            return Ok(Vec::new());
+        };
         let all: Vec<usize> = (0..start.theta.len()).collect();
         Ok(perturbations(&start.theta, &all, &start.steps, |j| {
             bound_of(&start.layout, j)
