@@ -107,14 +107,15 @@ pub struct TorqueChannel {
 
 impl TorqueChannel {
     /// Build the channel: segments of at most `segment_s` that do not cross a change of
-    /// `held_out` (fit / held-out blocks), on a regular clock, after the filter's start, away
-    /// from the tilt stop; residuals under `config`; regressors unless `regressors` skips them.
+    /// `split` (a label per tick: fit and held-out ticks, or time blocks), on a regular clock,
+    /// after the filter's start, away from the tilt stop; residuals under `config`; regressors
+    /// unless `regressors` skips them.
     pub fn new(
         data: &Aligned,
         recon: &Reconstruction,
         config: &ModelConfig,
         segment_s: f64,
-        held_out: &[bool],
+        split: &[usize],
         regressors: Regressors,
     ) -> Self {
         let built = regressors == Regressors::Built;
@@ -279,7 +280,7 @@ impl TorqueChannel {
                 k += 1;
                 if k + 1 >= n
                     || k - start >= max_len
-                    || held_out[k] != held_out[start]
+                    || split[k] != split[start]
                     || !usable(k)
                 {
                     break;

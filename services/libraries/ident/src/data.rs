@@ -25,6 +25,13 @@ use testbed_model::thruster_config::THRUSTER_COUNT;
 /// Shortest record identification accepts, s of gyro data.
 pub const MIN_DURATION_S: f64 = 60.0;
 
+/// The time block that `t_s` falls in, blocks of `block_s` from 0 on the data's clock (one
+/// block with `block_s` infinite): the units of the held-out split and of the
+/// cross-validation's folds.
+pub fn block_index(t_s: f64, block_s: f64) -> usize {
+    (t_s / block_s).floor().max(0.0) as usize
+}
+
 /// One gyro row.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct GyroRow {

@@ -469,6 +469,14 @@ impl Cause {
         }
     }
 
+    /// Whether a sensor cause at `values` leaves every reading as it is without it: zero, for
+    /// every sensor cause but `earth_rate`, which has no such value. The sensor model then
+    /// computes exactly what it computes without the effect (identity matrices, zero offsets),
+    /// so a filter run does not see it.
+    pub fn neutral(self, values: &[f64]) -> bool {
+        self.kind() == Kind::Sensor && self != Cause::EarthRate && values.iter().all(|v| *v == 0.0)
+    }
+
     /// The effect's values in `config`, flattened in [`Cause::params`] order; when the effect is
     /// absent, the values that reproduce the configuration without it (the nominal friction for
     /// `wheel_friction`, unit scale, zero elsewhere), except `earth_rate`, which has no neutral

@@ -526,6 +526,7 @@ pub fn evaluate(
         &aligned,
         model.clone(),
         held_out,
+        settings.identify.block_s,
         settings.identify.fit.clone(),
     );
     let state = problem.state(model)?;

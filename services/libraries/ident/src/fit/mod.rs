@@ -39,7 +39,7 @@ pub use information::{Information, information_params, information_supported};
 pub use wheels::WheelModel;
 
 use crate::channels::{Regressors, TORQUE_COLUMNS, TorqueChannel, WheelChannel};
-use crate::data::Aligned;
+use crate::data::{Aligned, block_index};
 use crate::effects::{Cause, Kind};
 use crate::error::IdentError;
 use crate::reconstruct::{Reconstruction, reconstruct, reconstruct_with_sensitivities};
@@ -200,7 +200,9 @@ pub struct Problem<'a> {
     /// Per tick: held out from the fits.
     pub held_out: Vec<bool>,
     pub options: FitOptions,
-    cache: RefCell<HashMap<SensorKey, Rc<State>>>,
+    /// This problem's states, and those of its folds ([`Problem::with_held_out`]).
+    states: Segmented,
+    fold_states: Segmented,
     /// Filter runs, shared with the problems made by [`Problem::with_held_out`] (a filter run
     /// does not depend on which ticks are held out).
     recons: Rc<RefCell<HashMap<SensorKey, Rc<Reconstruction>>>>,
@@ -211,6 +213,23 @@ pub struct Problem<'a> {
     tangents: RefCell<HashMap<TangentKey, Vec<Vec<f64>>>>,
     sphere: RefCell<Option<Option<[f64; 3]>>>,
     ellipsoid: RefCell<Option<Option<HardAndSoftIron>>>,
+}
+
+/// Where the torque channel's segments end (they do not cross a change of `split`, a label per
+/// tick), and the states built so: shared by the problems that segment alike.
+#[derive(Clone)]
+struct Segmented {
+    split: Rc<Vec<usize>>,
+    states: Rc<RefCell<HashMap<SensorKey, Rc<State>>>>,
+}
+
+impl Segmented {
+    fn new(split: Vec<usize>) -> Self {
+        Self {
+            split: Rc::new(split),
+            states: Rc::new(RefCell::new(HashMap::new())),
+        }
+    }
 }
 
 /// A tangent run's key: its start's key and its directions' keys.
@@ -240,10 +259,11 @@ impl TangentRun {
 /// Hard iron (gauss) and the soft iron's six values, from [`ellipsoid_fit`].
 type HardAndSoftIron = ([f64; 3], [f64; 6]);
 
-/// Cache key of a filter run: the sensor causes present in a configuration and their values,
-/// exactly (bit patterns), in [`Cause::ALL`] order, and the fitted field error's terms
-/// (`effects.fitted_field`, which the filter takes out of the readings). Configurations with
-/// equal keys give the same filter run.
+/// Cache key of a filter run: the sensor causes present in a configuration at other than
+/// their neutral values ([`Cause::neutral`]) and those values, exactly (bit patterns), in
+/// [`Cause::ALL`] order, and the fitted field error's terms (`effects.fitted_field`, which the
+/// filter takes out of the readings). Configurations with equal keys give the same filter run:
+/// a candidate screened at its neutral start is the run without it.
 #[derive(Debug, Clone, PartialEq, Eq, Hash, Default)]
 pub struct SensorKey(Vec<(Cause, Vec<u64>)>, Vec<(String, String, u64)>);
 
@@ -253,7 +273,9 @@ impl SensorKey {
             Cause::ALL
                 .into_iter()
                 .filter(|c| c.kind() == Kind::Sensor && c.present(config))
-                .map(|c| (c, c.values(config).iter().map(|x| x.to_bits()).collect()))
+                .map(|c| (c, c.values(config)))
+                .filter(|(c, values)| !c.neutral(values))
+                .map(|(c, values)| (c, values.iter().map(|x| x.to_bits()).collect()))
                 .collect(),
             config
                 .effects
@@ -273,18 +295,26 @@ impl SensorKey {
 }
 
 impl<'a> Problem<'a> {
+    /// The problem of fitting `data` with `held_out` ticks left out; a fold of its
+    /// cross-validation ([`Problem::with_held_out`]) holds out whole blocks of `block_s`
+    /// ([`block_index`]). The torque channel's segments end where `held_out` changes; a fold's
+    /// at every block boundary, so that the folds share their states.
     pub fn new(
         data: &'a Aligned,
         base: ModelConfig,
         held_out: Vec<bool>,
+        block_s: f64,
         options: FitOptions,
     ) -> Self {
+        let split = held_out.iter().map(|&h| usize::from(h)).collect();
+        let blocks = data.t.iter().map(|&t| block_index(t, block_s)).collect();
         Self {
             data,
             base,
             held_out,
             options,
-            cache: RefCell::new(HashMap::new()),
+            states: Segmented::new(split),
+            fold_states: Segmented::new(blocks),
             recons: Rc::new(RefCell::new(HashMap::new())),
             filter_runs: Cell::new(0),
             tangents: RefCell::new(HashMap::new()),
@@ -293,16 +323,24 @@ impl<'a> Problem<'a> {
         }
     }
 
-    /// The same data and configuration with other ticks held out (a fold of the
-    /// cross-validation): it shares this problem's filter runs, not its states (the torque
-    /// channel's segments end at held-out boundaries).
+    /// The same data and configuration with other whole blocks held out (a fold of the
+    /// cross-validation): it shares this problem's filter runs, and its states with the other
+    /// folds.
     pub fn with_held_out(&self, held_out: Vec<bool>) -> Problem<'a> {
+        debug_assert!(
+            held_out
+                .windows(2)
+                .zip(self.fold_states.split.windows(2))
+                .all(|(h, b)| h[0] == h[1] || b[0] != b[1]),
+            "a fold holds out whole blocks"
+        );
         Problem {
             data: self.data,
             base: self.base.clone(),
             held_out,
             options: self.options.clone(),
-            cache: RefCell::new(HashMap::new()),
+            states: self.fold_states.clone(),
+            fold_states: self.fold_states.clone(),
             recons: Rc::clone(&self.recons),
             filter_runs: Cell::new(0),
             tangents: RefCell::new(HashMap::new()),
@@ -414,18 +452,18 @@ impl<'a> Problem<'a> {
     /// The state and channels for the sensor effects of `config` (cached).
     pub fn state(&self, config: &ModelConfig) -> Result<Rc<State>, IdentError> {
         let key = SensorKey::of(config);
-        if let Some(s) = self.cache.borrow().get(&key) {
+        if let Some(s) = self.states.states.borrow().get(&key) {
             return Ok(s.clone());
         }
         let state = Rc::new(self.build_state(config, Regressors::Built)?);
-        self.cache.borrow_mut().insert(key, state.clone());
+        self.states.states.borrow_mut().insert(key, state.clone());
         Ok(state)
     }
 
     /// The state of `config` to evaluate it as it is: the cached one, else one whose torque
     /// channel has no regressors (not cached: [`Problem::state`] would return it to a fit).
     fn state_to_evaluate(&self, config: &ModelConfig) -> Result<Rc<State>, IdentError> {
-        if let Some(s) = self.cache.borrow().get(&SensorKey::of(config)) {
+        if let Some(s) = self.states.states.borrow().get(&SensorKey::of(config)) {
             return Ok(s.clone());
         }
         Ok(Rc::new(self.build_state(config, Regressors::Skipped)?))
@@ -442,7 +480,7 @@ impl<'a> Problem<'a> {
             &recon,
             &self.base,
             self.options.torque_segment_s,
-            &self.held_out,
+            &self.states.split,
             regressors,
         );
         let wheel = WheelChannel::new(self.data, &recon, &self.base);
@@ -457,7 +495,8 @@ impl<'a> Problem<'a> {
     pub fn trim_cache(&self, keep: &[&ModelConfig]) {
         self.tangents.borrow_mut().clear();
         let keys: Vec<SensorKey> = keep.iter().map(|c| SensorKey::of(c)).collect();
-        self.cache
+        self.states
+            .states
             .borrow_mut()
             .retain(|k, _| k.is_nominal() || keys.contains(k));
         self.recons

@@ -461,6 +461,7 @@ mod tests {
             &aligned,
             ModelConfig::default(),
             held_out,
+            f64::INFINITY,
             FitOptions::default(),
         );
         for cause in Cause::ALL.into_iter().filter(|c| c.kind() == Kind::Sensor) {

@@ -173,13 +173,12 @@ pub(super) fn whiteness(
     recon: &Reconstruction,
     config: &ModelConfig,
 ) -> WhitenessReport {
-    let held = vec![false; data.len()];
     let channel = TorqueChannel::new(
         data,
         recon,
         config,
         COLOUR_SEGMENT_S,
-        &held,
+        &vec![0; data.len()],
         Regressors::Skipped,
     );
     let mut report = whiteness_of(&channel, data.period_s);

@@ -86,7 +86,7 @@ use report::{prediction_curves, rms_report, window_curves};
 use residuals::{equation_error, remaining};
 use selection::{Selection, forward_selection, sensor_warm};
 
-use crate::data::{Aligned, Dataset};
+use crate::data::{Aligned, Dataset, block_index};
 use crate::effects::{Cause, Kind};
 use crate::error::IdentError;
 use crate::fit::{Problem, SetFit};
@@ -119,6 +119,7 @@ pub fn identify(
         &aligned,
         model.clone(),
         held_out_mask(&aligned, options),
+        options.block_s,
         options.fit.clone(),
     );
     let Some(fit) = sensor::fit_field_correction(&problem, model, &first.report.unexplained)?
@@ -186,13 +187,14 @@ fn identify_pass(
     options: &Options,
     prior: Option<FirstPass>,
 ) -> Result<Identification, IdentError> {
-    let block = |t: f64| (t / options.block_s).floor().max(0.0) as usize;
+    let block = |t: f64| block_index(t, options.block_s);
     let cross_validated = options.folds >= 2;
     let held_out = held_out_mask(aligned, options);
     let problem = Problem::new(
         aligned,
         model.clone(),
         held_out.clone(),
+        options.block_s,
         options.fit.clone(),
     );
     let fold_masks: Vec<Vec<bool>> = (0..options.folds)

@@ -127,7 +127,7 @@ impl Options {
 /// fits use all the data, each fold's problem holds out its own blocks); otherwise every
 /// `held_out_every`-th block of `block_s`.
 pub fn held_out_mask(aligned: &Aligned, options: &Options) -> Vec<bool> {
-    let block = |t: f64| (t / options.block_s).floor().max(0.0) as usize;
+    let block = |t: f64| crate::data::block_index(t, options.block_s);
     let cross_validated = options.folds >= 2;
     aligned
         .t
