@@ -278,11 +278,7 @@ impl TorqueChannel {
                         .push(std::array::from_fn(|col| m[col] - m0[col] + xc[col]));
                 }
                 k += 1;
-                if k + 1 >= n
-                    || k - start >= max_len
-                    || split[k] != split[start]
-                    || !usable(k)
-                {
+                if k + 1 >= n || k - start >= max_len || split[k] != split[start] || !usable(k) {
                     break;
                 }
             }

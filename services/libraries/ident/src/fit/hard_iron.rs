@@ -32,13 +32,13 @@ impl Problem<'_> {
         }
         let guess: Option<Vec<f64>> = match cause {
             Cause::MagneticDisturbance => {
-                let mut cached = self.sphere.borrow_mut();
+                let mut cached = super::lock(&self.sphere);
                 cached
                     .get_or_insert_with(|| sphere_fit(self.data, &self.base))
                     .map(|h| h.to_vec())
             }
             Cause::SoftIron => {
-                let mut cached = self.ellipsoid.borrow_mut();
+                let mut cached = super::lock(&self.ellipsoid);
                 cached
                     .get_or_insert_with(|| ellipsoid_fit(self.data, &self.base))
                     .map(|(_, s)| s.to_vec())

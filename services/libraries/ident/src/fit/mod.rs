@@ -46,9 +46,9 @@ use crate::reconstruct::{Reconstruction, reconstruct, reconstruct_with_sensitivi
 use crate::stats::NormalEquations;
 use rayon::prelude::*;
 use serde::Serialize;
-use std::cell::{Cell, RefCell};
 use std::collections::HashMap;
-use std::rc::Rc;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
 use testbed_model::ModelConfig;
 
 /// The residual channels.
@@ -131,7 +131,7 @@ impl FittedCause {
 /// The estimated state and the channels built on it, for one sensor configuration.
 #[derive(Debug)]
 pub struct State {
-    pub recon: Rc<Reconstruction>,
+    pub recon: Arc<Reconstruction>,
     pub torque: TorqueChannel,
     pub wheel: WheelChannel,
 }
@@ -143,12 +143,12 @@ pub struct SetFit {
     pub config: ModelConfig,
     pub causes: Vec<FittedCause>,
     pub evaluation: Evaluation,
-    pub state: Rc<State>,
+    pub state: Arc<State>,
     /// Torque-channel parameter change from the base, per column.
     pub torque_delta: [f64; TORQUE_COLUMNS],
     /// The sensor fit's last linearisation (none without sensor causes fitted here): the folds
     /// of a cross-validation fit the same set from it ([`Problem::fit_from`]).
-    pub sensor_linearisation: Option<Rc<SensorLinearisation>>,
+    pub sensor_linearisation: Option<Arc<SensorLinearisation>>,
 }
 
 /// Where a sensor fit last linearised the filter's whitened innovations: the parameters, and
@@ -205,29 +205,29 @@ pub struct Problem<'a> {
     fold_states: Segmented,
     /// Filter runs, shared with the problems made by [`Problem::with_held_out`] (a filter run
     /// does not depend on which ticks are held out).
-    recons: Rc<RefCell<HashMap<SensorKey, Rc<Reconstruction>>>>,
+    recons: Arc<Mutex<HashMap<SensorKey, Arc<Reconstruction>>>>,
     /// Filter runs so far (for the benchmark and the report).
-    pub filter_runs: Cell<usize>,
+    filter_runs: AtomicUsize,
     /// Jacobian columns on the fit ticks by the filter's sensitivities
     /// ([`Problem::tangent_columns`]), by start and directions.
-    tangents: RefCell<HashMap<TangentKey, Vec<Vec<f64>>>>,
-    sphere: RefCell<Option<Option<[f64; 3]>>>,
-    ellipsoid: RefCell<Option<Option<HardAndSoftIron>>>,
+    tangents: Mutex<HashMap<TangentKey, Vec<Vec<f64>>>>,
+    sphere: Mutex<Option<Option<[f64; 3]>>>,
+    ellipsoid: Mutex<Option<Option<HardAndSoftIron>>>,
 }
 
 /// Where the torque channel's segments end (they do not cross a change of `split`, a label per
 /// tick), and the states built so: shared by the problems that segment alike.
 #[derive(Clone)]
 struct Segmented {
-    split: Rc<Vec<usize>>,
-    states: Rc<RefCell<HashMap<SensorKey, Rc<State>>>>,
+    split: Arc<Vec<usize>>,
+    states: Arc<Mutex<HashMap<SensorKey, Arc<State>>>>,
 }
 
 impl Segmented {
     fn new(split: Vec<usize>) -> Self {
         Self {
-            split: Rc::new(split),
-            states: Rc::new(RefCell::new(HashMap::new())),
+            split: Arc::new(split),
+            states: Arc::new(Mutex::new(HashMap::new())),
         }
     }
 }
@@ -315,11 +315,11 @@ impl<'a> Problem<'a> {
             options,
             states: Segmented::new(split),
             fold_states: Segmented::new(blocks),
-            recons: Rc::new(RefCell::new(HashMap::new())),
-            filter_runs: Cell::new(0),
-            tangents: RefCell::new(HashMap::new()),
-            sphere: RefCell::new(None),
-            ellipsoid: RefCell::new(None),
+            recons: Arc::new(Mutex::new(HashMap::new())),
+            filter_runs: AtomicUsize::new(0),
+            tangents: Mutex::new(HashMap::new()),
+            sphere: Mutex::new(None),
+            ellipsoid: Mutex::new(None),
         }
     }
 
@@ -341,24 +341,38 @@ impl<'a> Problem<'a> {
             options: self.options.clone(),
             states: self.fold_states.clone(),
             fold_states: self.fold_states.clone(),
-            recons: Rc::clone(&self.recons),
-            filter_runs: Cell::new(0),
-            tangents: RefCell::new(HashMap::new()),
-            sphere: RefCell::new(*self.sphere.borrow()),
-            ellipsoid: RefCell::new(*self.ellipsoid.borrow()),
+            recons: Arc::clone(&self.recons),
+            filter_runs: AtomicUsize::new(0),
+            tangents: Mutex::new(HashMap::new()),
+            sphere: Mutex::new(*lock(&self.sphere)),
+            ellipsoid: Mutex::new(*lock(&self.ellipsoid)),
         }
     }
 
-    /// The filter run for the sensor effects of `config` (cached).
-    pub(crate) fn recon(&self, config: &ModelConfig) -> Result<Rc<Reconstruction>, IdentError> {
+    /// Filter runs so far, this problem's (for the benchmark and the report).
+    pub fn filter_runs(&self) -> usize {
+        self.filter_runs.load(Ordering::Relaxed)
+    }
+
+    /// Count `runs` more filter runs.
+    pub(crate) fn count_filter_runs(&self, runs: usize) {
+        self.filter_runs.fetch_add(runs, Ordering::Relaxed);
+    }
+
+    /// The filter run for the sensor effects of `config` (cached: fits on two threads asking
+    /// for it at once may both run it; one run is kept and counted).
+    pub(crate) fn recon(&self, config: &ModelConfig) -> Result<Arc<Reconstruction>, IdentError> {
         let key = SensorKey::of(config);
-        if let Some(r) = self.recons.borrow().get(&key) {
+        if let Some(r) = lock(&self.recons).get(&key) {
             return Ok(r.clone());
         }
-        self.filter_runs.set(self.filter_runs.get() + 1);
-        let r = Rc::new(reconstruct(self.data, config)?);
-        self.recons.borrow_mut().insert(key, r.clone());
-        Ok(r)
+        let r = Arc::new(reconstruct(self.data, config)?);
+        let mut recons = lock(&self.recons);
+        let kept = recons.entry(key).or_insert_with(|| {
+            self.count_filter_runs(1);
+            r
+        });
+        Ok(kept.clone())
     }
 
     /// Filter runs that are not worth keeping (finite-difference steps), one per configuration.
@@ -369,14 +383,14 @@ impl<'a> Problem<'a> {
         configs: &[ModelConfig],
     ) -> Result<Vec<Reconstruction>, IdentError> {
         let cached: Vec<Option<Reconstruction>> = {
-            let recons = self.recons.borrow();
+            let recons = lock(&self.recons);
             configs
                 .iter()
                 .map(|c| recons.get(&SensorKey::of(c)).map(|r| (**r).clone()))
                 .collect()
         };
         let runs = cached.iter().filter(|c| c.is_none()).count();
-        self.filter_runs.set(self.filter_runs.get() + runs);
+        self.count_filter_runs(runs);
         let data = self.data;
         configs
             .par_iter()
@@ -404,12 +418,11 @@ impl<'a> Problem<'a> {
     /// ([`Problem::prefetch_tangents`]).
     pub fn tangent_columns(&self, run: &TangentRun) -> Result<Vec<Vec<f64>>, IdentError> {
         let key = run.key();
-        if let Some(columns) = self.tangents.borrow().get(&key) {
+        if let Some(columns) = lock(&self.tangents).get(&key) {
             return Ok(columns.clone());
         }
         self.prefetch_tangents(std::slice::from_ref(run))?;
-        self.tangents
-            .borrow()
+        lock(&self.tangents)
             .get(&key)
             .cloned()
             .ok_or_else(|| IdentError::Failed("a tangent run was not kept".into()))
@@ -422,7 +435,7 @@ impl<'a> Problem<'a> {
     pub fn prefetch_tangents(&self, runs: &[TangentRun]) -> Result<(), IdentError> {
         let mut todo: Vec<(TangentKey, &TangentRun)> = Vec::new();
         {
-            let tangents = self.tangents.borrow();
+            let tangents = lock(&self.tangents);
             for r in runs {
                 let key = r.key();
                 if !tangents.contains_key(&key) && !todo.iter().any(|(k, _)| *k == key) {
@@ -430,43 +443,44 @@ impl<'a> Problem<'a> {
                 }
             }
         }
-        self.filter_runs.set(self.filter_runs.get() + todo.len());
         let data = self.data;
         let runs: Vec<_> = todo
             .par_iter()
             .map(|(_, r)| reconstruct_with_sensitivities(data, &r.start, &r.directions))
             .collect();
-        let (mut recons, mut tangents) = (self.recons.borrow_mut(), self.tangents.borrow_mut());
+        let (mut recons, mut tangents) = (lock(&self.recons), lock(&self.tangents));
         for ((key, _), run) in todo.into_iter().zip(runs) {
             let (recon, sensitivities) = run?;
             let columns =
                 recon.sensitivity_columns(&sensitivities, key.1.len(), |k| !self.held_out[k]);
             recons
                 .entry(key.0.clone())
-                .or_insert_with(|| Rc::new(recon));
-            tangents.insert(key, columns);
+                .or_insert_with(|| Arc::new(recon));
+            tangents.entry(key).or_insert_with(|| {
+                self.count_filter_runs(1);
+                columns
+            });
         }
         Ok(())
     }
 
     /// The state and channels for the sensor effects of `config` (cached).
-    pub fn state(&self, config: &ModelConfig) -> Result<Rc<State>, IdentError> {
+    pub fn state(&self, config: &ModelConfig) -> Result<Arc<State>, IdentError> {
         let key = SensorKey::of(config);
-        if let Some(s) = self.states.states.borrow().get(&key) {
+        if let Some(s) = lock(&self.states.states).get(&key) {
             return Ok(s.clone());
         }
-        let state = Rc::new(self.build_state(config, Regressors::Built)?);
-        self.states.states.borrow_mut().insert(key, state.clone());
-        Ok(state)
+        let state = Arc::new(self.build_state(config, Regressors::Built)?);
+        Ok(lock(&self.states.states).entry(key).or_insert(state).clone())
     }
 
     /// The state of `config` to evaluate it as it is: the cached one, else one whose torque
     /// channel has no regressors (not cached: [`Problem::state`] would return it to a fit).
-    fn state_to_evaluate(&self, config: &ModelConfig) -> Result<Rc<State>, IdentError> {
-        if let Some(s) = self.states.states.borrow().get(&SensorKey::of(config)) {
+    fn state_to_evaluate(&self, config: &ModelConfig) -> Result<Arc<State>, IdentError> {
+        if let Some(s) = lock(&self.states.states).get(&SensorKey::of(config)) {
             return Ok(s.clone());
         }
-        Ok(Rc::new(self.build_state(config, Regressors::Skipped)?))
+        Ok(Arc::new(self.build_state(config, Regressors::Skipped)?))
     }
 
     fn build_state(
@@ -493,15 +507,10 @@ impl<'a> Problem<'a> {
 
     /// Forget cached states and filter runs (memory) except the base's and those of `keep`.
     pub fn trim_cache(&self, keep: &[&ModelConfig]) {
-        self.tangents.borrow_mut().clear();
+        lock(&self.tangents).clear();
         let keys: Vec<SensorKey> = keep.iter().map(|c| SensorKey::of(c)).collect();
-        self.states
-            .states
-            .borrow_mut()
-            .retain(|k, _| k.is_nominal() || keys.contains(k));
-        self.recons
-            .borrow_mut()
-            .retain(|k, _| k.is_nominal() || keys.contains(k));
+        lock(&self.states.states).retain(|k, _| k.is_nominal() || keys.contains(k));
+        lock(&self.recons).retain(|k, _| k.is_nominal() || keys.contains(k));
     }
 
     /// Innovation rows on the fit ticks.
@@ -558,7 +567,7 @@ impl<'a> Problem<'a> {
     pub fn prefetch(&self, configs: &[ModelConfig]) -> Result<(), IdentError> {
         let mut todo: Vec<(SensorKey, &ModelConfig)> = Vec::new();
         {
-            let recons = self.recons.borrow();
+            let recons = lock(&self.recons);
             for c in configs {
                 let key = SensorKey::of(c);
                 if !recons.contains_key(&key) && !todo.iter().any(|(k, _)| *k == key) {
@@ -566,15 +575,17 @@ impl<'a> Problem<'a> {
                 }
             }
         }
-        self.filter_runs.set(self.filter_runs.get() + todo.len());
         let data = self.data;
         let runs: Vec<Reconstruction> = todo
             .par_iter()
             .map(|(_, c)| reconstruct(data, c))
             .collect::<Result<_, _>>()?;
-        let mut recons = self.recons.borrow_mut();
+        let mut recons = lock(&self.recons);
         for ((key, _), r) in todo.into_iter().zip(runs) {
-            recons.insert(key, Rc::new(r));
+            recons.entry(key).or_insert_with(|| {
+                self.count_filter_runs(1);
+                Arc::new(r)
+            });
         }
         Ok(())
     }
@@ -599,7 +610,7 @@ impl<'a> Problem<'a> {
             let (c, f, lin) = self.fit_sensors(&sensor, warm, screen, from)?;
             config = c;
             fitted.extend(f);
-            sensor_linearisation = lin.map(Rc::new);
+            sensor_linearisation = lin.map(Arc::new);
         }
         // A fold's fit of sensor causes alone is only evaluated: no torque fit on its state.
         let state = if from.is_some() && set.iter().all(|c| c.kind() == Kind::Sensor) {
@@ -695,6 +706,12 @@ impl<'a> Problem<'a> {
         }
         e
     }
+}
+
+/// The value behind `mutex`: a cache, whole even if a thread panicked while holding it (it
+/// only ever inserts or removes whole entries).
+fn lock<T>(mutex: &Mutex<T>) -> MutexGuard<'_, T> {
+    mutex.lock().unwrap_or_else(PoisonError::into_inner)
 }
 
 /// `base` with the sensor causes of `layout` set to `theta` (their values in order).

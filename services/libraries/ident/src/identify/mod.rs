@@ -92,6 +92,7 @@ use crate::error::IdentError;
 use crate::fit::{Problem, SetFit};
 use crate::predict::{self, COMPONENTS};
 use crate::stats::chi_square_quantile;
+use rayon::prelude::*;
 use std::collections::{BTreeMap, HashMap};
 use testbed_model::ModelConfig;
 
@@ -156,7 +157,7 @@ pub fn identify(
             first_pass_verdict: first.report.verdict.clone(),
             first_pass_gain: first.report.gain,
         },
-        filter_runs: first.report.filter_runs + problem.filter_runs.get(),
+        filter_runs: first.report.filter_runs + problem.filter_runs(),
         nominal_residuals: first.report.nominal_residuals,
         nominal_prediction: first.figures.nominal_prediction,
         nominal_equation: first.figures.nominal_equation,
@@ -411,8 +412,10 @@ fn identify_pass(
     };
     let second_pass = prior.is_some();
     let extends = extends || second_pass;
-    // `named_only`: the same predictions without the fitted torque (when it is carried).
-    let (base_held, ext_held, held_fraction, named_only) = if !cross_validated {
+    // `named_only`: the same predictions without the fitted torque (when it is carried);
+    // `whole`: with cross-validation the held-out windows tile the whole record, and the
+    // baseline's predictions there are its residual report's.
+    let (base_held, ext_held, held_fraction, named_only, whole) = if !cross_validated {
         let held_fraction =
             held_out.iter().filter(|h| **h).count() as f64 / held_out.len().max(1) as f64;
         let spans = held_out_spans(&held_out, start);
@@ -439,7 +442,7 @@ fn identify_pass(
                 &windows,
             )?),
         };
-        (base_held, ext_held, held_fraction, named_only)
+        (base_held, ext_held, held_fraction, named_only, None)
     } else {
         let fold_windows: Vec<Vec<(usize, usize)>> = fold_masks
             .iter()
@@ -460,34 +463,55 @@ fn identify_pass(
             cv_extended = cv_nominal;
             (base_held.clone(), None)
         } else {
-            let mut parts = Vec::with_capacity(folds.len());
-            let mut parts_without_terms = Vec::with_capacity(folds.len());
-            for (j, fold) in folds.iter().enumerate() {
-                let warm_j = if sensor_dropped {
-                    HashMap::new()
-                } else {
-                    sensor_warm(&current_folds[j])
-                };
-                cv_nominal.add(&nominal_folds[j].evaluation.held_out);
-                let fit_j = if selected.is_empty() {
-                    nominal_folds[j].clone()
-                } else {
-                    fold.fit(&selected, &warm_j)?
-                };
-                cv_extended.add(&fit_j.evaluation.held_out);
-                let without_terms =
-                    predict::predict(aligned, &fit_j.state.recon, &fit_j.config, &fold_windows[j])?;
-                if carry {
-                    let (config_j, _, _) = with_terms(&fit_j.config, Coefficients::WithoutFold(j));
-                    parts.push(predict::predict(
+            // Each fold fitted and predicted on its own, across the cores.
+            let per_fold: Vec<_> = folds
+                .par_iter()
+                .enumerate()
+                .map(|(j, fold)| -> Result<_, IdentError> {
+                    let warm_j = if sensor_dropped {
+                        HashMap::new()
+                    } else {
+                        sensor_warm(&current_folds[j])
+                    };
+                    let fit_j = if selected.is_empty() {
+                        nominal_folds[j].clone()
+                    } else {
+                        fold.fit(&selected, &warm_j)?
+                    };
+                    let without_terms = predict::predict(
                         aligned,
                         &fit_j.state.recon,
-                        &config_j,
+                        &fit_j.config,
                         &fold_windows[j],
-                    )?);
-                    parts_without_terms.push(without_terms);
-                } else {
-                    parts.push(without_terms);
+                    )?;
+                    let with_fold_terms = if carry {
+                        let (config_j, _, _) =
+                            with_terms(&fit_j.config, Coefficients::WithoutFold(j));
+                        Some(predict::predict(
+                            aligned,
+                            &fit_j.state.recon,
+                            &config_j,
+                            &fold_windows[j],
+                        )?)
+                    } else {
+                        None
+                    };
+                    Ok((fit_j.evaluation.held_out, without_terms, with_fold_terms))
+                })
+                .collect::<Result<_, _>>()?;
+            let mut parts = Vec::with_capacity(folds.len());
+            let mut parts_without_terms = Vec::with_capacity(folds.len());
+            for (j, (held_out_j, without_terms, with_fold_terms)) in
+                per_fold.into_iter().enumerate()
+            {
+                cv_nominal.add(&nominal_folds[j].evaluation.held_out);
+                cv_extended.add(&held_out_j);
+                match with_fold_terms {
+                    Some(with) => {
+                        parts.push(with);
+                        parts_without_terms.push(without_terms);
+                    }
+                    None => parts.push(without_terms),
                 }
             }
             let named_only = carry.then(|| predict::Predictions::merge(parts_without_terms));
@@ -496,7 +520,8 @@ fn identify_pass(
         // The held-out channel sums reported are the cross-validated ones.
         nominal.evaluation.held_out = cv_nominal;
         current.evaluation.held_out = cv_extended;
-        (base_held, ext_held, held_fraction, named_only)
+        let whole = (windows, base_held.clone());
+        (base_held, ext_held, held_fraction, named_only, Some(whole))
     };
     // The fitted torque stays in the extended model only if it improves the held-out
     // prediction by at least 1 % (the sparse search's own bar); a term that stands in for a
@@ -540,10 +565,16 @@ fn identify_pass(
         || second_pass;
 
     // Residual reports, nominal and extended.
-    let all_spans = [(nominal.state.recon.start, aligned.len())];
-    let all_windows = predict::windows(aligned, &all_spans, options.horizon_s);
-    let nominal_prediction =
-        predict::predict(aligned, baseline_recon, baseline_model, &all_windows)?;
+    let (all_windows, nominal_prediction) = match whole {
+        Some(whole) => whole,
+        None => {
+            let all_spans = [(nominal.state.recon.start, aligned.len())];
+            let all_windows = predict::windows(aligned, &all_spans, options.horizon_s);
+            let prediction =
+                predict::predict(aligned, baseline_recon, baseline_model, &all_windows)?;
+            (all_windows, prediction)
+        }
+    };
     let (nominal_equation, nominal_report) =
         equation_error(&problem, &nominal, &nominal_prediction);
     let extended_prediction = if extends {
@@ -683,8 +714,8 @@ fn identify_pass(
         sensor_correction,
         whiteness,
         filter_runs: filter_runs
-            + problem.filter_runs.get()
-            + folds.iter().map(|f| f.filter_runs.get()).sum::<usize>(),
+            + problem.filter_runs()
+            + folds.iter().map(Problem::filter_runs).sum::<usize>(),
     };
     Ok(Identification {
         report,

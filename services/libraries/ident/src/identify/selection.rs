@@ -7,6 +7,7 @@ use super::report::CandidateRow;
 use crate::effects::{Cause, Kind};
 use crate::fit::{FittedCause, Problem, SensorLinearisation, SetFit};
 use crate::stats::chi_square_quantile;
+use rayon::prelude::*;
 use std::collections::HashMap;
 use testbed_model::ModelConfig;
 
@@ -81,18 +82,21 @@ pub(super) fn forward_selection(
             .flatten()
             .collect();
         let _ = problem.prefetch(&first_steps);
-        let mut rows = Vec::new();
-        let mut best: Option<(usize, SetFit, Vec<SetFit>)> = None;
-        for &cause in available.iter().filter(|c| !selected.contains(c)) {
-            let mut set = selected.clone();
-            set.push(cause);
-            let screen = (cause.kind() == Kind::Sensor).then(|| screen_of(cause));
-            match problem.fit_screened(&set, &warm, screen) {
-                Ok(fit) => {
+        // Every candidate fitted (and cross-validated) on its own, across the cores; then
+        // judged in the candidates' order.
+        let candidates: Vec<Cause> = available
+            .iter()
+            .copied()
+            .filter(|c| !selected.contains(c))
+            .collect();
+        let outcomes: Vec<_> = candidates
+            .par_iter()
+            .map(|&cause| {
+                let set = [selected.as_slice(), &[cause]].concat();
+                let screen = (cause.kind() == Kind::Sensor).then(|| screen_of(cause));
+                problem.fit_screened(&set, &warm, screen).map(|fit| {
                     let lr = current.evaluation.fit.log_ratio(&fit.evaluation.fit);
                     let k = fit.free().saturating_sub(current.free());
-                    let threshold = threshold_for(k);
-                    let significant = k > 0 && lr > threshold;
                     // Cross-validation of the candidates that can be chosen or listed as
                     // possible (significant at 1 %); the others' is not computed (NaN).
                     let cv = if cross_validated {
@@ -109,6 +113,17 @@ pub(super) fn forward_selection(
                             .log_ratio(&fit.evaluation.held_out);
                         Some((lr_held, Vec::new()))
                     };
+                    (fit, lr, k, cv)
+                })
+            })
+            .collect();
+        let mut rows = Vec::new();
+        let mut best: Option<(usize, SetFit, Vec<SetFit>)> = None;
+        for (cause, outcome) in candidates.into_iter().zip(outcomes) {
+            match outcome {
+                Ok((fit, lr, k, cv)) => {
+                    let threshold = threshold_for(k);
+                    let significant = k > 0 && lr > threshold;
                     let lr_held = cv.as_ref().map_or(f64::NAN, |(lr, _)| *lr);
                     let note = fit
                         .causes
@@ -197,7 +212,7 @@ fn cross_validate(
     current: &[SetFit],
     set: &[Cause],
     from: Option<&SensorLinearisation>,
-    warm_of: &dyn Fn(&SetFit) -> HashMap<Cause, FittedCause>,
+    warm_of: &(dyn Fn(&SetFit) -> HashMap<Cause, FittedCause> + Sync),
 ) -> Option<(f64, Vec<SetFit>)> {
     // The folds' filter runs at once, across the cores (they share one cache).
     if let (Some(from), Some(first)) = (from, folds.first()) {

@@ -162,7 +162,7 @@ pub(super) fn fit_field_correction(
     };
     let keep = |tick: usize| !problem.held_out.get(tick).copied().unwrap_or(true);
     let run = |theta: &DVector<f64>| -> Result<Reconstruction, IdentError> {
-        problem.filter_runs.set(problem.filter_runs.get() + 1);
+        problem.count_filter_runs(1);
         reconstruct(problem.data, &config_with(theta))
     };
     let field_rms =
