@@ -471,7 +471,10 @@ impl<'a> Problem<'a> {
             return Ok(s.clone());
         }
         let state = Arc::new(self.build_state(config, Regressors::Built)?);
-        Ok(lock(&self.states.states).entry(key).or_insert(state).clone())
+        Ok(lock(&self.states.states)
+            .entry(key)
+            .or_insert(state)
+            .clone())
     }
 
     /// The state of `config` to evaluate it as it is: the cached one, else one whose torque
