@@ -327,12 +327,14 @@ impl<'a> Problem<'a> {
     /// cross-validation): it shares this problem's filter runs, and its states with the other
     /// folds.
     pub fn with_held_out(&self, held_out: Vec<bool>) -> Problem<'a> {
-        debug_assert!(
+        // The folds share states whose segments end at block boundaries: only right when
+        // every fold's held-out ticks are whole blocks.
+        assert!(
             held_out
                 .windows(2)
                 .zip(self.fold_states.split.windows(2))
                 .all(|(h, b)| h[0] == h[1] || b[0] != b[1]),
-            "a fold holds out whole blocks"
+            "a fold must hold out whole blocks"
         );
         Problem {
             data: self.data,
