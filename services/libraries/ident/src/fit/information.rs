@@ -18,7 +18,6 @@
 //! [`torque`]: super::torque
 //! [`wheels`]: super::wheels
 
-use super::jacobian::{normal_equations, perturbations};
 use super::torque::torque_normal_equations;
 use super::{Problem, State, TangentRun, WheelModel};
 use crate::channels::{column_cause, torque_columns};
@@ -168,18 +167,14 @@ impl Problem<'_> {
             };
             let steps: Vec<f64> = sensor.iter().map(|&(_, c, off)| step_of(c, off)).collect();
             let all: Vec<usize> = (0..sensor.len()).collect();
-            let stepped = perturbations(&theta, &all, &steps, |k| sensor[k].1.bounds(sensor[k].2));
-            let run = TangentRun {
-                start: build(&theta),
-                directions: stepped
-                    .iter()
-                    .enumerate()
-                    .map(|(k, t)| (build(t), t[k] - theta[k]))
-                    .collect(),
-            };
-            let columns = self.tangent_columns(&run)?;
-            let r0 = self.fit_innovations(&*self.recon(&run.start)?);
-            let f = normal_equations(&columns, &r0).information();
+            let run = TangentRun::stepped(
+                &theta,
+                &all,
+                &steps,
+                |k| sensor[k].1.bounds(sensor[k].2),
+                build,
+            );
+            let f = self.tangent_normal_equations(&run)?.information();
             for (a, &(ja, _, _)) in sensor.iter().enumerate() {
                 for (b, &(jb, _, _)) in sensor.iter().enumerate() {
                     matrix[(ja, jb)] = f[(a, b)];

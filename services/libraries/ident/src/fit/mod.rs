@@ -245,6 +245,27 @@ pub struct TangentRun {
 }
 
 impl TangentRun {
+    /// The run at `theta` (`build` makes a configuration of parameter values) with a direction
+    /// per parameter of `which`: that parameter stepped by its `steps` entry away from the
+    /// nearer of its `bounds`, as a finite-difference Jacobian steps it.
+    fn stepped(
+        theta: &[f64],
+        which: &[usize],
+        steps: &[f64],
+        bounds: impl Fn(usize) -> (f64, f64),
+        build: impl Fn(&[f64]) -> ModelConfig,
+    ) -> Self {
+        let stepped = jacobian::perturbations(theta, which, steps, bounds);
+        Self {
+            start: build(theta),
+            directions: which
+                .iter()
+                .zip(&stepped)
+                .map(|(&j, t)| (build(t), t[j] - theta[j]))
+                .collect(),
+        }
+    }
+
     fn key(&self) -> TangentKey {
         (
             SensorKey::of(&self.start),
@@ -412,6 +433,18 @@ impl<'a> Problem<'a> {
             .iter()
             .map(|r| self.fit_innovations(r))
             .collect())
+    }
+
+    /// The linearised least-squares problem of a tangent run on the fit ticks: its columns
+    /// ([`Problem::tangent_columns`]) against the whitened innovations of its start (the same
+    /// filter run).
+    pub(crate) fn tangent_normal_equations(
+        &self,
+        run: &TangentRun,
+    ) -> Result<NormalEquations, IdentError> {
+        let columns = self.tangent_columns(run)?;
+        let r0 = self.fit_innovations(&*self.recon(&run.start)?);
+        Ok(jacobian::normal_equations(&columns, &r0))
     }
 
     /// The Jacobian columns of a tangent run on the fit ticks: the whitened innovations'

@@ -44,19 +44,13 @@ impl Start {
     /// The screen at this start on `base`: a direction per screened parameter, its step away
     /// from the nearer bound.
     fn screen(&self, base: &ModelConfig) -> TangentRun {
-        let build = |theta: &[f64]| build_sensors(base, &self.layout, theta);
-        let which = self.screened();
-        let stepped = perturbations(&self.theta, &which, &self.steps, |j| {
-            bound_of(&self.layout, j)
-        });
-        TangentRun {
-            start: build(&self.theta),
-            directions: which
-                .iter()
-                .zip(&stepped)
-                .map(|(&j, t)| (build(t), t[j] - self.theta[j]))
-                .collect(),
-        }
+        TangentRun::stepped(
+            &self.theta,
+            &self.screened(),
+            &self.steps,
+            |j| bound_of(&self.layout, j),
+            |theta| build_sensors(base, &self.layout, theta),
+        )
     }
 }
 
@@ -149,10 +143,8 @@ impl Problem<'_> {
         run: &TangentRun,
         (threshold, reference): (f64, f64),
     ) -> Result<bool, IdentError> {
-        // The columns first: their filter run is the start's.
-        let columns = self.tangent_columns(run)?;
-        let r0 = self.fit_innovations(&*self.recon(&run.start)?);
-        let predicted = normal_equations(&columns, &r0)
+        let predicted = self
+            .tangent_normal_equations(run)?
             .solve()
             .map_or(0.0, |f| (reference - f.rss) / f.sigma2().max(1e-300));
         Ok(predicted >= 0.5 * threshold)

@@ -413,9 +413,9 @@ fn identify_pass(
     let second_pass = prior.is_some();
     let extends = extends || second_pass;
     // `named_only`: the same predictions without the fitted torque (when it is carried);
-    // `whole`: with cross-validation the held-out windows tile the whole record, and the
-    // baseline's predictions there are its residual report's.
-    let (base_held, ext_held, held_fraction, named_only, whole) = if !cross_validated {
+    // `tiling`: with cross-validation the held-out windows, which tile the whole record (the
+    // baseline's predictions there are its residual report's).
+    let (base_held, ext_held, held_fraction, named_only, tiling) = if !cross_validated {
         let held_fraction =
             held_out.iter().filter(|h| **h).count() as f64 / held_out.len().max(1) as f64;
         let spans = held_out_spans(&held_out, start);
@@ -520,8 +520,13 @@ fn identify_pass(
         // The held-out channel sums reported are the cross-validated ones.
         nominal.evaluation.held_out = cv_nominal;
         current.evaluation.held_out = cv_extended;
-        let whole = (windows, base_held.clone());
-        (base_held, ext_held, held_fraction, named_only, Some(whole))
+        (
+            base_held,
+            ext_held,
+            held_fraction,
+            named_only,
+            Some(windows),
+        )
     };
     // The fitted torque stays in the extended model only if it improves the held-out
     // prediction by at least 1 % (the sparse search's own bar); a term that stands in for a
@@ -565,25 +570,31 @@ fn identify_pass(
         || second_pass;
 
     // Residual reports, nominal and extended.
-    let (all_windows, nominal_prediction) = match whole {
-        Some(whole) => whole,
+    let (all_windows, own_prediction) = match tiling {
+        Some(windows) => (windows, None),
         None => {
             let all_spans = [(nominal.state.recon.start, aligned.len())];
             let all_windows = predict::windows(aligned, &all_spans, options.horizon_s);
             let prediction =
                 predict::predict(aligned, baseline_recon, baseline_model, &all_windows)?;
-            (all_windows, prediction)
+            (all_windows, Some(prediction))
         }
     };
-    let (nominal_equation, nominal_report) =
-        equation_error(&problem, &nominal, &nominal_prediction);
-    let extended_prediction = if extends {
-        predict::predict(aligned, &current.state.recon, &extended, &all_windows)?
+    let nominal_prediction = own_prediction.as_ref().unwrap_or(&base_held);
+    let (nominal_equation, nominal_report) = equation_error(&problem, &nominal, nominal_prediction);
+    let own_extended = if extends {
+        Some(predict::predict(
+            aligned,
+            &current.state.recon,
+            &extended,
+            &all_windows,
+        )?)
     } else {
-        nominal_prediction.clone()
+        None
     };
+    let extended_prediction = own_extended.as_ref().unwrap_or(nominal_prediction);
     let (extended_equation, extended_report) =
-        equation_error(&problem, &current, &extended_prediction);
+        equation_error(&problem, &current, extended_prediction);
 
     let base_rms = base_held.rms(|_| true);
     let ext_rms = ext_held.rms(|_| true);
@@ -624,7 +635,7 @@ fn identify_pass(
     };
     let remaining = remaining(&problem, &current, options, &effects, &extended_rms);
     let figures = FigureData {
-        nominal_prediction: prediction_curves(&nominal_prediction),
+        nominal_prediction: prediction_curves(nominal_prediction),
         nominal_equation,
         extended_equation,
         held_out_nominal: window_curves(&base_held, aligned),
