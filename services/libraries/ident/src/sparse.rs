@@ -295,6 +295,27 @@ impl Design {
         Some((values, se))
     }
 
+    /// Fit on all rows: θ and its cluster-robust covariance, both in the columns' own units.
+    pub fn fit_cov(&self, cols: &[usize]) -> Option<(DVector<f64>, DMatrix<f64>)> {
+        let (theta, cov) = self.sandwich(cols)?;
+        let s = |i: usize| self.scale[cols[i]];
+        let p = cols.len();
+        Some((
+            DVector::from_fn(p, |i, _| theta[i] / s(i)),
+            DMatrix::from_fn(p, p, |i, j| cov[(i, j)] / (s(i) * s(j))),
+        ))
+    }
+
+    /// Correlation of columns `a` and `b` over all rows (uncentred: `⟨a, b⟩ / (|a| |b|)`), and
+    /// the least-squares factor `k` of `a ≈ k b` (own units).
+    pub fn proportion(&self, a: usize, b: usize) -> (f64, f64) {
+        let (g, _, _) = self.sums(&[a, b], Subset::All);
+        let corr = g[(0, 1)] / (g[(0, 0)] * g[(1, 1)]).sqrt().max(1e-300);
+        // The sums are of the equilibrated columns.
+        let k = g[(0, 1)] / g[(1, 1)].max(1e-300) * self.scale[a] / self.scale[b];
+        (corr, k)
+    }
+
     /// Residual sum over all rows at the least-squares fit of `cols` (`None`: not determined).
     pub fn fit_rss(&self, cols: &[usize]) -> Option<f64> {
         let (theta, _) = self.solve(cols, Subset::All)?;

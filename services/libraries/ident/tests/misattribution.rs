@@ -225,33 +225,136 @@ fn blocks_that_disagree_only_through_the_remainder_keep_the_cause() {
     }
 }
 
-/// No new false positive: a library cause alone (a constant torque about all three axes, as in
-/// `tests/causes.rs`) is named without a "partly" flag on each of 10 seeds, on records of the
-/// two lengths the cases above use (`tests/causes.rs` checks the same for every cause of the
+/// With the tilt, across equations: a torque about X of 1 mNm per unit of `G_y` (a cable that
+/// resists tilting about X only, say) beside the constant torque, 600 s, seeds 83 and 84. About X it
+/// has the form of a vertical centre-of-mass offset's torque (`−m g r_z G_y`), and `com_offset`
+/// is named for it with no residual. The same offset would also act about Y (`m g r_z G_x`),
+/// where nothing does; each equation's search fits the cause's columns there alone and finds
+/// nothing beside them, and the joint `r_z` is a compromise. With the guard on, the offset's
+/// `r_z` fitted to each equation alone disagree (seed 83: −2.87e-7 ± 1.4e-8 m about X, 2e-8 ±
+/// 1.7e-8 m about Y, χ² 212.9 on 3 degrees of freedom against 31.3), and the cause is flagged
+/// in both equations with the remainders `sin tilt_y` about X and `sin tilt_x` about Y (Wald
+/// 114.0 and 85.1 against 23.9; seed 84: 76.7 and 77.4). Checked: `r_z` from each equation within 3 standard errors
+/// of what that equation holds (`−A / (m g)` and 0), and the joint value with the remainders
+/// reproduces the truth's torque in both equations within 3 standard errors. Over seeds 81–86
+/// the misattribution stands without the guard on 4 records of 600 s (on the other two, and on
+/// all six of 1200 s, the search finds the torque itself); the guard turns 3 of them (seed 86
+/// in one equation). On seed 81 the values disagree as well (χ² 80.9), but an `inertia_error`
+/// also named takes part of it and the remainders fall below the threshold: not flagged.
+#[test]
+fn a_centre_of_mass_offset_standing_in_for_a_torque_about_one_tilt_axis_partly_explains_it() {
+    let amplitude = 1.0e-3;
+    let t = truth(&format!(
+        "{CONSTANT_XY}[effects.fitted_torque]\nterms = [ {{ axis = \"x\", function = \"sin tilt_y\", coefficient = {amplitude:e} }} ]\n"
+    ));
+    for seed in [83, 84] {
+        let label = format!("torque about X per unit of G_y + constant torque, seed {seed}");
+        let data = experiment_data(&t, seed, 600.0);
+        let before = identify_with(&data, false);
+        print(&format!("{label}, guard off"), &before);
+        assert_eq!(names(&before), ["constant_torque", "com_offset"], "{label}");
+        assert!(before.report.unexplained.is_empty(), "{label}");
+        assert!(!before.report.remaining.residual_remains, "{label}");
+
+        let after = identify_with(&data, true);
+        print(&format!("{label}, guard on"), &after);
+        let r = &after.report;
+        assert_eq!(names(&after), ["constant_torque", "com_offset"], "{label}");
+        assert!(r.remaining.residual_remains, "{label}");
+        let weight_n = t.platform.mass_kg * t.platform.gravity_mps2;
+        let r_z = testbed_ident::Cause::ComOffset.values(&after.extended)[2];
+        // Per equation: the offset's r_z there alone, what that equation holds, and the remainder's
+        // function with the torque it carries beside the joint value (`m g r_z` per unit of `G_x`
+        // about Y, `−m g r_z` per unit of `G_y` about X).
+        for (equation, r_z_alone, function, held_nm) in [
+            (
+                "torque_x",
+                -amplitude / weight_n,
+                "sin tilt_y",
+                amplitude + weight_n * r_z,
+            ),
+            ("torque_y", 0.0, "sin tilt_x", -weight_n * r_z),
+        ] {
+            let flag = r
+                .partly_explained
+                .iter()
+                .find(|p| p.cause == "com_offset" && p.equation == equation)
+                .unwrap_or_else(|| panic!("{label}, {equation}: {:?}", r.partly_explained));
+            println!("    {flag:?}");
+            assert!(flag.wald > flag.threshold, "{flag:?}");
+            let across = flag.across.as_ref().expect("flagged across equations");
+            assert!(across.chi2 > 31.0, "{across:?}");
+            let j = across
+                .parameters
+                .iter()
+                .position(|p| p == "com_offset.r_m[2]")
+                .expect("r_z is shared");
+            let (_, value, se) = across
+                .equations
+                .iter()
+                .find(|(e, _, _)| e == equation)
+                .expect("the equation's values");
+            assert!(
+                (value[j] - r_z_alone).abs() <= 3.0 * se[j],
+                "{equation}: r_z alone {} ± {} against {r_z_alone}",
+                value[j],
+                se[j]
+            );
+            let remainder = r
+                .unexplained
+                .iter()
+                .find(|e| e.equation == equation)
+                .unwrap_or_else(|| panic!("{equation}: no remainder"));
+            let term = remainder
+                .terms
+                .iter()
+                .find(|t| t.name == function)
+                .unwrap_or_else(|| panic!("{equation}: {}", remainder.proposed));
+            assert!(
+                (term.value - held_nm).abs() <= 3.0 * term.stderr,
+                "{equation}: {function} {} ± {} against {held_nm}",
+                term.value,
+                term.stderr
+            );
+        }
+    }
+}
+
+/// No new false positive: library causes alone (a constant torque about all three axes, as in
+/// `tests/causes.rs`; beside it a centre-of-mass offset 20 µm below the pivot, whose `r_z` acts
+/// about X and Y alike) are named without a "partly" flag on each of 10 seeds, on records of the two
+/// lengths the cases above use (`tests/causes.rs` checks the same for every cause of the
 /// library on its three seeds).
 #[test]
-fn a_library_cause_alone_is_not_flagged_over_ten_seeds() {
-    let t = truth("[effects.constant_torque]\ntorque_nm = [1.5e-3, -1.0e-3, 2.0e-3]\n");
+fn library_causes_alone_are_not_flagged_over_ten_seeds() {
     let mut flagged = Vec::new();
-    for duration_s in [600.0, 1200.0] {
-        for seed in 200..210 {
-            let id = identify_blind(&t, seed, duration_s);
-            println!(
-                "{duration_s} s, seed {seed}: {} ; partly {:?}",
-                id.report.verdict,
-                id.report
-                    .partly_explained
-                    .iter()
-                    .map(|p| &p.verdict)
-                    .collect::<Vec<_>>()
-            );
-            assert_eq!(
-                names(&id),
-                ["constant_torque"],
-                "{duration_s} s, seed {seed}"
-            );
-            if !id.report.partly_explained.is_empty() {
-                flagged.push((duration_s, seed));
+    for (effects, causes) in [
+        (
+            "[effects.constant_torque]\ntorque_nm = [1.5e-3, -1.0e-3, 2.0e-3]\n",
+            &["constant_torque"][..],
+        ),
+        (
+            "[effects.constant_torque]\ntorque_nm = [1.5e-3, -1.0e-3, 0.0]\n[effects.com_offset]\nr_m = [2.5e-6, -1.5e-6, -20.0e-6]\n",
+            &["com_offset", "constant_torque"][..],
+        ),
+    ] {
+        let t = truth(effects);
+        for duration_s in [600.0, 1200.0] {
+            for seed in 200..210 {
+                let id = identify_blind(&t, seed, duration_s);
+                println!(
+                    "{causes:?}, {duration_s} s, seed {seed}: {} ; partly {:?}",
+                    id.report.verdict,
+                    id.report
+                        .partly_explained
+                        .iter()
+                        .map(|p| &p.verdict)
+                        .collect::<Vec<_>>()
+                );
+                assert_eq!(names(&id), causes, "{duration_s} s, seed {seed}");
+                if !id.report.partly_explained.is_empty() {
+                    flagged.push((causes, duration_s, seed));
+                }
             }
         }
     }

@@ -302,9 +302,13 @@ impl<'a> Levels<'a> {
     /// `max(k ln N, χ²_k(1 − selection))`.
     pub(super) fn joint(&self, n: f64, rss_without: f64, rss_with: f64, k: usize) -> (f64, f64) {
         let lr = n * (rss_without / rss_with.max(1e-300)).ln();
-        let threshold = (k as f64 * self.n_fit.ln())
-            .max(chi_square_quantile(1.0 - self.selection, k as f64).unwrap_or(f64::INFINITY));
-        (lr, threshold)
+        (lr, self.threshold(k))
+    }
+
+    /// The selection's threshold for `k` parameters, `max(k ln N, χ²_k(1 − selection))`.
+    pub(super) fn threshold(&self, k: usize) -> f64 {
+        (k as f64 * self.n_fit.ln())
+            .max(chi_square_quantile(1.0 - self.selection, k as f64).unwrap_or(f64::INFINITY))
     }
 }
 

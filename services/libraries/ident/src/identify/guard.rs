@@ -41,7 +41,8 @@ use super::unexplained::{UnexplainedEffect, effect};
 use super::wheel::{WheelCandidates, own_form as wheel_own_form, wheel_designs, wheel_equation};
 use crate::effects::{Cause, Kind};
 use crate::fit::{Problem, SetFit};
-use crate::sparse::{Design, SparseOptions, determined_forced, result_for, search};
+use crate::sparse::{Design, SparseOptions, SparseResult, determined_forced, result_for, search};
+use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
 
 /// A named cause that explains only part of an equation (see the module documentation).
@@ -67,6 +68,24 @@ pub struct PartlyExplained {
     pub dof: usize,
     /// In words.
     pub verdict: String,
+    /// When the flag comes from the cause's values in the equations it shares (a torque cause
+    /// acting about several axes): those values; `None` for the unrestricted search's flag.
+    pub across: Option<AcrossEquations>,
+}
+
+/// A torque cause's parameters fitted to each equation they are determined in alone (see
+/// [`across_equations`]): their values there, with cluster-robust standard errors, and the χ²
+/// of their disagreement.
+#[derive(Debug, Clone, Serialize)]
+pub struct AcrossEquations {
+    /// The parameters determined in more than one equation (`com_offset.r_m[2]` …).
+    pub parameters: Vec<String>,
+    /// Per equation: its name, and per parameter (in `parameters`' order; NaN where not
+    /// determined there) its value fitted there alone and the standard error, in the
+    /// parameter's unit.
+    pub equations: Vec<(String, Vec<f64>, Vec<f64>)>,
+    pub chi2: f64,
+    pub dof: usize,
 }
 
 /// One equation of a cause's channel: the design with every named cause forced (`with`) and
@@ -158,9 +177,253 @@ pub(super) fn judge(
             threshold,
             dof: idx.len(),
             verdict,
+            across: None,
         },
         remainder,
     ))
+}
+
+/// Smallest correlation at which a candidate function is taken as a cause's column's form in
+/// one equation (`com_offset.r_m[2]` about X is `m g` times `sin tilt_y`).
+const SAME_FORM: f64 = 0.999;
+
+/// One equation of [`across_equations`]: its design, the search with every named cause, the
+/// fitted columns (the determined forced ones, then the terms found), and the positions among
+/// them of the cause's parameters with their names.
+struct Shared<'a> {
+    design: &'a Design,
+    name: String,
+    found: SparseResult,
+    cols: Vec<usize>,
+    forced: usize,
+    theta: DVector<f64>,
+    cov: DMatrix<f64>,
+    params: Vec<(usize, String)>,
+}
+
+/// The guard across the equations of a torque cause (`designs`: per axis, every named cause
+/// forced): a parameter that acts about several axes (a vertical centre-of-mass offset about X
+/// and Y) must take one value in all of them. Each equation's own search fits the cause's
+/// columns there alone, so an effect that has the cause's form in one equation only (a torque
+/// about X per unit of `G_y` with no `G_x` torque about Y) is explained within the noise in
+/// each, and the joint value is a compromise that explains neither. The test: the cause's
+/// shared parameters fitted per equation beside the terms found there (cluster-robust
+/// covariances), their disagreement `χ²` (generalised least squares about one common value,
+/// equations independent) above the selection's threshold for its degrees of freedom. Each
+/// equation whose own change from the joint value is significant by itself (cluster-robust
+/// Wald statistic above the threshold) is then flagged, and its change reported as the
+/// remainder: the candidate function of the cause's form there, fitted beside the cause held
+/// at its joint value. Columns without a candidate of their form are not judged. `fitted`: the
+/// cause's fitted values (its configuration's order and units).
+pub(super) fn across_equations(
+    cause: Cause,
+    fitted: &[f64],
+    designs: &[(usize, Design)],
+    sparse: &SparseOptions,
+    levels: &Levels,
+) -> Vec<(PartlyExplained, UnexplainedEffect)> {
+    let prefix = format!("{}.", cause.name());
+    let equations: Vec<Shared> = designs
+        .iter()
+        .filter_map(|(axis, design)| {
+            let found = search(design, sparse);
+            let mut cols = determined_forced(design);
+            let forced = cols.len();
+            let column = |name: &str| design.names.iter().position(|n| n == name);
+            cols.extend(found.terms.iter().filter_map(|t| column(&t.name)));
+            let params: Vec<(usize, String)> = (0..forced)
+                .filter(|&i| design.names[cols[i]].starts_with(&prefix))
+                .map(|i| (i, design.names[cols[i]].clone()))
+                .collect();
+            if params.is_empty() {
+                return None;
+            }
+            let (theta, cov) = design.fit_cov(&cols)?;
+            Some(Shared {
+                design,
+                name: torque_equation(*axis),
+                found,
+                cols,
+                forced,
+                theta,
+                cov,
+                params,
+            })
+        })
+        .collect();
+    let mut parameters: Vec<String> = Vec::new();
+    for e in &equations {
+        for (_, p) in &e.params {
+            let count = equations
+                .iter()
+                .filter(|o| o.params.iter().any(|(_, q)| q == p))
+                .count();
+            if count > 1 && !parameters.contains(p) {
+                parameters.push(p.clone());
+            }
+        }
+    }
+    let m = parameters.len();
+    if m == 0 {
+        return Vec::new();
+    }
+    // Per equation: the shared parameters' positions among its columns and in `parameters`.
+    let picks: Vec<Vec<(usize, usize)>> = equations
+        .iter()
+        .map(|e| {
+            e.params
+                .iter()
+                .filter_map(|(i, p)| Some((*i, parameters.iter().position(|q| q == p)?)))
+                .collect()
+        })
+        .collect();
+    // Generalised least squares of one common value per parameter.
+    let mut a = DMatrix::<f64>::zeros(m, m);
+    let mut b = DVector::<f64>::zeros(m);
+    let mut blocks = Vec::new();
+    for (e, pick) in equations.iter().zip(&picks) {
+        let k = pick.len();
+        if k == 0 {
+            blocks.push(None);
+            continue;
+        }
+        let c = DMatrix::from_fn(k, k, |i, j| e.cov[(pick[i].0, pick[j].0)]);
+        let Some(w) = c.try_inverse() else {
+            return Vec::new();
+        };
+        let theta = DVector::from_fn(k, |i, _| e.theta[pick[i].0]);
+        let map = DMatrix::from_fn(k, m, |i, j| if pick[i].1 == j { 1.0 } else { 0.0 });
+        a += map.transpose() * &w * &map;
+        b += map.transpose() * &w * &theta;
+        blocks.push(Some((theta, w, map)));
+    }
+    let Some(common) = a.try_inverse().map(|inv| inv * b) else {
+        return Vec::new();
+    };
+    let (mut chi2, mut observed) = (0.0, 0);
+    for (theta, w, map) in blocks.iter().flatten() {
+        let d = theta - map * &common;
+        chi2 += (d.transpose() * w * &d)[(0, 0)];
+        observed += theta.len();
+    }
+    let dof = observed - m;
+    let threshold = levels.threshold(dof);
+    if !(dof > 0 && chi2 > threshold) {
+        return Vec::new();
+    }
+    let across = AcrossEquations {
+        parameters: parameters.clone(),
+        equations: equations
+            .iter()
+            .zip(&picks)
+            .map(|(e, pick)| {
+                let mut value = vec![f64::NAN; m];
+                let mut se = vec![f64::NAN; m];
+                for &(i, j) in pick {
+                    // The design's columns fit changes from the cause's fitted value.
+                    let at = (0..fitted.len()).find(|&o| cause.value_name(o) == parameters[j]);
+                    value[j] = at.map_or(f64::NAN, |o| fitted[o]) + e.theta[i];
+                    se[j] = e.cov[(i, i)].max(0.0).sqrt();
+                }
+                (e.name.clone(), value, se)
+            })
+            .collect(),
+        chi2,
+        dof,
+    };
+    let values_text = across
+        .equations
+        .iter()
+        .map(|(name, value, se)| {
+            let v: Vec<String> = value
+                .iter()
+                .zip(se)
+                .zip(&parameters)
+                .filter(|((v, _), _)| v.is_finite())
+                .map(|((v, s), p)| format!("{} {v:+.2e} ± {s:.1e}", p.trim_start_matches(&prefix)))
+                .collect();
+            format!("{name}: {}", v.join(", "))
+        })
+        .collect::<Vec<_>>()
+        .join("; ");
+    let mut out = Vec::new();
+    for (e, pick) in equations.iter().zip(&picks) {
+        if pick.is_empty() {
+            continue;
+        }
+        // The cause's shared columns whose value here differs by itself from the common one
+        // (a column this equation hardly determines, such as a centre-of-mass offset's
+        // nearly constant torque beside a constant torque, is left as it is), replaced by the
+        // candidates of their form.
+        let alone = levels.threshold(1);
+        let shared: Vec<usize> = pick
+            .iter()
+            .filter(|&&(i, j)| (e.theta[i] - common[j]).powi(2) > alone * e.cov[(i, i)])
+            .map(|&(i, _)| e.cols[i])
+            .collect();
+        if shared.is_empty() {
+            continue;
+        }
+        let form: Option<Vec<usize>> = shared
+            .iter()
+            .map(|&f| {
+                (e.design.forced..e.design.names.len())
+                    .filter(|j| !e.cols.contains(j))
+                    .map(|j| (j, e.design.proportion(f, j).0.abs()))
+                    .filter(|(_, r)| *r >= SAME_FORM)
+                    .max_by(|x, y| x.1.total_cmp(&y.1))
+                    .map(|(j, _)| j)
+            })
+            .collect();
+        let Some(form) = form else {
+            continue;
+        };
+        let mut cols: Vec<usize> = e.cols[..e.forced]
+            .iter()
+            .copied()
+            .filter(|c| !shared.contains(c))
+            .collect();
+        let nf = cols.len();
+        cols.extend(&e.cols[e.forced..]);
+        cols.extend(&form);
+        let idx: Vec<usize> = (cols.len() - form.len()..cols.len()).collect();
+        let Some(wald) = e.design.wald(&cols, &idx) else {
+            continue;
+        };
+        let threshold_here = levels.threshold(idx.len());
+        if wald <= threshold_here {
+            continue;
+        }
+        let cv = e.found.cv_rss;
+        let base_cv = e.design.cv_rss(&cols[..nf]).unwrap_or(e.design.total_rss());
+        let result = result_for(e.design, nf, &cols, e.found.z_threshold, base_cv);
+        let Some(remainder) = effect(e.name.clone(), "Nm", result, e.design) else {
+            continue;
+        };
+        let verdict = format!(
+            "partly explains {}: its values differ between the equations it acts in (each fitted alone: {values_text}; χ² = {chi2:.1} on {dof} degrees of freedom, threshold {threshold:.1}), so one value does not explain them all; beside it remains {} (cluster-robust Wald statistic {wald:.1}, threshold {threshold_here:.1})",
+            e.name, remainder.proposed
+        );
+        out.push((
+            PartlyExplained {
+                cause: cause.name(),
+                equation: e.name.clone(),
+                cv_cause: cv,
+                cv_search: cv,
+                cv_with_remainder: cv,
+                search_form: "none".to_string(),
+                remainder: remainder.proposed.clone(),
+                lr: chi2,
+                wald,
+                threshold: threshold_here,
+                dof: idx.len(),
+                verdict,
+                across: Some(across.clone()),
+            },
+            remainder,
+        ));
+    }
+    out
 }
 
 /// The guard on every named cause, per equation of its channel (body axis, wheel, innovation
@@ -207,6 +470,12 @@ pub(super) fn causes(
                     let own = torque_own_form(cause);
                     out.extend(guard(cause, own, torque_equation(*axis), "Nm", w, wo));
                 }
+                let fitted = fit
+                    .causes
+                    .iter()
+                    .find(|f| f.cause == cause)
+                    .map_or(&[][..], |f| &f.values);
+                out.extend(across_equations(cause, fitted, with, sparse, levels));
             }
             Kind::Wheel => {
                 let without = wheel_designs(problem, fit, named, wheel, blocks, Some(cause), &[]);
@@ -278,7 +547,9 @@ pub(super) fn apply(
             .iter()
             .any(|p: &PartlyExplained| p.equation == flag.equation)
         {
-            torque_terms |= remainder.equation.starts_with("torque_");
+            // A remainder across equations is relative to the cause's joint value: a refit
+            // beside it would take it back into the cause.
+            torque_terms |= remainder.equation.starts_with("torque_") && flag.across.is_none();
             effects.retain(|e| e.equation != remainder.equation);
             effects.push(remainder);
         }
