@@ -102,7 +102,9 @@ impl InnovationCandidates {
 }
 
 /// The named sensor causes linearised at their fitted values: `∂(innovation vector)/∂θ_j` by
-/// forward differences through the filter (one filter run per parameter), over all ticks.
+/// forward differences through the filter (one filter run per parameter), over all ticks; and
+/// the part of a cause without a neutral value (one filter run without it), so that the guard
+/// can put every named cause's part back.
 pub(super) struct SensorLinear {
     /// Per column: cause, value index, name.
     pub cols: Vec<(Cause, usize, String)>,
@@ -111,6 +113,9 @@ pub(super) struct SensorLinear {
     pub delta: Vec<Option<f64>>,
     /// Per column, per innovation-vector row.
     pub j: Vec<Vec<f64>>,
+    /// Per named cause without a neutral value (`earth_rate`): its part of each
+    /// innovation-vector row, the innovations with it less those of a filter run without it.
+    pub part: Vec<(Cause, Vec<f64>)>,
 }
 
 impl SensorLinear {
@@ -156,15 +161,42 @@ impl SensorLinear {
                 offset += spec.len;
             }
         }
-        let mut j = Vec::new();
-        for (run, taken) in problem.run_filters(&configs).ok()?.iter().zip(taken) {
-            let r = run.innovation_vector(|_| true);
-            if r.len() != r0.len() {
-                return None;
-            }
-            j.push(r.iter().zip(&r0).map(|(a, b)| (a - b) / taken).collect());
+        // A cause without a neutral value is switched off by a run without it.
+        let whole: Vec<Cause> = named
+            .iter()
+            .copied()
+            .filter(|&c| c == Cause::EarthRate)
+            .collect();
+        for _ in &whole {
+            let mut config = fit.config.clone();
+            config.effects.earth_rate = None;
+            configs.push(config);
         }
-        Some(Self { cols, delta, j })
+        let runs = problem.run_filters(&configs).ok()?;
+        let vectors: Vec<Vec<f64>> = runs
+            .iter()
+            .map(|run| run.innovation_vector(|_| true))
+            .collect();
+        if vectors.iter().any(|r| r.len() != r0.len()) {
+            return None;
+        }
+        let (steps, off) = vectors.split_at(taken.len());
+        let j = steps
+            .iter()
+            .zip(taken)
+            .map(|(r, taken)| r.iter().zip(&r0).map(|(a, b)| (a - b) / taken).collect())
+            .collect();
+        let part = whole
+            .into_iter()
+            .zip(off)
+            .map(|(cause, r)| (cause, r0.iter().zip(r).map(|(a, b)| a - b).collect()))
+            .collect();
+        Some(Self {
+            cols,
+            delta,
+            j,
+            part,
+        })
     }
 }
 
@@ -211,15 +243,30 @@ pub(super) fn innovation_designs(
 ) -> Vec<(usize, Design)> {
     let data = problem.data;
     let s = &fit.state;
-    let put_back: Vec<(usize, f64)> = match (removed, linear) {
-        (None, _) => Vec::new(),
+    // The removed cause's part of each innovation-vector row: its columns times its change
+    // from the neutral values, or, for a cause without them, its part from a run without it.
+    let part: Option<Vec<f64>> = match (removed, linear) {
+        (None, _) => None,
         (Some(cause), Some(l)) => {
-            let cols: Vec<usize> = (0..l.cols.len())
-                .filter(|&j| l.cols[j].0 == cause)
-                .collect();
-            match cols.iter().map(|&j| l.delta[j].map(|d| (j, d))).collect() {
-                Some(v) => v,
-                None => return Vec::new(),
+            if let Some((_, p)) = l.part.iter().find(|(c, _)| *c == cause) {
+                Some(p.clone())
+            } else {
+                let cols: Vec<usize> = (0..l.cols.len())
+                    .filter(|&j| l.cols[j].0 == cause)
+                    .collect();
+                let Some(put_back) = cols
+                    .iter()
+                    .map(|&j| l.delta[j].map(|d| (j, d)))
+                    .collect::<Option<Vec<(usize, f64)>>>()
+                else {
+                    return Vec::new();
+                };
+                let rows = l.j.first().map_or(0, Vec::len);
+                Some(
+                    (0..rows)
+                        .map(|r| put_back.iter().map(|&(j, d)| l.j[j][r] * d).sum())
+                        .collect(),
+                )
             }
         }
         (Some(_), None) => return Vec::new(),
@@ -259,11 +306,7 @@ pub(super) fn innovation_designs(
             .iter()
             .map(|&i| {
                 let r = candidates.row[i][c];
-                let back: f64 = put_back
-                    .iter()
-                    .filter_map(|&(j, d)| linear.map(|l| l.j[j][r] * d))
-                    .sum();
-                inn[i].values[c] - back
+                inn[i].values[c] - part.as_ref().map_or(0.0, |p| p[r])
             })
             .collect();
         // Clusters of a third of a block (never across a fit / held-out change).
