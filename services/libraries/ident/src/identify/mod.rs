@@ -299,6 +299,11 @@ fn identify_pass(
     } else {
         Vec::new()
     };
+    let absorbing: Vec<(Cause, Vec<f64>)> = current
+        .causes
+        .iter()
+        .map(|f| (f.cause, f.values.clone()))
+        .collect();
     // With unexplained torque terms, the named torque causes take their values from the joint
     // fit (they no longer absorb part of the new effect).
     let torque_terms = effects.iter().any(|e| e.equation.starts_with("torque_"));
@@ -319,6 +324,17 @@ fn identify_pass(
     // friction levels) take the search's refit beside the terms (its forced columns; the delay
     // and the Stribeck speed, shared or nonlinear, stay as fitted).
     wheel::refit_beside_terms(&mut current, &named, &effects);
+    // What the terms took from each cause: a fold's fit of the causes, made without the terms,
+    // absorbs it again, and is shifted by it where the fold is predicted with the terms.
+    let beside_terms: Vec<(Cause, Vec<f64>)> = current
+        .causes
+        .iter()
+        .filter_map(|f| {
+            let (_, before) = absorbing.iter().find(|(c, _)| *c == f.cause)?;
+            let shift: Vec<f64> = f.values.iter().zip(before).map(|(a, b)| a - b).collect();
+            shift.iter().any(|d| *d != 0.0).then_some((f.cause, shift))
+        })
+        .collect();
     let selected = named;
 
     let causes: Vec<CauseReport> = selected
@@ -485,8 +501,10 @@ fn identify_pass(
                         &fold_windows[j],
                     )?;
                     let with_fold_terms = if carry {
-                        let (config_j, _, _) =
-                            with_terms(&fit_j.config, Coefficients::WithoutFold(j));
+                        let (config_j, _, _) = with_terms(
+                            &shifted(&fit_j, &beside_terms),
+                            Coefficients::WithoutFold(j),
+                        );
                         Some(predict::predict(
                             aligned,
                             &fit_j.state.recon,
@@ -754,4 +772,27 @@ fn held_out_spans(held: &[bool], start: usize) -> Vec<(usize, usize)> {
         }
     }
     out
+}
+
+/// The configuration of `fit` with each cause of `shifts` moved by its shift (clamped to the
+/// cause's bounds).
+fn shifted(fit: &SetFit, shifts: &[(Cause, Vec<f64>)]) -> ModelConfig {
+    let mut config = fit.config.clone();
+    for (cause, shift) in shifts {
+        let Some(f) = fit.causes.iter().find(|f| f.cause == *cause) else {
+            continue;
+        };
+        let values: Vec<f64> = f
+            .values
+            .iter()
+            .zip(shift)
+            .enumerate()
+            .map(|(i, (v, d))| {
+                let (lo, hi) = cause.bounds(i);
+                (v + d).clamp(lo, hi)
+            })
+            .collect();
+        cause.apply(&mut config, &values);
+    }
+    config
 }
