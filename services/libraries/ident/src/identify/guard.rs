@@ -15,12 +15,20 @@
 //!   over the whole candidate library (its own form included), `cv_search` and its terms;
 //! - **the trigger**: the search's terms include a function outside the cause's own form and
 //!   predict better out of fold, `cv_search < cv_cause` (the selection's held-out likelihood
-//!   ratio above zero);
+//!   ratio above zero); else, the one candidate outside the cause's own form that does most
+//!   beside it (the unrestricted search loses to a cause whose law has no form among the
+//!   candidates, such as a friction law's Stribeck term, and the search beside the cause adds
+//!   a term only above 1 % of the cross-validated residual sum). Such a term is significant
+//!   beside every cause of its equation: it is laid on one only where no cause of the
+//!   equation is flagged otherwise, and on the first named;
 //! - **the remainder**: those functions fitted beside the cause (and the terms found with it)
 //!   must pass the test the selection names a cause by, beside the others: likelihood ratio on
 //!   the equation's rows above `max(k ln N, χ²_k(1 − alpha))`, the cluster-robust Wald
 //!   statistic above the same threshold (as the falsification's joint test), and a lower
 //!   cross-validated residual sum than the cause's.
+//!
+//! A torque cause that acts about several axes is also judged across them
+//! ([`across_equations`]).
 //!
 //! When all hold the cause **partly explains** that equation: it stays named, flagged with the
 //! statistics ([`PartlyExplained`]), and the remainder is reported as an unexplained effect with
@@ -68,8 +76,12 @@ pub struct PartlyExplained {
     pub dof: usize,
     /// In words.
     pub verdict: String,
-    /// When the flag comes from the cause's values in the equations it shares (a torque cause
-    /// acting about several axes): those values; `None` for the unrestricted search's flag.
+    /// What raised the flag: `search` (the unrestricted search predicts better with a form of
+    /// another kind), `beside` (a term of another form is significant beside the cause, below
+    /// the search's 1 % bar) or `across` (the cause's values differ between its equations).
+    pub trigger: &'static str,
+    /// With `across`: the cause's values in the equations it shares (a torque cause acting
+    /// about several axes).
     pub across: Option<AcrossEquations>,
 }
 
@@ -120,24 +132,47 @@ pub(super) fn judge(
     let found = search(with, sparse);
     let free = search(eq.without, sparse);
     let (cv_cause, cv_search) = (found.cv_rss, free.cv_rss);
-
-    // Held out, the search's form must predict better than the cause (the selection's
-    // held-out likelihood ratio above zero).
-    if cv_search.partial_cmp(&cv_cause) != Some(std::cmp::Ordering::Less) {
-        return None;
-    }
     let column = |name: &str| with.names.iter().position(|n| n == name);
     // The base: the determined forced columns and the terms found with the cause.
     let mut base = determined_forced(with);
     let nf = base.len();
     base.extend(found.terms.iter().filter_map(|t| column(&t.name)));
-    let extra: Vec<usize> = free
-        .terms
-        .iter()
-        .filter(|t| !own.contains(&t.name.as_str()))
-        .filter_map(|t| column(&t.name))
-        .filter(|j| !base.contains(j))
-        .collect();
+    let rows = with.rows() as f64;
+    // What the remainder may be. First the unrestricted search's functions of another form,
+    // when that search predicts better held out (the selection's held-out likelihood ratio
+    // above zero).
+    let from_search: Vec<usize> = if cv_search < cv_cause {
+        free.terms
+            .iter()
+            .filter(|t| !own.contains(&t.name.as_str()))
+            .filter_map(|t| column(&t.name))
+            .filter(|j| !base.contains(j))
+            .collect()
+    } else {
+        Vec::new()
+    };
+    // Else the one candidate of another form that does most beside the cause. The unrestricted
+    // search may lose to the cause where the cause's law has no form among the candidates (a
+    // friction law's Stribeck term), and the search beside the cause adds a term only if it
+    // lowers the cross-validated residual sum by 1 %: a remainder can pass the selection's
+    // test and still be below that bar.
+    let beside = from_search.is_empty();
+    let extra = if beside {
+        let rss_base = with.fit_rss(&base)?;
+        (with.forced..with.names.len())
+            .filter(|j| !base.contains(j) && !own.contains(&with.names[*j].as_str()))
+            .filter_map(|j| {
+                let mut cols = base.clone();
+                cols.push(j);
+                let (lr, _) = levels.joint(rows, rss_base, with.fit_rss(&cols)?, 1);
+                Some((j, lr))
+            })
+            .max_by(|a, b| a.1.total_cmp(&b.1))
+            .map(|(j, _)| vec![j])
+            .unwrap_or_default()
+    } else {
+        from_search
+    };
     if extra.is_empty() {
         return None;
     }
@@ -147,7 +182,6 @@ pub(super) fn judge(
     // The remainder beside the cause: the selection's test of a cause beside those chosen
     // (likelihood ratio above its threshold on the fit data, better held out), with the
     // cluster-robust Wald statistic as in the falsification's joint test.
-    let rows = with.rows() as f64;
     let (lr, threshold) = levels.joint(rows, with.fit_rss(&base)?, with.fit_rss(&cols)?, idx.len());
     let wald = with.wald(&cols, &idx)?;
     let cv_with_remainder = with.cv_rss(&cols)?;
@@ -159,10 +193,17 @@ pub(super) fn judge(
     let remainder = effect(eq.name.clone(), eq.unit, result, with)?;
     let search_form = effect(eq.name.clone(), eq.unit, free, eq.without)
         .map_or_else(|| "none".to_string(), |e| e.proposed);
-    let verdict = format!(
-        "partly explains {}: the unrestricted search without it ({search_form}) predicts better out of fold (cross-validated residual sum {:.4e} against {cv_cause:.4e} with it); beside it remains {} (likelihood ratio {lr:.1}, cluster-robust Wald statistic {wald:.1}, threshold {threshold:.1}; cross-validated residual sum {cv_with_remainder:.4e})",
-        eq.name, cv_search, remainder.proposed
-    );
+    let verdict = if beside {
+        format!(
+            "partly explains {}: beside it a term of another form is significant though below the search's bar for a new term (1 % of the cross-validated residual sum): {} (likelihood ratio {lr:.1}, cluster-robust Wald statistic {wald:.1}, threshold {threshold:.1}; cross-validated residual sum {cv_with_remainder:.4e} against {cv_cause:.4e} with the cause alone)",
+            eq.name, remainder.proposed
+        )
+    } else {
+        format!(
+            "partly explains {}: the unrestricted search without it ({search_form}) predicts better out of fold (cross-validated residual sum {:.4e} against {cv_cause:.4e} with it); beside it remains {} (likelihood ratio {lr:.1}, cluster-robust Wald statistic {wald:.1}, threshold {threshold:.1}; cross-validated residual sum {cv_with_remainder:.4e})",
+            eq.name, cv_search, remainder.proposed
+        )
+    };
     Some((
         PartlyExplained {
             cause: cause.name(),
@@ -177,6 +218,7 @@ pub(super) fn judge(
             threshold,
             dof: idx.len(),
             verdict,
+            trigger: if beside { "beside" } else { "search" },
             across: None,
         },
         remainder,
@@ -418,6 +460,7 @@ pub(super) fn across_equations(
                 threshold: threshold_here,
                 dof: idx.len(),
                 verdict,
+                trigger: "across",
                 across: Some(across.clone()),
             },
             remainder,
@@ -540,6 +583,23 @@ pub(super) fn apply(
         (options.block_s, &options.sparse),
         &levels,
     );
+    // A term significant beside a cause is significant beside every cause of its equation: it
+    // is laid on one only where no cause of the equation is flagged otherwise (the one that
+    // stood in for it), and on the first named.
+    let keep: Vec<bool> = found
+        .iter()
+        .enumerate()
+        .map(|(i, (f, _))| {
+            f.trigger != "beside"
+                || !found.iter().enumerate().any(|(j, (g, _))| {
+                    j != i && g.equation == f.equation && (g.trigger != "beside" || j < i)
+                })
+        })
+        .collect();
+    let found = found
+        .into_iter()
+        .zip(keep)
+        .filter_map(|(f, keep)| keep.then_some(f));
     let mut out = Vec::new();
     let mut torque_terms = false;
     for (flag, remainder) in found {
