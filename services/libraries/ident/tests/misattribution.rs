@@ -403,6 +403,47 @@ fn a_friction_law_standing_in_for_a_heading_dependent_wheel_torque_partly_explai
     }
 }
 
+/// A sensor distortion that brought in a gyro cause: a magnetometer error of 2 µT × `sin ψ` on
+/// its Y axis beside a hard iron, 600 s, seeds 81 and 82. The error moves the filter's attitude
+/// and `earth_rate` (a latitude near 89°) was named for part of what that does. Its
+/// falsification beside the unexplained field terms never ran: it removes a cause's part
+/// through its change from its neutral values, and `earth_rate` has none. Its part is now the
+/// innovations less those of a filter run without it: not significant beside the field terms
+/// (likelihood ratio 4.5 and 0.4, threshold 23.9), it is dropped, and the field error stays
+/// unexplained. (`tests/causes.rs` names a true `earth_rate` still.)
+#[test]
+fn an_earth_rate_brought_in_by_a_field_error_is_dropped() {
+    let t = truth(
+        "[effects.magnetic_disturbance]\nhard_iron_gauss = [0.02, -0.01, 0.0]\n\
+         [[effects.fitted_field.terms]]\naxis = \"y\"\nfunction = \"sin ψ\"\ncoefficient = 2e-6\n",
+    );
+    for seed in [81, 82] {
+        let label = format!("field error 2 µT × sin ψ + hard iron, seed {seed}");
+        let id = identify_with(&experiment_data(&t, seed, 600.0), true);
+        print(&label, &id);
+        let r = &id.report;
+        assert!(!names(&id).contains(&"earth_rate"), "{label}");
+        let test = r
+            .cause_tests
+            .iter()
+            .find(|c| c.name == "earth_rate")
+            .unwrap_or_else(|| panic!("{label}: earth_rate not tested"));
+        assert!(!test.kept, "{label}: {test:?}");
+        assert!(
+            test.joint_lr
+                .zip(test.joint_threshold)
+                .is_some_and(|(lr, t)| lr <= t),
+            "{label}: {test:?}"
+        );
+        assert!(
+            r.unexplained
+                .iter()
+                .any(|e| e.equation.starts_with("innovation_field")),
+            "{label}: the field error is not reported"
+        );
+    }
+}
+
 /// No new false positive: library causes alone (a constant torque about all three axes, as in
 /// `tests/causes.rs`; beside it a centre-of-mass offset 20 µm below the pivot, whose `r_z` acts
 /// about X and Y alike) are named without a "partly" flag on each of 10 seeds, on records of the two

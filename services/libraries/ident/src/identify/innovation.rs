@@ -119,6 +119,20 @@ pub(super) struct SensorLinear {
 }
 
 impl SensorLinear {
+    /// Column `j`'s cause's part of innovation-vector row `r`: its column times its change from
+    /// the neutral value, or, for a cause without one (a single column), its part from the run
+    /// without it.
+    pub fn removed(&self, j: usize, r: usize) -> f64 {
+        match self.delta[j] {
+            Some(d) => self.j[j][r] * d,
+            None => self
+                .part
+                .iter()
+                .find(|(c, _)| *c == self.cols[j].0)
+                .map_or(0.0, |(_, p)| p[r]),
+        }
+    }
+
     pub fn new(problem: &Problem, fit: &SetFit, named: &[Cause]) -> Option<Self> {
         let sensor: Vec<Cause> = named
             .iter()
@@ -418,7 +432,7 @@ pub(super) fn sensor_tests(
             }
             let mut y = inn[i].values[c];
             for &j in removed {
-                y -= lin.j[j][r] * lin.delta[j].unwrap_or(0.0);
+                y -= lin.removed(j, r);
             }
             for (a, &j) in used.iter().enumerate() {
                 x[a] = lin.j[j][r];
@@ -483,7 +497,8 @@ pub(super) fn sensor_tests(
         {
             failures.add("consistency", falsified_text(c, alpha_consistency));
         }
-        let removable = idx.iter().all(|&j| lin.delta[j].is_some());
+        let removable = idx.iter().all(|&j| lin.delta[j].is_some())
+            || lin.part.iter().any(|(c, _)| *c == cause);
         if !extra.is_empty() && removable {
             let fit_rows = |tick: usize| !problem.held_out[tick];
             let others: Vec<usize> = all.iter().copied().filter(|j| !idx.contains(j)).collect();
