@@ -9,7 +9,7 @@
 mod common;
 use common::*;
 use testbed_ident::Options;
-use testbed_ident::identify::Identification;
+use testbed_ident::identify::{Identification, Report};
 use testbed_model::config::GAUSS;
 
 /// A constant torque about X and Y (a library cause, truly acting).
@@ -30,6 +30,37 @@ fn identify_with(data: &testbed_ident::Dataset, guard: bool) -> Identification {
     testbed_ident::identify(data, &nominal(), &options).expect("identification runs")
 }
 
+/// Identify with the guard off and check the misattribution: `named` alone, no unexplained
+/// effect, "no residual remains".
+fn misattributed(label: &str, data: &testbed_ident::Dataset, named: &[&str]) {
+    let before = identify_with(data, false);
+    print(&format!("{label}, guard off"), &before);
+    assert_eq!(names(&before), named, "{label}");
+    assert!(before.report.unexplained.is_empty(), "{label}");
+    assert!(!before.report.remaining.residual_remains, "{label}");
+    assert!(before.report.partly_explained.is_empty(), "{label}");
+}
+
+/// The remainder's term `function` in `equation`, within 3 standard errors of `truth`.
+fn check_remainder(label: &str, r: &Report, equation: &str, function: &str, truth: f64) {
+    let remainder = r
+        .unexplained
+        .iter()
+        .find(|e| e.equation == equation)
+        .unwrap_or_else(|| panic!("{label}: no remainder in {equation}: {:?}", r.unexplained));
+    let term = remainder
+        .terms
+        .iter()
+        .find(|t| t.name == function)
+        .unwrap_or_else(|| panic!("{label}: {}", remainder.proposed));
+    assert!(
+        (term.value - truth).abs() <= 3.0 * term.stderr,
+        "{label}: {equation} {function} coefficient {} ± {} against {truth}",
+        term.value,
+        term.stderr
+    );
+}
+
 /// What the guard must turn: `named` (the library causes, with the guard off: named alone, no
 /// unexplained effect, "no residual remains") flagged on `torque_z` with the remainder `cos ψ`
 /// (the unrestricted search finds `cos ψ` and predicts better out of fold; beside the causes
@@ -42,12 +73,7 @@ fn check_turned(
     named: &[&str],
     cos_psi_nm: f64,
 ) -> Identification {
-    let before = identify_with(data, false);
-    print(&format!("{label}, guard off"), &before);
-    assert_eq!(names(&before), named, "{label}");
-    assert!(before.report.unexplained.is_empty(), "{label}");
-    assert!(!before.report.remaining.residual_remains, "{label}");
-    assert!(before.report.partly_explained.is_empty(), "{label}");
+    misattributed(label, data, named);
 
     let after = identify_with(data, true);
     print(&format!("{label}, guard on"), &after);
@@ -68,22 +94,7 @@ fn check_turned(
     assert!(flag.cv_search < flag.cv_cause, "{flag:?}");
     assert!(flag.cv_with_remainder < flag.cv_cause, "{flag:?}");
     assert!(flag.search_form.contains("cos ψ"), "{flag:?}");
-    let remainder = r
-        .unexplained
-        .iter()
-        .find(|e| e.equation == "torque_z")
-        .unwrap_or_else(|| panic!("{label}: no remainder: {:?}", r.unexplained));
-    let term = remainder
-        .terms
-        .iter()
-        .find(|t| t.name == "cos ψ")
-        .unwrap_or_else(|| panic!("{label}: {}", remainder.proposed));
-    assert!(
-        (term.value - cos_psi_nm).abs() <= 3.0 * term.stderr,
-        "{label}: cos ψ coefficient {} ± {} against {cos_psi_nm}",
-        term.value,
-        term.stderr
-    );
+    check_remainder(label, r, "torque_z", "cos ψ", cos_psi_nm);
     assert!(r.remaining.residual_remains, "{label}");
     assert!(
         r.summary
@@ -250,11 +261,7 @@ fn a_centre_of_mass_offset_standing_in_for_a_torque_about_one_tilt_axis_partly_e
     for seed in [83, 84] {
         let label = format!("torque about X per unit of G_y + constant torque, seed {seed}");
         let data = experiment_data(&t, seed, 600.0);
-        let before = identify_with(&data, false);
-        print(&format!("{label}, guard off"), &before);
-        assert_eq!(names(&before), ["constant_torque", "com_offset"], "{label}");
-        assert!(before.report.unexplained.is_empty(), "{label}");
-        assert!(!before.report.remaining.residual_remains, "{label}");
+        misattributed(&label, &data, &["constant_torque", "com_offset"]);
 
         let after = identify_with(&data, true);
         print(&format!("{label}, guard on"), &after);
@@ -300,22 +307,7 @@ fn a_centre_of_mass_offset_standing_in_for_a_torque_about_one_tilt_axis_partly_e
                 value[j],
                 se[j]
             );
-            let remainder = r
-                .unexplained
-                .iter()
-                .find(|e| e.equation == equation)
-                .unwrap_or_else(|| panic!("{equation}: no remainder"));
-            let term = remainder
-                .terms
-                .iter()
-                .find(|t| t.name == function)
-                .unwrap_or_else(|| panic!("{equation}: {}", remainder.proposed));
-            assert!(
-                (term.value - held_nm).abs() <= 3.0 * term.stderr,
-                "{equation}: {function} {} ± {} against {held_nm}",
-                term.value,
-                term.stderr
-            );
+            check_remainder(&label, r, equation, function, held_nm);
         }
     }
 }
@@ -348,11 +340,7 @@ fn a_friction_law_standing_in_for_a_heading_dependent_wheel_torque_partly_explai
     for seed in [81, 82] {
         let label = format!("cos ψ torque on the X wheel + wheel friction, seed {seed}");
         let data = experiment_data(&t, seed, 1200.0);
-        let before = identify_with(&data, false);
-        print(&format!("{label}, guard off"), &before);
-        assert_eq!(names(&before), ["wheel_friction"], "{label}");
-        assert!(before.report.unexplained.is_empty(), "{label}");
-        assert!(!before.report.remaining.residual_remains, "{label}");
+        misattributed(&label, &data, &["wheel_friction"]);
 
         let after = identify_with(&data, true);
         print(&format!("{label}, guard on"), &after);
@@ -373,22 +361,7 @@ fn a_friction_law_standing_in_for_a_heading_dependent_wheel_torque_partly_explai
         );
         assert!(flag.cv_with_remainder < flag.cv_cause, "{flag:?}");
         assert!(r.remaining.residual_remains, "{label}");
-        let remainder = r
-            .unexplained
-            .iter()
-            .find(|e| e.equation == "wheel_x")
-            .unwrap_or_else(|| panic!("{label}: no remainder"));
-        let term = remainder
-            .terms
-            .iter()
-            .find(|t| t.name == "cos ψ")
-            .unwrap_or_else(|| panic!("{label}: {}", remainder.proposed));
-        assert!(
-            (term.value - amplitude).abs() <= 3.0 * term.stderr,
-            "{label}: cos ψ coefficient {} ± {} against {amplitude}",
-            term.value,
-            term.stderr
-        );
+        check_remainder(&label, r, "wheel_x", "cos ψ", amplitude);
         let text = after.extended.to_toml_string();
         assert!(text.contains("[effects.fitted_wheel_torque]"), "{text}");
         // Refitted beside the remainder, the X wheel's Coulomb levels are the truth's within
