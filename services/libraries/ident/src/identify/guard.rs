@@ -225,6 +225,40 @@ pub(super) fn judge(
     ))
 }
 
+/// Values of some of `m` parameters observed in one equation: `theta[i]` is parameter
+/// `parameter[i]`, with covariance `cov`.
+struct Observed {
+    theta: DVector<f64>,
+    cov: DMatrix<f64>,
+    parameter: Vec<usize>,
+}
+
+/// One value of each of `m` parameters from independent observations of them (generalised least
+/// squares), and the disagreement: `χ² = Σ (θ − μ)ᵀ C⁻¹ (θ − μ)` on (observed values − `m`)
+/// degrees of freedom. `None` if a covariance or the combined information is singular.
+fn one_value(observations: &[Observed], m: usize) -> Option<(DVector<f64>, f64, usize)> {
+    let mut information = DMatrix::<f64>::zeros(m, m);
+    let mut weighted = DVector::<f64>::zeros(m);
+    let mut blocks = Vec::with_capacity(observations.len());
+    for o in observations {
+        let w = o.cov.clone().try_inverse()?;
+        let map = DMatrix::from_fn(o.theta.len(), m, |i, j| {
+            if o.parameter[i] == j { 1.0 } else { 0.0 }
+        });
+        information += map.transpose() * &w * &map;
+        weighted += map.transpose() * &w * &o.theta;
+        blocks.push((w, map));
+    }
+    let common = information.try_inverse()? * weighted;
+    let mut chi2 = 0.0;
+    for (o, (w, map)) in observations.iter().zip(&blocks) {
+        let d = &o.theta - map * &common;
+        chi2 += (d.transpose() * w * &d)[(0, 0)];
+    }
+    let observed: usize = observations.iter().map(|o| o.theta.len()).sum();
+    Some((common, chi2, observed.saturating_sub(m)))
+}
+
 /// Smallest correlation at which a candidate function is taken as a cause's column's form in
 /// one equation (`com_offset.r_m[2]` about X is `m g` times `sin tilt_y`).
 const SAME_FORM: f64 = 0.999;
@@ -319,36 +353,21 @@ pub(super) fn across_equations(
                 .collect()
         })
         .collect();
-    // Generalised least squares of one common value per parameter.
-    let mut a = DMatrix::<f64>::zeros(m, m);
-    let mut b = DVector::<f64>::zeros(m);
-    let mut blocks = Vec::new();
-    for (e, pick) in equations.iter().zip(&picks) {
-        let k = pick.len();
-        if k == 0 {
-            blocks.push(None);
-            continue;
-        }
-        let c = DMatrix::from_fn(k, k, |i, j| e.cov[(pick[i].0, pick[j].0)]);
-        let Some(w) = c.try_inverse() else {
-            return Vec::new();
-        };
-        let theta = DVector::from_fn(k, |i, _| e.theta[pick[i].0]);
-        let map = DMatrix::from_fn(k, m, |i, j| if pick[i].1 == j { 1.0 } else { 0.0 });
-        a += map.transpose() * &w * &map;
-        b += map.transpose() * &w * &theta;
-        blocks.push(Some((theta, w, map)));
-    }
-    let Some(common) = a.try_inverse().map(|inv| inv * b) else {
+    // Per equation: the values of the shared parameters there, their covariance, and which
+    // parameter each is.
+    let observations: Vec<Observed> = equations
+        .iter()
+        .zip(&picks)
+        .filter(|(_, pick)| !pick.is_empty())
+        .map(|(e, pick)| Observed {
+            theta: DVector::from_fn(pick.len(), |i, _| e.theta[pick[i].0]),
+            cov: DMatrix::from_fn(pick.len(), pick.len(), |i, j| e.cov[(pick[i].0, pick[j].0)]),
+            parameter: pick.iter().map(|&(_, j)| j).collect(),
+        })
+        .collect();
+    let Some((common, chi2, dof)) = one_value(&observations, m) else {
         return Vec::new();
     };
-    let (mut chi2, mut observed) = (0.0, 0);
-    for (theta, w, map) in blocks.iter().flatten() {
-        let d = theta - map * &common;
-        chi2 += (d.transpose() * w * &d)[(0, 0)];
-        observed += theta.len();
-    }
-    let dof = observed - m;
     let threshold = levels.threshold(dof);
     if !(dof > 0 && chi2 > threshold) {
         return Vec::new();
@@ -630,5 +649,56 @@ pub(super) fn annotate(summary: &mut Vec<String>, partly: &[PartlyExplained]) {
             .position(|l| l.starts_with(&own))
             .map_or(summary.len(), |i| i + 1);
         summary.insert(at, format!("Partly explained: {} {}.", p.cause, p.verdict));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn observed(theta: &[f64], se: &[f64], parameter: &[usize]) -> Observed {
+        Observed {
+            theta: DVector::from_column_slice(theta),
+            cov: DMatrix::from_diagonal(&DVector::from_iterator(
+                se.len(),
+                se.iter().map(|s| s * s),
+            )),
+            parameter: parameter.to_vec(),
+        }
+    }
+
+    /// Two observations of one parameter: the inverse-variance weighted mean, and `χ²` on one
+    /// degree of freedom `(a − b)² / (σ_a² + σ_b²)`.
+    #[test]
+    fn one_parameter_is_the_weighted_mean_and_the_difference_over_its_variance() {
+        let (a, sa, b, sb) = (-2.87e-7, 1.4e-8, 2.0e-8, 1.7e-8);
+        let (common, chi2, dof) = one_value(
+            &[observed(&[a], &[sa], &[0]), observed(&[b], &[sb], &[0])],
+            1,
+        )
+        .expect("determined");
+        let (wa, wb) = (1.0 / (sa * sa), 1.0 / (sb * sb));
+        let mean = (wa * a + wb * b) / (wa + wb);
+        assert!((common[0] - mean).abs() < 1e-12 * mean.abs());
+        let want = (a - b).powi(2) / (sa * sa + sb * sb);
+        assert!((chi2 - want).abs() < 1e-9 * want, "{chi2} against {want}");
+        assert_eq!(dof, 1);
+    }
+
+    /// Observations that agree give `χ² = 0`; a parameter seen in one equation only adds no
+    /// degree of freedom and takes that equation's value.
+    #[test]
+    fn agreeing_observations_and_a_parameter_seen_once() {
+        let (common, chi2, dof) = one_value(
+            &[
+                observed(&[1.0, 5.0], &[0.1, 0.2], &[0, 1]),
+                observed(&[1.0], &[0.3], &[0]),
+            ],
+            2,
+        )
+        .expect("determined");
+        assert!((common[0] - 1.0).abs() < 1e-12 && (common[1] - 5.0).abs() < 1e-12);
+        assert!(chi2.abs() < 1e-20);
+        assert_eq!(dof, 1);
     }
 }
