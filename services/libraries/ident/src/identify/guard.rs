@@ -60,7 +60,8 @@ pub struct PartlyExplained {
     pub equation: String,
     /// Cross-validated residual sums of the equation (its unit squared): with the cause (and the
     /// terms the search found beside it), of the unrestricted search without it, and of the
-    /// cause with the remainder.
+    /// cause with the remainder. With `across` all three are the first: in one equation alone
+    /// the cause's columns and the remainder's span the same functions.
     pub cv_cause: f64,
     pub cv_search: f64,
     pub cv_with_remainder: f64,
