@@ -286,13 +286,11 @@ impl Design {
 
     /// Fit on all rows: θ in the columns' own units, cluster-robust standard errors.
     pub fn fit(&self, cols: &[usize]) -> Option<(Vec<f64>, Vec<f64>)> {
-        let (theta, cov) = self.sandwich(cols)?;
-        let p = cols.len();
-        let values = (0..p).map(|i| theta[i] / self.scale[cols[i]]).collect();
-        let se = (0..p)
-            .map(|i| cov[(i, i)].max(0.0).sqrt() / self.scale[cols[i]])
+        let (theta, cov) = self.fit_cov(cols)?;
+        let se = (0..cols.len())
+            .map(|i| cov[(i, i)].max(0.0).sqrt())
             .collect();
-        Some((values, se))
+        Some((theta.iter().copied().collect(), se))
     }
 
     /// Fit on all rows: θ and its cluster-robust covariance, both in the columns' own units.
@@ -306,14 +304,10 @@ impl Design {
         ))
     }
 
-    /// Correlation of columns `a` and `b` over all rows (uncentred: `⟨a, b⟩ / (|a| |b|)`), and
-    /// the least-squares factor `k` of `a ≈ k b` (own units).
-    pub fn proportion(&self, a: usize, b: usize) -> (f64, f64) {
+    /// Correlation of columns `a` and `b` over all rows (uncentred: `⟨a, b⟩ / (|a| |b|)`).
+    pub fn correlation(&self, a: usize, b: usize) -> f64 {
         let (g, _, _) = self.sums(&[a, b], Subset::All);
-        let corr = g[(0, 1)] / (g[(0, 0)] * g[(1, 1)]).sqrt().max(1e-300);
-        // The sums are of the equilibrated columns.
-        let k = g[(0, 1)] / g[(1, 1)].max(1e-300) * self.scale[a] / self.scale[b];
-        (corr, k)
+        g[(0, 1)] / (g[(0, 0)] * g[(1, 1)]).sqrt().max(1e-300)
     }
 
     /// Residual sum over all rows at the least-squares fit of `cols` (`None`: not determined).

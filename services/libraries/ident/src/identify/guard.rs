@@ -77,13 +77,21 @@ pub struct PartlyExplained {
     pub dof: usize,
     /// In words.
     pub verdict: String,
-    /// What raised the flag: `search` (the unrestricted search predicts better with a form of
-    /// another kind), `beside` (a term of another form is significant beside the cause, below
-    /// the search's 1 % bar) or `across` (the cause's values differ between its equations).
-    pub trigger: &'static str,
-    /// With `across`: the cause's values in the equations it shares (a torque cause acting
-    /// about several axes).
-    pub across: Option<AcrossEquations>,
+    /// What raised the flag.
+    pub trigger: Trigger,
+}
+
+/// The test that flagged a cause (in `report.json`, `trigger.test`).
+#[derive(Debug, Clone, Serialize)]
+#[serde(tag = "test", rename_all = "lowercase")]
+pub enum Trigger {
+    /// The unrestricted search predicts better with a form of another kind.
+    Search,
+    /// A term of another form is significant beside the cause, below the search's 1 % bar.
+    Beside,
+    /// The cause's values differ between the equations it acts in (a torque cause acting
+    /// about several axes): those values.
+    Across(AcrossEquations),
 }
 
 /// A torque cause's parameters fitted to each equation they are determined in alone (see
@@ -99,6 +107,8 @@ pub struct AcrossEquations {
     pub equations: Vec<(String, Vec<f64>, Vec<f64>)>,
     pub chi2: f64,
     pub dof: usize,
+    /// The selection's threshold for `dof`.
+    pub threshold: f64,
 }
 
 /// One equation of a cause's channel: the design with every named cause forced (`with`) and
@@ -139,6 +149,7 @@ pub(super) fn judge(
     let nf = base.len();
     base.extend(found.terms.iter().filter_map(|t| column(&t.name)));
     let rows = with.rows() as f64;
+    let rss_base = with.fit_rss(&base)?;
     // What the remainder may be. First the unrestricted search's functions of another form,
     // when that search predicts better held out (the selection's held-out likelihood ratio
     // above zero).
@@ -159,7 +170,6 @@ pub(super) fn judge(
     // test and still be below that bar.
     let beside = from_search.is_empty();
     let extra = if beside {
-        let rss_base = with.fit_rss(&base)?;
         (with.forced..with.names.len())
             .filter(|j| !base.contains(j) && !own.contains(&with.names[*j].as_str()))
             .filter_map(|j| {
@@ -183,7 +193,7 @@ pub(super) fn judge(
     // The remainder beside the cause: the selection's test of a cause beside those chosen
     // (likelihood ratio above its threshold on the fit data, better held out), with the
     // cluster-robust Wald statistic as in the falsification's joint test.
-    let (lr, threshold) = levels.joint(rows, with.fit_rss(&base)?, with.fit_rss(&cols)?, idx.len());
+    let (lr, threshold) = levels.joint(rows, rss_base, with.fit_rss(&cols)?, idx.len());
     let wald = with.wald(&cols, &idx)?;
     let cv_with_remainder = with.cv_rss(&cols)?;
     if !(lr > threshold && wald > threshold && cv_with_remainder < cv_cause) {
@@ -219,8 +229,11 @@ pub(super) fn judge(
             threshold,
             dof: idx.len(),
             verdict,
-            trigger: if beside { "beside" } else { "search" },
-            across: None,
+            trigger: if beside {
+                Trigger::Beside
+            } else {
+                Trigger::Search
+            },
         },
         remainder,
     ))
@@ -392,6 +405,7 @@ pub(super) fn across_equations(
             .collect(),
         chi2,
         dof,
+        threshold,
     };
     let values_text = across
         .equations
@@ -431,7 +445,7 @@ pub(super) fn across_equations(
             .map(|&f| {
                 (e.design.forced..e.design.names.len())
                     .filter(|j| !e.cols.contains(j))
-                    .map(|j| (j, e.design.proportion(f, j).0.abs()))
+                    .map(|j| (j, e.design.correlation(f, j).abs()))
                     .filter(|(_, r)| *r >= SAME_FORM)
                     .max_by(|x, y| x.1.total_cmp(&y.1))
                     .map(|(j, _)| j)
@@ -480,8 +494,7 @@ pub(super) fn across_equations(
                 threshold: threshold_here,
                 dof: idx.len(),
                 verdict,
-                trigger: "across",
-                across: Some(across.clone()),
+                trigger: Trigger::Across(across.clone()),
             },
             remainder,
         ));
@@ -610,9 +623,11 @@ pub(super) fn apply(
         .iter()
         .enumerate()
         .map(|(i, (f, _))| {
-            f.trigger != "beside"
+            !matches!(f.trigger, Trigger::Beside)
                 || !found.iter().enumerate().any(|(j, (g, _))| {
-                    j != i && g.equation == f.equation && (g.trigger != "beside" || j < i)
+                    j != i
+                        && g.equation == f.equation
+                        && (!matches!(g.trigger, Trigger::Beside) || j < i)
                 })
         })
         .collect();
@@ -629,7 +644,8 @@ pub(super) fn apply(
         {
             // A remainder across equations is relative to the cause's joint value: a refit
             // beside it would take it back into the cause.
-            torque_terms |= remainder.equation.starts_with("torque_") && flag.across.is_none();
+            torque_terms |= remainder.equation.starts_with("torque_")
+                && !matches!(flag.trigger, Trigger::Across(_));
             effects.retain(|e| e.equation != remainder.equation);
             effects.push(remainder);
         }

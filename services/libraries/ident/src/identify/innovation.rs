@@ -113,24 +113,28 @@ pub(super) struct SensorLinear {
     pub delta: Vec<Option<f64>>,
     /// Per column, per innovation-vector row.
     pub j: Vec<Vec<f64>>,
-    /// Per named cause without a neutral value (`earth_rate`): its part of each
+    /// With `earth_rate` named (the one cause without a neutral value): its part of each
     /// innovation-vector row, the innovations with it less those of a filter run without it.
-    pub part: Vec<(Cause, Vec<f64>)>,
+    pub earth_rate: Option<Vec<f64>>,
 }
 
 impl SensorLinear {
-    /// Column `j`'s cause's part of innovation-vector row `r`: its column times its change from
-    /// the neutral value, or, for a cause without one (a single column), its part from the run
-    /// without it.
-    pub fn removed(&self, j: usize, r: usize) -> f64 {
-        match self.delta[j] {
-            Some(d) => self.j[j][r] * d,
-            None => self
-                .part
-                .iter()
-                .find(|(c, _)| *c == self.cols[j].0)
-                .map_or(0.0, |(_, p)| p[r]),
+    /// `cause`'s part of each innovation-vector row: its columns times its change from the
+    /// neutral values, or, for a cause without them, its part from the run without it.
+    pub fn part_of(&self, cause: Cause) -> Option<Vec<f64>> {
+        if cause == Cause::EarthRate {
+            return self.earth_rate.clone();
         }
+        let put_back = (0..self.cols.len())
+            .filter(|&j| self.cols[j].0 == cause)
+            .map(|j| self.delta[j].map(|d| (j, d)))
+            .collect::<Option<Vec<(usize, f64)>>>()?;
+        let rows = self.j.first().map_or(0, Vec::len);
+        Some(
+            (0..rows)
+                .map(|r| put_back.iter().map(|&(j, d)| self.j[j][r] * d).sum())
+                .collect(),
+        )
     }
 
     pub fn new(problem: &Problem, fit: &SetFit, named: &[Cause]) -> Option<Self> {
@@ -175,13 +179,9 @@ impl SensorLinear {
                 offset += spec.len;
             }
         }
-        // A cause without a neutral value is switched off by a run without it.
-        let whole: Vec<Cause> = named
-            .iter()
-            .copied()
-            .filter(|&c| c == Cause::EarthRate)
-            .collect();
-        for _ in &whole {
+        // `earth_rate` has no neutral value: a run without it gives its part.
+        let earth_rate = named.contains(&Cause::EarthRate);
+        if earth_rate {
             let mut config = fit.config.clone();
             config.effects.earth_rate = None;
             configs.push(config);
@@ -200,16 +200,15 @@ impl SensorLinear {
             .zip(taken)
             .map(|(r, taken)| r.iter().zip(&r0).map(|(a, b)| (a - b) / taken).collect())
             .collect();
-        let part = whole
-            .into_iter()
-            .zip(off)
-            .map(|(cause, r)| (cause, r0.iter().zip(r).map(|(a, b)| a - b).collect()))
-            .collect();
+        // Only the run without `earth_rate` follows the steps.
+        let earth_rate = off
+            .first()
+            .map(|r| r0.iter().zip(r).map(|(a, b)| a - b).collect());
         Some(Self {
             cols,
             delta,
             j,
-            part,
+            earth_rate,
         })
     }
 }
@@ -257,32 +256,13 @@ pub(super) fn innovation_designs(
 ) -> Vec<(usize, Design)> {
     let data = problem.data;
     let s = &fit.state;
-    // The removed cause's part of each innovation-vector row: its columns times its change
-    // from the neutral values, or, for a cause without them, its part from a run without it.
+    // The removed cause's part of each innovation-vector row.
     let part: Option<Vec<f64>> = match (removed, linear) {
         (None, _) => None,
-        (Some(cause), Some(l)) => {
-            if let Some((_, p)) = l.part.iter().find(|(c, _)| *c == cause) {
-                Some(p.clone())
-            } else {
-                let cols: Vec<usize> = (0..l.cols.len())
-                    .filter(|&j| l.cols[j].0 == cause)
-                    .collect();
-                let Some(put_back) = cols
-                    .iter()
-                    .map(|&j| l.delta[j].map(|d| (j, d)))
-                    .collect::<Option<Vec<(usize, f64)>>>()
-                else {
-                    return Vec::new();
-                };
-                let rows = l.j.first().map_or(0, Vec::len);
-                Some(
-                    (0..rows)
-                        .map(|r| put_back.iter().map(|&(j, d)| l.j[j][r] * d).sum())
-                        .collect(),
-                )
-            }
-        }
+        (Some(cause), Some(l)) => match l.part_of(cause) {
+            Some(p) => Some(p),
+            None => return Vec::new(),
+        },
         (Some(_), None) => return Vec::new(),
     };
     let mut out = Vec::new();
@@ -419,7 +399,7 @@ pub(super) fn sensor_tests(
     // Normal equations of `y ≈ [J_used, U] β` over the rows `keep` accepts, y the innovation
     // with the causes in `removed` taken out to first order.
     let build = |used: &[usize],
-                 removed: &[usize],
+                 removed: Option<&[f64]>,
                  keep: &dyn Fn(usize) -> bool,
                  sign: f64,
                  extra: &[(usize, usize)]| {
@@ -430,10 +410,7 @@ pub(super) fn sensor_tests(
             if !keep(inn[i].tick) {
                 continue;
             }
-            let mut y = inn[i].values[c];
-            for &j in removed {
-                y -= lin.removed(j, r);
-            }
+            let y = inn[i].values[c] - removed.map_or(0.0, |p| p[r]);
             for (a, &j) in used.iter().enumerate() {
                 x[a] = lin.j[j][r];
             }
@@ -485,7 +462,7 @@ pub(super) fn sensor_tests(
             .filter_map(|j| block_cols.iter().position(|c| c == j))
             .collect();
         let per_block: Vec<Option<LsFit>> = (0..blocks)
-            .map(|b| build(&block_cols, &[], &|tick| block_of(tick) == b, -1.0, &extra).solve())
+            .map(|b| build(&block_cols, None, &|tick| block_of(tick) == b, -1.0, &extra).solve())
             .collect();
         let mut evidence = Evidence {
             consistency: consistency(&per_block, &block_idx, (t1 - t0) / blocks as f64),
@@ -497,13 +474,13 @@ pub(super) fn sensor_tests(
         {
             failures.add("consistency", falsified_text(c, alpha_consistency));
         }
-        let removable = idx.iter().all(|&j| lin.delta[j].is_some())
-            || lin.part.iter().any(|(c, _)| *c == cause);
-        if !extra.is_empty() && removable {
+        if !extra.is_empty()
+            && let Some(part) = lin.part_of(cause)
+        {
             let fit_rows = |tick: usize| !problem.held_out[tick];
             let others: Vec<usize> = all.iter().copied().filter(|j| !idx.contains(j)).collect();
-            let with = build(&all, &idx, &fit_rows, 1.0, &extra1).solve();
-            let without = rss_of(&build(&others, &idx, &fit_rows, 1.0, &extra1));
+            let with = build(&all, Some(&part), &fit_rows, 1.0, &extra1).solve();
+            let without = rss_of(&build(&others, Some(&part), &fit_rows, 1.0, &extra1));
             if let (Some(w), Some(wo)) = (with, without) {
                 let (lr, threshold) = levels.joint(w.n as f64, wo, w.rss, idx.len());
                 evidence.joint_lr = Some(lr);

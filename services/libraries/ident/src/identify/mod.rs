@@ -71,7 +71,7 @@ pub use colour::{
     WhitenessReport, torque_whiteness,
 };
 pub use falsify::{CauseTest, Consistency, Trend, Whiteness};
-pub use guard::PartlyExplained;
+pub use guard::{AcrossEquations, PartlyExplained, Trigger};
 pub use options::{Options, held_out_mask};
 pub use sensor::SensorCorrection;
 pub use unexplained::UnexplainedEffect;
