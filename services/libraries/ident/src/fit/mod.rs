@@ -543,6 +543,19 @@ impl<'a> Problem<'a> {
         })
     }
 
+    /// The torque channel's momentum residuals on the estimate `recon` (another filter run on
+    /// this problem's data), segmented as this problem's states, without regressors.
+    pub(crate) fn torque_residuals(&self, recon: &Reconstruction) -> TorqueChannel {
+        TorqueChannel::new(
+            self.data,
+            recon,
+            &self.base,
+            self.options.torque_segment_s,
+            &self.states.split,
+            Regressors::Skipped,
+        )
+    }
+
     /// Forget cached states and filter runs (memory) except the base's and those of `keep`.
     pub fn trim_cache(&self, keep: &[&ModelConfig]) {
         lock(&self.tangents).clear();

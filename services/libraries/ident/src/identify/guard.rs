@@ -39,7 +39,7 @@
 use super::Options;
 use super::falsify::Levels;
 use super::innovation::{
-    INNOVATION_LABELS, InnovationCandidates, SensorLinear, innovation_designs,
+    INNOVATION_LABELS, InnovationCandidates, SensorLinear, corrects_rates, innovation_designs,
 };
 use super::torque::{
     JointTorque, TorqueCandidates, joint_torque, own_form as torque_own_form, torque_designs,
@@ -50,7 +50,7 @@ use super::wheel::{WheelCandidates, own_form as wheel_own_form, wheel_designs, w
 use crate::effects::{Cause, Kind};
 use crate::fit::{Problem, SetFit};
 use crate::sparse::{Design, SparseOptions, SparseResult, determined_forced, result_for, search};
-use nalgebra::{DMatrix, DVector};
+use nalgebra::{DMatrix, DVector, Vector3};
 use serde::Serialize;
 
 /// A named cause that explains only part of an equation (see the module documentation).
@@ -92,6 +92,10 @@ pub enum Trigger {
     /// The cause's values differ between the equations it acts in (a torque cause acting
     /// about several axes): those values.
     Across(AcrossEquations),
+    /// A sensor cause's values that the dynamics (the torque equations, on the rates it
+    /// corrects) put elsewhere than the sensors do (the innovations, `innovations`): those
+    /// values.
+    Dynamics(AcrossEquations),
 }
 
 /// A torque cause's parameters fitted to each equation they are determined in alone (see
@@ -109,6 +113,62 @@ pub struct AcrossEquations {
     pub dof: usize,
     /// The selection's threshold for `dof`.
     pub threshold: f64,
+}
+
+impl AcrossEquations {
+    /// The values per equation in words (`torque_x: r_m[2] −2.870e-7 ± 1.4e-8; …`), the
+    /// parameters' names without `prefix` (the cause's).
+    fn values_text(&self, prefix: &str) -> String {
+        self.equations
+            .iter()
+            .map(|(name, value, se)| {
+                let v: Vec<String> = value
+                    .iter()
+                    .zip(se)
+                    .zip(&self.parameters)
+                    .filter(|((v, s), _)| v.is_finite() && s.is_finite())
+                    .map(|((v, s), p)| {
+                        format!("{} {v:+.3e} ± {s:.1e}", p.trim_start_matches(prefix))
+                    })
+                    .collect();
+                format!("{name}: {}", v.join(", "))
+            })
+            .collect::<Vec<_>>()
+            .join("; ")
+    }
+
+    /// The flag of `cause` on the remainder's equation raised by these values (`trigger`):
+    /// the remainder's cross-validated residual sum `cv` stands for all three sums, the χ²
+    /// for the likelihood ratio, with the remainder's Wald statistic, threshold and degrees
+    /// of freedom.
+    fn flag(
+        self,
+        cause: Cause,
+        remainder: UnexplainedEffect,
+        cv: f64,
+        (wald, threshold, dof): (f64, f64, usize),
+        verdict: String,
+        trigger: fn(AcrossEquations) -> Trigger,
+    ) -> (PartlyExplained, UnexplainedEffect) {
+        (
+            PartlyExplained {
+                cause: cause.name(),
+                equation: remainder.equation.clone(),
+                cv_cause: cv,
+                cv_search: cv,
+                cv_with_remainder: cv,
+                search_form: "none".to_string(),
+                remainder: remainder.proposed.clone(),
+                lr: self.chi2,
+                wald,
+                threshold,
+                dof,
+                verdict,
+                trigger: trigger(self),
+            },
+            remainder,
+        )
+    }
 }
 
 /// One equation of a cause's channel: the design with every named cause forced (`with`) and
@@ -407,21 +467,7 @@ pub(super) fn across_equations(
         dof,
         threshold,
     };
-    let values_text = across
-        .equations
-        .iter()
-        .map(|(name, value, se)| {
-            let v: Vec<String> = value
-                .iter()
-                .zip(se)
-                .zip(&parameters)
-                .filter(|((v, _), _)| v.is_finite())
-                .map(|((v, s), p)| format!("{} {v:+.2e} ± {s:.1e}", p.trim_start_matches(&prefix)))
-                .collect();
-            format!("{name}: {}", v.join(", "))
-        })
-        .collect::<Vec<_>>()
-        .join("; ");
+    let values_text = across.values_text(&prefix);
     let mut out = Vec::new();
     for (e, pick) in equations.iter().zip(&picks) {
         if pick.is_empty() {
@@ -480,23 +526,219 @@ pub(super) fn across_equations(
             "partly explains {}: its values differ between the equations it acts in (each fitted alone: {values_text}; χ² = {chi2:.1} on {dof} degrees of freedom, threshold {threshold:.1}), so one value does not explain them all; beside it remains {} (cluster-robust Wald statistic {wald:.1}, threshold {threshold_here:.1})",
             e.name, remainder.proposed
         );
-        out.push((
-            PartlyExplained {
-                cause: cause.name(),
-                equation: e.name.clone(),
-                cv_cause: cv,
-                cv_search: cv,
-                cv_with_remainder: cv,
-                search_form: "none".to_string(),
-                remainder: remainder.proposed.clone(),
-                lr: chi2,
-                wald,
-                threshold: threshold_here,
-                dof: idx.len(),
-                verdict,
-                trigger: Trigger::Across(across.clone()),
-            },
+        out.push(across.clone().flag(
+            cause,
             remainder,
+            cv,
+            (wald, threshold_here, idx.len()),
+            verdict,
+            Trigger::Across,
+        ));
+    }
+    out
+}
+
+/// Where `observations` see only some of the `m` parameters: those, and the observations
+/// with their parameters numbered among them.
+fn seen_only(observations: &[Observed], m: usize) -> (Vec<usize>, Vec<Observed>) {
+    let seen: Vec<usize> = (0..m)
+        .filter(|p| observations.iter().any(|o| o.parameter.contains(p)))
+        .collect();
+    let renumbered = observations
+        .iter()
+        .map(|o| Observed {
+            theta: o.theta.clone(),
+            cov: o.cov.clone(),
+            parameter: o
+                .parameter
+                .iter()
+                .map(|p| seen.iter().position(|q| q == p).unwrap_or(0))
+                .collect(),
+        })
+        .collect();
+    (seen, renumbered)
+}
+
+/// The torque designs with the given sensor columns forced (see [`across_channels`]).
+type TorqueWith<'a> = dyn Fn(&[(String, &[Vector3<f64>])]) -> Option<Vec<(usize, Design)>> + 'a;
+/// The innovation designs with a part of each innovation-vector row taken out and the cause's
+/// columns not forced.
+type InnovationsWithout<'a> = dyn Fn(&[f64]) -> Vec<(usize, Design)> + 'a;
+
+/// The guard across channels for a sensor cause: a sensor cause changes the estimated rates,
+/// and with them the torque equations' residuals (`SensorLinear::torque`). Its values are
+/// fitted to the innovations; if it is what it is said to be, the dynamics agree: fitted to
+/// each torque equation beside the named causes and the terms found there (cluster-robust
+/// covariances), its change from the fitted values is zero within the errors. An inclinometer
+/// turned about the vertical reads like a gyro triad turned the other way (the innovations see
+/// only the sensors' relative alignment), but the gyro's correction then turns the rates
+/// against the wheels and the inertia, which the torque equations see. The test: the changes
+/// per torque equation and the innovations' (zero, with the fit's standard errors) about one
+/// value, `χ²` (as [`across_equations`]) above the selection's threshold. The remainder: the
+/// cause held at the dynamics' value (the torque equations' changes combined), the innovations'
+/// search beside the other named causes (`innovations`: the designs with a part of each
+/// innovation-vector row taken out and the cause's columns not forced); each innovation
+/// equation where it finds terms whose cluster-robust Wald statistic passes the threshold is
+/// flagged with them. `torque`: the torque designs with the given columns forced.
+pub(super) fn across_channels(
+    cause: Cause,
+    fit: &SetFit,
+    linear: &SensorLinear,
+    (torque, innovations): (&TorqueWith, &InnovationsWithout),
+    sparse: &SparseOptions,
+    levels: &Levels,
+) -> Vec<(PartlyExplained, UnexplainedEffect)> {
+    let js: Vec<usize> = (0..linear.cols.len())
+        .filter(|&j| linear.cols[j].0 == cause)
+        .collect();
+    let Some(fitted) = fit.causes.iter().find(|f| f.cause == cause) else {
+        return Vec::new();
+    };
+    if js.is_empty()
+        || js
+            .iter()
+            .any(|&j| linear.torque.get(j).is_none_or(Vec::is_empty))
+    {
+        return Vec::new();
+    }
+    let m = js.len();
+    let parameters: Vec<String> = js.iter().map(|&j| linear.cols[j].2.clone()).collect();
+    let sensor: Vec<(String, &[Vector3<f64>])> = js
+        .iter()
+        .zip(&parameters)
+        .map(|(&j, name)| (name.clone(), &linear.torque[j][..]))
+        .collect();
+    let Some(designs) = torque(&sensor) else {
+        return Vec::new();
+    };
+    let value = |p: usize| fitted.values[linear.cols[js[p]].1];
+    let mut observations = Vec::new();
+    let mut equations = Vec::new();
+    for (axis, design) in &designs {
+        let found = search(design, sparse);
+        let mut cols = determined_forced(design);
+        let column = |name: &str| design.names.iter().position(|n| n == name);
+        cols.extend(found.terms.iter().filter_map(|t| column(&t.name)));
+        let pick: Vec<(usize, usize)> = cols
+            .iter()
+            .enumerate()
+            .filter_map(|(i, &c)| Some((i, parameters.iter().position(|p| *p == design.names[c])?)))
+            .collect();
+        if pick.is_empty() {
+            continue;
+        }
+        let Some((theta, cov)) = design.fit_cov(&cols) else {
+            continue;
+        };
+        let mut values = vec![f64::NAN; m];
+        let mut se = vec![f64::NAN; m];
+        for &(i, p) in &pick {
+            values[p] = value(p) + theta[i];
+            se[p] = cov[(i, i)].max(0.0).sqrt();
+        }
+        equations.push((torque_equation(*axis), values, se));
+        observations.push(Observed {
+            theta: DVector::from_fn(pick.len(), |k, _| theta[pick[k].0]),
+            cov: DMatrix::from_fn(pick.len(), pick.len(), |a, b| cov[(pick[a].0, pick[b].0)]),
+            parameter: pick.iter().map(|&(_, p)| p).collect(),
+        });
+    }
+    if observations.is_empty() {
+        return Vec::new();
+    }
+    let (seen, in_torque) = seen_only(&observations, m);
+    let Some((dynamics, _, _)) = one_value(&in_torque, seen.len()) else {
+        return Vec::new();
+    };
+    // The sensors: no change from the fitted values, with the fit's standard errors.
+    let stderr: Vec<(usize, f64)> = (0..m)
+        .map(|p| (p, fitted.stderr[linear.cols[js[p]].1]))
+        .filter(|(_, s)| s.is_finite() && *s > 0.0)
+        .collect();
+    if stderr.is_empty() {
+        return Vec::new();
+    }
+    equations.push((
+        "innovations".to_string(),
+        (0..m).map(value).collect(),
+        (0..m)
+            .map(|p| {
+                stderr
+                    .iter()
+                    .find(|(q, _)| *q == p)
+                    .map_or(f64::NAN, |s| s.1)
+            })
+            .collect(),
+    ));
+    observations.push(Observed {
+        theta: DVector::zeros(stderr.len()),
+        cov: DMatrix::from_diagonal(&DVector::from_iterator(
+            stderr.len(),
+            stderr.iter().map(|(_, s)| s * s),
+        )),
+        parameter: stderr.iter().map(|&(p, _)| p).collect(),
+    });
+    let (all, renumbered) = seen_only(&observations, m);
+    let Some((_, chi2, dof)) = one_value(&renumbered, all.len()) else {
+        return Vec::new();
+    };
+    let threshold = levels.threshold(dof);
+    if !(dof > 0 && chi2 > threshold) {
+        return Vec::new();
+    }
+    let mut change = vec![0.0; m];
+    for (k, &p) in seen.iter().enumerate() {
+        change[p] = dynamics[k];
+    }
+    // The cause held at the dynamics' value: the innovations there, `r + J Δ`, are the
+    // innovations less `−J Δ`.
+    let part: Vec<f64> = linear
+        .part_of_change(cause, &change)
+        .iter()
+        .map(|v| -v)
+        .collect();
+    let across = AcrossEquations {
+        parameters: parameters.clone(),
+        equations,
+        chi2,
+        dof,
+        threshold,
+    };
+    let values_text = across.values_text(&format!("{}.", cause.name()));
+    let mut out = Vec::new();
+    for (c, design) in innovations(&part) {
+        let found = search(&design, sparse);
+        if found.terms.is_empty() {
+            continue;
+        }
+        let mut cols = determined_forced(&design);
+        let nf = cols.len();
+        let column = |name: &str| design.names.iter().position(|n| n == name);
+        cols.extend(found.terms.iter().filter_map(|t| column(&t.name)));
+        let idx: Vec<usize> = (nf..cols.len()).collect();
+        let Some(wald) = design.wald(&cols, &idx) else {
+            continue;
+        };
+        let threshold_here = levels.threshold(idx.len());
+        if wald <= threshold_here {
+            continue;
+        }
+        let name = INNOVATION_LABELS[c].to_string();
+        let cv = found.cv_rss;
+        let Some(remainder) = effect(name.clone(), "1 (whitened)", found, &design) else {
+            continue;
+        };
+        let verdict = format!(
+            "partly explains {name}: the dynamics put its values elsewhere than the sensors do (the torque equations on the rates it corrects, each fitted beside the named causes, and the innovations: {values_text}; χ² = {chi2:.1} on {dof} degrees of freedom, threshold {threshold:.1}); held at the dynamics' values, the innovations keep {} (cluster-robust Wald statistic {wald:.1}, threshold {threshold_here:.1})",
+            remainder.proposed
+        );
+        out.push(across.clone().flag(
+            cause,
+            remainder,
+            cv,
+            (wald, threshold_here, idx.len()),
+            verdict,
+            Trigger::Dynamics,
         ));
     }
     out
@@ -530,7 +772,7 @@ pub(super) fn causes(
             };
             judge(cause, own, &eq, sparse, levels)
         };
-    let torque_with = torque_designs(problem, fit, named, torque, blocks, None, &[]);
+    let torque_with = torque_designs(problem, fit, named, torque, blocks, None, &[], &[]);
     let wheel_with = wheel_designs(problem, fit, named, wheel, blocks, None, &[]);
     let mut sensor_with = None;
     for &cause in named {
@@ -538,7 +780,7 @@ pub(super) fn causes(
             Kind::Torque => {
                 let (Some(with), Some(without)) = (
                     &torque_with,
-                    torque_designs(problem, fit, named, torque, blocks, Some(cause), &[]),
+                    torque_designs(problem, fit, named, torque, blocks, Some(cause), &[], &[]),
                 ) else {
                     continue;
                 };
@@ -564,16 +806,34 @@ pub(super) fn causes(
                 let Some((candidates, linear)) = sensor else {
                     continue;
                 };
-                let designs = |removed| {
+                let designs = |removed: Option<(Cause, &[f64])>| {
                     innovation_designs(problem, fit, (candidates, Some(linear)), blocks, removed)
                 };
                 let with = sensor_with.get_or_insert_with(|| designs(None));
-                for ((c, w), (_, wo)) in with.iter().zip(&designs(Some(cause))) {
+                let Some(part) = linear.part_of(cause) else {
+                    continue;
+                };
+                for ((c, w), (_, wo)) in with.iter().zip(&designs(Some((cause, &part)))) {
                     let name = INNOVATION_LABELS[*c].to_string();
                     // No candidate is a sensor cause's own form: its effect through the filter
                     // has none of their shapes exactly.
                     out.extend(guard(cause, &[], name, "1 (whitened)", w, wo));
                 }
+                if !corrects_rates(cause) {
+                    continue;
+                }
+                let torque_with = |sensor: &[(String, &[Vector3<f64>])]| {
+                    torque_designs(problem, fit, named, torque, blocks, None, &[], sensor)
+                };
+                let innovations_without = |part: &[f64]| designs(Some((cause, part)));
+                out.extend(across_channels(
+                    cause,
+                    fit,
+                    linear,
+                    (&torque_with, &innovations_without),
+                    sparse,
+                    levels,
+                ));
             }
         }
     }

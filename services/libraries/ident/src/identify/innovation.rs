@@ -9,6 +9,7 @@ use crate::fit::{Problem, SetFit};
 use crate::reconstruct::INNOVATION_LEN;
 use crate::sparse::{Design, Rows, SparseOptions, search};
 use crate::stats::{LsFit, NormalEquations};
+use nalgebra::Vector3;
 use testbed_model::attitude;
 
 /// Per filter innovation (all ticks, in the reconstruction's order): the sensor-channel
@@ -116,6 +117,11 @@ pub(super) struct SensorLinear {
     /// With `earth_rate` named (the one cause without a neutral value): its part of each
     /// innovation-vector row, the innovations with it less those of a filter run without it.
     pub earth_rate: Option<Vec<f64>>,
+    /// Per column of a cause that corrects the rate readings ([`corrects_rates`]; empty for
+    /// the others), per row of the torque channel: `−∂(momentum residual)/∂θ_j`, Nms per unit,
+    /// body axes, the sign of a torque cause's regressor. All empty when a run's torque channel
+    /// has other rows.
+    pub torque: Vec<Vec<Vector3<f64>>>,
 }
 
 impl SensorLinear {
@@ -125,16 +131,28 @@ impl SensorLinear {
         if cause == Cause::EarthRate {
             return self.earth_rate.clone();
         }
-        let put_back = (0..self.cols.len())
+        let change = (0..self.cols.len())
             .filter(|&j| self.cols[j].0 == cause)
-            .map(|j| self.delta[j].map(|d| (j, d)))
-            .collect::<Option<Vec<(usize, f64)>>>()?;
+            .map(|j| self.delta[j])
+            .collect::<Option<Vec<f64>>>()?;
+        Some(self.part_of_change(cause, &change))
+    }
+
+    /// The innovations' change, per innovation-vector row, when `cause`'s values change by
+    /// `change` (its parameters' order) from the fitted ones, to first order.
+    pub fn part_of_change(&self, cause: Cause, change: &[f64]) -> Vec<f64> {
+        let cols: Vec<usize> = (0..self.cols.len())
+            .filter(|&j| self.cols[j].0 == cause)
+            .collect();
         let rows = self.j.first().map_or(0, Vec::len);
-        Some(
-            (0..rows)
-                .map(|r| put_back.iter().map(|&(j, d)| self.j[j][r] * d).sum())
-                .collect(),
-        )
+        (0..rows)
+            .map(|r| {
+                cols.iter()
+                    .zip(change)
+                    .map(|(&j, d)| self.j[j][r] * d)
+                    .sum()
+            })
+            .collect()
     }
 
     pub fn new(problem: &Problem, fit: &SetFit, named: &[Cause]) -> Option<Self> {
@@ -197,20 +215,79 @@ impl SensorLinear {
         let (steps, off) = vectors.split_at(taken.len());
         let j = steps
             .iter()
-            .zip(taken)
+            .zip(&taken)
             .map(|(r, taken)| r.iter().zip(&r0).map(|(a, b)| (a - b) / taken).collect())
             .collect();
         // Only the run without `earth_rate` follows the steps.
         let earth_rate = off
             .first()
             .map(|r| r0.iter().zip(r).map(|(a, b)| a - b).collect());
+        let ch = &fit.state.torque;
+        let torque: Option<Vec<Vec<Vector3<f64>>>> = runs
+            .iter()
+            .zip(&taken)
+            .zip(&cols)
+            .map(|((run, taken), (cause, _, _))| {
+                if !corrects_rates(*cause) {
+                    return Some(Vec::new());
+                }
+                let stepped = problem.torque_residuals(run);
+                (stepped.ticks == ch.ticks).then(|| {
+                    let change: Vec<Vector3<f64>> = stepped
+                        .y
+                        .iter()
+                        .zip(&ch.y)
+                        .map(|(a, b)| (b - a) / *taken)
+                        .collect();
+                    without_own_noise(&change, &ch.segments)
+                })
+            })
+            .collect();
         Some(Self {
             cols,
             delta,
             j,
             earth_rate,
+            torque: torque.unwrap_or_default(),
         })
     }
+}
+
+/// The sensor causes that correct the rate readings, and so change the estimated rates the
+/// dynamics are checked on directly (the others move the estimated attitude, which the torque
+/// equations see only through terms of the attitude that the named causes and the search take
+/// up).
+pub(super) fn corrects_rates(cause: Cause) -> bool {
+    matches!(cause, Cause::GyroScale | Cause::GyroMisalignment)
+}
+
+/// Ticks on each side of a row that [`without_own_noise`] averages.
+const NEIGHBOURS: usize = 5;
+
+/// A sensor cause's change of the momentum residual per row, `column`, replaced by the mean of
+/// its neighbours in the segment (up to [`NEIGHBOURS`] on each side, the row itself left out).
+/// A gyro cause changes the corrected rates in proportion to the readings, their noise
+/// included, and the momentum residual holds that same noise: regressed on the raw change, the
+/// residual's noise would pull the cause's value towards undoing the readings (an
+/// errors-in-variables bias, the larger the less the axis turns). The neighbours' readings
+/// carry other noise, and the slow part of the change, which the dynamics can test, is kept.
+fn without_own_noise(
+    column: &[Vector3<f64>],
+    segments: &[std::ops::Range<usize>],
+) -> Vec<Vector3<f64>> {
+    let mut out = column.to_vec();
+    for seg in segments {
+        for r in seg.clone() {
+            let lo = r.saturating_sub(NEIGHBOURS).max(seg.start);
+            let hi = (r + NEIGHBOURS + 1).min(seg.end);
+            let n = hi - lo - 1;
+            if n > 0 {
+                let sum: Vector3<f64> = (lo..hi).filter(|&i| i != r).map(|i| column[i]).sum();
+                out[r] = sum / n as f64;
+            }
+        }
+    }
+    out
 }
 
 pub(super) fn search_innovations(
@@ -244,27 +321,21 @@ pub(super) fn search_innovations(
 
 /// The sensor channel's equations, one design per innovation component with enough rows: the
 /// named sensor causes' columns (their Jacobian rows of the component) forced, so their values
-/// re-adjust with any new term, then every candidate. With `removed` the innovations have that
-/// cause's fitted part put back to first order (`r − J_c Δθ_c`) and its columns are not forced
-/// (nothing when it has no neutral value). `(block_s, folds)`: the blocks and folds.
+/// re-adjust with any new term, then every candidate. With `removed`, a cause and a part of
+/// each innovation-vector row (its fitted part, [`SensorLinear::part_of`]), the innovations
+/// have that part taken out (`r − J_c Δθ_c` to first order) and the cause's columns are not
+/// forced. `(block_s, folds)`: the blocks and folds.
 pub(super) fn innovation_designs(
     problem: &Problem,
     fit: &SetFit,
     (candidates, linear): (&InnovationCandidates, Option<&SensorLinear>),
     (block_s, folds): (f64, usize),
-    removed: Option<Cause>,
+    removed: Option<(Cause, &[f64])>,
 ) -> Vec<(usize, Design)> {
     let data = problem.data;
     let s = &fit.state;
-    // The removed cause's part of each innovation-vector row.
-    let part: Option<Vec<f64>> = match (removed, linear) {
-        (None, _) => None,
-        (Some(cause), Some(l)) => match l.part_of(cause) {
-            Some(p) => Some(p),
-            None => return Vec::new(),
-        },
-        (Some(_), None) => return Vec::new(),
-    };
+    let part = removed.map(|(_, part)| part);
+    let removed = removed.map(|(cause, _)| cause);
     let mut out = Vec::new();
     for c in 0..INNOVATION_LEN {
         let rows: Vec<usize> = (0..s.recon.innovations.len())
@@ -300,7 +371,7 @@ pub(super) fn innovation_designs(
             .iter()
             .map(|&i| {
                 let r = candidates.row[i][c];
-                inn[i].values[c] - part.as_ref().map_or(0.0, |p| p[r])
+                inn[i].values[c] - part.map_or(0.0, |p| p[r])
             })
             .collect();
         // Clusters of a third of a block (never across a fit / held-out change).
@@ -503,4 +574,30 @@ pub(super) fn sensor_tests(
         }));
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A change that varies slowly is kept (a straight line is its neighbours' mean), and a
+    /// row's own value, its noise, is left out of it; segments are not crossed.
+    #[test]
+    fn a_row_is_the_mean_of_its_neighbours_in_its_segment() {
+        let line: Vec<Vector3<f64>> = (0..40).map(|i| Vector3::repeat(i as f64)).collect();
+        let segments = [0..20, 20..40];
+        let out = without_own_noise(&line, &segments);
+        for r in NEIGHBOURS..20 - NEIGHBOURS {
+            assert!((out[r] - line[r]).norm() < 1e-12, "row {r}: {}", out[r]);
+        }
+        // At a segment's start only the later rows of that segment count.
+        let first: f64 = (21..=20 + NEIGHBOURS).map(|i| i as f64).sum::<f64>() / NEIGHBOURS as f64;
+        assert!((out[20].x - first).abs() < 1e-12, "{}", out[20].x);
+        let mut spike = vec![Vector3::zeros(); 20];
+        spike[10] = Vector3::repeat(1.0);
+        let whole = std::slice::from_ref(&(0..20));
+        let out = without_own_noise(&spike, whole);
+        assert_eq!(out[10], Vector3::zeros());
+        assert!((out[9].x - 1.0 / (2 * NEIGHBOURS) as f64).abs() < 1e-12);
+    }
 }

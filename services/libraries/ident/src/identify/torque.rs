@@ -12,6 +12,7 @@ use crate::effects::{Cause, Kind};
 use crate::fit::{Problem, SetFit};
 use crate::sparse::{Design, Rows, SparseOptions};
 use crate::stats::{LsFit, NormalEquations};
+use nalgebra::Vector3;
 use std::cell::OnceCell;
 use testbed_model::attitude;
 
@@ -218,6 +219,7 @@ pub(super) fn search_torque(
         (block_s, options.folds),
         removed,
         excluded,
+        &[],
     ) else {
         return (Vec::new(), None);
     };
@@ -236,9 +238,12 @@ pub(super) fn torque_equation(axis: usize) -> String {
 }
 
 /// The torque search's equations, one design per body axis: the named causes' columns that act
-/// on it forced, then the candidates but those named in `excluded`; with `removed` the residual
-/// has that cause's fitted part put back (and its columns are not forced). `(block_s, folds)`:
-/// the clusters' blocks and the cross-validation's folds. `None` if the channel is too short.
+/// on it forced, then the columns `sensor` (a sensor cause's parameters through the estimated
+/// state, per row of the channel, forced too), then the candidates but those named in
+/// `excluded`; with `removed` the residual has that cause's fitted part put back (and its
+/// columns are not forced). `(block_s, folds)`: the clusters' blocks and the cross-validation's
+/// folds. `None` if the channel is too short.
+#[allow(clippy::too_many_arguments)]
 pub(super) fn torque_designs(
     problem: &Problem,
     fit: &SetFit,
@@ -247,6 +252,7 @@ pub(super) fn torque_designs(
     (block_s, folds): (f64, usize),
     removed: Option<Cause>,
     excluded: &[&str],
+    sensor: &[(String, &[Vector3<f64>])],
 ) -> Option<Vec<(usize, Design)>> {
     let data = problem.data;
     let ch = &fit.state.torque;
@@ -286,6 +292,7 @@ pub(super) fn torque_designs(
             .filter(|&c| ch.x.iter().any(|row| row[c][axis] != 0.0))
             .collect();
         let mut names: Vec<String> = forced.iter().map(|&c| column_name(c)).collect();
+        names.extend(sensor.iter().map(|(name, _)| name.clone()));
         names.extend(
             kept_candidates
                 .iter()
@@ -294,6 +301,7 @@ pub(super) fn torque_designs(
         let x: Vec<Vec<f64>> = (0..ch.len())
             .map(|r| {
                 let mut row: Vec<f64> = forced.iter().map(|&c| ch.x[r][c][axis]).collect();
+                row.extend(sensor.iter().map(|(_, column)| column[r][axis]));
                 row.extend(kept_candidates.iter().map(|&j| candidates.values[r][j]));
                 row
             })
@@ -308,7 +316,10 @@ pub(super) fn torque_designs(
             fold: &fold,
             held_out: &held,
         };
-        out.push((axis, Design::new(names, forced.len(), rows, folds)));
+        out.push((
+            axis,
+            Design::new(names, forced.len() + sensor.len(), rows, folds),
+        ));
     }
     Some(out)
 }

@@ -44,6 +44,8 @@ pub struct EffectsConfig {
     pub gauss_markov_torque: Option<GaussMarkovTorque>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub wheel_tilt_torque: Option<WheelTiltTorque>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub inclinometer_cross_axis: Option<InclinometerCrossAxis>,
     /// Thrust of each thruster times a factor (a worn nozzle, a wrong regulator pressure);
     /// acts only with `[thrusters]`.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -272,6 +274,18 @@ pub struct MagneticDisturbance {
 pub struct InclinometerBias {
     /// Offset added to the measured tilt `[θ, φ]` of body X and body Y, rad.
     pub offset_rad: [f64; 2],
+}
+
+/// Each inclinometer angle also reads a fraction of the other: `θ_meas = … + k_θ φ`,
+/// `φ_meas = … + k_φ θ` (the cross-axis sensitivity of a datasheet; a sensor turned about the
+/// vertical by δ has `k_θ = −k_φ ≈ δ`). Not in identification's library: the scale error
+/// `inclinometer_scale` can take the part of it that follows the angle's own.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct InclinometerCrossAxis {
+    /// `[k_θ, k_φ]`: the fraction of `φ` read in `θ` and of `θ` read in `φ`, dimensionless
+    /// (datasheets give up to a few percent).
+    pub coupling: [f64; 2],
 }
 
 /// The inclinometer's angles read scaled: `(1 + s) θ` (its gain calibration is off).

@@ -162,6 +162,16 @@ impl ModelConfig {
                 );
             }
         }
+        if let Some(x) = &e.inclinometer_cross_axis {
+            for (i, k) in x.coupling.iter().enumerate() {
+                v.within(
+                    &format!("effects.inclinometer_cross_axis.coupling[{i}]"),
+                    *k,
+                    -0.1,
+                    0.1,
+                );
+            }
+        }
         if let Some(x) = &e.com_drift {
             v.finite_all("effects.com_drift.rate_m_per_s", &x.rate_m_per_s);
         }

@@ -1,7 +1,8 @@
 //! The two-axis inclinometer (LE-30): `theta_meas = (1 + s_theta) theta + b_theta + eta_theta`,
 //! `phi_meas = (1 + s_phi) phi + b_phi + eta_phi`, angles as defined by
 //! [`crate::attitude::tilt_angles`]; `b` is `effects.inclinometer_bias` and `s`
-//! `effects.inclinometer_scale` (zero without them).
+//! `effects.inclinometer_scale` (zero without them); with `effects.inclinometer_cross_axis`
+//! each angle also reads `k` times the other.
 
 use super::{DeviceId, device_rng, saturate};
 use crate::attitude::{Attitude, tilt_angles};
@@ -37,6 +38,8 @@ pub struct Inclinometer {
     offset_rad: [f64; 2],
     /// Gain of each angle, `1 + s`.
     gain: [f64; 2],
+    /// Fraction of the other angle read in each, `k`.
+    cross: [f64; 2],
     range_rad: f64,
     rng: ChaCha8Rng,
 }
@@ -58,6 +61,11 @@ impl Inclinometer {
                 .inclinometer_scale
                 .as_ref()
                 .map_or([1.0; 2], |s| s.ppm.map(|p| 1.0 + p * 1e-6)),
+            cross: config
+                .effects
+                .inclinometer_cross_axis
+                .as_ref()
+                .map_or([0.0; 2], |c| c.coupling),
             range_rad: c.range_deg * DEG,
             rng: device_rng(seed, DeviceId::Inclinometer),
         }
@@ -77,7 +85,10 @@ impl Inclinometer {
         for i in 0..2 {
             let eta: f64 = self.rng.sample(StandardNormal);
             (tilt_rad[i], saturated[i]) = saturate(
-                self.gain[i] * truth[i] + self.offset_rad[i] + self.noise_rad[i] * eta,
+                self.gain[i] * truth[i]
+                    + self.cross[i] * truth[1 - i]
+                    + self.offset_rad[i]
+                    + self.noise_rad[i] * eta,
                 self.range_rad,
             );
         }
@@ -108,6 +119,23 @@ mod tests {
             let sigma = config.inclinometer.noise_deg[axis] * DEG;
             assert_white(&format!("inclinometer axis {axis}"), &xs, true_tilt, sigma);
         }
+    }
+
+    /// Each angle reads the other's times its coupling: at θ = 0.03, φ = −0.02 and couplings
+    /// `[0.01, −0.02]`, `θ + 0.01 φ` and `φ − 0.02 θ`.
+    #[test]
+    fn a_cross_axis_coupling_adds_the_other_angle() {
+        let mut config = ModelConfig::default();
+        config.inclinometer.noise_deg = [0.0; 2];
+        let coupling = [0.01, -0.02];
+        config.effects.inclinometer_cross_axis =
+            Some(crate::config::InclinometerCrossAxis { coupling });
+        let mut inc = Inclinometer::new(&config, 0);
+        let q = from_heading_pitch_roll(0.7, 0.03, -0.02);
+        let [theta, phi] = tilt_angles(&q);
+        let r = inc.sample(&q);
+        assert!((r.tilt_rad[0] - (theta + coupling[0] * phi)).abs() < 1e-15);
+        assert!((r.tilt_rad[1] - (phi + coupling[1] * theta)).abs() < 1e-15);
     }
 
     #[test]
