@@ -61,7 +61,8 @@ pub struct PartlyExplained {
     /// Cross-validated residual sums of the equation (its unit squared): with the cause (and the
     /// terms the search found beside it), of the unrestricted search without it, and of the
     /// cause with the remainder. With `across` all three are the first: in one equation alone
-    /// the cause's columns and the remainder's span the same functions.
+    /// the cause's columns and the remainder's span the same functions. With `dynamics` all
+    /// three are the search's with the cause held at the dynamics' values.
     pub cv_cause: f64,
     pub cv_search: f64,
     pub cv_with_remainder: f64,
@@ -69,8 +70,9 @@ pub struct PartlyExplained {
     pub search_form: String,
     /// The remainder beside the cause (`equation ≈ …`), also an unexplained effect.
     pub remainder: String,
-    /// The remainder's significance beside the cause: likelihood ratio, cluster-robust Wald
-    /// statistic, the selection's threshold for its degrees of freedom.
+    /// The remainder's significance beside the cause: likelihood ratio (with `across` and
+    /// `dynamics`, the χ² of the values' disagreement), cluster-robust Wald statistic, the
+    /// selection's threshold for its degrees of freedom.
     pub lr: f64,
     pub wald: f64,
     pub threshold: f64,
