@@ -28,7 +28,8 @@
 //!   cross-validated residual sum than the cause's.
 //!
 //! A torque cause that acts about several axes is also judged across them
-//! ([`across_equations`]).
+//! ([`across_equations`]), and a gyro cause against the dynamics, which check the rates it
+//! corrects ([`across_channels`]).
 //!
 //! When all hold the cause **partly explains** that equation: it stays named, flagged with the
 //! statistics ([`PartlyExplained`]), and the remainder is reported as an unexplained effect with
