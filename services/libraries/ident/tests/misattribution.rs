@@ -421,31 +421,39 @@ fn an_earth_rate_brought_in_by_a_field_error_is_dropped() {
 
 /// A sensor distortion a gyro cause stands in for: the inclinometer turned 5 mrad about the
 /// vertical (`[effects.inclinometer_cross_axis] coupling = [0.005, −0.005]`, each angle reading
-/// a fraction of the other), 600 s, seeds 81 and 82. The innovations see only the sensors'
-/// relative alignment, and a gyro triad turned −5 mrad about Z explains them: with the guard
-/// off `gyro_misalignment` is named (its Z angle −5.02e-3 ± 6.6e-5 rad) and no flag raised. But
-/// its correction then turns the estimated rates against the wheels and the inertia: fitted to
-/// the torque equations the Z angle is zero (seed 81: −7e-5 ± 2.7e-4 rad about X, 2.0e-4 ±
-/// 2.8e-4 about Y; χ² 669 on 9 degrees of freedom against 94). With the guard on the cause is
-/// flagged on both tilt innovations, and held at the dynamics' values the innovations keep the
-/// turned inclinometer's form: `w_x` in `innovation_tilt_1`, `w_y` in `innovation_tilt_2` (Wald
-/// 2297 and 2145 against 27.6). Checked: the Z angle in the torque equations about X and Y
-/// within 3 standard errors of 0 (the gyros are aligned), the innovations' within 3 of −5e-3.
-/// Seeds 81–86: flagged on all six.
+/// a fraction of the other), 600 s, seeds 81 and 82, and beside the constant torque (seed 81).
+/// The innovations see only the sensors' relative alignment, and a gyro triad turned −5 mrad
+/// about Z explains them: with the guard off `gyro_misalignment` is named (its Z angle
+/// −5.02e-3 ± 6.6e-5 rad) and no flag raised. But its correction then turns the estimated
+/// rates against the wheels and the inertia: fitted to the torque equations the Z angle is zero
+/// (seed 81: −7e-5 ± 2.7e-4 rad about X, 2.0e-4 ± 2.8e-4 about Y; χ² 669 on 9 degrees of
+/// freedom against 94). With the guard on the cause is flagged on both tilt innovations, and
+/// held at the dynamics' values the innovations keep the turned inclinometer's form: `w_x` in
+/// `innovation_tilt_1`, `w_y` in `innovation_tilt_2` (Wald 2297 and 2145 against 27.6).
+/// Checked: the Z angle in the torque equations about X and Y within 3 standard errors of 0
+/// (the gyros are aligned), the innovations' within 3 of −5e-3, and beside it the constant
+/// torque named with its values within 3 standard errors. Seeds 81–86 alone: flagged on all
+/// six.
 #[test]
 fn a_gyro_misalignment_standing_in_for_a_turned_inclinometer_partly_explains_it() {
-    let t = truth("[effects.inclinometer_cross_axis]\ncoupling = [0.005, -0.005]\n");
-    for seed in [81, 82] {
-        let label = format!("inclinometer turned 5 mrad, seed {seed}");
+    const TURNED: &str = "[effects.inclinometer_cross_axis]\ncoupling = [0.005, -0.005]\n";
+    let beside = format!("{TURNED}{CONSTANT_XY}");
+    for (effects, seed, named) in [
+        (TURNED, 81, &["gyro_misalignment"][..]),
+        (TURNED, 82, &["gyro_misalignment"][..]),
+        (&beside, 81, &["constant_torque", "gyro_misalignment"][..]),
+    ] {
+        let t = truth(effects);
+        let label = format!("inclinometer turned 5 mrad, {named:?}, seed {seed}");
         let data = experiment_data(&t, seed, 600.0);
         let before = identify_with(&data, false);
         print(&format!("{label}, guard off"), &before);
-        assert_eq!(names(&before), ["gyro_misalignment"], "{label}");
+        assert_eq!(names(&before), named, "{label}");
         assert!(before.report.partly_explained.is_empty(), "{label}");
         let id = identify_with(&data, true);
         print(&label, &id);
         let r = &id.report;
-        assert_eq!(names(&id), ["gyro_misalignment"], "{label}");
+        assert_eq!(names(&id), named, "{label}");
         for (equation, rate) in [("innovation_tilt_1", "w_x"), ("innovation_tilt_2", "w_y")] {
             let flag = r
                 .partly_explained
@@ -484,6 +492,18 @@ fn a_gyro_misalignment_standing_in_for_a_turned_inclinometer_partly_explains_it(
                 "{label}: {}",
                 remainder.proposed
             );
+        }
+        if let Some(constant) = r.causes.iter().find(|c| c.name == "constant_torque") {
+            let at = |map: &serde_json::Map<String, serde_json::Value>, i: usize| {
+                map["torque_nm"][i].as_f64().expect("a number")
+            };
+            for (i, truth) in [1.5e-3, -1.0e-3, 0.0].into_iter().enumerate() {
+                let (v, se) = (at(&constant.parameters, i), at(&constant.stderr, i));
+                assert!(
+                    (v - truth).abs() <= 3.0 * se,
+                    "{label}: axis {i}: {v} ± {se}"
+                );
+            }
         }
         assert!(r.remaining.residual_remains, "{label}");
     }

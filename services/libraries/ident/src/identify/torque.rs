@@ -545,18 +545,22 @@ pub(super) fn torque_tests(
         // Beside each unexplained effect its offset: a constant part of the cause on that axis
         // cannot be told apart from it. A named constant torque's column on such an axis is
         // that offset: in the constant torque's own test it is replaced by the offset (tested
-        // are its other axes), in the others' it stands for it (adding the offset again would
-        // make the model singular).
-        let effect_axes: Vec<usize> = extra.iter().map(|e| e.0).collect();
+        // are its other axes) where the effect's terms take up much of a constant (a heading
+        // torque's mean over the experiment's headings), in the others' it stands for it
+        // (adding the offset again would make the model singular). Where they take up little
+        // of it (rates, their derivatives), the constant is no part of the effect and is
+        // tested there.
         let cols_test: Vec<(Option<Cause>, usize)> = cols
             .iter()
             .copied()
             .filter(|&(c, col)| {
                 !(cause == Cause::ConstantTorque
                     && c == Some(cause)
-                    && effect_axes
-                        .iter()
-                        .any(|&a| ch.x.iter().any(|row| row[col][a] != 0.0)))
+                    && (0..3).any(|a| {
+                        ch.x.iter().any(|row| row[col][a] != 0.0)
+                            && share_of_constant(ch, candidates, (col, a), &extra)
+                                >= CONSTANT_IN_EFFECT
+                    }))
             })
             .collect();
         let idx_test: Vec<usize> = (0..cols_test.len())
@@ -690,6 +694,42 @@ fn joint_fit(
         ));
     }
     Some(JointTorque { delta })
+}
+
+/// Share of a constant torque's column above which the unexplained terms on its axis are
+/// taken to hold a constant part of their own (the constant is then not tested on that axis
+/// beside them; see [`torque_tests`]).
+const CONSTANT_IN_EFFECT: f64 = 0.5;
+
+/// The share of the torque column `col` on `axis` (a constant torque's: a ramp in each
+/// segment) that the unexplained terms of `extra` on that axis take up, over all rows: `R²` of
+/// the column regressed on them; 0 without terms there.
+fn share_of_constant(
+    ch: &TorqueChannel,
+    candidates: &TorqueCandidates,
+    (col, axis): (usize, usize),
+    extra: &[(usize, usize)],
+) -> f64 {
+    let terms: Vec<usize> = extra.iter().filter(|e| e.0 == axis).map(|e| e.1).collect();
+    if terms.is_empty() {
+        return 0.0;
+    }
+    let mut ne = NormalEquations::new(terms.len());
+    let mut total = 0.0;
+    let mut row = vec![0.0; terms.len()];
+    for (r, x) in ch.x.iter().enumerate() {
+        let y = x[col][axis];
+        for (v, &j) in row.iter_mut().zip(&terms) {
+            *v = candidates.values[r][j];
+        }
+        ne.add(&row, y);
+        total += y * y;
+    }
+    match ne.solve() {
+        Some(fit) if total > 0.0 => (1.0 - fit.rss / total).clamp(0.0, 1.0),
+        // Terms the rows do not determine take up all of it.
+        _ => 1.0,
+    }
 }
 
 /// The unexplained terms `extra` with each one's axis offset (`1`) added, except on an axis
