@@ -9,7 +9,7 @@
 mod common;
 use common::*;
 use testbed_ident::Options;
-use testbed_ident::identify::{Identification, Report, Trigger};
+use testbed_ident::identify::{Identification, PartlyExplained, Report, Trigger};
 use testbed_model::config::GAUSS;
 
 /// A constant torque about X and Y (a library cause, truly acting).
@@ -39,6 +39,19 @@ fn misattributed(label: &str, data: &testbed_ident::Dataset, named: &[&str]) {
     assert!(before.report.unexplained.is_empty(), "{label}");
     assert!(!before.report.remaining.residual_remains, "{label}");
     assert!(before.report.partly_explained.is_empty(), "{label}");
+}
+
+/// The flag of `cause` on `equation`.
+fn flag_on<'a>(label: &str, r: &'a Report, cause: &str, equation: &str) -> &'a PartlyExplained {
+    r.partly_explained
+        .iter()
+        .find(|p| p.cause == cause && p.equation == equation)
+        .unwrap_or_else(|| {
+            panic!(
+                "{label}: {cause} not flagged on {equation}: {:?}",
+                r.partly_explained
+            )
+        })
 }
 
 /// The remainder's term `function` in `equation`, within 3 standard errors of `truth`.
@@ -282,11 +295,7 @@ fn a_centre_of_mass_offset_standing_in_for_a_torque_about_one_tilt_axis_partly_e
             ),
             ("torque_y", 0.0, "sin tilt_x", -weight_n * r_z),
         ] {
-            let flag = r
-                .partly_explained
-                .iter()
-                .find(|p| p.cause == "com_offset" && p.equation == equation)
-                .unwrap_or_else(|| panic!("{label}, {equation}: {:?}", r.partly_explained));
+            let flag = flag_on(&label, r, "com_offset", equation);
             println!("    {flag:?}");
             assert!(flag.wald > flag.threshold, "{flag:?}");
             let Trigger::Across(across) = &flag.trigger else {
@@ -455,11 +464,7 @@ fn a_gyro_misalignment_standing_in_for_a_turned_inclinometer_partly_explains_it(
         let r = &id.report;
         assert_eq!(names(&id), named, "{label}");
         for (equation, rate) in [("innovation_tilt_1", "w_x"), ("innovation_tilt_2", "w_y")] {
-            let flag = r
-                .partly_explained
-                .iter()
-                .find(|p| p.cause == "gyro_misalignment" && p.equation == equation)
-                .unwrap_or_else(|| panic!("{label}: not flagged on {equation}"));
+            let flag = flag_on(&label, r, "gyro_misalignment", equation);
             let Trigger::Dynamics(values) = &flag.trigger else {
                 panic!("{label}: {:?}", flag.trigger);
             };

@@ -38,6 +38,7 @@
 //! cause is then one test of a given form.
 
 use super::Options;
+use super::equations::Candidates;
 use super::falsify::Levels;
 use super::innovation::{
     INNOVATION_LABELS, InnovationCandidates, SensorLinear, corrects_rates, innovation_designs,
@@ -311,10 +312,17 @@ struct Observed {
 }
 
 /// One value of each of `m` parameters from independent observations of them (generalised least
-/// squares), and the disagreement: `χ² = Σ (θ − μ)ᵀ C⁻¹ (θ − μ)` on (observed values − `m`)
-/// degrees of freedom. `None` if a covariance or the combined information is singular.
+/// squares), and the disagreement: `χ² = Σ (θ − μ)ᵀ C⁻¹ (θ − μ)` on (observed values − seen
+/// parameters) degrees of freedom. A parameter no observation sees takes 0. `None` if a
+/// covariance or the combined information is singular.
 fn one_value(observations: &[Observed], m: usize) -> Option<(DVector<f64>, f64, usize)> {
+    let unseen: Vec<usize> = (0..m)
+        .filter(|p| !observations.iter().any(|o| o.parameter.contains(p)))
+        .collect();
     let mut information = DMatrix::<f64>::zeros(m, m);
+    for &p in &unseen {
+        information[(p, p)] = 1.0;
+    }
     let mut weighted = DVector::<f64>::zeros(m);
     let mut blocks = Vec::with_capacity(observations.len());
     for o in observations {
@@ -333,7 +341,7 @@ fn one_value(observations: &[Observed], m: usize) -> Option<(DVector<f64>, f64, 
         chi2 += (d.transpose() * w * &d)[(0, 0)];
     }
     let observed: usize = observations.iter().map(|o| o.theta.len()).sum();
-    Some((common, chi2, observed.saturating_sub(m)))
+    Some((common, chi2, observed.saturating_sub(m - unseen.len())))
 }
 
 /// Smallest correlation at which a candidate function is taken as a cause's column's form in
@@ -541,27 +549,6 @@ pub(super) fn across_equations(
     out
 }
 
-/// Where `observations` see only some of the `m` parameters: those, and the observations
-/// with their parameters numbered among them.
-fn seen_only(observations: &[Observed], m: usize) -> (Vec<usize>, Vec<Observed>) {
-    let seen: Vec<usize> = (0..m)
-        .filter(|p| observations.iter().any(|o| o.parameter.contains(p)))
-        .collect();
-    let renumbered = observations
-        .iter()
-        .map(|o| Observed {
-            theta: o.theta.clone(),
-            cov: o.cov.clone(),
-            parameter: o
-                .parameter
-                .iter()
-                .map(|p| seen.iter().position(|q| q == p).unwrap_or(0))
-                .collect(),
-        })
-        .collect();
-    (seen, renumbered)
-}
-
 /// The torque designs with the given sensor columns forced (see [`across_channels`]).
 type TorqueWith<'a> = dyn Fn(&[(String, &[Vector3<f64>])]) -> Option<Vec<(usize, Design)>> + 'a;
 /// The innovation designs with a part of each innovation-vector row taken out and the cause's
@@ -649,54 +636,44 @@ pub(super) fn across_channels(
     if observations.is_empty() {
         return Vec::new();
     }
-    let (seen, in_torque) = seen_only(&observations, m);
-    let Some((dynamics, _, _)) = one_value(&in_torque, seen.len()) else {
+    // The dynamics' values: the torque equations' changes combined (0 where they see none).
+    let Some((dynamics, _, _)) = one_value(&observations, m) else {
         return Vec::new();
     };
     // The sensors: no change from the fitted values, with the fit's standard errors.
-    let stderr: Vec<(usize, f64)> = (0..m)
-        .map(|p| (p, fitted.stderr[linear.cols[js[p]].1]))
-        .filter(|(_, s)| s.is_finite() && *s > 0.0)
+    let se: Vec<f64> = (0..m)
+        .map(|p| fitted.stderr[linear.cols[js[p]].1])
+        .map(|s| {
+            if s.is_finite() && s > 0.0 {
+                s
+            } else {
+                f64::NAN
+            }
+        })
         .collect();
-    if stderr.is_empty() {
+    let known: Vec<usize> = (0..m).filter(|&p| se[p].is_finite()).collect();
+    if known.is_empty() {
         return Vec::new();
     }
-    equations.push((
-        "innovations".to_string(),
-        (0..m).map(value).collect(),
-        (0..m)
-            .map(|p| {
-                stderr
-                    .iter()
-                    .find(|(q, _)| *q == p)
-                    .map_or(f64::NAN, |s| s.1)
-            })
-            .collect(),
-    ));
     observations.push(Observed {
-        theta: DVector::zeros(stderr.len()),
-        cov: DMatrix::from_diagonal(&DVector::from_iterator(
-            stderr.len(),
-            stderr.iter().map(|(_, s)| s * s),
-        )),
-        parameter: stderr.iter().map(|&(p, _)| p).collect(),
+        theta: DVector::zeros(known.len()),
+        cov: DMatrix::from_fn(known.len(), known.len(), |a, b| {
+            if a == b { se[known[a]].powi(2) } else { 0.0 }
+        }),
+        parameter: known,
     });
-    let (all, renumbered) = seen_only(&observations, m);
-    let Some((_, chi2, dof)) = one_value(&renumbered, all.len()) else {
+    equations.push(("innovations".to_string(), (0..m).map(value).collect(), se));
+    let Some((_, chi2, dof)) = one_value(&observations, m) else {
         return Vec::new();
     };
     let threshold = levels.threshold(dof);
     if !(dof > 0 && chi2 > threshold) {
         return Vec::new();
     }
-    let mut change = vec![0.0; m];
-    for (k, &p) in seen.iter().enumerate() {
-        change[p] = dynamics[k];
-    }
     // The cause held at the dynamics' value: the innovations there, `r + J Δ`, are the
     // innovations less `−J Δ`.
     let part: Vec<f64> = linear
-        .part_of_change(cause, &change)
+        .part_of_change(cause, dynamics.as_slice())
         .iter()
         .map(|v| -v)
         .collect();
@@ -843,14 +820,14 @@ pub(super) fn causes(
     out
 }
 
-/// The guard on the fit `fit` of the named causes `named` after their falsification: each
-/// cause flagged, its remainder put among the unexplained `effects` (in place of an effect the
-/// search found in that equation, whose terms it includes; one per equation), and the joint
-/// fit of the torque causes redone beside the new torque terms.
+/// The guard on the fit `fit` of the named causes `named` after their falsification, on the
+/// candidates and sensor linearisation its last round built (`candidates`): each cause
+/// flagged, its remainder put among the unexplained `effects` (in place of an effect the search
+/// found in that equation, whose terms it includes; one per equation), and the joint fit of the
+/// torque causes redone beside the new torque terms.
 pub(super) fn apply(
     problem: &Problem,
-    fit: &SetFit,
-    named: &[Cause],
+    (fit, named, candidates): (&SetFit, &[Cause], &Candidates),
     (options, n_fit): (&Options, f64),
     effects: &mut Vec<UnexplainedEffect>,
     joint: &mut Option<JointTorque>,
@@ -859,23 +836,15 @@ pub(super) fn apply(
         return Vec::new();
     }
     let levels = Levels::new(options, n_fit);
-    let torque = TorqueCandidates::new(problem, fit);
-    let wheel = WheelCandidates::new(problem, fit);
-    // The sensor causes' linearisation costs a filter run per parameter: only when one is named.
-    let linear = named
-        .iter()
-        .any(|c| c.kind() == Kind::Sensor)
-        .then(|| SensorLinear::new(problem, fit, named))
-        .flatten();
-    let innovation = linear
+    let sensor = candidates
+        .linear
         .as_ref()
-        .map(|_| InnovationCandidates::new(problem, fit));
-    let sensor = innovation.as_ref().zip(linear.as_ref());
+        .map(|linear| (&candidates.innovation, linear));
     let found = causes(
         problem,
         fit,
         named,
-        (&torque, &wheel, sensor),
+        (&candidates.torque, &candidates.wheel, sensor),
         (options.block_s, &options.sparse),
         &levels,
     );
@@ -915,7 +884,7 @@ pub(super) fn apply(
         out.push(flag);
     }
     if torque_terms {
-        *joint = joint_torque(problem, fit, named, effects, &torque);
+        *joint = joint_torque(problem, fit, named, effects, &candidates.torque);
     }
     out
 }
@@ -979,6 +948,22 @@ mod tests {
         .expect("determined");
         assert!((common[0] - 1.0).abs() < 1e-12 && (common[1] - 5.0).abs() < 1e-12);
         assert!(chi2.abs() < 1e-20);
+        assert_eq!(dof, 1);
+    }
+
+    /// A parameter no observation sees takes 0 and adds no degree of freedom; the others are
+    /// as without it.
+    #[test]
+    fn a_parameter_not_seen_takes_zero() {
+        let (a, sa, b, sb) = (2.0, 0.5, 3.0, 0.5);
+        let (common, chi2, dof) = one_value(
+            &[observed(&[a], &[sa], &[1]), observed(&[b], &[sb], &[1])],
+            3,
+        )
+        .expect("determined");
+        assert_eq!((common[0], common[2]), (0.0, 0.0));
+        assert!((common[1] - 2.5).abs() < 1e-12, "{common}");
+        assert!((chi2 - 2.0).abs() < 1e-12, "{chi2}");
         assert_eq!(dof, 1);
     }
 }

@@ -255,9 +255,9 @@ fn identify_pass(
             &candidates,
             &falsify::Levels::new(options, n_fit),
         );
-        (effects, tests, joint)
+        (effects, tests, joint, candidates)
     };
-    let (mut effects, mut tests, mut joint) = analyse(&current, &named);
+    let (mut effects, mut tests, mut joint, mut candidates) = analyse(&current, &named);
     let mut cause_tests: Vec<CauseTest> = Vec::new();
     let mut sensor_dropped = false;
     for _ in 0..=options.max_causes {
@@ -282,7 +282,7 @@ fn identify_pass(
             sensor_dropped = true;
         }
         current = problem.fit(&named, &warm)?;
-        (effects, tests, joint) = analyse(&current, &named);
+        (effects, tests, joint, candidates) = analyse(&current, &named);
     }
     cause_tests.extend(tests.iter().cloned());
     // A named cause that the unrestricted search explains better in one of its equations
@@ -290,8 +290,7 @@ fn identify_pass(
     let partly = if options.misattribution_guard {
         guard::apply(
             &problem,
-            &current,
-            &named,
+            (&current, &named, &candidates),
             (options, n_fit),
             &mut effects,
             &mut joint,
