@@ -15,6 +15,7 @@
 //! | `inertia_error` | `fraction` — relative error of each principal moment |
 //! | `gyro_scale` | `ppm` — scale-factor error per gyro, parts per million |
 //! | `gyro_misalignment` | `angles_rad` — small rotation of the gyro triad, rad |
+//! | `gyro_delay` | `delay_s` — the gyros read the rate this long before their time stamps, s |
 //! | `wheel_friction` | `coulomb_pos_nm`, `coulomb_neg_nm`, `viscous_nm_per_rad_s`, `stribeck_nm`, `stribeck_speed_rad_s` per wheel |
 //! | `wheel_torque_scale` | `scale` — delivered / commanded motor torque per wheel |
 //! | `actuator_delay` | `delay_s` — s |
@@ -42,9 +43,9 @@
 use serde::Serialize;
 use testbed_model::ModelConfig;
 use testbed_model::config::{
-    ActuatorDelay, AeroDrag, ComDrift, ComOffset, ConstantTorque, EarthRate, GyroMisalignment,
-    GyroScale, InclinometerBias, InclinometerScale, InertiaError, MagneticDisturbance, SoftIron,
-    WheelFriction, WheelTorqueScale,
+    ActuatorDelay, AeroDrag, ComDrift, ComOffset, ConstantTorque, EarthRate, GYRO_DELAY_MAX_S,
+    GyroDelay, GyroMisalignment, GyroScale, InclinometerBias, InclinometerScale, InertiaError,
+    MagneticDisturbance, SoftIron, WheelFriction, WheelTorqueScale,
 };
 use testbed_model::thruster_config::{THRUSTER_COUNT, ThrusterConfig, ThrusterTorqueScale};
 
@@ -60,6 +61,7 @@ pub enum Cause {
     InertiaError,
     GyroScale,
     GyroMisalignment,
+    GyroDelay,
     WheelFriction,
     WheelTorqueScale,
     ActuatorDelay,
@@ -167,6 +169,7 @@ const P_MISALIGN: &[ParamSpec] = &[spec(
     0.1,
     1e-4,
 )];
+const P_GYRO_DELAY: &[ParamSpec] = &[spec("delay_s", 1, "s", 0.0, GYRO_DELAY_MAX_S, 0.01)];
 const P_FRICTION: &[ParamSpec] = &[
     spec("coulomb_pos_nm", 3, "Nm, per wheel", 0.0, INF, 1e-4),
     spec("coulomb_neg_nm", 3, "Nm, per wheel", 0.0, INF, 1e-4),
@@ -268,7 +271,7 @@ pub fn soft_iron_matrix(values: &[f64]) -> [[f64; 3]; 3] {
 
 impl Cause {
     /// Every cause, in the library's order.
-    pub const ALL: [Cause; 17] = [
+    pub const ALL: [Cause; 18] = [
         Cause::ComOffset,
         Cause::ComDrift,
         Cause::EarthRate,
@@ -277,6 +280,7 @@ impl Cause {
         Cause::InertiaError,
         Cause::GyroScale,
         Cause::GyroMisalignment,
+        Cause::GyroDelay,
         Cause::WheelFriction,
         Cause::WheelTorqueScale,
         Cause::ActuatorDelay,
@@ -299,6 +303,7 @@ impl Cause {
             Cause::InertiaError => "inertia_error",
             Cause::GyroScale => "gyro_scale",
             Cause::GyroMisalignment => "gyro_misalignment",
+            Cause::GyroDelay => "gyro_delay",
             Cause::WheelFriction => "wheel_friction",
             Cause::WheelTorqueScale => "wheel_torque_scale",
             Cause::ActuatorDelay => "actuator_delay",
@@ -334,6 +339,10 @@ impl Cause {
             Cause::InertiaError => "principal moments of inertia differ from the nominal",
             Cause::GyroScale => "gyro scale-factor error per axis",
             Cause::GyroMisalignment => "gyro triad misaligned by a small rotation",
+            Cause::GyroDelay => {
+                "the gyros read the rate a delay before their time stamps (latency, stamped on \
+                 arrival)"
+            }
             Cause::WheelFriction => {
                 "wheel friction beyond eq. 3: per-wheel levels, direction asymmetry, Stribeck"
             }
@@ -364,6 +373,7 @@ impl Cause {
             Cause::EarthRate
             | Cause::GyroScale
             | Cause::GyroMisalignment
+            | Cause::GyroDelay
             | Cause::MagneticDisturbance
             | Cause::SoftIron
             | Cause::InclinometerBias
@@ -395,6 +405,7 @@ impl Cause {
             Cause::InertiaError => P_INERTIA,
             Cause::GyroScale => P_SCALE,
             Cause::GyroMisalignment => P_MISALIGN,
+            Cause::GyroDelay => P_GYRO_DELAY,
             Cause::WheelFriction => P_FRICTION,
             Cause::WheelTorqueScale => P_TSCALE,
             Cause::ActuatorDelay => P_DELAY,
@@ -456,6 +467,7 @@ impl Cause {
             Cause::InertiaError => e.inertia_error.is_some(),
             Cause::GyroScale => e.gyro_scale.is_some(),
             Cause::GyroMisalignment => e.gyro_misalignment.is_some(),
+            Cause::GyroDelay => e.gyro_delay.is_some(),
             Cause::WheelFriction => e.wheel_friction.is_some(),
             Cause::WheelTorqueScale => e.wheel_torque_scale.is_some(),
             Cause::ActuatorDelay => e.actuator_delay.is_some(),
@@ -518,6 +530,7 @@ impl Cause {
                 .as_ref()
                 .map_or([0.0; 3], |x| x.angles_rad)
                 .to_vec(),
+            Cause::GyroDelay => vec![e.gyro_delay.as_ref().map_or(0.0, |x| x.delay_s)],
             Cause::WheelFriction => {
                 let f = e
                     .wheel_friction
@@ -612,6 +625,7 @@ impl Cause {
             Cause::GyroMisalignment => {
                 e.gyro_misalignment = Some(GyroMisalignment { angles_rad: a3(0) })
             }
+            Cause::GyroDelay => e.gyro_delay = Some(GyroDelay { delay_s: v[0] }),
             Cause::WheelFriction => {
                 e.wheel_friction = Some(WheelFriction {
                     coulomb_pos_nm: a3(0),

@@ -291,13 +291,11 @@ pub fn predict(
         let mut residuals: WindowResiduals = Default::default();
         let mut attitudes: Vec<Attitude> = Vec::with_capacity(k1 - k0 + 1);
         // A window whose plant refuses a command or a step is left out.
+        let mut rates: Vec<Vector3<f64>> = Vec::with_capacity(k1 - k0 + 1);
         for k in k0..=k1 {
             let s = plant.state();
             attitudes.push(s.q);
-            let gyro = sensors.gyro_reading(&s.rate_b, &s.q, &bias);
-            for c in 0..3 {
-                residuals[c].push((data.t[k], data.gyro[k][c] - gyro[c]));
-            }
+            rates.push(s.rate_b);
             if let Some(speeds) = &data.wheel_speed {
                 for c in 0..3 {
                     residuals[8 + c].push((data.t[k], speeds[k][c] - s.wheel_speed[c]));
@@ -312,6 +310,23 @@ pub fn predict(
                     plant.command_thrusters(&thrust).ok()?;
                 }
                 plant.step(&command, dt).ok()?;
+            }
+        }
+        // A delayed gyro reads the rate of `gyro_delay_s` before (the window's first before it).
+        for (i, k) in (k0..=k1).enumerate() {
+            let at = data.t[k] - sensors.gyro_delay_s;
+            let j = data.t[k0..=k].partition_point(|t| *t <= at);
+            let rate = match j {
+                0 => rates[0],
+                j if j > i => rates[i],
+                j => {
+                    let (ta, tb) = (data.t[k0 + j - 1], data.t[k0 + j]);
+                    rates[j - 1] + (rates[j] - rates[j - 1]) * ((at - ta) / (tb - ta))
+                }
+            };
+            let gyro = sensors.gyro_reading(&rate, &attitudes[i], &bias);
+            for c in 0..3 {
+                residuals[c].push((data.t[k], data.gyro[k][c] - gyro[c]));
             }
         }
         // Vector samples inside the window, at the nearest tick.

@@ -29,6 +29,9 @@ pub struct SensorModel {
     pub gyro_matrix: Matrix3<f64>,
     /// Its inverse.
     pub gyro_matrix_inv: Matrix3<f64>,
+    /// The gyros' delay, s: a reading is of the rate this long before its time stamp (zero
+    /// without `gyro_delay`).
+    pub gyro_delay_s: f64,
     /// Earth's rotation in the level frame, rad/s (zero without `earth_rate`).
     pub earth_rate_l: Vector3<f64>,
     /// Hard-iron field, body axes, tesla (zero without `magnetic_disturbance`).
@@ -69,6 +72,7 @@ impl SensorModel {
         Self {
             gyro_matrix,
             gyro_matrix_inv: gyro_matrix.try_inverse().unwrap_or_else(Matrix3::identity),
+            gyro_delay_s: e.gyro_delay.as_ref().map_or(0.0, |d| d.delay_s),
             earth_rate_l,
             hard_iron_t: e
                 .magnetic_disturbance
@@ -91,6 +95,27 @@ impl SensorModel {
                 e.fitted_field.as_ref(),
                 &config.platform.field_l_t(),
             ),
+        }
+    }
+
+    /// The gyro reading of the rate at tick `k`: the one stamped [`Self::gyro_delay_s`] later,
+    /// interpolated linearly between the rows around that time (the last row's at the record's
+    /// end).
+    pub fn gyro_of_tick(&self, data: &Aligned, k: usize) -> Vector3<f64> {
+        if self.gyro_delay_s == 0.0 {
+            return data.gyro[k];
+        }
+        let at = data.t[k] + self.gyro_delay_s;
+        let mut j = k;
+        while j + 1 < data.t.len() && data.t[j + 1] <= at {
+            j += 1;
+        }
+        match data.t.get(j + 1) {
+            Some(&t1) => {
+                let f = (at - data.t[j]) / (t1 - data.t[j]);
+                data.gyro[j] + (data.gyro[j + 1] - data.gyro[j]) * f
+            }
+            None => data.gyro[j],
         }
     }
 
@@ -272,9 +297,9 @@ fn run(
     for k in 0..n {
         let tk = data.t[k];
         let q_now = mekf.as_ref().map_or(q_prior, Mekf::attitude);
-        let w = sensors.correct_gyro(&data.gyro[k], &q_now);
+        let w = sensors.correct_gyro(&sensors.gyro_of_tick(data, k), &q_now);
         if let Some(t) = tangent.as_deref_mut() {
-            t.gyro(&data.gyro[k], &q_now, &w);
+            t.gyro(data, k, &q_now, &w);
         }
         let mean = previous.map_or(w, |p| 0.5 * (p + w));
         previous = Some(w);
@@ -426,7 +451,7 @@ fn run(
         for k in 0..out.start {
             out.q[k] = q0;
             out.bias[k] = b0;
-            out.rate[k] = sensors.correct_gyro(&data.gyro[k], &q0) - b0;
+            out.rate[k] = sensors.correct_gyro(&sensors.gyro_of_tick(data, k), &q0) - b0;
         }
     }
     Ok(out)

@@ -18,6 +18,7 @@
 //! (any sensor cause, exactly as the filter run would see it). Against finite differences of
 //! whole filter runs: `tangent::tests` and `tests/sensitivities.rs`.
 
+use crate::data::Aligned;
 use crate::reconstruct::{INNOVATION_LEN, SensorModel};
 use nalgebra::{SMatrix, Vector3, Vector6};
 use testbed_flight::mekf::{Block, UpdateLinearisation, VectorMeasurements, transition_matrix};
@@ -74,10 +75,11 @@ impl Tangent {
         self.state.iter_mut().for_each(|x| *x = Vector6::zeros());
     }
 
-    /// A tick's gyro reading, corrected by the run's model to `corrected` at attitude `q`.
-    pub fn gyro(&mut self, reading: &Vector3<f64>, q: &Attitude, corrected: &Vector3<f64>) {
+    /// Tick `k`'s gyro reading, corrected by the run's model to `corrected` at attitude `q`.
+    pub fn gyro(&mut self, data: &Aligned, k: usize, q: &Attitude, corrected: &Vector3<f64>) {
         for (j, (model, step)) in self.models.iter().enumerate() {
-            self.current[j] = (model.correct_gyro(reading, q) - corrected) / *step;
+            let reading = model.gyro_of_tick(data, k);
+            self.current[j] = (model.correct_gyro(&reading, q) - corrected) / *step;
         }
         let previous = self.previous.get_or_insert_with(|| self.current.clone());
         for j in 0..self.models.len() {

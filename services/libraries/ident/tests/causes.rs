@@ -196,6 +196,59 @@ fn gyro_misalignment() {
     }
 }
 
+#[test]
+fn gyro_delay() {
+    // 50 ms: the gyros' output filter and a serial link, stamped on arrival.
+    let truth = truth("[effects.gyro_delay]\ndelay_s = 0.05\n");
+    for seed in SEEDS {
+        let id = identify_blind(&truth, seed, 600.0);
+        // Within 3 ms (about 3.5 standard errors on 600 s).
+        check_single(
+            &format!("gyro_delay seed {seed}"),
+            &truth,
+            Cause::GyroDelay,
+            &id,
+            1.2,
+            |_, _| 3e-3,
+        );
+    }
+}
+
+/// A gyro delay stands in for an inertia error when the library has no delay (its rates lag the
+/// wheels' momentum, as a larger inertia's would): beside a true inertia error, and beside an
+/// actuator delay, both are named, each value within 4 standard errors and within 3 ms (the
+/// gyro delay), 2 ms (the actuator delay) or 0.02 (the inertia's fractions, and its products in
+/// kg m², which these manoeuvres barely excite).
+#[test]
+fn a_gyro_delay_beside_an_inertia_error_or_an_actuator_delay_names_both() {
+    let delay = "[effects.gyro_delay]\ndelay_s = 0.05\n";
+    for (other, cause, abs, seed) in [
+        (
+            "[effects.inertia_error]\nfraction = [0.03, -0.02, 0.01]\n",
+            Cause::InertiaError,
+            0.02,
+            21,
+        ),
+        (
+            "[effects.actuator_delay]\ndelay_s = 0.15\n",
+            Cause::ActuatorDelay,
+            2e-3,
+            22,
+        ),
+    ] {
+        let truth = truth(&format!("{delay}{other}"));
+        let id = identify_blind(&truth, seed, 600.0);
+        let label = format!("gyro_delay beside {}, seed {seed}", cause.name());
+        let mut found = names(&id);
+        found.sort();
+        let mut want = vec!["gyro_delay", cause.name()];
+        want.sort();
+        assert_eq!(found, want, "{label}: {:?}", id.report.steps);
+        check_within(&label, &id, &truth, Cause::GyroDelay, 4.0, 3e-3);
+        check_within(&label, &id, &truth, cause, 4.0, abs);
+    }
+}
+
 /// A true wheel cause passes its competing-explanation test: the test ran (the wheel search
 /// without the cause and its own form) and the cause was kept.
 fn competitor_kept(label: &str, id: &testbed_ident::identify::Identification, cause: Cause) {

@@ -19,6 +19,8 @@ pub struct EffectsConfig {
     pub inertia_error: Option<InertiaError>,
     pub gyro_scale: Option<GyroScale>,
     pub gyro_misalignment: Option<GyroMisalignment>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub gyro_delay: Option<GyroDelay>,
     pub wheel_friction: Option<WheelFriction>,
     pub wheel_torque_scale: Option<WheelTorqueScale>,
     pub actuator_delay: Option<ActuatorDelay>,
@@ -224,6 +226,19 @@ pub struct GyroMisalignment {
     /// Small rotation angles of the triad about body X, Y, Z, rad (typical 0.1–1 mrad).
     pub angles_rad: [f64; 3],
 }
+
+/// The gyros' readings are of the rate `delay_s` earlier than their time stamps: the latency of
+/// their sampling, filtering and transport when a reading is stamped on arrival.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GyroDelay {
+    /// Delay, s (0 to [`GYRO_DELAY_MAX_S`]).
+    pub delay_s: f64,
+}
+
+/// The longest gyro delay a configuration accepts, s: five periods of the paper's 10-Hz gyros,
+/// far beyond a device's latency; a longer one is a clock error, not a delay.
+pub const GYRO_DELAY_MAX_S: f64 = 0.5;
 
 /// Wheel friction beyond eq. 3, per wheel: direction asymmetry and Stribeck effect.
 /// `T_f(n) = (T_c(dir) + (T_s − T_c(dir)) exp(−(n/n_s)²)) sign(n) + K n`.

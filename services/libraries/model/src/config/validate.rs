@@ -1,7 +1,7 @@
 //! [`ModelConfig::validate`]: what no physical platform can have, refused with the key and the
 //! value.
 
-use super::{ConfigError, ModelConfig};
+use super::{ConfigError, GYRO_DELAY_MAX_S, ModelConfig};
 use crate::devices::fitted_field::FieldFunction;
 use crate::physics::fitted_torque::{TorqueFunction, axis_index};
 use crate::physics::fitted_wheel_torque::WheelFunction;
@@ -115,6 +115,14 @@ impl ModelConfig {
                     0.1,
                 );
             }
+        }
+        if let Some(x) = &e.gyro_delay {
+            v.within(
+                "effects.gyro_delay.delay_s",
+                x.delay_s,
+                0.0,
+                GYRO_DELAY_MAX_S,
+            );
         }
         if let Some(x) = &e.wheel_friction {
             v.non_negative_all("effects.wheel_friction.coulomb_pos_nm", &x.coulomb_pos_nm);

@@ -8,6 +8,7 @@ use nalgebra::{Matrix3, Vector3};
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::StandardNormal;
+use std::collections::VecDeque;
 
 /// One reading of the gyro triad.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -29,6 +30,11 @@ pub struct GyroReading {
 /// 3. `b` and white sample noise `sigma_v / sqrt(Δt) N(0, 1)` are added;
 /// 4. the result is clamped to the range and quantised to the resolution.
 ///
+/// With `effects.gyro_delay` the sensed rate of step 2 is the one `delay_s` before the sample:
+/// interpolated linearly between the rates of the samples around that time (the rate a sample
+/// is read with is exact; between samples the platform's rate is close to linear, its torque
+/// being held over a period), the first sample's before it.
+///
 /// The configured initial bias is the paper's Table I, which already contains the Earth's rate
 /// seen at the lab; enabling `effects.earth_rate` on top counts it twice unless the bias is
 /// reconfigured.
@@ -44,6 +50,12 @@ pub struct Gyro {
     earth_rate_l: Vector3<f64>,
     /// `(I + diag(s)) (I − [m×])`: identity unless scale or misalignment effects are on.
     sensor_matrix: Matrix3<f64>,
+    /// `effects.gyro_delay`, s (zero without it).
+    delay_s: f64,
+    /// With a delay: the sensed rates of the latest samples and their time since the first,
+    /// back to the one at or before `delay_s` ago.
+    history: VecDeque<(f64, Vector3<f64>)>,
+    elapsed_s: f64,
     rng: ChaCha8Rng,
 }
 
@@ -81,6 +93,9 @@ impl Gyro {
             range_rad_s: g.range_deg_s * DEG,
             earth_rate_l,
             sensor_matrix: scale * misalignment,
+            delay_s: effects.gyro_delay.as_ref().map_or(0.0, |d| d.delay_s),
+            history: VecDeque::new(),
+            elapsed_s: 0.0,
             rng: device_rng(seed, DeviceId::Gyro),
         }
     }
@@ -130,7 +145,7 @@ impl Gyro {
         let walk = self.normal3() * dt_s.sqrt();
         let white = self.normal3() / dt_s.sqrt();
         self.bias_rad_s += self.bias_walk_rad_s32.component_mul(&walk);
-        let inertial = rate_b + q * self.earth_rate_l;
+        let inertial = self.delayed(dt_s, rate_b + q * self.earth_rate_l);
         let analog = self.sensor_matrix * inertial
             + self.bias_rad_s
             + self.noise_density_rad_sqrt_s.component_mul(&white);
@@ -144,6 +159,27 @@ impl Gyro {
         GyroReading {
             rate_rad_s,
             saturated,
+        }
+    }
+
+    /// The sensed rate `delay_s` before this sample, whose rate is `now`, `dt_s` after the
+    /// previous sample.
+    fn delayed(&mut self, dt_s: f64, now: Vector3<f64>) -> Vector3<f64> {
+        if self.delay_s == 0.0 {
+            return now;
+        }
+        self.elapsed_s += dt_s;
+        self.history.push_back((self.elapsed_s, now));
+        let at = self.elapsed_s - self.delay_s;
+        while self.history.len() > 1 && self.history[1].0 <= at {
+            self.history.pop_front();
+        }
+        match (self.history.front(), self.history.get(1)) {
+            (Some(&(t0, w0)), Some(&(t1, w1))) if at > t0 => {
+                w0 + (w1 - w0) * ((at - t0) / (t1 - t0))
+            }
+            (Some(&(_, w0)), _) => w0,
+            (None, _) => now,
         }
     }
 
@@ -167,6 +203,25 @@ mod tests {
         config.gyro.bias_walk_deg_s32 = [0.0; 3];
         config.gyro.resolution_deg_s = 0.0;
         config
+    }
+
+    /// A delayed gyro on a rate ramp reads the ramp `delay_s` earlier: exact for a linear
+    /// rate, between samples too; before the delay has passed, the first sample's rate.
+    #[test]
+    fn a_delayed_gyro_reads_the_rate_of_delay_earlier() {
+        let mut config = quiet_config();
+        config.effects.gyro_delay = Some(crate::config::GyroDelay { delay_s: 0.25 });
+        let mut gyro = Gyro::new(&config, 1);
+        let ramp = |t: f64| Vector3::new(0.01 * t, -0.02 * t, 0.003);
+        for k in 1..=20 {
+            let t = 0.1 * k as f64;
+            let read = gyro.sample(&Attitude::identity(), &ramp(t)).rate_rad_s;
+            let expected = ramp((t - 0.25).max(0.1));
+            assert!(
+                (read - expected).norm() < 1e-15,
+                "t {t}: {read} against {expected}"
+            );
+        }
     }
 
     #[test]
