@@ -115,6 +115,11 @@ fn detection_power_table_for_a_20_minute_experiment() {
             "150 ms × scale",
         ),
         (
+            Cause::GyroDelay,
+            Box::new(|s| format!("[effects.gyro_delay]\ndelay_s = {}\n", 0.05 * s)),
+            "50 ms × scale",
+        ),
+        (
             Cause::GyroScale,
             Box::new(|s| {
                 format!(
