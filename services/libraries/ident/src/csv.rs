@@ -264,7 +264,7 @@ pub fn read_records<R: Record>(
                 Some(line) => DataError::Row {
                     file: file.to_path_buf(),
                     row: rows.len() + 1,
-                    line,
+                    line: Some(line),
                     message: e.to_string(),
                 },
                 None => io_error(e),
@@ -280,7 +280,7 @@ pub fn read_records<R: Record>(
         let at = |message: String| DataError::Row {
             file: file.to_path_buf(),
             row,
-            line,
+            line: Some(line),
             message,
         };
         if record.len() != headers.len() {
@@ -333,7 +333,7 @@ pub fn read_records<R: Record>(
         return Err(DataError::Row {
             file: file.to_path_buf(),
             row: rows.len(),
-            line: text.split('\n').count(),
+            line: Some(text.split('\n').count()),
             message: format!(
                 "column `{column}`: `{value}` ends the file without a newline: the file looks \
                  cut while being written (a cut number still parses); if the row is complete, \

@@ -18,6 +18,7 @@ use crate::csv::{
     CmgRecord, FieldRecord, GyroRecord, Records, ThrusterRecord, TiltRecord, WheelRecord, columns,
 };
 use crate::error::DataError;
+use ipc_types::topic;
 use nalgebra::{Vector3, Vector4};
 use std::path::PathBuf;
 use testbed_model::thruster_config::THRUSTER_COUNT;
@@ -85,11 +86,22 @@ pub struct ThrusterRow {
     pub on_time_s: [f64; THRUSTER_COUNT],
 }
 
+/// Where a record's rows came from, for messages.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Origin {
+    /// A directory of the CSV files of [`files`]: a device's rows are a file's lines.
+    #[default]
+    CsvDirectory,
+    /// A run log: a device's rows are a topic's samples.
+    RunLog,
+}
+
 /// A measured record. An empty series means the device was absent.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct Dataset {
     /// Where the data came from (for messages).
     pub source: PathBuf,
+    pub origin: Origin,
     pub gyro: Vec<GyroRow>,
     pub inclinometer: Vec<TiltRow>,
     pub magnetometer: Vec<FieldRow>,
@@ -116,6 +128,7 @@ impl From<Records> for Dataset {
     fn from(r: Records) -> Self {
         Self {
             source: r.dir,
+            origin: Origin::CsvDirectory,
             gyro: r
                 .gyro
                 .iter()
@@ -285,8 +298,28 @@ impl Dataset {
         ]
     }
 
+    /// Where the rows of the CSV file `name` are, for messages: that file, or the run log's
+    /// topic they were read from.
     fn file(&self, name: &str) -> PathBuf {
-        self.source.join(name)
+        match self.origin {
+            Origin::CsvDirectory => self.source.join(name),
+            Origin::RunLog => {
+                let topic = match name {
+                    files::GYRO => topic::GYRO,
+                    files::INCLINOMETER => topic::INCLINOMETER,
+                    files::MAGNETOMETER => topic::MAGNETOMETER,
+                    files::WHEELS => topic::WHEEL_TELEMETRY,
+                    files::CMG => topic::CMG_TELEMETRY,
+                    _ => topic::THRUSTER_STATUS,
+                };
+                PathBuf::from(format!("{}, topic {topic}", self.source.display()))
+            }
+        }
+    }
+
+    /// The line of the first row in a file (after the header), none in a run log.
+    fn first_line(&self) -> Option<usize> {
+        (self.origin == Origin::CsvDirectory).then_some(2)
     }
 
     /// Check what identification needs: [`Dataset::check_rows`] and
@@ -302,24 +335,28 @@ impl Dataset {
     pub fn check_rows(&self) -> Result<(), DataError> {
         check_series(
             &self.file(files::GYRO),
+            self.first_line(),
             &self.gyro,
             |r| (r.t_s, r.rate_rad_s.as_slice().to_vec()),
             columns::GYRO,
         )?;
         check_series(
             &self.file(files::INCLINOMETER),
+            self.first_line(),
             &self.inclinometer,
             |r| (r.t_s, r.tilt_rad.to_vec()),
             columns::INCLINOMETER,
         )?;
         check_series(
             &self.file(files::MAGNETOMETER),
+            self.first_line(),
             &self.magnetometer,
             |r| (r.t_s, r.field_t.as_slice().to_vec()),
             columns::MAGNETOMETER,
         )?;
         check_series(
             &self.file(files::WHEELS),
+            self.first_line(),
             &self.wheels,
             |r| {
                 (
@@ -335,6 +372,7 @@ impl Dataset {
         )?;
         check_series(
             &self.file(files::CMG),
+            self.first_line(),
             &self.cmg,
             |r| {
                 (
@@ -350,6 +388,7 @@ impl Dataset {
         )?;
         check_series(
             &self.file(files::THRUSTERS),
+            self.first_line(),
             &self.thrusters,
             |r| (r.t_s, r.on_time_s.to_vec()),
             columns::THRUSTERS,
@@ -364,7 +403,7 @@ impl Dataset {
             return Err(DataError::Row {
                 file: self.file(files::THRUSTERS),
                 row: i + 1,
-                line: i + 2,
+                line: self.first_line().map(|l| l + i),
                 message: format!(
                     "column `{}`: on-time {x} s is negative",
                     columns::THRUSTERS[j + 1]
@@ -414,8 +453,15 @@ impl Dataset {
                         file: self.file(name),
                         message: format!(
                             "covers {a:.3}..{b:.3} s, which overlaps the gyro's {t0:.3}..{t1:.3} s by only \
-                             {:.1} s (the files must share one clock)",
-                            overlap.max(0.0)
+                             {:.1} s ({})",
+                            overlap.max(0.0),
+                            match self.origin {
+                                Origin::CsvDirectory => "the files must share one clock",
+                                Origin::RunLog => {
+                                    "its valid samples must cover half the gyro's record; samples \
+                                     not flagged valid, such as readings beyond the range, are left out"
+                                }
+                            }
                         ),
                     });
                 }
@@ -444,6 +490,7 @@ pub fn median_period(times: impl Iterator<Item = f64>) -> f64 {
 
 fn check_series<R>(
     file: &std::path::Path,
+    first_line: Option<usize>,
     rows: &[R],
     values: impl Fn(&R) -> (f64, Vec<f64>),
     columns: &[&str],
@@ -456,7 +503,7 @@ fn check_series<R>(
         let at = |message: String| DataError::Row {
             file: file.to_path_buf(),
             row: i + 1,
-            line: i + 2,
+            line: first_line.map(|l| l + i),
             message,
         };
         if !t.is_finite() {
@@ -724,6 +771,53 @@ where
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Errors in data read from a run log name the log and the topic, and no line; from a
+    /// directory, the file and the line.
+    #[test]
+    fn errors_name_the_topic_of_a_run_log_and_the_line_of_a_file() {
+        let gyro = |t_s: f64| GyroRow {
+            t_s,
+            rate_rad_s: Vector3::zeros(),
+        };
+        let tilt = |t_s: f64| TiltRow {
+            t_s,
+            tilt_rad: [0.0; 2],
+        };
+        let mut data = Dataset {
+            source: PathBuf::from("run.mcap"),
+            origin: Origin::RunLog,
+            gyro: (0..700).map(|k| gyro(0.1 * k as f64)).collect(),
+            inclinometer: (0..50).map(|k| tilt(0.4 * k as f64)).collect(),
+            ..Dataset::default()
+        };
+        let message = data.check().expect_err("coverage").to_string();
+        assert!(
+            message.starts_with(
+                "run.mcap, topic testbed/sensors/inclinometer: covers 0.000..19.600 s"
+            ),
+            "{message}"
+        );
+        data.inclinometer = (0..100).map(|k| tilt(0.4 * (k % 50) as f64)).collect();
+        let message = data.check().expect_err("times").to_string();
+        assert!(
+            message.starts_with(
+                "run.mcap, topic testbed/sensors/inclinometer, row 51: time 0 s is not after"
+            ),
+            "{message}"
+        );
+        data.source = PathBuf::from("dir");
+        data.origin = Origin::CsvDirectory;
+        let message = data.check().expect_err("times").to_string();
+        let file = PathBuf::from("dir").join(files::INCLINOMETER);
+        assert!(
+            message.starts_with(&format!(
+                "{}, row 51 (line 52): time 0 s is not after",
+                file.display()
+            )),
+            "{message}"
+        );
+    }
 
     /// The guessed search finds what a binary search finds: on a jittered 10-Hz series with a
     /// gap, repeated times and a burst, at times on, between and beyond its entries.

@@ -29,11 +29,12 @@ pub enum DataError {
         message: String,
         expected: String,
     },
-    #[error("{file}, row {row} (line {line}): {message}")]
+    #[error("{file}, row {row}{}: {message}", line.map_or_else(String::new, |l| format!(" (line {l})")))]
     Row {
         file: PathBuf,
         row: usize,
-        line: usize,
+        /// The row's line in a CSV file (none in a run log).
+        line: Option<usize>,
         message: String,
     },
     #[error("{file}: {message}")]

@@ -4,7 +4,7 @@
 //! Samples without the `VALID` flag are left out.
 
 use crate::data::{
-    CmgRow, Dataset, FieldRow, GyroRow, ThrusterRow, TiltRow, WheelRow, median_period,
+    CmgRow, Dataset, FieldRow, GyroRow, Origin, ThrusterRow, TiltRow, WheelRow, median_period,
 };
 use crate::error::DataError;
 use ipc_types::{
@@ -84,6 +84,7 @@ pub fn read_log(path: &Path) -> Result<Dataset, DataError> {
     let thrusters = thruster_rows(&samples::<ThrusterStatus>(&log, path)?, &gyro);
     Ok(Dataset {
         source: path.to_path_buf(),
+        origin: Origin::RunLog,
         gyro,
         inclinometer,
         magnetometer,
