@@ -290,8 +290,8 @@ pub fn predict(
         let bias = recon.bias[k0];
         let mut residuals: WindowResiduals = Default::default();
         let mut attitudes: Vec<Attitude> = Vec::with_capacity(k1 - k0 + 1);
-        // A window whose plant refuses a command or a step is left out.
         let mut rates: Vec<Vector3<f64>> = Vec::with_capacity(k1 - k0 + 1);
+        // A window whose plant refuses a command or a step is left out.
         for k in k0..=k1 {
             let s = plant.state();
             attitudes.push(s.q);
