@@ -310,7 +310,8 @@ impl Dataset {
                     files::MAGNETOMETER => topic::MAGNETOMETER,
                     files::WHEELS => topic::WHEEL_TELEMETRY,
                     files::CMG => topic::CMG_TELEMETRY,
-                    _ => topic::THRUSTER_STATUS,
+                    files::THRUSTERS => topic::THRUSTER_STATUS,
+                    other => other,
                 };
                 PathBuf::from(format!("{}, topic {topic}", self.source.display()))
             }
@@ -752,7 +753,7 @@ fn integrate_held<F: Fn(&Vector3<f64>) -> Vector3<f64>>(
 }
 
 /// Linear interpolation of a sampled series at `t` (held constant beyond its ends).
-fn interpolate<V>(times: &[f64], values: &[V], t: f64) -> V
+pub(crate) fn interpolate<V>(times: &[f64], values: &[V], t: f64) -> V
 where
     V: Copy + std::ops::Mul<f64, Output = V> + std::ops::Add<Output = V>,
 {

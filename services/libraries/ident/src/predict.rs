@@ -19,7 +19,7 @@
 //! tick interval split by the actuator delay is clamped to the piece it starts (a limitation of
 //! the plant's one-period command; no delay: no split).
 
-use crate::data::Aligned;
+use crate::data::{Aligned, interpolate};
 use crate::error::IdentError;
 use crate::reconstruct::{Reconstruction, SensorModel};
 use crate::thrusters::ThrusterHistory;
@@ -313,16 +313,12 @@ pub fn predict(
             }
         }
         // A delayed gyro reads the rate of `gyro_delay_s` before (the window's first before it).
+        let times = &data.t[k0..=k1];
         for (i, k) in (k0..=k1).enumerate() {
-            let at = data.t[k] - sensors.gyro_delay_s;
-            let j = data.t[k0..=k].partition_point(|t| *t <= at);
-            let rate = match j {
-                0 => rates[0],
-                j if j > i => rates[i],
-                j => {
-                    let (ta, tb) = (data.t[k0 + j - 1], data.t[k0 + j]);
-                    rates[j - 1] + (rates[j] - rates[j - 1]) * ((at - ta) / (tb - ta))
-                }
+            let rate = if sensors.gyro_delay_s == 0.0 {
+                rates[i]
+            } else {
+                interpolate(times, &rates, data.t[k] - sensors.gyro_delay_s)
             };
             let gyro = sensors.gyro_reading(&rate, &attitudes[i], &bias);
             for c in 0..3 {

@@ -9,7 +9,7 @@
 //! to tick k with the mean of the two corrected readings (the filter takes a sample as the mean
 //! rate over the interval it closes).
 
-use crate::data::{Aligned, median_period};
+use crate::data::{Aligned, interpolate, median_period};
 use crate::error::IdentError;
 use crate::tangent::{Rate, Sensitivities, Tangent};
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
@@ -105,18 +105,7 @@ impl SensorModel {
         if self.gyro_delay_s == 0.0 {
             return data.gyro[k];
         }
-        let at = data.t[k] + self.gyro_delay_s;
-        let mut j = k;
-        while j + 1 < data.t.len() && data.t[j + 1] <= at {
-            j += 1;
-        }
-        match data.t.get(j + 1) {
-            Some(&t1) => {
-                let f = (at - data.t[j]) / (t1 - data.t[j]);
-                data.gyro[j] + (data.gyro[j + 1] - data.gyro[j]) * f
-            }
-            None => data.gyro[j],
-        }
+        interpolate(&data.t, &data.gyro, data.t[k] + self.gyro_delay_s)
     }
 
     /// Body rate relative to L plus the (scaled) bias: `S⁻¹ w_meas − A(q) Ω_L`, rad/s.

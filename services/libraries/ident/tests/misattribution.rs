@@ -15,6 +15,10 @@ use testbed_model::config::GAUSS;
 /// A constant torque about X and Y (a library cause, truly acting).
 const CONSTANT_XY: &str = "[effects.constant_torque]\ntorque_nm = [1.5e-3, -1.0e-3, 0.0]\n";
 
+/// The inclinometer turned 5 mrad about the vertical: each angle reads a fraction of the other
+/// (a sensor distortion outside the library).
+const TURNED: &str = "[effects.inclinometer_cross_axis]\ncoupling = [0.005, -0.005]\n";
+
 fn print(label: &str, id: &Identification) {
     println!("{label}: verdict {}", id.report.verdict);
     for line in &id.report.summary {
@@ -446,7 +450,6 @@ fn an_earth_rate_brought_in_by_a_field_error_is_dropped() {
 /// `innovation_tilt_1`, `w_y` in `innovation_tilt_2`. The constant torque beside it is named.
 #[test]
 fn a_turned_inclinometer_is_unexplained_rather_than_a_gyro_cause() {
-    const TURNED: &str = "[effects.inclinometer_cross_axis]\ncoupling = [0.005, -0.005]\n";
     let beside = format!("{TURNED}{CONSTANT_XY}");
     for (effects, seed, named) in [
         (TURNED, 81, &[][..]),
@@ -490,7 +493,6 @@ fn a_turned_inclinometer_is_unexplained_rather_than_a_gyro_cause() {
 /// six.
 #[test]
 fn a_gyro_misalignment_standing_in_for_a_turned_inclinometer_partly_explains_it() {
-    const TURNED: &str = "[effects.inclinometer_cross_axis]\ncoupling = [0.005, -0.005]\n";
     let beside = format!("{TURNED}{CONSTANT_XY}");
     for (effects, seed, named) in [
         (TURNED, 81, &["gyro_misalignment"][..]),
