@@ -68,8 +68,8 @@ fn flag_on<'a>(label: &str, r: &'a Report, cause: &str, equation: &str) -> &'a P
         })
 }
 
-/// The remainder's term `function` in `equation`, within 3 standard errors of `truth`.
-fn check_remainder(label: &str, r: &Report, equation: &str, function: &str, truth: f64) {
+/// The coefficient and standard error of the unexplained term `function` in `equation`.
+fn remainder_term(label: &str, r: &Report, equation: &str, function: &str) -> (f64, f64) {
     let remainder = r
         .unexplained
         .iter()
@@ -80,11 +80,15 @@ fn check_remainder(label: &str, r: &Report, equation: &str, function: &str, trut
         .iter()
         .find(|t| t.name == function)
         .unwrap_or_else(|| panic!("{label}: {}", remainder.proposed));
+    (term.value, term.stderr)
+}
+
+/// The remainder's term `function` in `equation`, within 3 standard errors of `truth`.
+fn check_remainder(label: &str, r: &Report, equation: &str, function: &str, truth: f64) {
+    let (value, stderr) = remainder_term(label, r, equation, function);
     assert!(
-        (term.value - truth).abs() <= 3.0 * term.stderr,
-        "{label}: {equation} {function} coefficient {} ± {} against {truth}",
-        term.value,
-        term.stderr
+        (value - truth).abs() <= 3.0 * stderr,
+        "{label}: {equation} {function} coefficient {value} ± {stderr} against {truth}"
     );
 }
 
@@ -463,16 +467,7 @@ fn a_turned_inclinometer_is_unexplained_rather_than_a_gyro_cause() {
         assert_eq!(names(&id), named, "{label}");
         assert!(r.partly_explained.is_empty(), "{label}");
         for (equation, rate) in [("innovation_tilt_1", "w_x"), ("innovation_tilt_2", "w_y")] {
-            let effect = r
-                .unexplained
-                .iter()
-                .find(|e| e.equation == equation)
-                .unwrap_or_else(|| panic!("{label}: nothing unexplained in {equation}"));
-            assert!(
-                effect.terms.iter().any(|t| t.name == rate),
-                "{label}: {}",
-                effect.proposed
-            );
+            remainder_term(&label, r, equation, rate);
         }
     }
 }
@@ -538,16 +533,7 @@ fn a_gyro_misalignment_standing_in_for_a_turned_inclinometer_partly_explains_it(
                     se[z]
                 );
             }
-            let remainder = r
-                .unexplained
-                .iter()
-                .find(|e| e.equation == equation)
-                .unwrap_or_else(|| panic!("{label}: no remainder in {equation}"));
-            assert!(
-                remainder.terms.iter().any(|t| t.name == rate),
-                "{label}: {}",
-                remainder.proposed
-            );
+            remainder_term(&label, r, equation, rate);
         }
         if let Some(constant) = r.causes.iter().find(|c| c.name == "constant_torque") {
             let at = |map: &serde_json::Map<String, serde_json::Value>, i: usize| {
