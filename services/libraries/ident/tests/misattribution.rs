@@ -596,3 +596,59 @@ fn library_causes_alone_are_not_flagged_over_ten_seeds() {
     }
     assert!(flagged.is_empty(), "flagged on {flagged:?}");
 }
+
+/// A clock the library has no cause for: `wheels.csv` stamped late (telemetry stamped on
+/// arrival). The wheels' momentum then lags the rates as under a larger inertia, and the
+/// selection chooses `inertia_error` (+1.2 % about X and Y for 0.1 s, seed 81) — but the model
+/// extended with it predicts the held-out data worse than the nominal one (0.67×; 0.80× for
+/// 0.05 s): the data refute it. Checked, for 0.1 s (seeds 81, 82) and 0.05 s (seed 83):
+/// nothing named, `inertia_error` refuted, the gain below 1/1.01, no guard flag, the extended
+/// model the configuration given, and the lag's torque left as unexplained terms in `w_x` and
+/// `w_y`. Beside a true inertia error (seed 81, 0.1 s) the extension predicts better (1.41×)
+/// and the cause is named, its Z fraction within 4 standard errors (X and Y carry the lag's
+/// +1.2 %: a limit, documented).
+#[test]
+fn a_late_wheel_clock_is_refuted_as_an_inertia_error() {
+    let inertia = "[effects.inertia_error]\nfraction = [0.03, -0.02, 0.01]\n";
+    for (effects, seed, late_s) in [
+        ("", 81, 0.1),
+        ("", 82, 0.1),
+        ("", 83, 0.05),
+        (inertia, 81, 0.1),
+    ] {
+        let label = format!("wheels.csv {late_s} s late, {effects:?}, seed {seed}");
+        let mut data = experiment_data(&truth(effects), seed, 600.0);
+        for row in &mut data.wheels {
+            row.t_s += late_s;
+        }
+        let id = identify_with(&data, true);
+        print(&label, &id);
+        let r = &id.report;
+        if !effects.is_empty() {
+            assert_eq!(names(&id), ["inertia_error"], "{label}");
+            assert!(
+                r.refuted.is_empty() && r.gain > 1.0,
+                "{label}: gain {}",
+                r.gain
+            );
+            let values = &r.causes[0].parameters["fraction"];
+            let errors = &r.causes[0].stderr["fraction"];
+            let (z, se) = (values[2].as_f64().unwrap(), errors[2].as_f64().unwrap());
+            assert!(
+                (z - 0.01).abs() < 4.0 * se,
+                "{label}: Z fraction {z} ± {se}"
+            );
+            continue;
+        }
+        assert_eq!(r.verdict, "none", "{label}");
+        let refuted: Vec<&str> = r.refuted.iter().map(|c| c.name).collect();
+        assert_eq!(refuted, ["inertia_error"], "{label}");
+        assert!(r.gain * 1.01 < 1.0, "{label}: gain {}", r.gain);
+        assert!(r.partly_explained.is_empty(), "{label}");
+        assert!(id.extended.effects.inertia_error.is_none(), "{label}");
+        assert!(id.extended.effects.fitted_torque.is_none(), "{label}");
+        for (equation, rate) in [("torque_x", "w_x"), ("torque_y", "w_y")] {
+            remainder_term(&label, r, equation, rate);
+        }
+    }
+}

@@ -287,7 +287,7 @@ fn identify_pass(
     cause_tests.extend(tests.iter().cloned());
     // A named cause that the unrestricted search explains better in one of its equations
     // explains it only partly: flagged, its remainder among the unexplained effects (`guard`).
-    let partly = if options.misattribution_guard {
+    let mut partly = if options.misattribution_guard {
         guard::apply(
             &problem,
             (&current, &named, &candidates),
@@ -336,7 +336,7 @@ fn identify_pass(
         .collect();
     let selected = named;
 
-    let causes: Vec<CauseReport> = selected
+    let mut causes: Vec<CauseReport> = selected
         .iter()
         .filter_map(|cause| {
             let row = chosen_rows.iter().find(|r| r.name == cause.name())?;
@@ -354,15 +354,6 @@ fn identify_pass(
             })
         })
         .collect();
-    let verdict = if causes.is_empty() {
-        "none".to_string()
-    } else {
-        causes
-            .iter()
-            .map(|c| c.name)
-            .collect::<Vec<_>>()
-            .join(" + ")
-    };
     // The unexplained torque terms become a fitted torque in the extended model, the wheel
     // channel's a fitted wheel torque (each added to one the model already has); held-out
     // predictions use the terms fitted without the held-out blocks.
@@ -629,6 +620,36 @@ fn identify_pass(
         .iter()
         .filter_map(|(g, a)| extended_rms.groups.get(g).map(|b| (*g, a / b)))
         .collect();
+    // The test of the extension itself: the model extended with the named causes must predict
+    // the held-out data better than the configuration given. Worse by more than the 1 % bar,
+    // the data refute them: they are the library's nearest stand-in for an effect outside it
+    // (a clock offset between two devices, say). They are reported as refuted, not named, and
+    // the extended model is the configuration given.
+    let refuted = if !causes.is_empty() && gain * (1.0 + MIN_EXTENSION_GAIN) < 1.0 {
+        if extension.fitted_torque.is_some() || extension.fitted_wheel_torque.is_some() {
+            extension.rejected = Some(format!(
+                "the fitted terms not carried: the model extended with them and the refuted causes predicts the held-out data worse than the configuration given ({gain:.2}×)"
+            ));
+            extension.fitted_torque = None;
+            extension.fitted_wheel_torque = None;
+        }
+        extension.gain_includes_fitted_torque = false;
+        extended = model.clone();
+        // The guard's flags speak of named causes.
+        partly.clear();
+        std::mem::take(&mut causes)
+    } else {
+        Vec::new()
+    };
+    let verdict = if causes.is_empty() {
+        "none".to_string()
+    } else {
+        causes
+            .iter()
+            .map(|c| c.name)
+            .collect::<Vec<_>>()
+            .join(" + ")
+    };
 
     // The second pass: the first pass's field effects (the correction's form) lead the
     // unexplained effects (what remains after the named causes includes them: the correction is
@@ -703,6 +724,7 @@ fn identify_pass(
         &cause_tests,
         &possible,
         &unconfirmed,
+        &refuted,
         &effects,
         &remaining,
         gain,
@@ -727,6 +749,7 @@ fn identify_pass(
         possible,
         unconfirmed,
         causes,
+        refuted,
         verdict,
         cause_tests,
         partly_explained: partly,

@@ -137,6 +137,11 @@ pub struct Report {
     pub unconfirmed: Vec<CandidateRow>,
     /// Named causes, strongest first (empty: none).
     pub causes: Vec<CauseReport>,
+    /// Causes the selection chose whose extended model predicted the held-out data worse than
+    /// the configuration given, by more than 1 % (`gain` below 1/1.01): refuted by the data,
+    /// not named. They stood in for an effect outside the library; the extended model is then
+    /// the configuration given (empty: none).
+    pub refuted: Vec<CauseReport>,
     /// `none`, or the causes joined by ` + `.
     pub verdict: String,
     /// The falsification tests of every cause the selection named (dropped ones included).
@@ -229,6 +234,7 @@ pub(super) fn summary(
     tests: &[super::CauseTest],
     possible: &[CandidateRow],
     unconfirmed: &[CandidateRow],
+    refuted: &[CauseReport],
     effects: &[super::UnexplainedEffect],
     remaining: &Remaining,
     gain: f64,
@@ -314,6 +320,15 @@ pub(super) fn summary(
     {
         out.push(format!(
             "Held-out prediction gain of the extended model: {gain:.2}× (nominal RMS / extended RMS)."
+        ));
+    }
+    if !refuted.is_empty() {
+        let names: Vec<&str> = refuted.iter().map(|c| c.name).collect();
+        out.push(format!(
+            "Refuted: {} — chosen by the selection, but the model extended with {} predicts the held-out data worse than the configuration given ({gain:.2}× nominal RMS / extended RMS): {} in for an effect outside the library (see the unexplained effects), and the extended model is the configuration given.",
+            names.join(" + "),
+            if names.len() == 1 { "it" } else { "them" },
+            if names.len() == 1 { "it stands" } else { "they stand" },
         ));
     }
     for t in tests.iter().filter(|t| !t.kept) {
