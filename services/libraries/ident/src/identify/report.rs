@@ -325,10 +325,15 @@ pub(super) fn summary(
     if !refuted.is_empty() {
         let names: Vec<&str> = refuted.iter().map(|c| c.name).collect();
         out.push(format!(
-            "Refuted: {} — chosen by the selection, but the model extended with {} predicts the held-out data worse than the configuration given ({gain:.2}× nominal RMS / extended RMS): {} in for an effect outside the library (see the unexplained effects), and the extended model is the configuration given.",
+            "Refuted: {} — chosen by the selection, but the model extended with {} predicts the held-out data worse than the configuration given ({gain:.2}× nominal RMS / extended RMS): {} in for an effect outside the library ({}), and the extended model is the configuration given.",
             names.join(" + "),
             if names.len() == 1 { "it" } else { "them" },
             if names.len() == 1 { "it stands" } else { "they stand" },
+            if effects.is_empty() {
+                "too weak for its form to be found"
+            } else {
+                "see the unexplained effects"
+            },
         ));
     }
     for t in tests.iter().filter(|t| !t.kept) {
