@@ -300,7 +300,7 @@ impl Dataset {
 
     /// Where the rows of the CSV file `name` are, for messages: that file, or the run log's
     /// topic they were read from.
-    fn file(&self, name: &str) -> PathBuf {
+    pub(crate) fn file(&self, name: &str) -> PathBuf {
         match self.origin {
             Origin::CsvDirectory => self.source.join(name),
             Origin::RunLog => {

@@ -45,6 +45,7 @@ pub mod sanity;
 pub mod separability;
 pub mod sparse;
 pub mod spectral;
+pub mod spikes;
 pub mod stats;
 pub mod tangent;
 pub mod thrusters;

@@ -109,6 +109,23 @@ pub fn identify(
 ) -> Result<Identification, IdentError> {
     options.validate()?;
     model.validate()?;
+    data.check_rows()?;
+    let (cleaned, spikes) = crate::spikes::remove(data, model);
+    let mut identification = identify_clean(&cleaned, model, options)?;
+    let report = &mut identification.report;
+    if let Some(line) = crate::spikes::summary(&spikes) {
+        report.summary.insert(0, line);
+    }
+    report.data.spikes = spikes;
+    Ok(identification)
+}
+
+/// [`identify`] on data without spikes.
+fn identify_clean(
+    data: &Dataset,
+    model: &ModelConfig,
+    options: &Options,
+) -> Result<Identification, IdentError> {
     crate::sanity::check(data, model)?;
     let aligned = Aligned::new(data);
     let first = identify_pass(data, &aligned, model, options, None)?;
@@ -742,6 +759,7 @@ fn identify_pass(
             period_s: aligned.period_s,
             devices,
             held_out_fraction: held_fraction,
+            spikes: Vec::new(),
         },
         options: options.clone(),
         nominal_residuals: nominal_report,

@@ -21,6 +21,8 @@ pub struct DataSummary {
     /// Fraction of the ticks held out of the fits; with k-fold cross-validation, of the ticks
     /// predicted out of fold (the fits use all the data).
     pub held_out_fraction: f64,
+    /// Readings left out as isolated spikes (see [`crate::spikes`]), in file and time order.
+    pub spikes: Vec<crate::spikes::Spike>,
 }
 
 /// Statistics of one residual component.
