@@ -223,19 +223,10 @@ pub fn summary(spikes: &[Spike]) -> Option<String> {
 mod tests {
     use super::*;
 
-    /// Deterministic normal noise (Box–Muller on a linear congruential generator).
     fn noise(n: usize, sigma: f64) -> Vec<f64> {
-        let mut state: u64 = 12345;
-        let mut uniform = move || {
-            state = state
-                .wrapping_mul(6_364_136_223_846_793_005)
-                .wrapping_add(1_442_695_040_888_963_407);
-            ((state >> 11) as f64 + 0.5) / (1u64 << 53) as f64
-        };
-        (0..n)
-            .map(|_| {
-                sigma * (-2.0 * uniform().ln()).sqrt() * (std::f64::consts::TAU * uniform()).cos()
-            })
+        crate::stats::normals(n, 12345)
+            .into_iter()
+            .map(|e| sigma * e)
             .collect()
     }
 

@@ -493,6 +493,24 @@ fn lost_rows_and_jittered_time_stamps_still_name_a_hidden_cause() {
     }
 }
 
+/// Adds ±`size` (the sign drawn from `state`) to one column, in turn, of every `every`-th row
+/// from the middle of the first `every`: the readings spoilt, as (time, column).
+fn spoil<'a>(
+    rows: impl Iterator<Item = (f64, &'a mut [f64])>,
+    columns: &[&'static str],
+    every: usize,
+    size: f64,
+    state: &mut u64,
+) -> Vec<(f64, &'static str)> {
+    let mut spoilt = Vec::new();
+    for (k, (t_s, values)) in rows.enumerate().skip(every / 2).step_by(every) {
+        let axis = k % columns.len();
+        values[axis] += if uniform(state) < 0.0 { -size } else { size };
+        spoilt.push((t_s, columns[axis]));
+    }
+    spoilt
+}
+
 /// Isolated spikes (corrupted frames): every 200th gyro row off by ±0.01 rad/s on one axis
 /// (some 500 times its noise), every 50th inclinometer row by ±0.01 rad and magnetometer row by
 /// ±2 µT. Without the screening 0.5 % of such gyro rows made a clean record name a
@@ -508,51 +526,33 @@ fn isolated_spikes_are_left_out_and_listed() {
     ] {
         let mut data = experiment_data(&truth, seed, 600.0);
         let mut state = 5;
-        let mut spoilt = Vec::new();
-        let mut spoil = |t_s: f64, value: &mut f64, column: &'static str, size: f64| {
-            *value += if uniform(&mut state) < 0.0 {
-                -size
-            } else {
-                size
-            };
-            spoilt.push((t_s, column));
-        };
-        for (k, row) in data.gyro.iter_mut().enumerate().skip(100).step_by(200) {
-            spoil(
-                row.t_s,
-                &mut row.rate_rad_s[k % 3],
-                ["wx", "wy", "wz"][k % 3],
-                0.01,
-            );
-        }
-        for (k, row) in data
-            .inclinometer
-            .iter_mut()
-            .enumerate()
-            .skip(25)
-            .step_by(50)
-        {
-            spoil(
-                row.t_s,
-                &mut row.tilt_rad[k % 2],
-                ["tilt_x", "tilt_y"][k % 2],
-                0.01,
-            );
-        }
-        for (k, row) in data
-            .magnetometer
-            .iter_mut()
-            .enumerate()
-            .skip(25)
-            .step_by(50)
-        {
-            spoil(
-                row.t_s,
-                &mut row.field_t[k % 3],
-                ["bx", "by", "bz"][k % 3],
-                2e-6,
-            );
-        }
+        let mut spoilt = spoil(
+            data.gyro
+                .iter_mut()
+                .map(|r| (r.t_s, r.rate_rad_s.as_mut_slice())),
+            &["wx", "wy", "wz"],
+            200,
+            0.01,
+            &mut state,
+        );
+        spoilt.extend(spoil(
+            data.inclinometer
+                .iter_mut()
+                .map(|r| (r.t_s, &mut r.tilt_rad[..])),
+            &["tilt_x", "tilt_y"],
+            50,
+            0.01,
+            &mut state,
+        ));
+        spoilt.extend(spoil(
+            data.magnetometer
+                .iter_mut()
+                .map(|r| (r.t_s, r.field_t.as_mut_slice())),
+            &["bx", "by", "bz"],
+            50,
+            2e-6,
+            &mut state,
+        ));
         let id = testbed_ident::identify(&data, &nominal(), &options())
             .unwrap_or_else(|e| panic!("{label}: {e}"));
         println!("{label}: {}", id.report.summary[0]);

@@ -762,23 +762,8 @@ pub(super) fn refit_beside_terms(fit: &mut SetFit, named: &[Cause], effects: &[U
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::stats::normals;
     use nalgebra::{DMatrix, DVector};
-
-    /// Standard normal samples from a fixed linear congruential generator (Box–Muller).
-    fn normals(n: usize, mut state: u64) -> Vec<f64> {
-        let mut uniform = move || {
-            state = state
-                .wrapping_mul(6_364_136_223_846_793_005)
-                .wrapping_add(1_442_695_040_888_963_407);
-            ((state >> 11) as f64 + 0.5) / (1u64 << 53) as f64
-        };
-        (0..n)
-            .map(|_| {
-                let (a, b) = (uniform(), uniform());
-                (-2.0 * a.ln()).sqrt() * (std::f64::consts::TAU * b).cos()
-            })
-            .collect()
-    }
 
     fn rows(y: &[f64]) -> Vec<LinRow> {
         y.iter()
