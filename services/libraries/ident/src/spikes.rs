@@ -10,13 +10,18 @@
 //! smooth motion is not a spike; a change of slope (a torque step seen by the gyro) leaves
 //! half of its size in one period, `Δω̇ dt / 2`, far below a spike's at the test bed's torques.
 //!
+//! A spike must also stand alone: the lines through the two readings on each side agree with
+//! each other where it does not (`isolated`), which a step or a change of slope between two
+//! readings fails. Rows next to a lost row are not screened.
+//!
 //! The scale is robust and local: the median absolute deviation of the fourth differences of
-//! the [`SCALE_HALF_WIDTH`] rows on each side beyond the five the reading enters, as the motion's own vary along a record (the
-//! inclinometer's 2.5 Hz sees a swing near the tilt stop), but at least what the sensor's
-//! configured noise gives them (`√70 / 4 σ`), so a quantised reading that rarely changes is
-//! not all spikes. Only the gyro, inclinometer and
+//! the `SCALE_HALF_WIDTH` (20) rows on each side beyond the five the reading enters, as the
+//! motion's own vary along a record (the inclinometer's 2.5 Hz sees a swing near the tilt
+//! stop), but at least what the sensor's configured noise gives them (`√70 / 4 σ`), so a
+//! quantised reading that rarely changes is not all spikes. Only the gyro, inclinometer and
 //! magnetometer are screened: wheel speeds follow the commanded torque's steps, whose change
-//! of slope is many times the tachometer's noise.
+//! of slope is many times the tachometer's noise. Two spoilt readings in a row are not isolated
+//! and stay in.
 
 use crate::csv::{columns, files};
 use crate::data::{Dataset, median_period};
