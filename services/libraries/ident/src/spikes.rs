@@ -198,7 +198,6 @@ fn retain<R>(rows: &mut Vec<R>, drop: &[usize]) {
 
 /// One line for the report's summary (none without spikes).
 pub fn summary(spikes: &[Spike]) -> Option<String> {
-    let first = spikes.first()?;
     let mut files: Vec<(&str, usize)> = Vec::new();
     for s in spikes {
         match files.iter_mut().find(|(f, _)| *f == s.file) {
@@ -209,8 +208,7 @@ pub fn summary(spikes: &[Spike]) -> Option<String> {
     let counts: Vec<String> = files.iter().map(|(f, n)| format!("{n} in {f}")).collect();
     let largest = spikes
         .iter()
-        .max_by(|a, b| a.deviation.total_cmp(&b.deviation))
-        .unwrap_or(first);
+        .max_by(|a, b| a.deviation.total_cmp(&b.deviation))?;
     Some(format!(
         "Left out: {} isolated spike{} (a reading off both neighbours' trend by more than {THRESHOLD} times its column's scale; `data.spikes` lists each): {}; the largest {} = {:.4e} at t = {:.3} s in {}, {:.0}× the scale.",
         spikes.len(),
