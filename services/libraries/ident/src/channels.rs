@@ -146,6 +146,7 @@ impl TorqueChannel {
                 && (data.t[k] - data.t[k - 1] - data.period_s).abs() < 0.25 * data.period_s;
             let [x, y] = attitude::tilt_angles(&recon.q[k]);
             regular
+                && recon.span_of(k).is_some()
                 && x.abs() < limit
                 && y.abs() < limit
                 && data.wheel_record_complete(data.t[k - 1], data.t[k + 1])
@@ -409,7 +410,8 @@ impl WheelChannel {
             while k + 1 < data.len() {
                 let regular =
                     (data.t[k + 1] - data.t[k] - data.period_s).abs() < 0.25 * data.period_s;
-                if regular && data.wheel_record_complete(data.t[k], data.t[k + 1]) {
+                let estimated = recon.span_of(k).is_some_and(|s| k + 1 < s.end);
+                if regular && estimated && data.wheel_record_complete(data.t[k], data.t[k + 1]) {
                     let (a, b) = (platform_at(recon, k), platform_at(recon, k + 1));
                     let platform: [f64; 7] = std::array::from_fn(|j| 0.5 * (a[j] + b[j]));
                     for (i, wheel_rows) in rows.iter_mut().enumerate() {

@@ -527,6 +527,55 @@ fn check_series<R>(
     Ok(())
 }
 
+/// A silence of the gyro longer than this breaks the record, s (see [`Aligned::breaks`]). Over a
+/// silence the filter carries its attitude on the mean of the rates at its two ends; the rotation
+/// in between is unknown, and 10–20 s in a manoeuvre left the tilt innovations 5–27 times the
+/// noise, which the fits took for causes and the whiteness tests for coloured residuals. Up to
+/// 1 s the mean rate's error (`T³ ω̈ / 12`) stays well inside the tilt noise at the platform's
+/// manoeuvres, and a restart would throw away the converged bias: lost rows are no break.
+pub const BREAK_S: f64 = 1.0;
+/// ... nor a silence of fewer gyro periods than this (a slow gyro's lost rows).
+pub const BREAK_PERIODS: f64 = 5.0;
+
+/// A device's silence longer than a break ([`BREAK_S`]), on the data's clock.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct Silence {
+    /// `gyro` or `wheels`.
+    pub device: &'static str,
+    /// The last row before it and the first after it, s.
+    pub from_s: f64,
+    pub to_s: f64,
+}
+
+/// The report's line on the silences, if the record has any.
+pub fn silences_summary(silences: &[Silence]) -> Option<String> {
+    let each: Vec<String> = silences
+        .iter()
+        .map(|s| {
+            format!(
+                "the {} silent for {:.1} s from t = {:.3} s",
+                s.device,
+                s.to_s - s.from_s,
+                s.from_s
+            )
+        })
+        .collect();
+    let last = each.last()?;
+    let list = match &each[..each.len() - 1] {
+        [] => last.clone(),
+        first => format!("{} and {last}", first.join(", ")),
+    };
+    let restart = if silences.iter().any(|s| s.device == "gyro") {
+        ", and the attitude filter starts again after the gyro's"
+    } else {
+        ""
+    };
+    Some(format!(
+        "Breaks in the record (a device without rows for more than {BREAK_S} s; \
+         `data.silences` lists each): {list}. No equation or prediction spans one{restart}."
+    ))
+}
+
 /// The data on the gyro's clock: what the fits and predictions work with.
 ///
 /// Tick k is gyro row k. Wheel speeds and gimbal angles are interpolated linearly to the tick
@@ -550,6 +599,10 @@ pub struct Aligned {
     /// consecutive rows more than 1.5 median intervals apart (lost rows). Inside a gap the
     /// command in effect is unknown and the speed only interpolated.
     pub wheel_gaps: Vec<(f64, f64)>,
+    /// Breaks in the record: the ticks that follow a silence of the gyro longer than
+    /// [`BREAK_S`] (and than [`BREAK_PERIODS`] periods), in time order. No estimate, equation or
+    /// prediction spans one: the attitude filter starts again after it.
+    pub breaks: Vec<usize>,
     /// Gimbal angles at the ticks, rad (`None` without `cmg.csv`).
     pub gimbal: Option<Vec<Vector4<f64>>>,
     /// Gimbal rate commands `(t − t0, rates)` in time order, rad/s.
@@ -589,9 +642,15 @@ impl Aligned {
             .filter(|w| w[1] - w[0] > 1.5 * wheel_period)
             .map(|w| (w[0], w[1]))
             .collect();
+        let period_s = median_period(t.iter().copied());
+        let break_s = BREAK_S.max(BREAK_PERIODS * period_s);
+        let breaks = (1..t.len())
+            .filter(|&k| t[k] - t[k - 1] > break_s)
+            .collect();
         Self {
-            period_s: median_period(t.iter().copied()),
+            period_s,
             wheel_gaps,
+            breaks,
             gyro: data.gyro.iter().map(|r| r.rate_rad_s).collect(),
             wheel_speed,
             wheel_cmd: data
@@ -659,6 +718,47 @@ impl Aligned {
     pub fn wheel_record_complete(&self, a: f64, b: f64) -> bool {
         let i = self.wheel_gaps.partition_point(|g| g.1 <= a + 1e-9);
         self.wheel_gaps.get(i).is_none_or(|g| g.0 >= b - 1e-9)
+    }
+
+    /// The silences of the gyro and the wheel telemetry longer than a break, in time order.
+    pub fn silences(&self) -> Vec<Silence> {
+        let at = |device, from: f64, to: f64| Silence {
+            device,
+            from_s: self.t0 + from,
+            to_s: self.t0 + to,
+        };
+        let gyro = (self.breaks.iter()).map(|&k| at("gyro", self.t[k - 1], self.t[k]));
+        let wheels = (self.wheel_silences()).map(|&(a, b)| at("wheels", a, b));
+        let mut out: Vec<Silence> = gyro.chain(wheels).collect();
+        out.sort_by(|a, b| a.from_s.total_cmp(&b.from_s));
+        out
+    }
+
+    /// The gaps in the wheel telemetry longer than a break.
+    fn wheel_silences(&self) -> impl Iterator<Item = &(f64, f64)> {
+        let break_s = BREAK_S.max(BREAK_PERIODS * self.period_s);
+        self.wheel_gaps.iter().filter(move |g| g.1 - g.0 > break_s)
+    }
+
+    /// The ticks `[a, b)` less those where the wheel telemetry is silent for longer than a break
+    /// ([`BREAK_S`]): the pieces on either side, in order. Over a short gap the command held is
+    /// the one issued; over a silence the commands in effect are unknown, and a prediction
+    /// driven by them runs away.
+    pub fn without_wheel_silences(&self, a: usize, b: usize) -> Vec<(usize, usize)> {
+        let mut pieces = Vec::new();
+        let mut from = a;
+        for &(g0, g1) in self.wheel_silences() {
+            let before = from + self.t[from..b].partition_point(|&t| t <= g0);
+            let after = from + self.t[from..b].partition_point(|&t| t < g1);
+            if before > from {
+                pieces.push((from, before));
+            }
+            from = after;
+        }
+        if b > from {
+            pieces.push((from, b));
+        }
+        pieces
     }
 
     /// Gimbal angles at tick k (zero without CMGs), rad.
@@ -818,6 +918,70 @@ mod tests {
             )),
             "{message}"
         );
+    }
+
+    /// A silence of more than 1 s is a break, lost rows are not; the pieces around a silence
+    /// of the wheels hold every tick outside it.
+    #[test]
+    fn silences_longer_than_a_break_split_the_record() {
+        // 10 Hz for 60 s; the gyro without 20.0–22.0 s and 40.0–40.2 s (two rows), the wheels
+        // without 30.0–31.5 s.
+        let times = |lost: &dyn Fn(f64) -> bool| -> Vec<f64> {
+            (0..600)
+                .map(|k| 0.1 * k as f64)
+                .filter(|t| !lost(*t))
+                .collect()
+        };
+        let gyro = times(&|t| (19.95..21.95).contains(&t) || (39.95..40.15).contains(&t));
+        let wheels = times(&|t| (29.95..31.45).contains(&t));
+        let data = Dataset {
+            gyro: (gyro.iter())
+                .map(|&t_s| GyroRow {
+                    t_s,
+                    rate_rad_s: Vector3::zeros(),
+                })
+                .collect(),
+            wheels: (wheels.iter())
+                .map(|&t_s| WheelRow {
+                    t_s,
+                    speed_rad_s: Vector3::zeros(),
+                    torque_nm: Vector3::zeros(),
+                })
+                .collect(),
+            ..Dataset::default()
+        };
+        let aligned = Aligned::new(&data);
+        let after = |t: f64| {
+            aligned
+                .t
+                .iter()
+                .position(|&x| (x - t).abs() < 1e-9)
+                .unwrap()
+        };
+        assert_eq!(aligned.breaks, vec![after(22.0)]);
+        let silences = aligned.silences();
+        let spans: Vec<(&str, f64, f64)> = (silences.iter())
+            .map(|s| {
+                (
+                    s.device,
+                    (s.from_s * 10.0).round() / 10.0,
+                    (s.to_s * 10.0).round() / 10.0,
+                )
+            })
+            .collect();
+        assert_eq!(spans, vec![("gyro", 19.9, 22.0), ("wheels", 29.9, 31.5)]);
+        let n = aligned.len();
+        assert_eq!(
+            aligned.without_wheel_silences(0, n),
+            vec![(0, after(29.9) + 1), (after(31.5), n)]
+        );
+        assert_eq!(
+            aligned.without_wheel_silences(0, after(25.0)),
+            vec![(0, after(25.0))]
+        );
+        let line = silences_summary(&silences).unwrap();
+        assert!(line.contains("the gyro silent for 2.1 s from t = 19.900 s and the wheels silent for 1.6 s from t = 29.900 s"), "{line}");
+        assert!(line.ends_with("starts again after the gyro's."), "{line}");
     }
 
     /// The guessed search finds what a binary search finds: on a jittered 10-Hz series with a

@@ -172,11 +172,15 @@ impl Predictions {
     }
 }
 
-/// Windows of `horizon_s` tiling the ticks `[a, b)` of each given span.
+/// Windows of `horizon_s` tiling the ticks `[a, b)` of each given span, none across a silence
+/// of the wheel telemetry ([`Aligned::without_wheel_silences`]).
 pub fn windows(data: &Aligned, spans: &[(usize, usize)], horizon_s: f64) -> Vec<(usize, usize)> {
     let per = ((horizon_s / data.period_s).round() as usize).max(2);
     let mut out = Vec::new();
-    for &(a, b) in spans {
+    let pieces = spans
+        .iter()
+        .flat_map(|&(a, b)| data.without_wheel_silences(a, b));
+    for (a, b) in pieces {
         let mut k = a;
         while k + 1 < b {
             let end = (k + per).min(b - 1);
@@ -251,13 +255,13 @@ pub fn predict(
     let average = ((2.0 / data.period_s).round() as usize).max(1);
     // Each window on its own (across the cores), then gathered in window order.
     let window = |k0: usize, k1: usize| -> Option<WindowResiduals> {
-        if k0 < recon.start || k1 >= data.len() {
-            return None;
-        }
+        // A window lies within one span of estimates: none crosses a break in the record.
+        let span = recon.span_of(k0).filter(|s| k1 < s.end)?;
         // Initial rate from the averaged total momentum.
-        let half = average
-            .min(k0 - recon.start.min(k0))
-            .min(data.len() - 1 - k0);
+        // (over ticks whose wheel speeds were measured, not interpolated over a silence).
+        let half = (0..=average.min(k0 - span.start).min(span.end - 1 - k0))
+            .rev()
+            .find(|h| data.without_wheel_silences(k0 - h, k0 + h + 1) == [(k0 - h, k0 + h + 1)])?;
         let mut h_mean = Vector3::zeros();
         for k in k0 - half..=k0 + half {
             h_mean += inertia * recon.rate[k] + rotor(k);

@@ -167,6 +167,10 @@ pub struct Innovation {
 pub struct Reconstruction {
     /// First tick with an estimate (the filter's start); earlier ticks repeat the first estimate.
     pub start: usize,
+    /// The runs of ticks with estimates of their own, in time order: from the filter's start to
+    /// the first break in the record ([`Aligned::breaks`]), and from each restart after a break
+    /// to the next. The ticks between a break and its restart repeat the restart's estimate.
+    pub spans: Vec<std::ops::Range<usize>>,
     /// Attitude estimate per tick, L→B.
     pub q: Vec<Attitude>,
     /// Bias estimate per tick (of the corrected readings), rad/s.
@@ -276,6 +280,7 @@ fn run(
     let mut q_prior = Attitude::identity();
     let mut out = Reconstruction {
         start: n,
+        spans: Vec::new(),
         q: Vec::with_capacity(n),
         bias: Vec::with_capacity(n),
         rate: Vec::with_capacity(n),
@@ -283,8 +288,32 @@ fn run(
     };
     let (mut i_tilt, mut i_field) = (0usize, 0usize);
     let mut previous: Option<Vector3<f64>> = None;
+    // The span under way (its first tick), and the breaks with the ticks the filter restarted at.
+    let mut span_start: Option<usize> = None;
+    // The bias at the last break: the gyro's, which a silence does not change.
+    let mut carried_bias: Option<Vector3<f64>> = None;
+    let mut restarts: Vec<(usize, usize)> = Vec::new();
+    let mut breaks = data.breaks.iter().copied().peekable();
     for k in 0..n {
         let tk = data.t[k];
+        // A break: what the filter knew does not carry over it. It starts again from the
+        // vector sensors, as at the record's start.
+        if breaks.next_if_eq(&k).is_some() {
+            if let Some(f) = mekf.take() {
+                q_prior = f.attitude();
+                carried_bias = Some(f.bias());
+            }
+            if let Some(first) = span_start.take() {
+                out.spans.push(first..k);
+            }
+            latest_tilt = None;
+            latest_field = None;
+            // Vector samples in the silence have no rates to carry them to the restart: only
+            // those of its last gyro period may start the filter.
+            let from = tk - data.period_s;
+            i_tilt += data.tilt[i_tilt..].partition_point(|s| s.0 < from - 1e-6);
+            i_field += data.field[i_field..].partition_point(|s| s.0 < from - 1e-6);
+        }
         let q_now = mekf.as_ref().map_or(q_prior, Mekf::attitude);
         let w = sensors.correct_gyro(&sensors.gyro_of_tick(data, k), &q_now);
         if let Some(t) = tangent.as_deref_mut() {
@@ -395,22 +424,28 @@ fn run(
                         start.tilt_rad = Some(tilt);
                         start.field_b_t = Some(field);
                     }
-                    if let Some(f) = start_filter(
-                        &filter_cfg,
-                        t_ns(t_sample),
-                        &start,
-                        &sensors,
-                        has_tilt,
-                        has_field,
-                    ) {
+                    let mut cfg = filter_cfg.clone();
+                    if let Some(b) = carried_bias {
+                        cfg.initial_bias_rad_s = b.into();
+                    }
+                    if let Some(f) =
+                        start_filter(&cfg, t_ns(t_sample), &start, &sensors, has_tilt, has_field)
+                    {
                         let mut f = f;
                         if let Some(t) = tangent.as_deref_mut() {
-                            t.start();
+                            match carried_bias {
+                                Some(_) => t.restart(),
+                                None => t.start(),
+                            }
                         }
                         propagate(&mut f, t_ns(tk), &w, tangent.as_deref_mut(), Rate::Current)?;
                         q_prior = f.attitude();
                         mekf = Some(f);
-                        out.start = k;
+                        match out.spans.last() {
+                            None => out.start = k,
+                            Some(before) => restarts.push((before.end, k)),
+                        }
+                        span_start = Some(k);
                     }
                 }
             }
@@ -434,10 +469,14 @@ fn run(
             }
         }
     }
-    // Ticks before the start repeat the first estimate.
-    if out.start < n {
-        let (q0, b0) = (out.q[out.start], out.bias[out.start]);
-        for k in 0..out.start {
+    if let Some(first) = span_start {
+        out.spans.push(first..n);
+    }
+    // Ticks before the start repeat the first estimate, and those after a break its restart's.
+    let waits = std::iter::once((0, out.start)).chain(restarts);
+    for (from, to) in waits.filter(|&(_, to)| to < n) {
+        let (q0, b0) = (out.q[to], out.bias[to]);
+        for k in from..to {
             out.q[k] = q0;
             out.bias[k] = b0;
             out.rate[k] = sensors.correct_gyro(&sensors.gyro_of_tick(data, k), &q0) - b0;
@@ -485,6 +524,12 @@ fn start_filter(
 }
 
 impl Reconstruction {
+    /// The span of ticks with estimates of their own that holds tick `k`, if one does.
+    pub fn span_of(&self, k: usize) -> Option<std::ops::Range<usize>> {
+        let i = self.spans.partition_point(|s| s.end <= k);
+        self.spans.get(i).filter(|s| s.contains(&k)).cloned()
+    }
+
     /// Whitened innovation components of the updates on the ticks `keep` accepts, flattened
     /// (present components only), for fits.
     pub fn innovation_vector(&self, keep: impl Fn(usize) -> bool) -> Vec<f64> {

@@ -75,6 +75,14 @@ impl Tangent {
         self.state.iter_mut().for_each(|x| *x = Vector6::zeros());
     }
 
+    /// The filter starts again after a break with the bias it had: the attitude's dependence
+    /// starts anew, the bias's carries over.
+    pub fn restart(&mut self) {
+        for x in &mut self.state {
+            x.fixed_rows_mut::<3>(0).fill(0.0);
+        }
+    }
+
     /// Tick `k`'s gyro reading, corrected by the run's model to `corrected` at attitude `q`.
     pub fn gyro(&mut self, data: &Aligned, k: usize, q: &Attitude, corrected: &Vector3<f64>) {
         for (j, (model, step)) in self.models.iter().enumerate() {

@@ -94,6 +94,7 @@ use crate::predict::{self, COMPONENTS};
 use crate::stats::chi_square_quantile;
 use rayon::prelude::*;
 use std::collections::{BTreeMap, HashMap};
+use std::ops::Range;
 use testbed_model::ModelConfig;
 
 /// Identify what the model gets wrong in `data` (see the module documentation).
@@ -113,6 +114,9 @@ pub fn identify(
     let (cleaned, spikes) = crate::spikes::remove(data, model);
     let mut identification = identify_clean(&cleaned, model, options)?;
     let report = &mut identification.report;
+    if let Some(line) = crate::data::silences_summary(&report.data.silences) {
+        report.summary.insert(0, line);
+    }
     if let Some(line) = crate::spikes::summary(&spikes) {
         report.summary.insert(0, line);
     }
@@ -424,7 +428,6 @@ fn identify_pass(
     // the held-out blocks. In the second pass the baseline is the configuration given, on its
     // own (uncorrected) estimate, and the extended model always differs from it (the
     // correction).
-    let start = nominal.state.recon.start;
     let baseline_recon = match &prior {
         Some(p) => Some(crate::reconstruct::reconstruct(aligned, p.original)?),
         None => None,
@@ -441,7 +444,7 @@ fn identify_pass(
     let (base_held, ext_held, held_fraction, named_only, tiling) = if !cross_validated {
         let held_fraction =
             held_out.iter().filter(|h| **h).count() as f64 / held_out.len().max(1) as f64;
-        let spans = held_out_spans(&held_out, start);
+        let spans = held_out_spans(&held_out, &nominal.state.recon.spans);
         let windows = predict::windows(aligned, &spans, options.horizon_s);
         let base_held = predict::predict(aligned, baseline_recon, baseline_model, &windows)?;
         let ext_held = if extends {
@@ -469,7 +472,10 @@ fn identify_pass(
     } else {
         let fold_windows: Vec<Vec<(usize, usize)>> = fold_masks
             .iter()
-            .map(|mask| predict::windows(aligned, &held_out_spans(mask, start), options.horizon_s))
+            .map(|mask| {
+                let spans = held_out_spans(mask, &nominal.state.recon.spans);
+                predict::windows(aligned, &spans, options.horizon_s)
+            })
             .collect();
         let mut windows: Vec<(usize, usize)> = fold_windows.iter().flatten().copied().collect();
         windows.sort_unstable();
@@ -598,7 +604,9 @@ fn identify_pass(
     let (all_windows, own_prediction) = match tiling {
         Some(windows) => (windows, None),
         None => {
-            let all_spans = [(nominal.state.recon.start, aligned.len())];
+            let all_spans: Vec<(usize, usize)> = (nominal.state.recon.spans.iter())
+                .map(|s| (s.start, s.end))
+                .collect();
             let all_windows = predict::windows(aligned, &all_spans, options.horizon_s);
             let prediction =
                 predict::predict(aligned, baseline_recon, baseline_model, &all_windows)?;
@@ -760,6 +768,7 @@ fn identify_pass(
             devices,
             held_out_fraction: held_fraction,
             spikes: Vec::new(),
+            silences: aligned.silences(),
         },
         options: options.clone(),
         nominal_residuals: nominal_report,
@@ -796,19 +805,21 @@ fn identify_pass(
 /// Least relative drop of the held-out prediction's RMS for the fitted torque to be carried.
 const MIN_EXTENSION_GAIN: f64 = 0.01;
 
-/// Contiguous runs of held-out ticks after `start`.
-fn held_out_spans(held: &[bool], start: usize) -> Vec<(usize, usize)> {
+/// Contiguous runs of held-out ticks within the spans of estimates `estimated`.
+fn held_out_spans(held: &[bool], estimated: &[Range<usize>]) -> Vec<(usize, usize)> {
     let mut out = Vec::new();
-    let mut k = start;
-    while k < held.len() {
-        if held[k] {
-            let a = k;
-            while k < held.len() && held[k] {
+    for span in estimated {
+        let mut k = span.start;
+        while k < span.end {
+            if held[k] {
+                let a = k;
+                while k < span.end && held[k] {
+                    k += 1;
+                }
+                out.push((a, k));
+            } else {
                 k += 1;
             }
-            out.push((a, k));
-        } else {
-            k += 1;
         }
     }
     out

@@ -23,6 +23,9 @@ pub struct DataSummary {
     pub held_out_fraction: f64,
     /// Readings left out as isolated spikes (see [`crate::spikes`]), in file and time order.
     pub spikes: Vec<crate::spikes::Spike>,
+    /// The gyro's and the wheels' silences longer than a break ([`crate::data::BREAK_S`]), in
+    /// time order.
+    pub silences: Vec<crate::data::Silence>,
 }
 
 /// Statistics of one residual component.
