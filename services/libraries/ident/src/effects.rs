@@ -23,6 +23,7 @@
 //! | `soft_iron` | `matrix` — the symmetric soft-iron matrix `S` of `(1 + S) A(q) M_L`, dimensionless, as its six entries `[S_xx, S_yy, S_zz, S_xy, S_yz, S_zx]` |
 //! | `inclinometer_bias` | `offset_rad` — mounting offset of the tilt angles θ (body X), φ (body Y), rad |
 //! | `inclinometer_scale` | `ppm` — scale error of the tilt angles θ, φ, parts per million |
+//! | `inclinometer_lag` | `time_constant_s` — the tilt angles lag the platform's: `θ − τ θ̇` (a first-order response, or a late stamp), s |
 //! | `thruster_torque_scale` | `scale` — delivered / nominal thrust per thruster 0–5 |
 //! | `propellant_com_shift` | `tank_position_m` — the propellant's centre of mass from the bearing centre, m, body axes (`[thrusters].tank_position_m`) |
 //!
@@ -44,8 +45,9 @@ use serde::Serialize;
 use testbed_model::ModelConfig;
 use testbed_model::config::{
     ActuatorDelay, AeroDrag, ComDrift, ComOffset, ConstantTorque, EarthRate, GYRO_DELAY_MAX_S,
-    GyroDelay, GyroMisalignment, GyroScale, InclinometerBias, InclinometerScale, InertiaError,
-    MagneticDisturbance, SoftIron, WheelFriction, WheelTorqueScale,
+    GyroDelay, GyroMisalignment, GyroScale, INCLINOMETER_LAG_MAX_S, InclinometerBias,
+    InclinometerLag, InclinometerScale, InertiaError, MagneticDisturbance, SoftIron, WheelFriction,
+    WheelTorqueScale,
 };
 use testbed_model::thruster_config::{THRUSTER_COUNT, ThrusterConfig, ThrusterTorqueScale};
 
@@ -69,6 +71,7 @@ pub enum Cause {
     SoftIron,
     InclinometerBias,
     InclinometerScale,
+    InclinometerLag,
     ThrusterTorqueScale,
     PropellantComShift,
 }
@@ -231,6 +234,14 @@ const P_TILT_SCALE: &[ParamSpec] = &[spec(
     1e5,
     100.0,
 )];
+const P_TILT_LAG: &[ParamSpec] = &[spec(
+    "time_constant_s",
+    1,
+    "s",
+    0.0,
+    INCLINOMETER_LAG_MAX_S,
+    0.05,
+)];
 const P_DELAY: &[ParamSpec] = &[spec("delay_s", 1, "s", 0.0, 10.0, 0.01)];
 const P_MAG: &[ParamSpec] = &[spec(
     "hard_iron_gauss",
@@ -271,7 +282,7 @@ pub fn soft_iron_matrix(values: &[f64]) -> [[f64; 3]; 3] {
 
 impl Cause {
     /// Every cause, in the library's order.
-    pub const ALL: [Cause; 18] = [
+    pub const ALL: [Cause; 19] = [
         Cause::ComOffset,
         Cause::ComDrift,
         Cause::EarthRate,
@@ -288,6 +299,7 @@ impl Cause {
         Cause::SoftIron,
         Cause::InclinometerBias,
         Cause::InclinometerScale,
+        Cause::InclinometerLag,
         Cause::ThrusterTorqueScale,
         Cause::PropellantComShift,
     ];
@@ -311,6 +323,7 @@ impl Cause {
             Cause::SoftIron => "soft_iron",
             Cause::InclinometerBias => "inclinometer_bias",
             Cause::InclinometerScale => "inclinometer_scale",
+            Cause::InclinometerLag => "inclinometer_lag",
             Cause::ThrusterTorqueScale => "thruster_torque_scale",
             Cause::PropellantComShift => "propellant_com_shift",
         }
@@ -358,6 +371,10 @@ impl Cause {
                 "inclinometer mounted off level with the body axes: a constant offset of its angles"
             }
             Cause::InclinometerScale => "inclinometer scale-factor error per angle",
+            Cause::InclinometerLag => {
+                "the inclinometer's angles lag the platform's (a first-order response, or stamped \
+                 late): θ − τ θ̇"
+            }
             Cause::ThrusterTorqueScale => {
                 "thrusters deliver a scaled thrust (worn nozzle, regulator set wrong), per thruster"
             }
@@ -377,7 +394,8 @@ impl Cause {
             | Cause::MagneticDisturbance
             | Cause::SoftIron
             | Cause::InclinometerBias
-            | Cause::InclinometerScale => Kind::Sensor,
+            | Cause::InclinometerScale
+            | Cause::InclinometerLag => Kind::Sensor,
             Cause::ComOffset
             | Cause::ComDrift
             | Cause::AeroDrag
@@ -413,6 +431,7 @@ impl Cause {
             Cause::SoftIron => P_SOFT,
             Cause::InclinometerBias => P_TILT_BIAS,
             Cause::InclinometerScale => P_TILT_SCALE,
+            Cause::InclinometerLag => P_TILT_LAG,
             Cause::ThrusterTorqueScale => P_THRUSTER_SCALE,
             Cause::PropellantComShift => P_TANK,
         }
@@ -475,6 +494,7 @@ impl Cause {
             Cause::SoftIron => e.soft_iron.is_some(),
             Cause::InclinometerBias => e.inclinometer_bias.is_some(),
             Cause::InclinometerScale => e.inclinometer_scale.is_some(),
+            Cause::InclinometerLag => e.inclinometer_lag.is_some(),
             Cause::ThrusterTorqueScale => e.thruster_torque_scale.is_some(),
             // The tank position is part of `[thrusters]`: present with the thrusters.
             Cause::PropellantComShift => config.thrusters.is_some(),
@@ -571,6 +591,11 @@ impl Cause {
                 .as_ref()
                 .map_or([0.0; 2], |x| x.ppm)
                 .to_vec(),
+            Cause::InclinometerLag => vec![
+                e.inclinometer_lag
+                    .as_ref()
+                    .map_or(0.0, |x| x.time_constant_s),
+            ],
             Cause::ThrusterTorqueScale => e
                 .thruster_torque_scale
                 .as_ref()
@@ -656,6 +681,11 @@ impl Cause {
             }
             Cause::InclinometerScale => {
                 e.inclinometer_scale = Some(InclinometerScale { ppm: [v[0], v[1]] })
+            }
+            Cause::InclinometerLag => {
+                e.inclinometer_lag = Some(InclinometerLag {
+                    time_constant_s: v[0],
+                })
             }
             Cause::ThrusterTorqueScale => {
                 e.thruster_torque_scale = Some(ThrusterTorqueScale {

@@ -350,7 +350,7 @@ pub fn predict(
                 continue;
             }
             if let Some(k) = nearest(t) {
-                let predicted = sensors.tilt_reading(&attitudes[k - k0]);
+                let predicted = sensors.tilt_reading(&attitudes[k - k0], &rates[k - k0]);
                 for c in 0..2 {
                     residuals[3 + c].push((t, tilt[c] - predicted[c]));
                 }

@@ -43,6 +43,8 @@ pub struct SensorModel {
     pub tilt_offset_rad: [f64; 2],
     /// Inclinometer gain of `[θ, φ]`, `1 + s` (one without `inclinometer_scale`).
     pub tilt_gain: [f64; 2],
+    /// Inclinometer lag `τ`, s: it reads `θ − τ θ̇` (zero without `inclinometer_lag`).
+    pub tilt_lag_s: f64,
     /// Lab field in the level frame, tesla.
     pub field_l_t: Vector3<f64>,
     /// The fitted field error of `effects.fitted_field` (a function of the attitude), tesla.
@@ -90,6 +92,10 @@ impl SensorModel {
                 .inclinometer_scale
                 .as_ref()
                 .map_or([1.0; 2], |s| s.ppm.map(|p| 1.0 + p * 1e-6)),
+            tilt_lag_s: e
+                .inclinometer_lag
+                .as_ref()
+                .map_or(0.0, |l| l.time_constant_s),
             field_l_t: config.platform.field_l_t(),
             fitted_field: FittedFieldModel::from_config(
                 e.fitted_field.as_ref(),
@@ -124,15 +130,27 @@ impl SensorModel {
         self.gyro_matrix * (w + q * self.earth_rate_l + bias)
     }
 
-    /// The tilt reading `[θ, φ]` (rad) with the mounting offset and the scale error taken out.
-    pub fn correct_tilt(&self, tilt: &[f64; 2]) -> [f64; 2] {
-        std::array::from_fn(|i| (tilt[i] - self.tilt_offset_rad[i]) / self.tilt_gain[i])
+    /// The tilt reading `[θ, φ]` (rad) with the mounting offset and the scale error taken out,
+    /// and the lag made up with the tilt rates at attitude `q` and body rate `w` (the filter's
+    /// estimates when the sample is applied).
+    pub fn correct_tilt(&self, tilt: &[f64; 2], q: &Attitude, w: &Vector3<f64>) -> [f64; 2] {
+        let lag = self.tilt_lag(q, w);
+        std::array::from_fn(|i| (tilt[i] - self.tilt_offset_rad[i]) / self.tilt_gain[i] + lag[i])
     }
 
-    /// The noise-free tilt reading at attitude `q`, rad.
-    pub fn tilt_reading(&self, q: &Attitude) -> [f64; 2] {
+    /// The noise-free tilt reading at attitude `q` and body rate `w`, rad.
+    pub fn tilt_reading(&self, q: &Attitude, w: &Vector3<f64>) -> [f64; 2] {
         let tilt = attitude::tilt_angles(q);
-        std::array::from_fn(|i| self.tilt_gain[i] * tilt[i] + self.tilt_offset_rad[i])
+        let lag = self.tilt_lag(q, w);
+        std::array::from_fn(|i| self.tilt_gain[i] * (tilt[i] - lag[i]) + self.tilt_offset_rad[i])
+    }
+
+    /// What the lag takes off each angle, `τ θ̇`, rad (zero without a lag).
+    fn tilt_lag(&self, q: &Attitude, w: &Vector3<f64>) -> [f64; 2] {
+        if self.tilt_lag_s == 0.0 {
+            return [0.0; 2];
+        }
+        attitude::tilt_rates(q, w).map(|r| self.tilt_lag_s * r)
     }
 
     /// The field reading `m` (tesla, body axes) with the hard iron and the fitted field error
@@ -286,6 +304,7 @@ fn run(
         rate: Vec::with_capacity(n),
         innovations: Vec::with_capacity(data.tilt.len().max(data.field.len())),
     };
+    let initial_bias = Vector3::from(filter_cfg.initial_bias_rad_s);
     let (mut i_tilt, mut i_field) = (0usize, 0usize);
     let mut previous: Option<Vector3<f64>> = None;
     // The span under way (its first tick), and the breaks with the ticks the filter restarted at.
@@ -357,8 +376,9 @@ fn run(
             {
                 i_tilt += 1;
                 if tilt[0].abs() < tilt_range && tilt[1].abs() < tilt_range {
-                    meas.tilt_rad = Some(sensors.correct_tilt(&tilt));
-                    raw_tilt = Some(tilt);
+                    let (q_now, rate) = estimate(&mekf, &q_prior, &w, &initial_bias);
+                    meas.tilt_rad = Some(sensors.correct_tilt(&tilt, &q_now, &rate));
+                    raw_tilt = Some((tilt, q_now, rate));
                 }
             }
             if let Some(&(_, field)) = data
@@ -368,7 +388,7 @@ fn run(
             {
                 i_field += 1;
                 if field.iter().all(|x| x.abs() < field_range) {
-                    let q_now = mekf.as_ref().map_or(q_prior, Mekf::attitude);
+                    let (q_now, _) = estimate(&mekf, &q_prior, &w, &initial_bias);
                     meas.field_b_t = Some(sensors.correct_field(&field, &q_now));
                     raw_field = Some((field, q_now));
                 }
@@ -381,7 +401,7 @@ fn run(
                     if let Some(t) = tangent.as_deref_mut() {
                         let q = raw_field.map_or_else(|| f.attitude(), |(_, q)| q);
                         t.readings(
-                            raw_tilt.as_ref(),
+                            raw_tilt.as_ref().map(|(t, q, w)| (t, q, w)),
                             raw_field.as_ref().map(|(m, _)| m),
                             &meas,
                             &q,
@@ -483,6 +503,20 @@ fn run(
         }
     }
     Ok(out)
+}
+
+/// The attitude and body rate the filter estimates (before it starts: the prior attitude and
+/// the initial bias), `w` the corrected gyro reading.
+fn estimate(
+    mekf: &Option<Mekf>,
+    q_prior: &Attitude,
+    w: &Vector3<f64>,
+    initial_bias: &Vector3<f64>,
+) -> (Attitude, Vector3<f64>) {
+    match mekf {
+        Some(f) => (f.attitude(), w - f.bias()),
+        None => (*q_prior, w - initial_bias),
+    }
 }
 
 /// How far apart in time a tilt and a field sample may be to start the filter as a pair, s: the

@@ -120,7 +120,7 @@ impl Tangent {
     /// filter's attitude `q`) and as the run's model corrected them (`corrected`).
     pub fn readings(
         &mut self,
-        raw_tilt: Option<&[f64; 2]>,
+        raw_tilt: Option<(&[f64; 2], &Attitude, &Vector3<f64>)>,
         raw_field: Option<&Vector3<f64>>,
         corrected: &VectorMeasurements,
         q: &Attitude,
@@ -128,9 +128,9 @@ impl Tangent {
         let down = |[a, b]: [f64; 2]| attitude::gravity_from_tilt(a, b);
         let down0 = corrected.tilt_rad.and_then(down);
         for (j, (model, step)) in self.models.iter().enumerate() {
-            self.gravity[j] = raw_tilt
-                .zip(down0)
-                .and_then(|(t, g0)| Some((down(model.correct_tilt(t))? - g0) / *step));
+            self.gravity[j] = raw_tilt.zip(down0).and_then(|((t, qt, w), g0)| {
+                Some((down(model.correct_tilt(t, qt, w))? - g0) / *step)
+            });
             self.field[j] = raw_field
                 .zip(corrected.field_b_t)
                 .map(|(m, f0)| (model.correct_field(m, q) - f0) / *step);

@@ -51,6 +51,16 @@ pub fn tilt_angles(q: &Attitude) -> [f64; 2] {
     [g.x.clamp(-1.0, 1.0).asin(), g.y.clamp(-1.0, 1.0).asin()]
 }
 
+/// Rates of the tilt angles θ, φ of [`tilt_angles`] at attitude `q` and body rate `w` (rad/s,
+/// body axes, relative to the level frame), rad/s: the down vector moves in body axes as
+/// `Ġ_B = G_B × w`, and `θ = asin G_x`, `φ = asin G_y`.
+pub fn tilt_rates(q: &Attitude, w: &Vector3<f64>) -> [f64; 2] {
+    let g = gravity_b(q);
+    let dg = g.cross(w);
+    let rate = |s: f64, ds: f64| ds / (1.0 - s * s).max(1e-12).sqrt();
+    [rate(g.x, dg.x), rate(g.y, dg.y)]
+}
+
 /// The unit down vector in body axes from inclinometer angles (rad); `None` if
 /// `sin²θ + sin²φ > 1` (no such attitude).
 pub fn gravity_from_tilt(theta: f64, phi: f64) -> Option<Vector3<f64>> {
@@ -82,6 +92,25 @@ pub fn from_heading_pitch_roll(heading: f64, pitch: f64, roll: f64) -> Attitude 
 mod tests {
     use super::*;
     use std::f64::consts::FRAC_PI_2;
+
+    /// The tilt rates are the tilt angles' central difference over the attitude's motion,
+    /// `q(t + dt) = exp(−w dt) q(t)` (body rate `w`).
+    #[test]
+    fn tilt_rates_are_the_angles_derivatives() {
+        let q = from_heading_pitch_roll(1.1, 0.2, -0.15);
+        let w = Vector3::new(0.02, -0.03, 0.05);
+        let dt = 1e-4;
+        let at = |t: f64| tilt_angles(&(Attitude::from_scaled_axis(-w * t) * q));
+        let (after, before) = (at(dt), at(-dt));
+        let rates = tilt_rates(&q, &w);
+        for i in 0..2 {
+            let difference = (after[i] - before[i]) / (2.0 * dt);
+            assert!(
+                (rates[i] - difference).abs() < 1e-9,
+                "{i}: {rates:?} {difference}"
+            );
+        }
+    }
 
     #[test]
     fn quarter_turn_about_up_maps_north_to_body_minus_y() {

@@ -277,7 +277,7 @@ pub fn run_with_thrusters(
             gimbal_rad: Vector4::zeros(),
         };
         if schedule.tilt_due(k) {
-            let reading = devices.inclinometer.sample(&truth.q);
+            let reading = devices.inclinometer.sample(&truth.q, &truth.rate_b);
             vectors.tilt_rad = reading.valid().then_some(reading.tilt_rad);
             record.tilt_rad = Some(reading.tilt_rad);
         }

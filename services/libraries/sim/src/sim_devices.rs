@@ -87,7 +87,7 @@ impl SimInclinometer {
             return None;
         }
         let q = quaternion_from_array(&truth.quaternion)?;
-        let r = self.device.sample(&q);
+        let r = self.device.sample(&q, &v3(&truth.rate));
         let flags = ranged_flags(r.valid(), &r.saturated);
         Some(InclinometerSample {
             header: self.seq.header(truth.header.time_ns, flags),

@@ -236,8 +236,10 @@ fn available(cause: Cause, problem: &Problem, nominal: &SetFit) -> bool {
         Kind::Sensor => {
             !s.recon.innovations.is_empty()
                 && (!cause.magnetometer() || !problem.data.field.is_empty())
-                && (!matches!(cause, Cause::InclinometerBias | Cause::InclinometerScale)
-                    || !problem.data.tilt.is_empty())
+                && (!matches!(
+                    cause,
+                    Cause::InclinometerBias | Cause::InclinometerScale | Cause::InclinometerLag
+                ) || !problem.data.tilt.is_empty())
         }
         // The thrusters' causes only with thruster firings in the data (and `[thrusters]` in
         // the model): otherwise their columns are zero.

@@ -2,11 +2,13 @@
 //! `phi_meas = (1 + s_phi) phi + b_phi + eta_phi`, angles as defined by
 //! [`crate::attitude::tilt_angles`]; `b` is `effects.inclinometer_bias` and `s`
 //! `effects.inclinometer_scale` (zero without them); with `effects.inclinometer_cross_axis`
-//! each angle also reads `k` times the other.
+//! each angle also reads `k` times the other; with `effects.inclinometer_lag` the angles lag,
+//! `theta − tau theta_dot` in place of `theta`.
 
 use super::{DeviceId, device_rng, saturate};
-use crate::attitude::{Attitude, tilt_angles};
+use crate::attitude::{Attitude, tilt_angles, tilt_rates};
 use crate::config::{DEG, ModelConfig};
+use nalgebra::Vector3;
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::StandardNormal;
@@ -40,6 +42,8 @@ pub struct Inclinometer {
     gain: [f64; 2],
     /// Fraction of the other angle read in each, `k`.
     cross: [f64; 2],
+    /// Lag of the angles, s.
+    lag_s: f64,
     range_rad: f64,
     rng: ChaCha8Rng,
 }
@@ -66,6 +70,11 @@ impl Inclinometer {
                 .inclinometer_cross_axis
                 .as_ref()
                 .map_or([0.0; 2], |c| c.coupling),
+            lag_s: config
+                .effects
+                .inclinometer_lag
+                .as_ref()
+                .map_or(0.0, |l| l.time_constant_s),
             range_rad: c.range_deg * DEG,
             rng: device_rng(seed, DeviceId::Inclinometer),
         }
@@ -77,9 +86,13 @@ impl Inclinometer {
         self.period_s
     }
 
-    /// Read the inclinometer at true attitude `q` (L to B).
-    pub fn sample(&mut self, q: &Attitude) -> InclinometerReading {
-        let truth = tilt_angles(q);
+    /// Read the inclinometer at true attitude `q` (L to B) and body rate `w` (rad/s).
+    pub fn sample(&mut self, q: &Attitude, w: &Vector3<f64>) -> InclinometerReading {
+        let mut truth = tilt_angles(q);
+        if self.lag_s != 0.0 {
+            let rates = tilt_rates(q, w);
+            truth = std::array::from_fn(|i| truth[i] - self.lag_s * rates[i]);
+        }
         let mut tilt_rad = [0.0; 2];
         let mut saturated = [false; 2];
         for i in 0..2 {
@@ -112,7 +125,7 @@ mod tests {
         let q = from_heading_pitch_roll(1.2, 0.05, -0.08);
         let truth = tilt_angles(&q);
         let n = 20_000;
-        let readings: Vec<_> = (0..n).map(|_| inc.sample(&q)).collect();
+        let readings: Vec<_> = (0..n).map(|_| inc.sample(&q, &Vector3::zeros())).collect();
         assert!(readings.iter().all(InclinometerReading::valid));
         for (axis, &true_tilt) in truth.iter().enumerate() {
             let xs: Vec<f64> = readings.iter().map(|r| r.tilt_rad[axis]).collect();
@@ -133,7 +146,7 @@ mod tests {
         let mut inc = Inclinometer::new(&config, 0);
         let q = from_heading_pitch_roll(0.7, 0.03, -0.02);
         let [theta, phi] = tilt_angles(&q);
-        let r = inc.sample(&q);
+        let r = inc.sample(&q, &Vector3::zeros());
         assert!((r.tilt_rad[0] - (theta + coupling[0] * phi)).abs() < 1e-15);
         assert!((r.tilt_rad[1] - (phi + coupling[1] * theta)).abs() < 1e-15);
     }
@@ -147,7 +160,7 @@ mod tests {
         let mut inc = Inclinometer::new(&config, 0);
         let q = from_heading_pitch_roll(0.7, 0.03, -0.02);
         let truth = tilt_angles(&q);
-        let r = inc.sample(&q);
+        let r = inc.sample(&q, &Vector3::zeros());
         for axis in 0..2 {
             assert!((r.tilt_rad[axis] - (truth[axis] + offset_rad[axis])).abs() < 1e-15);
         }
@@ -164,11 +177,43 @@ mod tests {
         let mut inc = Inclinometer::new(&config, 0);
         let q = from_heading_pitch_roll(0.7, 0.03, -0.02);
         let truth = tilt_angles(&q);
-        let r = inc.sample(&q);
+        let r = inc.sample(&q, &Vector3::zeros());
         for (axis, gain) in [1.02, 0.99].into_iter().enumerate() {
             let expected = gain * truth[axis] + offset_rad[axis];
             assert!((r.tilt_rad[axis] - expected).abs() < 1e-15);
         }
+    }
+
+    /// A lag reads the angle `τ` earlier: `θ − τ θ̇`, against the angles of the attitude
+    /// turned back by `w τ` (equal to first order in `τ`).
+    #[test]
+    fn a_lag_reads_the_angles_a_time_constant_earlier() {
+        let mut config = ModelConfig::default();
+        config.inclinometer.noise_deg = [0.0; 2];
+        let tau = 0.5;
+        config.effects.inclinometer_lag = Some(crate::config::InclinometerLag {
+            time_constant_s: tau,
+        });
+        let mut inc = Inclinometer::new(&config, 0);
+        let q = from_heading_pitch_roll(0.7, 0.03, -0.02);
+        let w = Vector3::new(2e-3, -3e-3, 1e-2);
+        let r = inc.sample(&q, &w);
+        // The attitude τ earlier: q(t + dt) = exp(−w dt) q, so q(t − τ) = exp(w τ) q; they
+        // differ by the second-order term, at most (w τ)².
+        let earlier = tilt_angles(&(Attitude::from_scaled_axis(w * tau) * q));
+        let now = tilt_angles(&q);
+        let second_order = (w.norm() * tau).powi(2);
+        for axis in 0..2 {
+            let off = (r.tilt_rad[axis] - earlier[axis]).abs();
+            assert!(
+                off < second_order,
+                "axis {axis}: {off:e} ≥ {second_order:e}"
+            );
+            assert!((r.tilt_rad[axis] - now[axis]).abs() > 1e-4, "axis {axis}");
+        }
+        // At rest it reads the angles themselves.
+        let r = inc.sample(&q, &Vector3::zeros());
+        assert_eq!(r.tilt_rad, now);
     }
 
     #[test]
@@ -177,11 +222,17 @@ mod tests {
         config.inclinometer.noise_deg = [0.0; 2];
         let mut inc = Inclinometer::new(&config, 0);
         // Pitch tips body X: θ = 28° is past the ±25° range; φ stays inside.
-        let r = inc.sample(&from_heading_pitch_roll(0.3, 28.0 * DEG, 0.0));
+        let r = inc.sample(
+            &from_heading_pitch_roll(0.3, 28.0 * DEG, 0.0),
+            &Vector3::zeros(),
+        );
         assert_eq!(r.saturated, [true, false]);
         assert!(!r.valid());
         assert!((r.tilt_rad[0] - 25.0 * DEG).abs() < 1e-15);
-        let r = inc.sample(&from_heading_pitch_roll(0.3, 24.0 * DEG, 0.0));
+        let r = inc.sample(
+            &from_heading_pitch_roll(0.3, 24.0 * DEG, 0.0),
+            &Vector3::zeros(),
+        );
         assert!(r.valid());
         assert!((r.tilt_rad[0] - 24.0 * DEG).abs() < 1e-12);
     }

@@ -157,7 +157,7 @@ mod tests {
         let mut out = Vec::new();
         for _ in 0..n {
             out.extend(set.gyro.sample(&q, &w).rate_rad_s.iter());
-            out.extend(set.inclinometer.sample(&q).tilt_rad.iter());
+            out.extend(set.inclinometer.sample(&q, &w).tilt_rad.iter());
             out.extend(set.magnetometer.sample(&q).field_t.iter());
             out.extend(
                 set.tachometer
@@ -195,7 +195,7 @@ mod tests {
         for _ in 0..20 {
             // Sampling the other devices in between must not shift the gyro's noise.
             set.magnetometer.sample(&q);
-            set.inclinometer.sample(&q);
+            set.inclinometer.sample(&q, &w);
             assert_eq!(alone.sample(&q, &w), set.gyro.sample(&q, &w));
         }
     }
