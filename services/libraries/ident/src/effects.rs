@@ -23,7 +23,8 @@
 //! | `soft_iron` | `matrix` — the symmetric soft-iron matrix `S` of `(1 + S) A(q) M_L`, dimensionless, as its six entries `[S_xx, S_yy, S_zz, S_xy, S_yz, S_zx]` |
 //! | `inclinometer_bias` | `offset_rad` — mounting offset of the tilt angles θ (body X), φ (body Y), rad |
 //! | `inclinometer_scale` | `ppm` — scale error of the tilt angles θ, φ, parts per million |
-//! | `inclinometer_lag` | `time_constant_s` — the tilt angles lag the platform's: `θ − τ θ̇` (a first-order response, or a late stamp), s |
+//! | `inclinometer_lag` | `time_constant_s` — the inclinometer reads the attitude `τ` earlier, about `θ − τ θ̇` (a first-order response, or a late stamp), s |
+//! | `magnetometer_lag` | `time_constant_s` — the magnetometer reads the field of the attitude `τ` earlier, s |
 //! | `thruster_torque_scale` | `scale` — delivered / nominal thrust per thruster 0–5 |
 //! | `propellant_com_shift` | `tank_position_m` — the propellant's centre of mass from the bearing centre, m, body axes (`[thrusters].tank_position_m`) |
 //!
@@ -45,8 +46,8 @@ use serde::Serialize;
 use testbed_model::ModelConfig;
 use testbed_model::config::{
     ActuatorDelay, AeroDrag, ComDrift, ComOffset, ConstantTorque, EarthRate, GYRO_DELAY_MAX_S,
-    GyroDelay, GyroMisalignment, GyroScale, INCLINOMETER_LAG_MAX_S, InclinometerBias,
-    InclinometerLag, InclinometerScale, InertiaError, MagneticDisturbance, SoftIron, WheelFriction,
+    GyroDelay, GyroMisalignment, GyroScale, InclinometerBias, InclinometerLag, InclinometerScale,
+    InertiaError, MagneticDisturbance, MagnetometerLag, SENSOR_LAG_MAX_S, SoftIron, WheelFriction,
     WheelTorqueScale,
 };
 use testbed_model::thruster_config::{THRUSTER_COUNT, ThrusterConfig, ThrusterTorqueScale};
@@ -72,6 +73,7 @@ pub enum Cause {
     InclinometerBias,
     InclinometerScale,
     InclinometerLag,
+    MagnetometerLag,
     ThrusterTorqueScale,
     PropellantComShift,
 }
@@ -234,14 +236,8 @@ const P_TILT_SCALE: &[ParamSpec] = &[spec(
     1e5,
     100.0,
 )];
-const P_TILT_LAG: &[ParamSpec] = &[spec(
-    "time_constant_s",
-    1,
-    "s",
-    0.0,
-    INCLINOMETER_LAG_MAX_S,
-    0.05,
-)];
+const P_TILT_LAG: &[ParamSpec] = &[spec("time_constant_s", 1, "s", 0.0, SENSOR_LAG_MAX_S, 0.05)];
+const P_FIELD_LAG: &[ParamSpec] = &[spec("time_constant_s", 1, "s", 0.0, SENSOR_LAG_MAX_S, 0.05)];
 const P_DELAY: &[ParamSpec] = &[spec("delay_s", 1, "s", 0.0, 10.0, 0.01)];
 const P_MAG: &[ParamSpec] = &[spec(
     "hard_iron_gauss",
@@ -282,7 +278,7 @@ pub fn soft_iron_matrix(values: &[f64]) -> [[f64; 3]; 3] {
 
 impl Cause {
     /// Every cause, in the library's order.
-    pub const ALL: [Cause; 19] = [
+    pub const ALL: [Cause; 20] = [
         Cause::ComOffset,
         Cause::ComDrift,
         Cause::EarthRate,
@@ -300,6 +296,7 @@ impl Cause {
         Cause::InclinometerBias,
         Cause::InclinometerScale,
         Cause::InclinometerLag,
+        Cause::MagnetometerLag,
         Cause::ThrusterTorqueScale,
         Cause::PropellantComShift,
     ];
@@ -324,6 +321,7 @@ impl Cause {
             Cause::InclinometerBias => "inclinometer_bias",
             Cause::InclinometerScale => "inclinometer_scale",
             Cause::InclinometerLag => "inclinometer_lag",
+            Cause::MagnetometerLag => "magnetometer_lag",
             Cause::ThrusterTorqueScale => "thruster_torque_scale",
             Cause::PropellantComShift => "propellant_com_shift",
         }
@@ -373,7 +371,11 @@ impl Cause {
             Cause::InclinometerScale => "inclinometer scale-factor error per angle",
             Cause::InclinometerLag => {
                 "the inclinometer's angles lag the platform's (a first-order response, or stamped \
-                 late): θ − τ θ̇"
+                 late): it reads the attitude τ earlier, about θ − τ θ̇"
+            }
+            Cause::MagnetometerLag => {
+                "the magnetometer lags the platform (it averages, or is stamped late): it reads \
+                 the field of the attitude τ earlier"
             }
             Cause::ThrusterTorqueScale => {
                 "thrusters deliver a scaled thrust (worn nozzle, regulator set wrong), per thruster"
@@ -395,7 +397,8 @@ impl Cause {
             | Cause::SoftIron
             | Cause::InclinometerBias
             | Cause::InclinometerScale
-            | Cause::InclinometerLag => Kind::Sensor,
+            | Cause::InclinometerLag
+            | Cause::MagnetometerLag => Kind::Sensor,
             Cause::ComOffset
             | Cause::ComDrift
             | Cause::AeroDrag
@@ -432,6 +435,7 @@ impl Cause {
             Cause::InclinometerBias => P_TILT_BIAS,
             Cause::InclinometerScale => P_TILT_SCALE,
             Cause::InclinometerLag => P_TILT_LAG,
+            Cause::MagnetometerLag => P_FIELD_LAG,
             Cause::ThrusterTorqueScale => P_THRUSTER_SCALE,
             Cause::PropellantComShift => P_TANK,
         }
@@ -495,6 +499,7 @@ impl Cause {
             Cause::InclinometerBias => e.inclinometer_bias.is_some(),
             Cause::InclinometerScale => e.inclinometer_scale.is_some(),
             Cause::InclinometerLag => e.inclinometer_lag.is_some(),
+            Cause::MagnetometerLag => e.magnetometer_lag.is_some(),
             Cause::ThrusterTorqueScale => e.thruster_torque_scale.is_some(),
             // The tank position is part of `[thrusters]`: present with the thrusters.
             Cause::PropellantComShift => config.thrusters.is_some(),
@@ -596,6 +601,11 @@ impl Cause {
                     .as_ref()
                     .map_or(0.0, |x| x.time_constant_s),
             ],
+            Cause::MagnetometerLag => vec![
+                e.magnetometer_lag
+                    .as_ref()
+                    .map_or(0.0, |x| x.time_constant_s),
+            ],
             Cause::ThrusterTorqueScale => e
                 .thruster_torque_scale
                 .as_ref()
@@ -684,6 +694,11 @@ impl Cause {
             }
             Cause::InclinometerLag => {
                 e.inclinometer_lag = Some(InclinometerLag {
+                    time_constant_s: v[0],
+                })
+            }
+            Cause::MagnetometerLag => {
+                e.magnetometer_lag = Some(MagnetometerLag {
                     time_constant_s: v[0],
                 })
             }

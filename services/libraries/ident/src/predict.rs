@@ -366,7 +366,7 @@ pub fn predict(
                 continue;
             }
             if let Some(k) = nearest(t) {
-                let predicted = sensors.field_reading(&attitudes[k - k0]);
+                let predicted = sensors.field_reading(&attitudes[k - k0], &rates[k - k0]);
                 for c in 0..3 {
                     residuals[5 + c].push((t, field[c] - predicted[c]));
                 }

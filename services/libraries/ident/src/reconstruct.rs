@@ -43,8 +43,11 @@ pub struct SensorModel {
     pub tilt_offset_rad: [f64; 2],
     /// Inclinometer gain of `[θ, φ]`, `1 + s` (one without `inclinometer_scale`).
     pub tilt_gain: [f64; 2],
-    /// Inclinometer lag `τ`, s: it reads `θ − τ θ̇` (zero without `inclinometer_lag`).
+    /// Inclinometer lag `τ`, s: it reads the attitude `τ` earlier (zero without
+    /// `inclinometer_lag`).
     pub tilt_lag_s: f64,
+    /// Magnetometer lag, s (zero without `magnetometer_lag`).
+    pub field_lag_s: f64,
     /// Lab field in the level frame, tesla.
     pub field_l_t: Vector3<f64>,
     /// The fitted field error of `effects.fitted_field` (a function of the attitude), tesla.
@@ -96,6 +99,10 @@ impl SensorModel {
                 .inclinometer_lag
                 .as_ref()
                 .map_or(0.0, |l| l.time_constant_s),
+            field_lag_s: e
+                .magnetometer_lag
+                .as_ref()
+                .map_or(0.0, |l| l.time_constant_s),
             field_l_t: config.platform.field_l_t(),
             fitted_field: FittedFieldModel::from_config(
                 e.fitted_field.as_ref(),
@@ -131,38 +138,48 @@ impl SensorModel {
     }
 
     /// The tilt reading `[θ, φ]` (rad) with the mounting offset and the scale error taken out,
-    /// and the lag made up with the tilt rates at attitude `q` and body rate `w` (the filter's
-    /// estimates when the sample is applied).
+    /// and the lag made up: the angles' change from the attitude the lag earlier to `q`, at
+    /// body rate `w` (the filter's estimates when the sample is applied).
     pub fn correct_tilt(&self, tilt: &[f64; 2], q: &Attitude, w: &Vector3<f64>) -> [f64; 2] {
-        let lag = self.tilt_lag(q, w);
-        std::array::from_fn(|i| (tilt[i] - self.tilt_offset_rad[i]) / self.tilt_gain[i] + lag[i])
+        let corrected = |i: usize| (tilt[i] - self.tilt_offset_rad[i]) / self.tilt_gain[i];
+        if self.tilt_lag_s == 0.0 {
+            return std::array::from_fn(corrected);
+        }
+        let (now, then) = (
+            attitude::tilt_angles(q),
+            attitude::tilt_angles(&attitude::lagged(q, w, self.tilt_lag_s)),
+        );
+        std::array::from_fn(|i| corrected(i) + now[i] - then[i])
     }
 
     /// The noise-free tilt reading at attitude `q` and body rate `w`, rad.
     pub fn tilt_reading(&self, q: &Attitude, w: &Vector3<f64>) -> [f64; 2] {
-        let tilt = attitude::tilt_angles(q);
-        let lag = self.tilt_lag(q, w);
-        std::array::from_fn(|i| self.tilt_gain[i] * (tilt[i] - lag[i]) + self.tilt_offset_rad[i])
-    }
-
-    /// What the lag takes off each angle, `τ θ̇`, rad (zero without a lag).
-    fn tilt_lag(&self, q: &Attitude, w: &Vector3<f64>) -> [f64; 2] {
-        if self.tilt_lag_s == 0.0 {
-            return [0.0; 2];
-        }
-        attitude::tilt_rates(q, w).map(|r| self.tilt_lag_s * r)
+        let tilt = attitude::tilt_angles(&attitude::lagged(q, w, self.tilt_lag_s));
+        std::array::from_fn(|i| self.tilt_gain[i] * tilt[i] + self.tilt_offset_rad[i])
     }
 
     /// The field reading `m` (tesla, body axes) with the hard iron and the fitted field error
     /// at attitude `q` (the filter's estimate when the sample is applied) taken out, then the
     /// soft iron undone, tesla: `(1 + S)⁻¹ (m − M_hard − ΔM(q))`.
-    pub fn correct_field(&self, m: &Vector3<f64>, q: &Attitude) -> Vector3<f64> {
-        self.soft_iron_inv * (m - self.hard_iron_t - self.fitted_field.error_t(q))
+    ///
+    /// With a lag, the reading is of the attitude the lag earlier at body rate `w`: the errors
+    /// are those of that attitude, and the field it gives is turned on to `q`.
+    pub fn correct_field(&self, m: &Vector3<f64>, q: &Attitude, w: &Vector3<f64>) -> Vector3<f64> {
+        let then = attitude::lagged(q, w, self.field_lag_s);
+        let corrected =
+            self.soft_iron_inv * (m - self.hard_iron_t - self.fitted_field.error_t(&then));
+        if self.field_lag_s == 0.0 {
+            return corrected;
+        }
+        (q * then.inverse()) * corrected
     }
 
-    /// The noise-free field reading at attitude `q`, tesla.
-    pub fn field_reading(&self, q: &Attitude) -> Vector3<f64> {
-        self.soft_iron * (q * self.field_l_t) + self.hard_iron_t + self.fitted_field.error_t(q)
+    /// The noise-free field reading at attitude `q` and body rate `w`, tesla.
+    pub fn field_reading(&self, q: &Attitude, w: &Vector3<f64>) -> Vector3<f64> {
+        let then = attitude::lagged(q, w, self.field_lag_s);
+        self.soft_iron * (then * self.field_l_t)
+            + self.hard_iron_t
+            + self.fitted_field.error_t(&then)
     }
 }
 
@@ -388,9 +405,9 @@ fn run(
             {
                 i_field += 1;
                 if field.iter().all(|x| x.abs() < field_range) {
-                    let (q_now, _) = estimate(&mekf, &q_prior, &w, &initial_bias);
-                    meas.field_b_t = Some(sensors.correct_field(&field, &q_now));
-                    raw_field = Some((field, q_now));
+                    let (q_now, rate) = estimate(&mekf, &q_prior, &w, &initial_bias);
+                    meas.field_b_t = Some(sensors.correct_field(&field, &q_now, &rate));
+                    raw_field = Some((field, q_now, rate));
                 }
             }
             if t_sample < -1e-9 || (meas.tilt_rad.is_none() && meas.field_b_t.is_none()) {
@@ -399,12 +416,10 @@ fn run(
             match mekf.as_mut() {
                 Some(f) => {
                     if let Some(t) = tangent.as_deref_mut() {
-                        let q = raw_field.map_or_else(|| f.attitude(), |(_, q)| q);
                         t.readings(
                             raw_tilt.as_ref().map(|(t, q, w)| (t, q, w)),
-                            raw_field.as_ref().map(|(m, _)| m),
+                            raw_field.as_ref().map(|(m, q, w)| (m, q, w)),
                             &meas,
-                            &q,
                         );
                     }
                     let report = f.update(t_ns(t_sample), &meas)?;
@@ -632,9 +647,9 @@ mod tests {
         .expect("valid");
         let sensors = SensorModel::from_config(&config);
         let q = attitude::from_heading_pitch_roll(0.7, 0.1, -0.05);
-        let reading = sensors.field_reading(&q);
+        let reading = sensors.field_reading(&q, &Vector3::zeros());
         let body = q * config.platform.field_l_t();
         assert!((reading - body).norm() > 1e-6);
-        assert!((sensors.correct_field(&reading, &q) - body).norm() < 1e-18);
+        assert!((sensors.correct_field(&reading, &q, &Vector3::zeros()) - body).norm() < 1e-18);
     }
 }

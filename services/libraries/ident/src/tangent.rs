@@ -121,9 +121,8 @@ impl Tangent {
     pub fn readings(
         &mut self,
         raw_tilt: Option<(&[f64; 2], &Attitude, &Vector3<f64>)>,
-        raw_field: Option<&Vector3<f64>>,
+        raw_field: Option<(&Vector3<f64>, &Attitude, &Vector3<f64>)>,
         corrected: &VectorMeasurements,
-        q: &Attitude,
     ) {
         let down = |[a, b]: [f64; 2]| attitude::gravity_from_tilt(a, b);
         let down0 = corrected.tilt_rad.and_then(down);
@@ -133,7 +132,7 @@ impl Tangent {
             });
             self.field[j] = raw_field
                 .zip(corrected.field_b_t)
-                .map(|(m, f0)| (model.correct_field(m, q) - f0) / *step);
+                .map(|((m, q, w), f0)| (model.correct_field(m, q, w) - f0) / *step);
         }
     }
 

@@ -884,32 +884,3 @@ fn identifying_again_with_the_extended_model_finds_the_wheel_drag_explained() {
         "no wheel cause for an explained drag: {named:?}"
     );
 }
-
-#[test]
-fn a_magnetometer_stamped_late_starts_the_filter_and_shows_as_a_field_error_in_the_rates() {
-    // Devices with their own clocks: the magnetometer's time stamps 0.1 s after its samples,
-    // so no field sample falls on an inclinometer sample. Before the filter could start from a
-    // tilt and a field sample apart in time, identification refused such a record ("the
-    // attitude filter never started"). A field sample `Δ` older than its stamp reads the field
-    // at the attitude of `Δ` before, `−Δ [w×] B` off: the error is in the rates, and no library
-    // cause is named for it.
-    let nominal = nominal();
-    let mut data = experiment_data(&nominal, 65, 600.0);
-    for row in &mut data.magnetometer {
-        row.t_s += 0.1;
-    }
-    let id = testbed_ident::identify(&data, &nominal, &options()).expect("identification runs");
-    check(
-        "magnetometer 0.1 s late",
-        &nominal,
-        &id,
-        &[],
-        &[
-            "innovation_field_x",
-            "innovation_field_y",
-            "innovation_field_z",
-        ],
-        &["w_x", "w_y", "w_z"],
-        1.01,
-    );
-}

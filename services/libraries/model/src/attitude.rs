@@ -51,14 +51,15 @@ pub fn tilt_angles(q: &Attitude) -> [f64; 2] {
     [g.x.clamp(-1.0, 1.0).asin(), g.y.clamp(-1.0, 1.0).asin()]
 }
 
-/// Rates of the tilt angles θ, φ of [`tilt_angles`] at attitude `q` and body rate `w` (rad/s,
-/// body axes, relative to the level frame), rad/s: the down vector moves in body axes as
-/// `Ġ_B = G_B × w`, and `θ = asin G_x`, `φ = asin G_y`.
-pub fn tilt_rates(q: &Attitude, w: &Vector3<f64>) -> [f64; 2] {
-    let g = gravity_b(q);
-    let dg = g.cross(w);
-    let rate = |s: f64, ds: f64| ds / (1.0 - s * s).max(1e-12).sqrt();
-    [rate(g.x, dg.x), rate(g.y, dg.y)]
+/// The attitude `lag_s` before `q` at body rate `w` (rad/s, body axes, relative to the level
+/// frame), held over the lag: `exp(w τ) q`, as `q(t + dt) = exp(−w dt) q(t)`. What a sensor
+/// that lags by `τ` reads (a first-order response at motions slow against `1/τ`, or a late
+/// stamp); `q` itself when `lag_s` is zero.
+pub fn lagged(q: &Attitude, w: &Vector3<f64>, lag_s: f64) -> Attitude {
+    if lag_s == 0.0 {
+        return *q;
+    }
+    Attitude::from_scaled_axis(w * lag_s) * q
 }
 
 /// The unit down vector in body axes from inclinometer angles (rad); `None` if
@@ -93,23 +94,16 @@ mod tests {
     use super::*;
     use std::f64::consts::FRAC_PI_2;
 
-    /// The tilt rates are the tilt angles' central difference over the attitude's motion,
-    /// `q(t + dt) = exp(−w dt) q(t)` (body rate `w`).
+    /// The lagged attitude is the one the motion reaches `τ` later: turned on by `exp(−w τ)`
+    /// it is `q` again, and with no lag it is `q` exactly.
     #[test]
-    fn tilt_rates_are_the_angles_derivatives() {
+    fn a_lagged_attitude_is_the_attitude_a_lag_earlier() {
         let q = from_heading_pitch_roll(1.1, 0.2, -0.15);
         let w = Vector3::new(0.02, -0.03, 0.05);
-        let dt = 1e-4;
-        let at = |t: f64| tilt_angles(&(Attitude::from_scaled_axis(-w * t) * q));
-        let (after, before) = (at(dt), at(-dt));
-        let rates = tilt_rates(&q, &w);
-        for i in 0..2 {
-            let difference = (after[i] - before[i]) / (2.0 * dt);
-            assert!(
-                (rates[i] - difference).abs() < 1e-9,
-                "{i}: {rates:?} {difference}"
-            );
-        }
+        let earlier = lagged(&q, &w, 0.5);
+        assert!(earlier.angle_to(&q) > 0.02);
+        assert!((Attitude::from_scaled_axis(-w * 0.5) * earlier).angle_to(&q) < 1e-15);
+        assert_eq!(lagged(&q, &w, 0.0), q);
     }
 
     #[test]

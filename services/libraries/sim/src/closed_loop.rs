@@ -282,7 +282,7 @@ pub fn run_with_thrusters(
             record.tilt_rad = Some(reading.tilt_rad);
         }
         if schedule.field_due(k) {
-            let reading = devices.magnetometer.sample(&truth.q);
+            let reading = devices.magnetometer.sample(&truth.q, &truth.rate_b);
             vectors.field_b_t = reading.valid().then_some(reading.field_t);
             record.field_t = Some(reading.field_t);
         }

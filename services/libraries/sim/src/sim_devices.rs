@@ -122,7 +122,7 @@ impl SimMagnetometer {
             return None;
         }
         let q = quaternion_from_array(&truth.quaternion)?;
-        let r = self.device.sample(&q);
+        let r = self.device.sample(&q, &v3(&truth.rate));
         let flags = ranged_flags(r.valid(), &r.saturated);
         Some(MagnetometerSample {
             header: self.seq.header(truth.header.time_ns, flags),

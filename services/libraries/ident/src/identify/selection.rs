@@ -235,7 +235,8 @@ fn available(cause: Cause, problem: &Problem, nominal: &SetFit) -> bool {
     match cause.kind() {
         Kind::Sensor => {
             !s.recon.innovations.is_empty()
-                && (!cause.magnetometer() || !problem.data.field.is_empty())
+                && (!(cause.magnetometer() || cause == Cause::MagnetometerLag)
+                    || !problem.data.field.is_empty())
                 && (!matches!(
                     cause,
                     Cause::InclinometerBias | Cause::InclinometerScale | Cause::InclinometerLag

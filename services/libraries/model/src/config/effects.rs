@@ -31,6 +31,8 @@ pub struct EffectsConfig {
     pub soft_iron: Option<SoftIron>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub inclinometer_lag: Option<InclinometerLag>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub magnetometer_lag: Option<MagnetometerLag>,
     /// Effects outside identification's cause library (the simulator can produce them so tests
     /// can check that `testbed identify` reports them as unexplained rather than absorbing
     /// them into library causes). Off unless configured.
@@ -293,20 +295,31 @@ pub struct InclinometerBias {
     pub offset_rad: [f64; 2],
 }
 
-/// The inclinometer's angles lag the platform's: `θ_meas = θ − τ θ̇`. It is what a first-order
-/// response of time constant `τ` reads (an electrolytic sensor's settling, an output filter)
-/// while the platform moves slowly against `1/τ`, and what readings stamped `τ` late read: at
-/// the platform's manoeuvres (periods of tens of seconds) the two are alike. Typical 0.1–1 s.
+/// The inclinometer's angles lag the platform's: it reads the angles of the attitude `τ`
+/// earlier ([`crate::attitude::lagged`]), about `θ − τ θ̇`. It is what a first-order response of
+/// time constant `τ` reads (an electrolytic sensor's settling, an output filter) while the
+/// platform moves slowly against `1/τ`, and what readings stamped `τ` late read: at the
+/// platform's manoeuvres (periods of tens of seconds) the two are alike. Typical 0.1–1 s.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct InclinometerLag {
-    /// `τ`, s (0 to [`INCLINOMETER_LAG_MAX_S`]).
+    /// `τ`, s (0 to [`SENSOR_LAG_MAX_S`]).
     pub time_constant_s: f64,
 }
 
-/// The longest inclinometer lag a configuration accepts, s: beyond it `θ − τ θ̇` is no longer
-/// a lag at the platform's motions (a slew of 1°/s would read a degree off).
-pub const INCLINOMETER_LAG_MAX_S: f64 = 2.0;
+/// The magnetometer lags the platform: it reads the field of the attitude `τ` earlier
+/// ([`crate::attitude::lagged`]): a device that averages or filters its samples, or readings
+/// stamped on arrival. Typical 0.01–0.2 s.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MagnetometerLag {
+    /// `τ`, s (0 to [`SENSOR_LAG_MAX_S`]).
+    pub time_constant_s: f64,
+}
+
+/// The longest lag of a vector sensor a configuration accepts, s: beyond it a first-order
+/// response no longer reads like the attitude a lag earlier at the platform's motions.
+pub const SENSOR_LAG_MAX_S: f64 = 2.0;
 
 /// Each inclinometer angle also reads a fraction of the other: `θ_meas = … + k_θ φ`,
 /// `φ_meas = … + k_φ θ` (the cross-axis sensitivity of a datasheet; a sensor turned about the

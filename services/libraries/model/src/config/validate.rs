@@ -1,7 +1,7 @@
 //! [`ModelConfig::validate`]: what no physical platform can have, refused with the key and the
 //! value.
 
-use super::{ConfigError, GYRO_DELAY_MAX_S, INCLINOMETER_LAG_MAX_S, ModelConfig};
+use super::{ConfigError, GYRO_DELAY_MAX_S, ModelConfig, SENSOR_LAG_MAX_S};
 use crate::devices::fitted_field::FieldFunction;
 use crate::physics::fitted_torque::{TorqueFunction, axis_index};
 use crate::physics::fitted_wheel_torque::WheelFunction;
@@ -160,13 +160,20 @@ impl ModelConfig {
                 );
             }
         }
-        if let Some(x) = &e.inclinometer_lag {
-            v.within(
-                "effects.inclinometer_lag.time_constant_s",
-                x.time_constant_s,
-                0.0,
-                INCLINOMETER_LAG_MAX_S,
-            );
+        for (key, lag) in [
+            (
+                "inclinometer_lag",
+                e.inclinometer_lag.as_ref().map(|l| l.time_constant_s),
+            ),
+            (
+                "magnetometer_lag",
+                e.magnetometer_lag.as_ref().map(|l| l.time_constant_s),
+            ),
+        ] {
+            if let Some(tau) = lag {
+                let field = format!("effects.{key}.time_constant_s");
+                v.within(&field, tau, 0.0, SENSOR_LAG_MAX_S);
+            }
         }
         if let Some(x) = &e.inclinometer_scale {
             for (i, s) in x.ppm.iter().enumerate() {

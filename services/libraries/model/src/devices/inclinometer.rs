@@ -2,11 +2,11 @@
 //! `phi_meas = (1 + s_phi) phi + b_phi + eta_phi`, angles as defined by
 //! [`crate::attitude::tilt_angles`]; `b` is `effects.inclinometer_bias` and `s`
 //! `effects.inclinometer_scale` (zero without them); with `effects.inclinometer_cross_axis`
-//! each angle also reads `k` times the other; with `effects.inclinometer_lag` the angles lag,
-//! `theta − tau theta_dot` in place of `theta`.
+//! each angle also reads `k` times the other; with `effects.inclinometer_lag` the angles are
+//! those of the attitude the lag earlier ([`crate::attitude::lagged`]).
 
 use super::{DeviceId, device_rng, saturate};
-use crate::attitude::{Attitude, tilt_angles, tilt_rates};
+use crate::attitude::{Attitude, lagged, tilt_angles};
 use crate::config::{DEG, ModelConfig};
 use nalgebra::Vector3;
 use rand::Rng;
@@ -88,11 +88,7 @@ impl Inclinometer {
 
     /// Read the inclinometer at true attitude `q` (L to B) and body rate `w` (rad/s).
     pub fn sample(&mut self, q: &Attitude, w: &Vector3<f64>) -> InclinometerReading {
-        let mut truth = tilt_angles(q);
-        if self.lag_s != 0.0 {
-            let rates = tilt_rates(q, w);
-            truth = std::array::from_fn(|i| truth[i] - self.lag_s * rates[i]);
-        }
+        let truth = tilt_angles(&lagged(q, w, self.lag_s));
         let mut tilt_rad = [0.0; 2];
         let mut saturated = [false; 2];
         for i in 0..2 {
@@ -184,8 +180,8 @@ mod tests {
         }
     }
 
-    /// A lag reads the angle `τ` earlier: `θ − τ θ̇`, against the angles of the attitude
-    /// turned back by `w τ` (equal to first order in `τ`).
+    /// A lag reads the angles of the attitude `τ` earlier, about `θ − τ θ̇`; at rest, the
+    /// angles themselves.
     #[test]
     fn a_lag_reads_the_angles_a_time_constant_earlier() {
         let mut config = ModelConfig::default();
@@ -198,22 +194,22 @@ mod tests {
         let q = from_heading_pitch_roll(0.7, 0.03, -0.02);
         let w = Vector3::new(2e-3, -3e-3, 1e-2);
         let r = inc.sample(&q, &w);
-        // The attitude τ earlier: q(t + dt) = exp(−w dt) q, so q(t − τ) = exp(w τ) q; they
-        // differ by the second-order term, at most (w τ)².
-        let earlier = tilt_angles(&(Attitude::from_scaled_axis(w * tau) * q));
         let now = tilt_angles(&q);
+        // The angles' rates by a central difference of the motion q(t + dt) = exp(−w dt) q.
+        let dt = 1e-4;
+        let at = |t: f64| tilt_angles(&(Attitude::from_scaled_axis(-w * t) * q));
         let second_order = (w.norm() * tau).powi(2);
-        for axis in 0..2 {
-            let off = (r.tilt_rad[axis] - earlier[axis]).abs();
+        for (axis, angle) in now.iter().enumerate() {
+            let rate = (at(dt)[axis] - at(-dt)[axis]) / (2.0 * dt);
+            let first_order = angle - tau * rate;
+            let off = (r.tilt_rad[axis] - first_order).abs();
             assert!(
                 off < second_order,
                 "axis {axis}: {off:e} ≥ {second_order:e}"
             );
-            assert!((r.tilt_rad[axis] - now[axis]).abs() > 1e-4, "axis {axis}");
+            assert!((r.tilt_rad[axis] - angle).abs() > 1e-4, "axis {axis}");
         }
-        // At rest it reads the angles themselves.
-        let r = inc.sample(&q, &Vector3::zeros());
-        assert_eq!(r.tilt_rad, now);
+        assert_eq!(inc.sample(&q, &Vector3::zeros()).tilt_rad, now);
     }
 
     #[test]

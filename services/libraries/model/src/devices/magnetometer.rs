@@ -1,8 +1,9 @@
-//! The three-axis magnetometer (CXM-539): `M_meas = A(q) M_L + M_hard + eta_M`.
+//! The three-axis magnetometer (CXM-539): `M_meas = A(q) M_L + M_hard + eta_M`; with
+//! `effects.magnetometer_lag` the reading of the attitude the lag earlier.
 
 use super::fitted_field::FittedFieldModel;
 use super::{DeviceId, device_rng, saturate};
-use crate::attitude::Attitude;
+use crate::attitude::{Attitude, lagged};
 use crate::config::{GAUSS, ModelConfig};
 use nalgebra::{Matrix3, Vector3};
 use rand::Rng;
@@ -39,6 +40,8 @@ pub struct Magnetometer {
     heading_error_t: Option<(Vector3<f64>, Vector3<f64>)>,
     /// `effects.fitted_field`, added to the reading (zero without it).
     fitted: FittedFieldModel,
+    /// Lag of the readings, s (`effects.magnetometer_lag`; zero without it).
+    lag_s: f64,
     noise_t: Vector3<f64>,
     range_t: f64,
     rng: ChaCha8Rng,
@@ -72,6 +75,11 @@ impl Magnetometer {
                 config.effects.fitted_field.as_ref(),
                 &config.platform.field_l_t(),
             ),
+            lag_s: config
+                .effects
+                .magnetometer_lag
+                .as_ref()
+                .map_or(0.0, |l| l.time_constant_s),
             noise_t: c.noise_t(),
             range_t: c.range_gauss * GAUSS,
             rng: device_rng(seed, DeviceId::Magnetometer),
@@ -103,9 +111,10 @@ impl Magnetometer {
         }
     }
 
-    /// Read the magnetometer at true attitude `q` (L to B).
-    pub fn sample(&mut self, q: &Attitude) -> MagnetometerReading {
-        let truth = self.expected_t(q);
+    /// Read the magnetometer at true attitude `q` (L to B) and body rate `w` (rad/s): the
+    /// reading of the attitude its lag earlier.
+    pub fn sample(&mut self, q: &Attitude, w: &Vector3<f64>) -> MagnetometerReading {
+        let truth = self.expected_t(&lagged(q, w, self.lag_s));
         let mut field_t = Vector3::zeros();
         let mut saturated = [false; 3];
         for i in 0..3 {
@@ -122,6 +131,27 @@ mod tests {
     use crate::attitude::from_heading_pitch_roll;
     use crate::config::MagneticDisturbance;
     use crate::devices::stats::assert_white;
+
+    /// A lag reads the field of the attitude `τ` earlier: its change from the present reading
+    /// is about `−τ (M × w)` (a lab-fixed vector moves in body axes as `Ṁ = M × w`).
+    #[test]
+    fn a_lag_reads_the_field_a_time_constant_earlier() {
+        let mut config = ModelConfig::default();
+        config.magnetometer.noise_gauss = [0.0; 3];
+        let tau = 0.2;
+        config.effects.magnetometer_lag = Some(crate::config::MagnetometerLag {
+            time_constant_s: tau,
+        });
+        let mut mag = Magnetometer::new(&config, 0);
+        let q = from_heading_pitch_roll(0.7, 0.03, -0.02);
+        let w = Vector3::new(1e-2, -2e-2, 5e-2);
+        let now = mag.expected_t(&q);
+        let change = mag.sample(&q, &w).field_t - now;
+        let first_order = -tau * now.cross(&w);
+        assert!(change.norm() > 1e-7);
+        assert!((change - first_order).norm() < (w.norm() * tau).powi(2) * now.norm());
+        assert_eq!(mag.sample(&q, &Vector3::zeros()).field_t, now);
+    }
 
     #[test]
     fn soft_iron_multiplies_the_body_field() {
@@ -198,7 +228,7 @@ mod tests {
         let truth = q * Vector3::from(config.platform.field_l_gauss) * GAUSS
             + Vector3::new(0.02, -0.01, 0.005) * GAUSS;
         let n = 20_000;
-        let readings: Vec<_> = (0..n).map(|_| mag.sample(&q)).collect();
+        let readings: Vec<_> = (0..n).map(|_| mag.sample(&q, &Vector3::zeros())).collect();
         assert!(readings.iter().all(MagnetometerReading::valid));
         for axis in 0..3 {
             let xs: Vec<f64> = readings.iter().map(|r| r.field_t[axis]).collect();
@@ -221,7 +251,7 @@ mod tests {
         });
         let mut mag = Magnetometer::new(&config, 0);
         // Level: z reads −0.48 − 0.7 = −1.18 G, past the ±1 G range.
-        let r = mag.sample(&Attitude::identity());
+        let r = mag.sample(&Attitude::identity(), &Vector3::zeros());
         assert_eq!(r.saturated, [false, false, true]);
         assert!(!r.valid());
         assert!((r.field_t.z + 1e-4).abs() < 1e-18);

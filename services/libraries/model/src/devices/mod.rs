@@ -158,7 +158,7 @@ mod tests {
         for _ in 0..n {
             out.extend(set.gyro.sample(&q, &w).rate_rad_s.iter());
             out.extend(set.inclinometer.sample(&q, &w).tilt_rad.iter());
-            out.extend(set.magnetometer.sample(&q).field_t.iter());
+            out.extend(set.magnetometer.sample(&q, &w).field_t.iter());
             out.extend(
                 set.tachometer
                     .sample(&Vector3::new(100.0, -50.0, 0.0))
@@ -194,7 +194,7 @@ mod tests {
         let mut set = DeviceSet::new(&config, 7);
         for _ in 0..20 {
             // Sampling the other devices in between must not shift the gyro's noise.
-            set.magnetometer.sample(&q);
+            set.magnetometer.sample(&q, &w);
             set.inclinometer.sample(&q, &w);
             assert_eq!(alone.sample(&q, &w), set.gyro.sample(&q, &w));
         }
