@@ -501,7 +501,11 @@ fn vector_sensors_stamped_late_are_named_lags() {
         }
         // A field 0.1 s late is off by about its noise (the gain 1.01×); tilts by ten times it.
         let min_gain = if tilt_s > 0.0 { 2.0 } else { 1.0 };
-        assert!(id.report.gain > min_gain, "{label}: gain {}", id.report.gain);
+        assert!(
+            id.report.gain > min_gain,
+            "{label}: gain {}",
+            id.report.gain
+        );
         assert!(
             !id.report.remaining.residual_remains,
             "{label}: {}",
