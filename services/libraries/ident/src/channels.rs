@@ -226,7 +226,7 @@ impl TorqueChannel {
             excited: [false; TORQUE_COLUMNS],
             thrusters: None,
         };
-        let mut k = recon.start.max(1) + 1;
+        let mut k = recon.start().max(1) + 1;
         while k + 1 < n {
             if !usable(k) {
                 k += 1;
@@ -405,7 +405,7 @@ impl WheelChannel {
         let n_max = 0.97 * config.wheels.max_speed_rad_s();
         let mut rows: [Vec<WheelInterval>; 3] = Default::default();
         if let Some(speeds) = &data.wheel_speed {
-            let start = recon.start.max(1);
+            let start = recon.start().max(1);
             let mut k = start;
             while k + 1 < data.len() {
                 let regular =

@@ -537,6 +537,11 @@ pub const BREAK_S: f64 = 1.0;
 /// ... nor a silence of fewer gyro periods than this (a slow gyro's lost rows).
 pub const BREAK_PERIODS: f64 = 5.0;
 
+/// The shortest silence that breaks a record whose gyro's median period is `period_s`, s.
+fn break_s(period_s: f64) -> f64 {
+    BREAK_S.max(BREAK_PERIODS * period_s)
+}
+
 /// A device's silence longer than a break ([`BREAK_S`]), on the data's clock.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct Silence {
@@ -643,9 +648,8 @@ impl Aligned {
             .map(|w| (w[0], w[1]))
             .collect();
         let period_s = median_period(t.iter().copied());
-        let break_s = BREAK_S.max(BREAK_PERIODS * period_s);
         let breaks = (1..t.len())
-            .filter(|&k| t[k] - t[k - 1] > break_s)
+            .filter(|&k| t[k] - t[k - 1] > break_s(period_s))
             .collect();
         Self {
             period_s,
@@ -736,8 +740,8 @@ impl Aligned {
 
     /// The gaps in the wheel telemetry longer than a break.
     fn wheel_silences(&self) -> impl Iterator<Item = &(f64, f64)> {
-        let break_s = BREAK_S.max(BREAK_PERIODS * self.period_s);
-        self.wheel_gaps.iter().filter(move |g| g.1 - g.0 > break_s)
+        let shortest = break_s(self.period_s);
+        self.wheel_gaps.iter().filter(move |g| g.1 - g.0 > shortest)
     }
 
     /// The ticks `[a, b)` less those where the wheel telemetry is silent for longer than a break

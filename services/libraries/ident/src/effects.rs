@@ -415,6 +415,19 @@ impl Cause {
         matches!(self, Cause::MagneticDisturbance | Cause::SoftIron)
     }
 
+    /// Whether the cause acts on the magnetometer's readings (the data need a magnetometer).
+    pub fn needs_field(self) -> bool {
+        self.magnetometer() || self == Cause::MagnetometerLag
+    }
+
+    /// Whether the cause acts on the inclinometer's readings (the data need an inclinometer).
+    pub fn needs_tilt(self) -> bool {
+        matches!(
+            self,
+            Cause::InclinometerBias | Cause::InclinometerScale | Cause::InclinometerLag
+        )
+    }
+
     /// Parameter arrays, in the order of [`Cause::values`].
     pub fn params(self) -> &'static [ParamSpec] {
         match self {

@@ -257,11 +257,14 @@ pub fn predict(
     let window = |k0: usize, k1: usize| -> Option<WindowResiduals> {
         // A window lies within one span of estimates: none crosses a break in the record.
         let span = recon.span_of(k0).filter(|s| k1 < s.end)?;
-        // Initial rate from the averaged total momentum.
-        // (over ticks whose wheel speeds were measured, not interpolated over a silence).
-        let half = (0..=average.min(k0 - span.start).min(span.end - 1 - k0))
-            .rev()
-            .find(|h| data.without_wheel_silences(k0 - h, k0 + h + 1) == [(k0 - h, k0 + h + 1)])?;
+        // Initial rate from the averaged total momentum, over ticks whose wheel speeds were
+        // measured (not interpolated over a silence).
+        let reach = average.min(k0 - span.start).min(span.end - 1 - k0);
+        let (a, b) = (data
+            .without_wheel_silences(k0 - reach, k0 + reach + 1)
+            .into_iter())
+        .find(|&(a, b)| a <= k0 && k0 < b)?;
+        let half = (k0 - a).min(b - 1 - k0);
         let mut h_mean = Vector3::zeros();
         for k in k0 - half..=k0 + half {
             h_mean += inertia * recon.rate[k] + rotor(k);

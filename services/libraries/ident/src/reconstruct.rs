@@ -200,11 +200,10 @@ pub struct Innovation {
 /// The filter's estimates on the data's ticks.
 #[derive(Debug, Clone)]
 pub struct Reconstruction {
-    /// First tick with an estimate (the filter's start); earlier ticks repeat the first estimate.
-    pub start: usize,
     /// The runs of ticks with estimates of their own, in time order: from the filter's start to
     /// the first break in the record ([`Aligned::breaks`]), and from each restart after a break
-    /// to the next. The ticks between a break and its restart repeat the restart's estimate.
+    /// to the next. Ticks before the start repeat the first estimate, and the ticks between a
+    /// break and its restart the restart's.
     pub spans: Vec<std::ops::Range<usize>>,
     /// Attitude estimate per tick, L→B.
     pub q: Vec<Attitude>,
@@ -314,7 +313,6 @@ fn run(
     let mut mekf: Option<Mekf> = None;
     let mut q_prior = Attitude::identity();
     let mut out = Reconstruction {
-        start: n,
         spans: Vec::new(),
         q: Vec::with_capacity(n),
         bias: Vec::with_capacity(n),
@@ -324,11 +322,10 @@ fn run(
     let initial_bias = Vector3::from(filter_cfg.initial_bias_rad_s);
     let (mut i_tilt, mut i_field) = (0usize, 0usize);
     let mut previous: Option<Vector3<f64>> = None;
-    // The span under way (its first tick), and the breaks with the ticks the filter restarted at.
+    // The span under way: its first tick.
     let mut span_start: Option<usize> = None;
     // The bias at the last break: the gyro's, which a silence does not change.
     let mut carried_bias: Option<Vector3<f64>> = None;
-    let mut restarts: Vec<(usize, usize)> = Vec::new();
     let mut breaks = data.breaks.iter().copied().peekable();
     for k in 0..n {
         let tk = data.t[k];
@@ -476,10 +473,6 @@ fn run(
                         propagate(&mut f, t_ns(tk), &w, tangent.as_deref_mut(), Rate::Current)?;
                         q_prior = f.attitude();
                         mekf = Some(f);
-                        match out.spans.last() {
-                            None => out.start = k,
-                            Some(before) => restarts.push((before.end, k)),
-                        }
                         span_start = Some(k);
                     }
                 }
@@ -508,8 +501,10 @@ fn run(
         out.spans.push(first..n);
     }
     // Ticks before the start repeat the first estimate, and those after a break its restart's.
-    let waits = std::iter::once((0, out.start)).chain(restarts);
-    for (from, to) in waits.filter(|&(_, to)| to < n) {
+    let waits: Vec<(usize, usize)> = std::iter::once((0, out.start()))
+        .chain(out.spans.windows(2).map(|w| (w[0].end, w[1].start)))
+        .collect();
+    for (from, to) in waits.into_iter().filter(|&(_, to)| to < n) {
         let (q0, b0) = (out.q[to], out.bias[to]);
         for k in from..to {
             out.q[k] = q0;
@@ -573,6 +568,12 @@ fn start_filter(
 }
 
 impl Reconstruction {
+    /// The first tick with an estimate (the filter's start); the record's length if the filter
+    /// never started.
+    pub fn start(&self) -> usize {
+        self.spans.first().map_or(self.q.len(), |s| s.start)
+    }
+
     /// The span of ticks with estimates of their own that holds tick `k`, if one does.
     pub fn span_of(&self, k: usize) -> Option<std::ops::Range<usize>> {
         let i = self.spans.partition_point(|s| s.end <= k);

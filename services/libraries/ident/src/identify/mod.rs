@@ -236,7 +236,7 @@ fn identify_pass(
     // Baseline.
     let empty = HashMap::new();
     let mut nominal = problem.fit(&[], &empty)?;
-    if nominal.state.recon.start >= aligned.len() {
+    if nominal.state.recon.start() >= aligned.len() {
         return Err(IdentError::Failed(format!(
             "{}: the attitude filter never started (no usable inclinometer/magnetometer sample pair)",
             data.source.display()

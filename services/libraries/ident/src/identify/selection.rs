@@ -235,12 +235,8 @@ fn available(cause: Cause, problem: &Problem, nominal: &SetFit) -> bool {
     match cause.kind() {
         Kind::Sensor => {
             !s.recon.innovations.is_empty()
-                && (!(cause.magnetometer() || cause == Cause::MagnetometerLag)
-                    || !problem.data.field.is_empty())
-                && (!matches!(
-                    cause,
-                    Cause::InclinometerBias | Cause::InclinometerScale | Cause::InclinometerLag
-                ) || !problem.data.tilt.is_empty())
+                && (!cause.needs_field() || !problem.data.field.is_empty())
+                && (!cause.needs_tilt() || !problem.data.tilt.is_empty())
         }
         // The thrusters' causes only with thruster firings in the data (and `[thrusters]` in
         // the model): otherwise their columns are zero.

@@ -165,17 +165,16 @@ pub(super) fn fit_field_correction(
         problem.count_filter_runs(1);
         reconstruct(problem.data, &config_with(theta))
     };
-    let field_rms =
-        |recon: &Reconstruction| {
-            let (mut sum, mut count) = (0.0, 0usize);
-            for i in recon.innovations.iter().filter(|i| {
-                i.mask & FIELD_MASK == FIELD_MASK && i.tick >= recon.start && keep(i.tick)
-            }) {
-                sum += i.field_residual_t.norm_squared();
-                count += 3;
-            }
-            (sum / count.max(1) as f64).sqrt()
-        };
+    let field_rms = |recon: &Reconstruction| {
+        let (mut sum, mut count) = (0.0, 0usize);
+        for i in recon.innovations.iter().filter(|i| {
+            i.mask & FIELD_MASK == FIELD_MASK && i.tick >= recon.start() && keep(i.tick)
+        }) {
+            sum += i.field_residual_t.norm_squared();
+            count += 3;
+        }
+        (sum / count.max(1) as f64).sqrt()
+    };
     let mut theta = DVector::<f64>::zeros(n);
     let recon0 = run(&theta)?;
     let r0 = DVector::from_vec(recon0.innovation_vector(keep));
