@@ -18,15 +18,19 @@
 //! the `SCALE_HALF_WIDTH` (20) rows on each side beyond the five the reading enters, as the
 //! motion's own vary along a record (the inclinometer's 2.5 Hz sees a swing near the tilt
 //! stop), but at least what the sensor's configured noise gives them (`√70 / 4 σ`), so a
-//! quantised reading that rarely changes is not all spikes. Only the gyro, inclinometer and
-//! magnetometer are screened: wheel speeds follow the commanded torque's steps, whose change
-//! of slope is many times the tachometer's noise. Two spoilt readings in a row are not isolated
-//! and stay in.
+//! quantised reading that rarely changes is not all spikes. The wheel speeds are screened less
+//! what the torque commands explain (`n − ∫T/J`, see [`unexplained_wheel_speeds`]): a commanded
+//! step of the torque is a change of slope many times the tachometer's noise, and when it falls
+//! on a reading the lines on each side meet there, so the speeds themselves would look like
+//! spikes at every such step (four in a clean 600-s experiment). Two spoilt readings in a row
+//! are not isolated and stay in.
 
 use crate::csv::{columns, files};
-use crate::data::{Dataset, median_period};
+use crate::data::{Dataset, WheelRow, median_period};
+use nalgebra::Vector3;
 use serde::Serialize;
 use testbed_model::ModelConfig;
+use testbed_model::config::RPM;
 
 /// A reading is a spike beyond this many times its column's scale.
 pub const THRESHOLD: f64 = 10.0;
@@ -117,11 +121,16 @@ fn isolated(x: &[f64]) -> bool {
 }
 
 /// `data` without the rows that hold a spike in any column of the gyro, inclinometer or
-/// magnetometer, and the spikes (at most one per row: the largest), in file and time order.
+/// magnetometer or in a wheel speed, and the spikes (at most one per row: the largest), in file and time order.
 pub fn remove(data: &Dataset, model: &ModelConfig) -> (Dataset, Vec<Spike>) {
     let gyro_sigma = model.gyro.noise_density_rad_sqrt_s() * model.gyro.rate_hz.sqrt();
     let tilt_sigma = model.inclinometer.noise_rad();
     let field_sigma = model.magnetometer.noise_t();
+    let w = &model.wheels;
+    let tach_sigma = w
+        .speed_noise_rpm
+        .hypot(w.speed_resolution_rpm / 12f64.sqrt())
+        * RPM;
     let mut spikes = Vec::new();
     let mut out = data.clone();
 
@@ -152,7 +161,35 @@ pub fn remove(data: &Dataset, model: &ModelConfig) -> (Dataset, Vec<Spike>) {
         &mut spikes,
     );
     retain(&mut out.magnetometer, &field);
+    let wheels = screen(
+        data,
+        files::WHEELS,
+        &columns::WHEELS[1..4],
+        unexplained_wheel_speeds(&data.wheels, w.inertia_kgm2),
+        &[tach_sigma; 3],
+        &mut spikes,
+    );
+    retain(&mut out.wheels, &wheels);
     (out, spikes)
+}
+
+/// Each wheel row's speeds less what the torque commands so far explain,
+/// `n_k − Σ_{j<k} T_j (t_{j+1} − t_j) / J` (a command holds until the next row), with the time
+/// stamps: the commanded steps and doublets of the speeds are gone, the friction's smooth drift
+/// and a spoilt reading stay.
+fn unexplained_wheel_speeds(
+    rows: &[WheelRow],
+    inertia_kgm2: f64,
+) -> impl Iterator<Item = (f64, [f64; 3])> + '_ {
+    let mut commanded = Vector3::zeros();
+    let mut previous: Option<&WheelRow> = None;
+    rows.iter().map(move |r| {
+        if let Some(p) = previous {
+            commanded += p.torque_nm * ((r.t_s - p.t_s) / inertia_kgm2);
+        }
+        previous = Some(r);
+        (r.t_s, (r.speed_rad_s - commanded).into())
+    })
 }
 
 /// The rows of one file to leave out (sorted), adding their spikes to `spikes`.
@@ -293,6 +330,50 @@ mod tests {
             .collect();
         let values: Vec<f64> = times.iter().map(|t| 1e-2 * t).collect();
         assert!(find(&times, &values, 1e-6).is_empty());
+    }
+
+    /// A commanded torque doublet (+20 mNm then −20 mNm, a tick each) bumps the wheel speed by
+    /// one reading of 1.26 rad/s, 120 times the tachometer's noise: a spike in the speeds, none
+    /// in what the commands leave unexplained, where a spoilt reading is still found.
+    #[test]
+    fn a_commanded_doublet_is_no_wheel_spike() {
+        let (j, sigma) = (1.5915e-3, 1.05e-2);
+        let torque = |k: usize| match k {
+            300 => 0.02,
+            301 => -0.02,
+            _ => 1e-3,
+        };
+        let mut speed = 100.0;
+        let mut rows: Vec<WheelRow> = noise(600, sigma)
+            .into_iter()
+            .enumerate()
+            .map(|(k, e)| {
+                let row = WheelRow {
+                    t_s: k as f64 * 0.1,
+                    speed_rad_s: Vector3::repeat(speed + e),
+                    torque_nm: Vector3::repeat(torque(k)),
+                };
+                speed += torque(k) * 0.1 / j;
+                row
+            })
+            .collect();
+        let axis = |rows: &[WheelRow], unexplained: bool| -> Vec<usize> {
+            let (times, values): (Vec<f64>, Vec<f64>) = if unexplained {
+                unexplained_wheel_speeds(rows, j)
+                    .map(|(t, v)| (t, v[0]))
+                    .unzip()
+            } else {
+                rows.iter().map(|r| (r.t_s, r.speed_rad_s.x)).unzip()
+            };
+            find(&times, &values, sigma)
+                .iter()
+                .map(|(k, _)| *k)
+                .collect()
+        };
+        assert_eq!(axis(&rows, false), [301]);
+        assert!(axis(&rows, true).is_empty());
+        rows[450].speed_rad_s.x += 1.0;
+        assert_eq!(axis(&rows, true), [450]);
     }
 
     #[test]

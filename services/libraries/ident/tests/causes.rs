@@ -691,17 +691,21 @@ fn spoil<'a>(
 }
 
 /// Isolated spikes (corrupted frames): every 200th gyro row off by ±0.01 rad/s on one axis
-/// (some 500 times its noise), every 50th inclinometer row by ±0.01 rad and magnetometer row by
-/// ±2 µT. Without the screening 0.5 % of such gyro rows made a clean record name a
-/// `gyro_delay` of 25 ms. Checked: the report lists exactly the readings spoilt (file, time,
-/// column), nothing is named on the clean record (seed 22), and beside a hidden centre-of-mass
-/// offset (seed 21) it is named within the bounds of the whole, unspoilt record.
+/// (some 500 times its noise), every 50th inclinometer row by ±0.01 rad, magnetometer row by
+/// ±2 µT and wheel row's speed by ±1 rad/s (some 95 times the tachometer's noise). Without the
+/// screening 0.5 % of such gyro rows made a clean record name a `gyro_delay` of 25 ms, and the
+/// wheel speeds' left the wheel channel at 4.3 times its noise. Checked: the report lists
+/// exactly the readings spoilt (file, time, column), nothing is named on the clean record
+/// (seed 22), and beside a hidden centre-of-mass offset (seed 21) or wheel torque scale
+/// (seed 23) it is named within the bounds of the whole, unspoilt record.
 #[test]
 fn isolated_spikes_are_left_out_and_listed() {
     let offset = truth("[effects.com_offset]\nr_m = [2.5e-6, -1.5e-6, -1.0e-6]\n");
+    let torque_scale = truth("[effects.wheel_torque_scale]\nscale = [0.95, 1.04, 0.97]\n");
     for (label, truth, seed) in [
         ("clean", nominal(), 22),
         ("centre-of-mass offset", offset, 21),
+        ("wheel torque scale", torque_scale, 23),
     ] {
         let mut data = experiment_data(&truth, seed, 600.0);
         let mut state = 5;
@@ -732,6 +736,15 @@ fn isolated_spikes_are_left_out_and_listed() {
             2e-6,
             &mut state,
         ));
+        spoilt.extend(spoil(
+            data.wheels
+                .iter_mut()
+                .map(|r| (r.t_s, r.speed_rad_s.as_mut_slice())),
+            &["speed_x", "speed_y", "speed_z"],
+            50,
+            1.0,
+            &mut state,
+        ));
         let id = testbed_ident::identify(&data, &nominal(), &options())
             .unwrap_or_else(|e| panic!("{label}: {e}"));
         println!("{label}: {}", id.report.summary[0]);
@@ -746,12 +759,16 @@ fn isolated_spikes_are_left_out_and_listed() {
         spoilt.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(b.1)));
         assert_eq!(found, spoilt, "{label}");
         assert!(id.report.summary[0].starts_with("Left out: "), "{label}");
-        if label == "clean" {
-            assert_eq!(id.report.verdict, "none", "{label}");
-        } else {
-            check_single(label, &truth, Cause::ComOffset, &id, 10.0, |_, t| {
-                (0.1 * t.abs()).max(0.2e-6)
-            });
+        match label {
+            "clean" => assert_eq!(id.report.verdict, "none", "{label}"),
+            "centre-of-mass offset" => {
+                check_single(label, &truth, Cause::ComOffset, &id, 10.0, |_, t| {
+                    (0.1 * t.abs()).max(0.2e-6)
+                })
+            }
+            _ => check_single(label, &truth, Cause::WheelTorqueScale, &id, 20.0, |_, _| {
+                0.003
+            }),
         }
     }
 }
