@@ -16,6 +16,7 @@
 //! | `gyro_scale` | `ppm` — scale-factor error per gyro, parts per million |
 //! | `gyro_misalignment` | `angles_rad` — small rotation of the gyro triad, rad |
 //! | `gyro_delay` | `delay_s` — the gyros read the rate this long before their time stamps, s |
+//! | `gyro_bias_drift` | `rate_rad_s2` — the gyros' bias changes at this rate beside its random walk (warm-up, the lab's temperature), rad/s² per gyro axis |
 //! | `wheel_friction` | `coulomb_pos_nm`, `coulomb_neg_nm`, `viscous_nm_per_rad_s`, `stribeck_nm`, `stribeck_speed_rad_s` per wheel |
 //! | `wheel_torque_scale` | `scale` — delivered / commanded motor torque per wheel |
 //! | `actuator_delay` | `delay_s` — s |
@@ -45,9 +46,10 @@
 use serde::Serialize;
 use testbed_model::ModelConfig;
 use testbed_model::config::{
-    ActuatorDelay, AeroDrag, ComDrift, ComOffset, ConstantTorque, EarthRate, GYRO_DELAY_MAX_S,
-    GyroDelay, GyroMisalignment, GyroScale, InclinometerBias, InclinometerLag, InclinometerScale,
-    InertiaError, MagneticDisturbance, MagnetometerLag, SENSOR_LAG_MAX_S, SoftIron, WheelFriction,
+    ActuatorDelay, AeroDrag, ComDrift, ComOffset, ConstantTorque, EarthRate,
+    GYRO_BIAS_DRIFT_MAX_RAD_S2, GYRO_DELAY_MAX_S, GyroBiasDrift, GyroDelay, GyroMisalignment,
+    GyroScale, InclinometerBias, InclinometerLag, InclinometerScale, InertiaError,
+    MagneticDisturbance, MagnetometerLag, SENSOR_LAG_MAX_S, SoftIron, WheelFriction,
     WheelTorqueScale,
 };
 use testbed_model::thruster_config::{THRUSTER_COUNT, ThrusterConfig, ThrusterTorqueScale};
@@ -65,6 +67,7 @@ pub enum Cause {
     GyroScale,
     GyroMisalignment,
     GyroDelay,
+    GyroBiasDrift,
     WheelFriction,
     WheelTorqueScale,
     ActuatorDelay,
@@ -175,6 +178,14 @@ const P_MISALIGN: &[ParamSpec] = &[spec(
     1e-4,
 )];
 const P_GYRO_DELAY: &[ParamSpec] = &[spec("delay_s", 1, "s", 0.0, GYRO_DELAY_MAX_S, 0.01)];
+const P_GYRO_DRIFT: &[ParamSpec] = &[spec(
+    "rate_rad_s2",
+    3,
+    "rad/s², per gyro axis",
+    -GYRO_BIAS_DRIFT_MAX_RAD_S2,
+    GYRO_BIAS_DRIFT_MAX_RAD_S2,
+    1e-8,
+)];
 const P_FRICTION: &[ParamSpec] = &[
     spec("coulomb_pos_nm", 3, "Nm, per wheel", 0.0, INF, 1e-4),
     spec("coulomb_neg_nm", 3, "Nm, per wheel", 0.0, INF, 1e-4),
@@ -278,7 +289,7 @@ pub fn soft_iron_matrix(values: &[f64]) -> [[f64; 3]; 3] {
 
 impl Cause {
     /// Every cause, in the library's order.
-    pub const ALL: [Cause; 20] = [
+    pub const ALL: [Cause; 21] = [
         Cause::ComOffset,
         Cause::ComDrift,
         Cause::EarthRate,
@@ -288,6 +299,7 @@ impl Cause {
         Cause::GyroScale,
         Cause::GyroMisalignment,
         Cause::GyroDelay,
+        Cause::GyroBiasDrift,
         Cause::WheelFriction,
         Cause::WheelTorqueScale,
         Cause::ActuatorDelay,
@@ -313,6 +325,7 @@ impl Cause {
             Cause::GyroScale => "gyro_scale",
             Cause::GyroMisalignment => "gyro_misalignment",
             Cause::GyroDelay => "gyro_delay",
+            Cause::GyroBiasDrift => "gyro_bias_drift",
             Cause::WheelFriction => "wheel_friction",
             Cause::WheelTorqueScale => "wheel_torque_scale",
             Cause::ActuatorDelay => "actuator_delay",
@@ -354,6 +367,10 @@ impl Cause {
                 "the gyros read the rate a delay before their time stamps (latency, stamped on \
                  arrival)"
             }
+            Cause::GyroBiasDrift => {
+                "the gyros' bias drifts at a constant rate (warm-up, the lab's temperature), \
+                 faster than its random walk lets the filter follow"
+            }
             Cause::WheelFriction => {
                 "wheel friction beyond eq. 3: per-wheel levels, direction asymmetry, Stribeck"
             }
@@ -393,6 +410,7 @@ impl Cause {
             | Cause::GyroScale
             | Cause::GyroMisalignment
             | Cause::GyroDelay
+            | Cause::GyroBiasDrift
             | Cause::MagneticDisturbance
             | Cause::SoftIron
             | Cause::InclinometerBias
@@ -440,6 +458,7 @@ impl Cause {
             Cause::GyroScale => P_SCALE,
             Cause::GyroMisalignment => P_MISALIGN,
             Cause::GyroDelay => P_GYRO_DELAY,
+            Cause::GyroBiasDrift => P_GYRO_DRIFT,
             Cause::WheelFriction => P_FRICTION,
             Cause::WheelTorqueScale => P_TSCALE,
             Cause::ActuatorDelay => P_DELAY,
@@ -504,6 +523,7 @@ impl Cause {
             Cause::GyroScale => e.gyro_scale.is_some(),
             Cause::GyroMisalignment => e.gyro_misalignment.is_some(),
             Cause::GyroDelay => e.gyro_delay.is_some(),
+            Cause::GyroBiasDrift => e.gyro_bias_drift.is_some(),
             Cause::WheelFriction => e.wheel_friction.is_some(),
             Cause::WheelTorqueScale => e.wheel_torque_scale.is_some(),
             Cause::ActuatorDelay => e.actuator_delay.is_some(),
@@ -569,6 +589,11 @@ impl Cause {
                 .map_or([0.0; 3], |x| x.angles_rad)
                 .to_vec(),
             Cause::GyroDelay => vec![e.gyro_delay.as_ref().map_or(0.0, |x| x.delay_s)],
+            Cause::GyroBiasDrift => e
+                .gyro_bias_drift
+                .as_ref()
+                .map_or([0.0; 3], |x| x.rate_rad_s2)
+                .to_vec(),
             Cause::WheelFriction => {
                 let f = e
                     .wheel_friction
@@ -674,6 +699,7 @@ impl Cause {
                 e.gyro_misalignment = Some(GyroMisalignment { angles_rad: a3(0) })
             }
             Cause::GyroDelay => e.gyro_delay = Some(GyroDelay { delay_s: v[0] }),
+            Cause::GyroBiasDrift => e.gyro_bias_drift = Some(GyroBiasDrift { rate_rad_s2: a3(0) }),
             Cause::WheelFriction => {
                 e.wheel_friction = Some(WheelFriction {
                     coulomb_pos_nm: a3(0),

@@ -327,7 +327,8 @@ pub fn predict(
             } else {
                 interpolate(times, &rates, data.t[k] - sensors.gyro_delay_s)
             };
-            let gyro = sensors.gyro_reading(&rate, &attitudes[i], &bias);
+            let gyro = sensors.gyro_reading(&rate, &attitudes[i], &bias)
+                + sensors.gyro_drift_since_start(data, k);
             for c in 0..3 {
                 residuals[c].push((data.t[k], data.gyro[k][c] - gyro[c]));
             }

@@ -48,6 +48,9 @@ pub struct SensorModel {
     pub tilt_lag_s: f64,
     /// Magnetometer lag, s (zero without `magnetometer_lag`).
     pub field_lag_s: f64,
+    /// Gyro bias drift `ḃ`, rad/s² (zero without `gyro_bias_drift`): the readings less
+    /// `ḃ (t − t_0)`, `t_0` the record's start, have the bias the filter tracks.
+    pub gyro_bias_drift: Vector3<f64>,
     /// Lab field in the level frame, tesla.
     pub field_l_t: Vector3<f64>,
     /// The fitted field error of `effects.fitted_field` (a function of the attitude), tesla.
@@ -78,6 +81,10 @@ impl SensorModel {
             gyro_matrix,
             gyro_matrix_inv: gyro_matrix.try_inverse().unwrap_or_else(Matrix3::identity),
             gyro_delay_s: e.gyro_delay.as_ref().map_or(0.0, |d| d.delay_s),
+            gyro_bias_drift: e
+                .gyro_bias_drift
+                .as_ref()
+                .map_or_else(Vector3::zeros, |d| Vector3::from(d.rate_rad_s2)),
             earth_rate_l,
             hard_iron_t: e
                 .magnetic_disturbance
@@ -113,12 +120,19 @@ impl SensorModel {
 
     /// The gyro reading of the rate at tick `k`: the one stamped [`Self::gyro_delay_s`] later,
     /// interpolated linearly between the rows around that time (the last row's at the record's
-    /// end).
+    /// end), less the bias drift since the record's start.
     pub fn gyro_of_tick(&self, data: &Aligned, k: usize) -> Vector3<f64> {
-        if self.gyro_delay_s == 0.0 {
-            return data.gyro[k];
-        }
-        interpolate(&data.t, &data.gyro, data.t[k] + self.gyro_delay_s)
+        let reading = if self.gyro_delay_s == 0.0 {
+            data.gyro[k]
+        } else {
+            interpolate(&data.t, &data.gyro, data.t[k] + self.gyro_delay_s)
+        };
+        reading - self.gyro_drift_since_start(data, k)
+    }
+
+    /// The bias drift `ḃ (t_k − t_0)` at tick `k`, rad/s.
+    pub fn gyro_drift_since_start(&self, data: &Aligned, k: usize) -> Vector3<f64> {
+        self.gyro_bias_drift * (data.t[k] - data.t[0])
     }
 
     /// Body rate relative to L plus the (scaled) bias: `S⁻¹ w_meas − A(q) Ω_L`, rad/s.

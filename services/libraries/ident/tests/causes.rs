@@ -197,6 +197,54 @@ fn gyro_misalignment() {
 }
 
 #[test]
+fn gyro_bias_drift() {
+    // A gyro warming up: the bias moves by 6e-5 rad/s (12 °/h) over the 600-s record, some 500
+    // times what the random walk of the model allows it.
+    let truth = truth("[effects.gyro_bias_drift]\nrate_rad_s2 = [1e-7, -7e-8, 5e-8]\n");
+    for seed in SEEDS {
+        let id = identify_blind(&truth, seed, 600.0);
+        // Within 1e-8 rad/s² (about three standard errors on Z, seven on X and Y).
+        check_single(
+            &format!("gyro_bias_drift seed {seed}"),
+            &truth,
+            Cause::GyroBiasDrift,
+            &id,
+            1.5,
+            |_, _| 1e-8,
+        );
+    }
+}
+
+/// A drifting gyro bias beside a torque cause (the drift tilts the estimated attitude the
+/// gravity torque is computed from) and beside the gyro's scale (both correct the rate
+/// readings): both named, each within three of its reported standard errors.
+#[test]
+fn a_gyro_bias_drift_beside_another_cause_names_both() {
+    const DRIFT: &str = "[effects.gyro_bias_drift]\nrate_rad_s2 = [1e-7, -7e-8, 5e-8]\n";
+    for (other, effect) in [
+        (
+            Cause::ComOffset,
+            "[effects.com_offset]\nr_m = [2.5e-6, -1.5e-6, -1.0e-6]\n",
+        ),
+        (
+            Cause::GyroScale,
+            "[effects.gyro_scale]\nppm = [500.0, -700.0, 900.0]\n",
+        ),
+    ] {
+        let truth = truth(&format!("{DRIFT}{effect}"));
+        let id = identify_blind(&truth, 21, 600.0);
+        let mut found = names(&id);
+        found.sort();
+        let mut want = vec!["gyro_bias_drift", other.name()];
+        want.sort();
+        assert_eq!(found, want, "{:?}", id.report.steps);
+        for cause in [other, Cause::GyroBiasDrift] {
+            check_within(other.name(), &id, &truth, cause, 3.0, f64::INFINITY);
+        }
+    }
+}
+
+#[test]
 fn gyro_delay() {
     // 50 ms: the gyros' output filter and a serial link, stamped on arrival.
     let truth = truth("[effects.gyro_delay]\ndelay_s = 0.05\n");

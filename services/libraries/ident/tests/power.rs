@@ -176,6 +176,62 @@ fn detection_power_table_for_a_20_minute_experiment() {
             "max departure from eq. 3: 2 mNm (Stribeck, Z) × scale",
         ),
         (
+            Cause::GyroBiasDrift,
+            Box::new(|s| {
+                format!(
+                    "[effects.gyro_bias_drift]\nrate_rad_s2 = [{}, {}, {}]\n",
+                    1e-7 * s,
+                    -7e-8 * s,
+                    5e-8 * s
+                )
+            }),
+            "max 1e-7 rad/s² (20 °/h in 10 min) × scale",
+        ),
+        (
+            Cause::ComDrift,
+            Box::new(|s| {
+                format!(
+                    "[effects.com_drift]\nrate_m_per_s = [{}, {}, 0.0]\n",
+                    2.5e-9 * s,
+                    -1.5e-9 * s
+                )
+            }),
+            "|ṙ| = 2.9 nm/s × scale",
+        ),
+        (
+            Cause::SoftIron,
+            Box::new(|s| {
+                let m = [
+                    [0.03, 0.02, 0.01],
+                    [0.02, -0.03, -0.015],
+                    [0.01, -0.015, 0.02],
+                ]
+                .map(|row| row.map(|x| x * s));
+                format!("[effects.soft_iron]\nmatrix = {m:?}\n")
+            }),
+            "max 3 % × scale",
+        ),
+        (
+            Cause::InclinometerLag,
+            Box::new(|s| {
+                format!(
+                    "[effects.inclinometer_lag]\ntime_constant_s = {}\n",
+                    0.5 * s
+                )
+            }),
+            "500 ms × scale",
+        ),
+        (
+            Cause::MagnetometerLag,
+            Box::new(|s| {
+                format!(
+                    "[effects.magnetometer_lag]\ntime_constant_s = {}\n",
+                    0.2 * s
+                )
+            }),
+            "200 ms × scale",
+        ),
+        (
             // Not a magnitude a lab chooses: the Earth's rate at the test bed's latitude.
             Cause::EarthRate,
             Box::new(|_| "[effects.earth_rate]\nlatitude_deg = 43.88\n".to_string()),

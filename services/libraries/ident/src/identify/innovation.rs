@@ -260,7 +260,10 @@ impl SensorLinear {
 /// the readings' second difference, whose noise the neighbours' mean does not remove, so its
 /// value there is biased towards zero (0.079 ± 0.005 s about X for a true 0.1 s).
 pub(super) fn corrects_rates(cause: Cause) -> bool {
-    matches!(cause, Cause::GyroScale | Cause::GyroMisalignment)
+    matches!(
+        cause,
+        Cause::GyroScale | Cause::GyroMisalignment | Cause::GyroBiasDrift
+    )
 }
 
 /// Ticks on each side of a row that [`without_own_noise`] averages.

@@ -21,6 +21,8 @@ pub struct EffectsConfig {
     pub gyro_misalignment: Option<GyroMisalignment>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub gyro_delay: Option<GyroDelay>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub gyro_bias_drift: Option<GyroBiasDrift>,
     pub wheel_friction: Option<WheelFriction>,
     pub wheel_torque_scale: Option<WheelTorqueScale>,
     pub actuator_delay: Option<ActuatorDelay>,
@@ -239,6 +241,20 @@ pub struct GyroDelay {
     /// Delay, s (0 to [`GYRO_DELAY_MAX_S`]).
     pub delay_s: f64,
 }
+
+/// The gyros' bias changes at a constant rate on top of its random walk, `b' = ḃ + η_u`: the
+/// drift of a gyro warming up or of the lab's temperature over a record, far beyond what the
+/// random walk (`gyro.bias_walk_deg_s32`) lets the estimator follow.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GyroBiasDrift {
+    /// Rate of change of the bias per gyro axis, rad/s² (within ±[`GYRO_BIAS_DRIFT_MAX_RAD_S2`]).
+    pub rate_rad_s2: [f64; 3],
+}
+
+/// The largest bias drift a configuration accepts, rad/s²: 1e-4 rad/s² is 20 °/s in an hour,
+/// a gyro far outside any specification.
+pub const GYRO_BIAS_DRIFT_MAX_RAD_S2: f64 = 1e-4;
 
 /// The longest gyro delay a configuration accepts, s: five periods of the paper's 10-Hz gyros,
 /// far beyond a device's latency; a longer one is a clock error, not a delay.

@@ -1,7 +1,9 @@
 //! [`ModelConfig::validate`]: what no physical platform can have, refused with the key and the
 //! value.
 
-use super::{ConfigError, GYRO_DELAY_MAX_S, ModelConfig, SENSOR_LAG_MAX_S};
+use super::{
+    ConfigError, GYRO_BIAS_DRIFT_MAX_RAD_S2, GYRO_DELAY_MAX_S, ModelConfig, SENSOR_LAG_MAX_S,
+};
 use crate::devices::fitted_field::FieldFunction;
 use crate::physics::fitted_torque::{TorqueFunction, axis_index};
 use crate::physics::fitted_wheel_torque::WheelFunction;
@@ -123,6 +125,16 @@ impl ModelConfig {
                 0.0,
                 GYRO_DELAY_MAX_S,
             );
+        }
+        if let Some(x) = &e.gyro_bias_drift {
+            for (i, r) in x.rate_rad_s2.iter().enumerate() {
+                v.within(
+                    &format!("effects.gyro_bias_drift.rate_rad_s2[{i}]"),
+                    *r,
+                    -GYRO_BIAS_DRIFT_MAX_RAD_S2,
+                    GYRO_BIAS_DRIFT_MAX_RAD_S2,
+                );
+            }
         }
         if let Some(x) = &e.wheel_friction {
             v.non_negative_all("effects.wheel_friction.coulomb_pos_nm", &x.coulomb_pos_nm);

@@ -24,7 +24,8 @@ pub struct GyroReading {
 /// Gyro triad model.
 ///
 /// Per sample of interval Δt (normally the configured period):
-/// 1. the bias random-walks, `b += sigma_u sqrt(Δt) N(0, 1)`;
+/// 1. the bias random-walks, `b += sigma_u sqrt(Δt) N(0, 1)`, and drifts by `ḃ Δt` with
+///    `effects.gyro_bias_drift`;
 /// 2. the sensed rate is `(I + diag(s)) (I − [m×]) (w + A(q) Ω_L)`, with the Earth's rate `Ω_L`,
 ///    scale error `s` and misalignment `m` only if their `effects` are configured;
 /// 3. `b` and white sample noise `sigma_v / sqrt(Δt) N(0, 1)` are added;
@@ -44,6 +45,8 @@ pub struct Gyro {
     bias_rad_s: Vector3<f64>,
     noise_density_rad_sqrt_s: Vector3<f64>,
     bias_walk_rad_s32: Vector3<f64>,
+    /// `effects.gyro_bias_drift`, rad/s² (zero without it).
+    bias_drift_rad_s2: Vector3<f64>,
     resolution_rad_s: f64,
     range_rad_s: f64,
     /// Earth's rotation in the level frame, rad/s; zero unless `effects.earth_rate`.
@@ -89,6 +92,10 @@ impl Gyro {
             bias_rad_s: g.bias_rad_s(),
             noise_density_rad_sqrt_s: g.noise_density_rad_sqrt_s(),
             bias_walk_rad_s32: g.bias_walk_rad_s32(),
+            bias_drift_rad_s2: effects
+                .gyro_bias_drift
+                .as_ref()
+                .map_or_else(Vector3::zeros, |d| Vector3::from(d.rate_rad_s2)),
             resolution_rad_s: g.resolution_deg_s * DEG,
             range_rad_s: g.range_deg_s * DEG,
             earth_rate_l,
@@ -144,7 +151,8 @@ impl Gyro {
         // configured magnitudes (a zero sigma still consumes its draw).
         let walk = self.normal3() * dt_s.sqrt();
         let white = self.normal3() / dt_s.sqrt();
-        self.bias_rad_s += self.bias_walk_rad_s32.component_mul(&walk);
+        self.bias_rad_s +=
+            self.bias_walk_rad_s32.component_mul(&walk) + self.bias_drift_rad_s2 * dt_s;
         let inertial = self.delayed(dt_s, rate_b + q * self.earth_rate_l);
         let analog = self.sensor_matrix * inertial
             + self.bias_rad_s
@@ -203,6 +211,26 @@ mod tests {
         config.gyro.bias_walk_deg_s32 = [0.0; 3];
         config.gyro.resolution_deg_s = 0.0;
         config
+    }
+
+    /// A drifting bias at rest: the k-th reading is `ḃ k Δt`, exactly the line (no noise, no
+    /// walk), and the truth's bias follows it.
+    #[test]
+    fn a_drifting_bias_reads_its_line() {
+        let mut config = quiet_config();
+        let rate = [2e-7, -1e-7, 5e-8];
+        config.effects.gyro_bias_drift = Some(crate::config::GyroBiasDrift { rate_rad_s2: rate });
+        let mut gyro = Gyro::new(&config, 1);
+        let q = Attitude::identity();
+        for k in 1..=600 {
+            let reading = gyro.sample(&q, &Vector3::zeros()).rate_rad_s;
+            let expected = Vector3::from(rate) * (k as f64 * 0.1);
+            assert!(
+                (reading - expected).norm() < 1e-15,
+                "{k}: {reading} against {expected}"
+            );
+            assert_eq!(gyro.bias_rad_s(), reading);
+        }
     }
 
     /// A delayed gyro on a rate ramp reads the ramp `delay_s` earlier: exact for a linear
