@@ -185,7 +185,7 @@ fn detection_power_table_for_a_20_minute_experiment() {
                     5e-8 * s
                 )
             }),
-            "max 1e-7 rad/s² (20 °/h in 10 min) × scale",
+            "max 1e-7 rad/s² (12 °/h in 10 min) × scale",
         ),
         (
             Cause::ComDrift,

@@ -303,7 +303,7 @@ impl DesignOptions {
 /// torque, 1e-3 Nm/(rad/s) and 1e-2 Nm/(rad/s)² of drag, 1 % of a principal moment and 0.5 kg
 /// m² of product of inertia (1 % of the default moments), 1 % of wheel torque scale, 0.1 mNm of Coulomb friction and 1e-7 Nm/(rad/s) of viscous friction
 /// (7 % and 3 % of the default wheels'), 100 ppm of gyro scale, 0.1 mrad of gyro
-/// misalignment, 10 ms of gyro delay, 1e-8 rad/s² of gyro bias drift (2 °/h in an hour), 1° of latitude (Earth rate), 0.01 G (1 µT) of hard iron, 1 % of soft iron, 1 mrad (0.06°) of
+/// misalignment, 10 ms of gyro delay, 1e-8 rad/s² of gyro bias drift (7 °/h in an hour), 1° of latitude (Earth rate), 0.01 G (1 µT) of hard iron, 1 % of soft iron, 1 mrad (0.06°) of
 /// inclinometer offset, 1000 ppm of inclinometer scale; 1 for anything else.
 pub fn typical_magnitude(cause: Cause, i: usize) -> f64 {
     match cause {
