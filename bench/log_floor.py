@@ -20,6 +20,8 @@ less the one-byte tags):
 - `binary f32`: numbers as 4 bytes except the estimate's quaternion and times, not exact;
 - `binary, f64 inputs, f32 others`: exact for what replay and identification read (sensors and
   actuators), single precision for the estimate, the controller's status and the truth;
+- `binary f64, covariance f32 triangle`: exact but for the estimate's covariance, its upper
+  triangle (21 of 36 values) in single precision;
 - `... without views`: the same without the derived Foxglove views (`testbed/tf/*`,
   `testbed/pose/*`) and the simulation clock: fewer messages.
 
@@ -83,6 +85,14 @@ def encoders():
             return quaternion + binary(rest, single=True)
         return binary(message, single=True)
 
+    def covariance_single(topic, data, message):
+        if not topic.endswith("attitude_estimate"):
+            return f64(topic, data, message)
+        covariance = message["covariance"]
+        triangle = [covariance[6 * r + c] for r in range(6) for c in range(r, 6)]
+        rest = {k: v for k, v in message.items() if k != "covariance"}
+        return binary(rest, single=False) + struct.pack("<21f", *triangle)
+
     def inputs_exact(topic, data, message):
         return f64(topic, data, message) if topic.startswith(INPUTS) else f32(topic, data, message)
 
@@ -96,6 +106,7 @@ def encoders():
         ("binary, f64 inputs, f32 others", inputs_exact),
         ("json without views", without_views(json_bytes)),
         ("binary f64 without views", without_views(f64)),
+        ("binary f64, covariance f32 triangle, without views", without_views(covariance_single)),
         ("binary, f64 inputs, f32 others, without views", without_views(inputs_exact)),
         ("binary f32 without views", without_views(f32)),
     ]
