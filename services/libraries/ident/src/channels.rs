@@ -34,7 +34,6 @@ use crate::thrusters::ThrusterHistory;
 use nalgebra::{Matrix3, Vector3};
 use testbed_model::ModelConfig;
 use testbed_model::attitude::{self, Attitude};
-use testbed_model::config::RPM;
 use testbed_model::physics::{CmgPyramid, ExternalTorqueModel, Wheel, WheelFrictionModel};
 use testbed_model::thruster_config::THRUSTER_COUNT;
 
@@ -320,7 +319,7 @@ impl TorqueChannel {
         }
         // A-priori noise of H: one gyro sample through the inertia, and the tachometer.
         let gyro_sigma = config.gyro.noise_density_rad_sqrt_s() / data.period_s.sqrt();
-        let tach = config.wheels.speed_noise_rpm * RPM;
+        let tach = config.wheels.speed_noise_rad_s();
         out.sigma = Vector3::from_fn(|i, _| {
             let from_gyro: f64 = (0..3)
                 .map(|c| (inertia[(i, c)] * gyro_sigma[c]).powi(2))
@@ -400,7 +399,7 @@ pub(crate) const GL4: [(f64, f64); 4] = [
 impl WheelChannel {
     pub fn new(data: &Aligned, recon: &Reconstruction, config: &ModelConfig) -> Self {
         let j = config.wheels.inertia_kgm2;
-        let tach = config.wheels.speed_noise_rpm * RPM;
+        let tach = config.wheels.speed_noise_rad_s();
         let n_min = (8.0 * tach).max(1e-3);
         let n_max = 0.97 * config.wheels.max_speed_rad_s();
         let mut rows: [Vec<WheelInterval>; 3] = Default::default();

@@ -29,7 +29,7 @@ use serde::Serialize;
 use testbed_model::ModelConfig;
 use testbed_model::attitude::{self, Attitude};
 use testbed_model::config::ComOffset;
-use testbed_model::config::{DEG, GAUSS, RPM};
+use testbed_model::config::{DEG, GAUSS};
 use testbed_model::physics::{ActuatorCommand, CmgPyramid, Plant, PlatformState, ThrusterCommand};
 
 /// The predicted measurement components, in this order.
@@ -231,7 +231,7 @@ pub fn predict(
                 Vector3::zeros()
             }
     };
-    let tach = config.wheels.speed_noise_rpm * RPM;
+    let tach = config.wheels.speed_noise_rad_s();
     let tilt_range = config.inclinometer.range_deg * DEG - 1e-9;
     let gyro_sigma = config.gyro.noise_density_rad_sqrt_s() / data.period_s.sqrt();
     let incl = config.inclinometer.noise_rad();

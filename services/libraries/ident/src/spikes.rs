@@ -30,7 +30,6 @@ use crate::data::{Dataset, WheelRow, median_period};
 use nalgebra::Vector3;
 use serde::Serialize;
 use testbed_model::ModelConfig;
-use testbed_model::config::RPM;
 
 /// A reading is a spike beyond this many times its column's scale.
 pub const THRESHOLD: f64 = 10.0;
@@ -126,11 +125,7 @@ pub fn remove(data: &Dataset, model: &ModelConfig) -> (Dataset, Vec<Spike>) {
     let gyro_sigma = model.gyro.noise_density_rad_sqrt_s() * model.gyro.rate_hz.sqrt();
     let tilt_sigma = model.inclinometer.noise_rad();
     let field_sigma = model.magnetometer.noise_t();
-    let w = &model.wheels;
-    let tach_sigma = w
-        .speed_noise_rpm
-        .hypot(w.speed_resolution_rpm / 12f64.sqrt())
-        * RPM;
+    let tach_sigma = model.wheels.speed_noise_rad_s();
     let mut spikes = Vec::new();
     let mut out = data.clone();
 
@@ -165,7 +160,7 @@ pub fn remove(data: &Dataset, model: &ModelConfig) -> (Dataset, Vec<Spike>) {
         data,
         files::WHEELS,
         &columns::WHEELS[1..4],
-        unexplained_wheel_speeds(&data.wheels, w.inertia_kgm2),
+        unexplained_wheel_speeds(&data.wheels, model.wheels.inertia_kgm2),
         &[tach_sigma; 3],
         &mut spikes,
     );

@@ -345,6 +345,10 @@ impl WheelConfig {
     pub fn max_speed_rad_s(&self) -> f64 {
         self.max_speed_rpm * RPM
     }
+    /// Tachometer white noise 1σ, rad/s.
+    pub fn speed_noise_rad_s(&self) -> f64 {
+        self.speed_noise_rpm * RPM
+    }
     /// Momentum limit J·n_max, Nms.
     pub fn max_momentum_nms(&self) -> f64 {
         self.inertia_kgm2 * self.max_speed_rad_s()

@@ -25,7 +25,7 @@ impl WheelTachometer {
         let w = &config.wheels;
         Self {
             period_s: 1.0 / w.telemetry_rate_hz,
-            noise_rad_s: w.speed_noise_rpm * RPM,
+            noise_rad_s: w.speed_noise_rad_s(),
             resolution_rad_s: w.speed_resolution_rpm * RPM,
             rng: device_rng(seed, DeviceId::WheelTachometer),
         }
@@ -65,7 +65,7 @@ mod tests {
         let readings: Vec<_> = (0..n).map(|_| tach.sample(&truth)).collect();
         // The 0.01 rpm quantum adds variance q²/12, a relative 0.04 % of the 0.1 rpm noise's: well
         // inside the 2.8 % bound.
-        let sigma = config.wheels.speed_noise_rpm * RPM;
+        let sigma = config.wheels.speed_noise_rad_s();
         for axis in 0..3 {
             let xs: Vec<f64> = readings.iter().map(|r| r[axis]).collect();
             assert_white(&format!("tachometer {axis}"), &xs, truth[axis], sigma);
