@@ -7,11 +7,13 @@
 //! Conventions: attitudes L→B ([`testbed_model::attitude`]); rates in body axes, rad/s; field in
 //! tesla. A gyro row is the rate at its time stamp, so the filter is propagated from tick k−1
 //! to tick k with the mean of the two corrected readings (the filter takes a sample as the mean
-//! rate over the interval it closes).
+//! rate over the interval it closes), plus what the thruster pulses inside the interval add to
+//! that mean: a pulse steps the rate where it falls, which the two readings cannot place.
 
 use crate::data::{Aligned, interpolate, median_period};
 use crate::error::IdentError;
 use crate::tangent::{Rate, Sensitivities, Tangent};
+use crate::thrusters::ThrusterHistory;
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 use testbed_flight::mekf::{Mekf, MekfConfig, VectorMeasurements};
 use testbed_model::ModelConfig;
@@ -320,6 +322,15 @@ fn run(
     let has_tilt = !data.tilt.is_empty();
     let has_field = !data.field.is_empty();
     let pair_window_s = start_pair_window_s(data);
+    // Thruster pulses inside the interval up to tick k (see `ThrusterHistory::intra_tick_rate`).
+    let thrusters = ThrusterHistory::new(data, config);
+    let inertia_inv = config.true_inertia().and_then(|j| j.try_inverse());
+    let intra_tick_rate = |k: usize| match (&thrusters, &inertia_inv) {
+        (Some(h), Some(j_inv)) if k > 0 => {
+            h.intra_tick_rate(k - 1, data.t[k] - data.t[k - 1], j_inv)
+        }
+        _ => Vector3::zeros(),
+    };
     // Before the filter starts: the latest usable sample of each vector sensor (time, value).
     let mut latest_tilt: Option<(f64, [f64; 2])> = None;
     let mut latest_field: Option<(f64, Vector3<f64>)> = None;
@@ -366,7 +377,7 @@ fn run(
         if let Some(t) = tangent.as_deref_mut() {
             t.gyro(data, k, &q_now, &w);
         }
-        let mean = previous.map_or(w, |p| 0.5 * (p + w));
+        let mean = previous.map_or(w, |p| 0.5 * (p + w) + intra_tick_rate(k));
         previous = Some(w);
         // Vector samples up to this tick, grouped by time.
         loop {

@@ -13,7 +13,7 @@
 //! time up to tick k), as the model's bank draws it.
 
 use crate::data::Aligned;
-use nalgebra::Vector3;
+use nalgebra::{Matrix3, Vector3};
 use testbed_model::ModelConfig;
 use testbed_model::physics::{ThrusterBank, ThrusterCommand};
 use testbed_model::thruster_config::THRUSTER_COUNT;
@@ -27,6 +27,10 @@ pub struct ThrusterHistory {
     /// Per tick k: each thruster's thrust time (nominal relative thrust integrated) over
     /// `[t_k, t_{k+1}]`, s (zero for the last tick).
     pub thrust_s: Vec<[f64; THRUSTER_COUNT]>,
+    /// Per tick k: each thruster's thrust time over `[t_k, t_{k+1}]` weighted by the time then
+    /// left in the interval, `∫ (t_{k+1} − τ) f(τ) dτ`, s² (`f` the relative thrust): where in
+    /// the interval the thrust fell, which sets the mean rate over it (zero for the last tick).
+    pub thrust_moment_s2: Vec<[f64; THRUSTER_COUNT]>,
     /// Per tick k: each thruster's thrust time from the record's start to `t_k`, s.
     pub cumulative_s: Vec<[f64; THRUSTER_COUNT]>,
     /// Nominal torque of each thruster `r × F`, Nm, body axes.
@@ -72,21 +76,27 @@ impl ThrusterHistory {
         };
         let n = data.len();
         let mut thrust_s = vec![[0.0; THRUSTER_COUNT]; n];
+        let mut thrust_moment_s2 = vec![[0.0; THRUSTER_COUNT]; n];
         let mut cumulative_s = vec![[0.0; THRUSTER_COUNT]; n];
         let mut total = [0.0; THRUSTER_COUNT];
         let mut pulses: [Vec<(usize, f64)>; THRUSTER_COUNT] = Default::default();
-        // Integrate the relative thrust over [t, until), splitting at valve switches; the
-        // thrust time also goes to each thruster's current pulse.
+        // Integrate the relative thrust over [t, until), splitting at valve switches, into
+        // `acc` and, weighted by the time left to `interval_end`, into `moment`; the thrust
+        // time also goes to each thruster's current pulse.
         let integrate = |bank: &mut ThrusterBank,
                          t: &mut f64,
                          until: f64,
+                         interval_end: f64,
                          acc: &mut [f64],
+                         moment: &mut [f64],
                          pulses: &mut [Vec<(usize, f64)>; THRUSTER_COUNT]| {
             while until - *t > TOL_S {
                 let end = bank.next_switch_after(*t).map_or(until, |s| s.min(until));
                 let f = bank.factors_at(*t);
+                let left = |x: f64| (interval_end - x).powi(2);
                 for i in 0..THRUSTER_COUNT {
                     acc[i] += f[i] * (end - *t);
+                    moment[i] += f[i] * 0.5 * (left(*t) - left(end));
                     if let Some(p) = pulses[i].last_mut() {
                         p.1 += f[i] * (end - *t);
                     }
@@ -116,33 +126,56 @@ impl ThrusterHistory {
         if let Some((t_first, _)) = cmds.first() {
             t = t.min(*t_first);
         }
-        let mut discard = [0.0; THRUSTER_COUNT];
-        while next < cmds.len() && cmds[next].0 < data.t[0] - TOL_S {
-            integrate(&mut bank, &mut t, cmds[next].0, &mut discard, &mut pulses);
+        let (mut discard, mut discard_moment) = ([0.0; THRUSTER_COUNT], [0.0; THRUSTER_COUNT]);
+        let start = data.t[0];
+        while next < cmds.len() && cmds[next].0 < start - TOL_S {
+            let until = cmds[next].0;
+            let (acc, moment) = (&mut discard, &mut discard_moment);
+            integrate(&mut bank, &mut t, until, start, acc, moment, &mut pulses);
             issue(&mut bank, t, next, 0, &mut pulses);
             next += 1;
         }
-        integrate(&mut bank, &mut t, data.t[0], &mut discard, &mut pulses);
+        let (acc, moment) = (&mut discard, &mut discard_moment);
+        integrate(&mut bank, &mut t, start, start, acc, moment, &mut pulses);
         for k in 0..n {
             cumulative_s[k] = total;
             let Some(&end) = data.t.get(k + 1) else {
                 break;
             };
-            let mut acc = [0.0; THRUSTER_COUNT];
+            let (mut acc, mut moment) = ([0.0; THRUSTER_COUNT], [0.0; THRUSTER_COUNT]);
             while next < cmds.len() && cmds[next].0 < end - TOL_S {
-                integrate(&mut bank, &mut t, cmds[next].0, &mut acc, &mut pulses);
+                let until = cmds[next].0;
+                integrate(
+                    &mut bank,
+                    &mut t,
+                    until,
+                    end,
+                    &mut acc,
+                    &mut moment,
+                    &mut pulses,
+                );
                 issue(&mut bank, t, next, k, &mut pulses);
                 next += 1;
             }
-            integrate(&mut bank, &mut t, end, &mut acc, &mut pulses);
+            integrate(
+                &mut bank,
+                &mut t,
+                end,
+                end,
+                &mut acc,
+                &mut moment,
+                &mut pulses,
+            );
             bank.discard_before(t);
             for i in 0..THRUSTER_COUNT {
                 total[i] += acc[i];
             }
             thrust_s[k] = acc;
+            thrust_moment_s2[k] = moment;
         }
         Some(Self {
             thrust_s,
+            thrust_moment_s2,
             cumulative_s,
             torque_nm: std::array::from_fn(|i| thrusters.torque_nm(i)),
             mass_flow_kg_s: thrusters.mass_flow_kg_s(),
@@ -168,6 +201,24 @@ impl ThrusterHistory {
         (0..THRUSTER_COUNT).fold(Vector3::zeros(), |acc, i| {
             acc + self.torque_nm[i] * (self.scale[i] * self.thrust_s[k][i])
         })
+    }
+
+    /// What the thrusters add over `[t_k, t_{k+1}]` to the body's mean rate beyond the mean of
+    /// the rates at the interval's ends, rad/s, body axes, with `inertia_inv` the platform's
+    /// inverse inertia: `J⁻¹ Σ_i s_i T_i (M_{k,i} / Δt − a_{k,i} / 2)` (`a` the thrust time, `M`
+    /// its moment [`thrust_moment_s2`](Self::thrust_moment_s2)). A rate sampled at the ticks
+    /// misses where in the interval a pulse fell: a pulse at its start turns the body for
+    /// nearly the whole interval at the new rate, one at its end hardly at all; the mean of the
+    /// ends counts half of either.
+    pub fn intra_tick_rate(&self, k: usize, dt_s: f64, inertia_inv: &Matrix3<f64>) -> Vector3<f64> {
+        if dt_s <= 0.0 {
+            return Vector3::zeros();
+        }
+        let torque_s = (0..THRUSTER_COUNT).fold(Vector3::zeros(), |acc, i| {
+            let excess = self.thrust_moment_s2[k][i] / dt_s - 0.5 * self.thrust_s[k][i];
+            acc + self.torque_nm[i] * (self.scale[i] * excess)
+        });
+        inertia_inv * torque_s
     }
 
     /// Gravity torque of the propellant used by tick `k` at attitude gravity direction `g_b`
@@ -250,6 +301,37 @@ mod tests {
         assert!((h.impulse_nms(0) - Vector3::new(0.0, 0.05 * pulse, 0.0)).norm() < 1e-15);
         assert!(h.pulses[2].iter().all(|p| (p.1 - pulse).abs() < 1e-12));
         assert_eq!(h.pulses[2][3].0, 6);
+    }
+
+    #[test]
+    fn a_pulse_early_in_its_interval_adds_to_the_mean_rate_and_a_full_one_does_not() {
+        let config = ModelConfig {
+            thrusters: Some(testbed_model::thruster_config::ThrusterConfig::default()),
+            ..ModelConfig::default()
+        };
+        let t = config.thrusters.clone().unwrap_or_default();
+        let h = ThrusterHistory::new(&Aligned::new(&data()), &config).expect("thrusters fired");
+        // Thruster 2's 40 ms pulse thrusts over [open delay, 40 ms + close delay) of its 0.1-s
+        // interval: the rate steps by J⁻¹ T a spread around the thrust's midpoint `m`, so the
+        // mean rate over the interval gains J⁻¹ T a (1 − m / Δt) where the ends' mean counts
+        // J⁻¹ T a / 2 (closed form, J = 1).
+        let (start, end) = (t.open_delay_s, 0.04 + t.close_delay_s);
+        let (a, m) = (end - start, 0.5 * (start + end));
+        let moment = 0.5 * ((0.1 - start).powi(2) - (0.1 - end).powi(2));
+        assert!((h.thrust_moment_s2[0][2] - moment).abs() < 1e-15);
+        let excess = h.intra_tick_rate(0, 0.1, &Matrix3::identity());
+        let want = Vector3::new(0.0, 0.05 * a * (0.5 - m / 0.1), 0.0);
+        assert!((excess - want).norm() < 1e-15, "{excess} against {want}");
+        // Inverse inertia: scales it.
+        let j_inv = Matrix3::from_diagonal(&Vector3::new(0.5, 0.02, 0.25));
+        assert!((h.intra_tick_rate(0, 0.1, &j_inv) - 0.02 * want).norm() < 1e-17);
+        // Thrust over the whole interval (thruster 5 at 5.1 s) steps the rate linearly: the
+        // mean of the ends is the mean. No thrust: nothing.
+        assert!(h.intra_tick_rate(51, 0.1, &Matrix3::identity()).norm() < 1e-15);
+        assert_eq!(
+            h.intra_tick_rate(1, 0.1, &Matrix3::identity()),
+            Vector3::zeros()
+        );
     }
 
     #[test]

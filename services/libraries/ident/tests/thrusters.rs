@@ -1,8 +1,8 @@
 //! Identification from data with thruster firings: a simulated run in which
 //! the thrusters dump the wheels' momentum against a constant disturbance, with a hidden
-//! per-thruster thrust scale error or a hidden tank-position error, identified blind against the
-//! model without it (the model knows the thrusters and the disturbance). Clean data must give
-//! `none`.
+//! per-thruster thrust scale error, a hidden tank-position error or a drifting gyro bias,
+//! identified blind against the model without it (the model knows the thrusters and the
+//! disturbance). Clean data must give `none`.
 
 mod common;
 use common::*;
@@ -142,6 +142,29 @@ fn a_tank_off_its_assumed_position_is_named_as_the_propellant_com_shift() {
         // Measured 2.5–2.9.
         assert!(id.report.gain > 1.5, "{label}: gain {}", id.report.gain);
         assert_eq!(extended_round_trip(&id, "tank"), id.extended);
+    }
+}
+
+#[test]
+fn a_gyro_bias_drift_is_named_on_thruster_data() {
+    // The drift of `causes.rs`' `gyro_bias_drift` in the momentum-dumping runs: the pulses'
+    // rate steps inside the ticks are propagated where they fall, so they are no drift (clean
+    // records below) and a drift is still one.
+    let nominal = model();
+    let mut truth = model();
+    truth.effects.gyro_bias_drift = Some(testbed_model::config::GyroBiasDrift {
+        rate_rad_s2: [1e-7, -7e-8, 5e-8],
+    });
+    for seed in SEEDS {
+        let label = format!("gyro bias drift seed {seed}");
+        let data = run(&truth, seed, 600.0);
+        let id = identify(&data, &nominal, &Options::default()).expect("identification runs");
+        report(&label, &data, &id);
+        assert_eq!(names(&id), vec!["gyro_bias_drift"], "{label}");
+        // Measured within 2.1 σ.
+        check_within(&label, &id, &truth, Cause::GyroBiasDrift, 3.0, 1e-8);
+        // Measured 2.2–2.4.
+        assert!(id.report.gain > 1.5, "{label}: gain {}", id.report.gain);
     }
 }
 

@@ -238,15 +238,6 @@ fn available(cause: Cause, problem: &Problem, nominal: &SetFit) -> bool {
             .flatten()
             .any(|c| s.torque.excited[c])
     };
-    match cause {
-        // The attitude filter sees the rate only at the ticks, so a thruster pulse's rate step
-        // inside a tick is an attitude error in the pulse's direction; momentum dumping
-        // repeats it, and a bias drift stands in for the sum (named on one of five clean
-        // records of the thruster programme, with the gyro's other causes fitted and falsified
-        // across time blocks on another).
-        Cause::GyroBiasDrift if excited(Cause::ThrusterTorqueScale) => return false,
-        _ => {}
-    }
     match cause.kind() {
         Kind::Sensor => {
             !s.recon.innovations.is_empty()
