@@ -24,6 +24,7 @@
 //! | `soft_iron` | `matrix` — the symmetric soft-iron matrix `S` of `(1 + S) A(q) M_L`, dimensionless, as its six entries `[S_xx, S_yy, S_zz, S_xy, S_yz, S_zx]` |
 //! | `inclinometer_bias` | `offset_rad` — mounting offset of the tilt angles θ (body X), φ (body Y), rad |
 //! | `inclinometer_scale` | `ppm` — scale error of the tilt angles θ, φ, parts per million |
+//! | `inclinometer_cross_axis` | `coupling` — the fraction of φ read in θ and of θ read in φ (cross-axis sensitivity; a sensor turned about the vertical by δ has `[δ, −δ]`), dimensionless |
 //! | `inclinometer_lag` | `time_constant_s` — the inclinometer reads the attitude `τ` earlier, about `θ − τ θ̇` (a first-order response, or a late stamp), s |
 //! | `magnetometer_lag` | `time_constant_s` — the magnetometer reads the field of the attitude `τ` earlier, s |
 //! | `thruster_torque_scale` | `scale` — delivered / nominal thrust per thruster 0–5 |
@@ -48,8 +49,8 @@ use testbed_model::ModelConfig;
 use testbed_model::config::{
     ActuatorDelay, AeroDrag, ComDrift, ComOffset, ConstantTorque, EarthRate,
     GYRO_BIAS_DRIFT_MAX_RAD_S2, GYRO_DELAY_MAX_S, GyroBiasDrift, GyroDelay, GyroMisalignment,
-    GyroScale, InclinometerBias, InclinometerLag, InclinometerScale, InertiaError,
-    MagneticDisturbance, MagnetometerLag, SENSOR_LAG_MAX_S, SoftIron, WheelFriction,
+    GyroScale, InclinometerBias, InclinometerCrossAxis, InclinometerLag, InclinometerScale,
+    InertiaError, MagneticDisturbance, MagnetometerLag, SENSOR_LAG_MAX_S, SoftIron, WheelFriction,
     WheelTorqueScale,
 };
 use testbed_model::thruster_config::{THRUSTER_COUNT, ThrusterConfig, ThrusterTorqueScale};
@@ -75,6 +76,7 @@ pub enum Cause {
     SoftIron,
     InclinometerBias,
     InclinometerScale,
+    InclinometerCrossAxis,
     InclinometerLag,
     MagnetometerLag,
     ThrusterTorqueScale,
@@ -247,6 +249,15 @@ const P_TILT_SCALE: &[ParamSpec] = &[spec(
     1e5,
     100.0,
 )];
+// The step: 1e-4 of a 5° tilt is 9 µrad, a few percent of the inclinometer's noise.
+const P_TILT_CROSS: &[ParamSpec] = &[spec(
+    "coupling",
+    2,
+    "dimensionless: the fraction of φ read in θ, of θ read in φ",
+    -0.1,
+    0.1,
+    1e-4,
+)];
 const P_TILT_LAG: &[ParamSpec] = &[spec("time_constant_s", 1, "s", 0.0, SENSOR_LAG_MAX_S, 0.05)];
 const P_FIELD_LAG: &[ParamSpec] = &[spec("time_constant_s", 1, "s", 0.0, SENSOR_LAG_MAX_S, 0.05)];
 const P_DELAY: &[ParamSpec] = &[spec("delay_s", 1, "s", 0.0, 10.0, 0.01)];
@@ -289,7 +300,7 @@ pub fn soft_iron_matrix(values: &[f64]) -> [[f64; 3]; 3] {
 
 impl Cause {
     /// Every cause, in the library's order.
-    pub const ALL: [Cause; 21] = [
+    pub const ALL: [Cause; 22] = [
         Cause::ComOffset,
         Cause::ComDrift,
         Cause::EarthRate,
@@ -307,6 +318,7 @@ impl Cause {
         Cause::SoftIron,
         Cause::InclinometerBias,
         Cause::InclinometerScale,
+        Cause::InclinometerCrossAxis,
         Cause::InclinometerLag,
         Cause::MagnetometerLag,
         Cause::ThrusterTorqueScale,
@@ -333,6 +345,7 @@ impl Cause {
             Cause::SoftIron => "soft_iron",
             Cause::InclinometerBias => "inclinometer_bias",
             Cause::InclinometerScale => "inclinometer_scale",
+            Cause::InclinometerCrossAxis => "inclinometer_cross_axis",
             Cause::InclinometerLag => "inclinometer_lag",
             Cause::MagnetometerLag => "magnetometer_lag",
             Cause::ThrusterTorqueScale => "thruster_torque_scale",
@@ -386,6 +399,10 @@ impl Cause {
                 "inclinometer mounted off level with the body axes: a constant offset of its angles"
             }
             Cause::InclinometerScale => "inclinometer scale-factor error per angle",
+            Cause::InclinometerCrossAxis => {
+                "each inclinometer angle reads a fraction of the other (cross-axis sensitivity, \
+                 or the sensor turned about the vertical)"
+            }
             Cause::InclinometerLag => {
                 "the inclinometer's angles lag the platform's (a first-order response, or stamped \
                  late): it reads the attitude τ earlier, about θ − τ θ̇"
@@ -415,6 +432,7 @@ impl Cause {
             | Cause::SoftIron
             | Cause::InclinometerBias
             | Cause::InclinometerScale
+            | Cause::InclinometerCrossAxis
             | Cause::InclinometerLag
             | Cause::MagnetometerLag => Kind::Sensor,
             Cause::ComOffset
@@ -442,7 +460,10 @@ impl Cause {
     pub fn needs_tilt(self) -> bool {
         matches!(
             self,
-            Cause::InclinometerBias | Cause::InclinometerScale | Cause::InclinometerLag
+            Cause::InclinometerBias
+                | Cause::InclinometerScale
+                | Cause::InclinometerCrossAxis
+                | Cause::InclinometerLag
         )
     }
 
@@ -466,6 +487,7 @@ impl Cause {
             Cause::SoftIron => P_SOFT,
             Cause::InclinometerBias => P_TILT_BIAS,
             Cause::InclinometerScale => P_TILT_SCALE,
+            Cause::InclinometerCrossAxis => P_TILT_CROSS,
             Cause::InclinometerLag => P_TILT_LAG,
             Cause::MagnetometerLag => P_FIELD_LAG,
             Cause::ThrusterTorqueScale => P_THRUSTER_SCALE,
@@ -531,6 +553,7 @@ impl Cause {
             Cause::SoftIron => e.soft_iron.is_some(),
             Cause::InclinometerBias => e.inclinometer_bias.is_some(),
             Cause::InclinometerScale => e.inclinometer_scale.is_some(),
+            Cause::InclinometerCrossAxis => e.inclinometer_cross_axis.is_some(),
             Cause::InclinometerLag => e.inclinometer_lag.is_some(),
             Cause::MagnetometerLag => e.magnetometer_lag.is_some(),
             Cause::ThrusterTorqueScale => e.thruster_torque_scale.is_some(),
@@ -634,6 +657,11 @@ impl Cause {
                 .as_ref()
                 .map_or([0.0; 2], |x| x.ppm)
                 .to_vec(),
+            Cause::InclinometerCrossAxis => e
+                .inclinometer_cross_axis
+                .as_ref()
+                .map_or([0.0; 2], |x| x.coupling)
+                .to_vec(),
             Cause::InclinometerLag => vec![
                 e.inclinometer_lag
                     .as_ref()
@@ -730,6 +758,11 @@ impl Cause {
             }
             Cause::InclinometerScale => {
                 e.inclinometer_scale = Some(InclinometerScale { ppm: [v[0], v[1]] })
+            }
+            Cause::InclinometerCrossAxis => {
+                e.inclinometer_cross_axis = Some(InclinometerCrossAxis {
+                    coupling: [v[0], v[1]],
+                })
             }
             Cause::InclinometerLag => {
                 e.inclinometer_lag = Some(InclinometerLag {

@@ -14,7 +14,7 @@ use crate::data::{Aligned, interpolate, median_period};
 use crate::error::IdentError;
 use crate::tangent::{Rate, Sensitivities, Tangent};
 use crate::thrusters::ThrusterHistory;
-use nalgebra::{Matrix3, UnitQuaternion, Vector3};
+use nalgebra::{Matrix2, Matrix3, UnitQuaternion, Vector2, Vector3};
 use testbed_flight::mekf::{Mekf, MekfConfig, VectorMeasurements};
 use testbed_model::ModelConfig;
 use testbed_model::attitude::{self, Attitude};
@@ -43,8 +43,11 @@ pub struct SensorModel {
     pub soft_iron_inv: Matrix3<f64>,
     /// Inclinometer mounting offset of `[θ, φ]`, rad (zero without `inclinometer_bias`).
     pub tilt_offset_rad: [f64; 2],
-    /// Inclinometer gain of `[θ, φ]`, `1 + s` (one without `inclinometer_scale`).
-    pub tilt_gain: [f64; 2],
+    /// Inclinometer matrix: the reading is `G [θ, φ]` plus the offset, `G` with `1 + s` of
+    /// `inclinometer_scale` on its diagonal and the coupling of `inclinometer_cross_axis` off
+    /// it (the identity without them); and its inverse.
+    pub tilt_matrix: Matrix2<f64>,
+    pub tilt_matrix_inv: Matrix2<f64>,
     /// Inclinometer lag `τ`, s: it reads the attitude `τ` earlier (zero without
     /// `inclinometer_lag`).
     pub tilt_lag_s: f64,
@@ -76,6 +79,15 @@ impl SensorModel {
             let lat = x.latitude_deg * DEG;
             EARTH_RATE_RAD_S * Vector3::new(lat.cos(), 0.0, lat.sin())
         });
+        let [gain_x, gain_y] = e
+            .inclinometer_scale
+            .as_ref()
+            .map_or([1.0; 2], |s| s.ppm.map(|p| 1.0 + p * 1e-6));
+        let [cross_x, cross_y] = e
+            .inclinometer_cross_axis
+            .as_ref()
+            .map_or([0.0; 2], |c| c.coupling);
+        let tilt_matrix = Matrix2::new(gain_x, cross_x, cross_y, gain_y);
         let soft_iron = e.soft_iron.as_ref().map_or_else(Matrix3::identity, |s| {
             Matrix3::identity() + Matrix3::from_fn(|i, j| s.matrix[i][j])
         });
@@ -100,10 +112,10 @@ impl SensorModel {
                 .inclinometer_bias
                 .as_ref()
                 .map_or([0.0; 2], |b| b.offset_rad),
-            tilt_gain: e
-                .inclinometer_scale
-                .as_ref()
-                .map_or([1.0; 2], |s| s.ppm.map(|p| 1.0 + p * 1e-6)),
+            tilt_matrix,
+            // Couplings within ±0.1 and scales within ±10 % (the configuration's bounds) keep
+            // `G` far from singular; the identity stands in should one not.
+            tilt_matrix_inv: tilt_matrix.try_inverse().unwrap_or_else(Matrix2::identity),
             tilt_lag_s: e
                 .inclinometer_lag
                 .as_ref()
@@ -153,11 +165,14 @@ impl SensorModel {
         self.gyro_matrix * (w + q * self.earth_rate_l + bias)
     }
 
-    /// The tilt reading `[θ, φ]` (rad) with the mounting offset and the scale error taken out,
-    /// and the lag made up: the angles' change from the attitude the lag earlier to `q`, at
-    /// body rate `w` (the filter's estimates when the sample is applied).
+    /// The tilt reading `[θ, φ]` (rad) with the mounting offset, the scale error and the
+    /// cross-axis coupling taken out, `G⁻¹ (r − b)`, and the lag made up: the angles' change
+    /// from the attitude the lag earlier to `q`, at body rate `w` (the filter's estimates when
+    /// the sample is applied).
     pub fn correct_tilt(&self, tilt: &[f64; 2], q: &Attitude, w: &Vector3<f64>) -> [f64; 2] {
-        let corrected = |i: usize| (tilt[i] - self.tilt_offset_rad[i]) / self.tilt_gain[i];
+        let offset = Vector2::from(self.tilt_offset_rad);
+        let unmixed = self.tilt_matrix_inv * (Vector2::from(*tilt) - offset);
+        let corrected = |i: usize| unmixed[i];
         if self.tilt_lag_s == 0.0 {
             return std::array::from_fn(corrected);
         }
@@ -171,7 +186,8 @@ impl SensorModel {
     /// The noise-free tilt reading at attitude `q` and body rate `w`, rad.
     pub fn tilt_reading(&self, q: &Attitude, w: &Vector3<f64>) -> [f64; 2] {
         let tilt = attitude::tilt_angles(&attitude::lagged(q, w, self.tilt_lag_s));
-        std::array::from_fn(|i| self.tilt_gain[i] * tilt[i] + self.tilt_offset_rad[i])
+        let reading = self.tilt_matrix * Vector2::from(tilt) + Vector2::from(self.tilt_offset_rad);
+        reading.into()
     }
 
     /// The field reading `m` (tesla, body axes) with the hard iron and the fitted field error
@@ -660,6 +676,41 @@ impl Reconstruction {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// With the inclinometer's offset, scale and cross-axis coupling configured, taking them out
+    /// of the noise-free reading gives back the attitude's tilt angles.
+    #[test]
+    fn correcting_the_tilt_reading_undoes_offset_scale_and_coupling() {
+        let config = ModelConfig::from_toml_str(
+            "[effects.inclinometer_bias]\noffset_rad = [0.002, -0.001]\n\
+             [effects.inclinometer_scale]\nppm = [2e4, -1e4]\n\
+             [effects.inclinometer_cross_axis]\ncoupling = [0.03, -0.01]\n",
+            "test",
+        )
+        .expect("valid");
+        let sensors = SensorModel::from_config(&config);
+        let q = attitude::from_heading_pitch_roll(0.7, 0.08, -0.05);
+        let tilt = attitude::tilt_angles(&q);
+        let reading = sensors.tilt_reading(&q, &Vector3::zeros());
+        // The reading as the simulator's inclinometer forms it, noise aside.
+        let want = [
+            1.02 * tilt[0] + 0.03 * tilt[1] + 0.002,
+            0.99 * tilt[1] - 0.01 * tilt[0] - 0.001,
+        ];
+        for i in 0..2 {
+            assert!(
+                (reading[i] - want[i]).abs() < 1e-15,
+                "{reading:?} against {want:?}"
+            );
+        }
+        let back = sensors.correct_tilt(&reading, &q, &Vector3::zeros());
+        for i in 0..2 {
+            assert!(
+                (back[i] - tilt[i]).abs() < 1e-15,
+                "{back:?} against {tilt:?}"
+            );
+        }
+    }
 
     /// With hard and soft iron configured, taking them out of the noise-free reading gives back
     /// the lab field in body axes.

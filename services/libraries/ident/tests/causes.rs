@@ -438,6 +438,25 @@ fn inclinometer_bias() {
 }
 
 #[test]
+fn inclinometer_cross_axis() {
+    // Each angle reads a part of the other: 2 % of φ in θ and −1 % of θ in φ, a cross-axis
+    // sensitivity that is not a rotation (that has the two equal and opposite,
+    // `misattribution.rs`).
+    let truth = truth("[effects.inclinometer_cross_axis]\ncoupling = [0.02, -0.01]\n");
+    for seed in SEEDS {
+        let id = identify_blind(&truth, seed, 600.0);
+        check_single(
+            &format!("inclinometer_cross_axis seed {seed}"),
+            &truth,
+            Cause::InclinometerCrossAxis,
+            &id,
+            2.0,
+            |_, _| 3e-4,
+        );
+    }
+}
+
+#[test]
 fn inclinometer_scale() {
     // The inclinometer's gain 2 % high on θ and 1 % low on φ (a calibration off). Before the
     // cause was in the library, a 3 % error was blamed on the magnetometer (the second pass's

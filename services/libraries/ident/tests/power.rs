@@ -98,6 +98,17 @@ fn detection_power_table_for_a_20_minute_experiment() {
             "2 %, −1 % × scale",
         ),
         (
+            Cause::InclinometerCrossAxis,
+            Box::new(|s| {
+                format!(
+                    "[effects.inclinometer_cross_axis]\ncoupling = [{}, {}]\n",
+                    2.0e-2 * s,
+                    -1.0e-2 * s
+                )
+            }),
+            "2 %, −1 % × scale",
+        ),
+        (
             Cause::WheelTorqueScale,
             Box::new(|s| {
                 format!(

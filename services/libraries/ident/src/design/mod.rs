@@ -334,6 +334,7 @@ pub fn typical_magnitude(cause: Cause, i: usize) -> f64 {
         Cause::SoftIron => 0.01,
         Cause::InclinometerBias => 1e-3,
         Cause::InclinometerScale => 1e3,
+        Cause::InclinometerCrossAxis => 1e-3,
         Cause::InclinometerLag | Cause::MagnetometerLag => 0.2,
         Cause::WheelFriction => {
             if i < 6 {

@@ -179,6 +179,12 @@ pub struct Report {
     pub whiteness: super::WhitenessReport,
     /// Filter runs the analysis took (both passes).
     pub filter_runs: usize,
+    /// Causes left out of the library because the selection chose them and the falsification
+    /// tests then dropped them as standing in for an effect of another form: the analysis
+    /// above ran again without them and predicts the held-out data better (empty: no rerun, or
+    /// the rerun did not predict better).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub stand_ins_left_out: Vec<&'static str>,
 }
 
 /// A labelled time series for figures.

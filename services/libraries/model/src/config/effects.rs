@@ -339,8 +339,8 @@ pub const SENSOR_LAG_MAX_S: f64 = 2.0;
 
 /// Each inclinometer angle also reads a fraction of the other: `θ_meas = … + k_θ φ`,
 /// `φ_meas = … + k_φ θ` (the cross-axis sensitivity of a datasheet; a sensor turned about the
-/// vertical by δ has `k_θ = −k_φ ≈ δ`). Not in identification's library: the scale error
-/// `inclinometer_scale` can take the part of it that follows the angle's own.
+/// vertical by δ has `k_θ = −k_φ ≈ δ`). With `inclinometer_scale` on the diagonal it makes the
+/// inclinometer's reading a general 2×2 map of the angles.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct InclinometerCrossAxis {
