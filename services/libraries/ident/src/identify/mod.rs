@@ -135,10 +135,10 @@ fn identify_clean(
     let first = identify_pass(data, &aligned, model, options, None)?;
     let (first, options, left_out) = without_stand_ins(data, &aligned, model, options, first)?;
     let mut identification = with_sensor_correction(data, &aligned, model, &options, first)?;
-    if let Some((names, line)) = left_out {
+    if let Some(left_out) = left_out {
         let report = &mut identification.report;
-        report.summary.insert(0, line);
-        report.stand_ins_left_out = names;
+        report.summary.insert(0, left_out.summary);
+        report.stand_ins_left_out = left_out.names;
     }
     Ok(identification)
 }
@@ -212,16 +212,14 @@ fn with_sensor_correction(
 /// stand-ins could not: its extended model predicts the held-out data better, it leaves fewer
 /// unexplained effects, and the guard flags none of its causes as explaining only part of its
 /// channel (a cause from outside the effect's form, standing in again). The options it ran
-/// with go on to the second pass, and the stand-ins' names and a summary line saying so are
-/// returned beside it.
-#[allow(clippy::type_complexity)] // used once, right above
+/// with go on to the second pass, and what was left out is returned beside it.
 fn without_stand_ins(
     data: &Dataset,
     aligned: &Aligned,
     model: &ModelConfig,
     options: &Options,
     first: Identification,
-) -> Result<(Identification, Options, Option<(Vec<&'static str>, String)>), IdentError> {
+) -> Result<(Identification, Options, Option<StandInsLeftOut>), IdentError> {
     let stand_ins: Vec<Cause> = first
         .report
         .cause_tests
@@ -249,21 +247,28 @@ fn without_stand_ins(
         return Ok((first, options.clone(), None));
     }
     let names: Vec<&'static str> = stand_ins.iter().map(|c| c.name()).collect();
-    let line = format!(
+    let them = if names.len() == 1 { "it" } else { "them" };
+    let summary = format!(
         "Ran again without {}: chosen, then dropped as standing in for an effect of another \
-         form. Without {} the causes named explain it: the extended model predicts the \
-         held-out data {:.2}× better than the configuration given (with {}: {:.2}×), and {} \
-         of {} unexplained effects remain.",
+         form. Without {them} the causes named explain it: the extended model predicts the \
+         held-out data {:.2}× better than the configuration given (with {them}: {:.2}×), and \
+         {} of {} unexplained effects remain.",
         names.join(", "),
-        if names.len() == 1 { "it" } else { "them" },
         rerun.report.gain,
-        if names.len() == 1 { "it" } else { "them" },
         first.report.gain,
         rerun.report.unexplained.len(),
         first.report.unexplained.len()
     );
     rerun.report.filter_runs += first.report.filter_runs;
-    Ok((rerun, rerun_options, Some((names, line))))
+    let left_out = StandInsLeftOut { names, summary };
+    Ok((rerun, rerun_options, Some(left_out)))
+}
+
+/// The stand-ins an analysis ran again without ([`without_stand_ins`]), and the summary line
+/// that says so.
+struct StandInsLeftOut {
+    names: Vec<&'static str>,
+    summary: String,
 }
 
 /// What the second pass takes from the first.
