@@ -171,16 +171,15 @@ impl SensorModel {
     /// the sample is applied).
     pub fn correct_tilt(&self, tilt: &[f64; 2], q: &Attitude, w: &Vector3<f64>) -> [f64; 2] {
         let offset = Vector2::from(self.tilt_offset_rad);
-        let unmixed = self.tilt_matrix_inv * (Vector2::from(*tilt) - offset);
-        let corrected = |i: usize| unmixed[i];
+        let corrected: [f64; 2] = (self.tilt_matrix_inv * (Vector2::from(*tilt) - offset)).into();
         if self.tilt_lag_s == 0.0 {
-            return std::array::from_fn(corrected);
+            return corrected;
         }
         let (now, then) = (
             attitude::tilt_angles(q),
             attitude::tilt_angles(&attitude::lagged(q, w, self.tilt_lag_s)),
         );
-        std::array::from_fn(|i| corrected(i) + now[i] - then[i])
+        std::array::from_fn(|i| corrected[i] + now[i] - then[i])
     }
 
     /// The noise-free tilt reading at attitude `q` and body rate `w`, rad.
@@ -338,9 +337,10 @@ fn run(
     let has_tilt = !data.tilt.is_empty();
     let has_field = !data.field.is_empty();
     let pair_window_s = start_pair_window_s(data);
-    // Thruster pulses inside the interval up to tick k (see `ThrusterHistory::intra_tick_rate`).
+    // Thruster pulses inside the interval up to tick k (see `ThrusterHistory::intra_tick_rate`),
+    // at nominal thrust and inertia: a filter run depends on the sensor causes only.
     let thrusters = ThrusterHistory::new(data, config);
-    let inertia_inv = config.true_inertia().and_then(|j| j.try_inverse());
+    let inertia_inv = config.platform.inertia().and_then(|j| j.try_inverse());
     let intra_tick_rate = |k: usize| match (&thrusters, &inertia_inv) {
         (Some(h), Some(j_inv)) if k > 0 => {
             h.intra_tick_rate(k - 1, data.t[k] - data.t[k - 1], j_inv)

@@ -205,18 +205,22 @@ impl ThrusterHistory {
 
     /// What the thrusters add over `[t_k, t_{k+1}]` to the body's mean rate beyond the mean of
     /// the rates at the interval's ends, rad/s, body axes, with `inertia_inv` the platform's
-    /// inverse inertia: `J⁻¹ Σ_i s_i T_i (M_{k,i} / Δt − a_{k,i} / 2)` (`a` the thrust time, `M`
+    /// inverse inertia: `J⁻¹ Σ_i T_i (M_{k,i} / Δt − a_{k,i} / 2)` (`a` the thrust time, `M`
     /// its moment [`thrust_moment_s2`](Self::thrust_moment_s2)). A rate sampled at the ticks
     /// misses where in the interval a pulse fell: a pulse at its start turns the body for
     /// nearly the whole interval at the new rate, one at its end hardly at all; the mean of the
     /// ends counts half of either.
+    ///
+    /// At nominal thrust: the attitude filter that uses it must depend on the sensor causes
+    /// only (its runs are shared between configurations that differ in the torque causes), and
+    /// a thrust scale error changes this small correction by its own small fraction.
     pub fn intra_tick_rate(&self, k: usize, dt_s: f64, inertia_inv: &Matrix3<f64>) -> Vector3<f64> {
         if dt_s <= 0.0 {
             return Vector3::zeros();
         }
         let torque_s = (0..THRUSTER_COUNT).fold(Vector3::zeros(), |acc, i| {
             let excess = self.thrust_moment_s2[k][i] / dt_s - 0.5 * self.thrust_s[k][i];
-            acc + self.torque_nm[i] * (self.scale[i] * excess)
+            acc + self.torque_nm[i] * excess
         });
         inertia_inv * torque_s
     }

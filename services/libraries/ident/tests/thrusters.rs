@@ -145,6 +145,25 @@ fn a_tank_off_its_assumed_position_is_named_as_the_propellant_com_shift() {
     }
 }
 
+/// The attitude filter's runs are shared between configurations with the same sensor causes
+/// (`SensorKey`), so its pulse correction must not depend on the torque causes: a thrust
+/// scale or an inertia error leaves the reconstruction of thruster data bit for bit.
+#[test]
+fn the_reconstruction_of_thruster_data_depends_on_the_sensor_causes_only() {
+    let nominal = model();
+    let data = testbed_ident::data::Aligned::new(&run(&nominal, 41, 600.0));
+    let mut other = nominal.clone();
+    other.effects.thruster_torque_scale = Some(ThrusterTorqueScale {
+        scale: [0.8, 1.0, 1.2, 1.0, 0.9, 1.0],
+    });
+    Cause::InertiaError.apply(&mut other, &[0.05, -0.05, 0.02, 0.5, 0.0, -0.5]);
+    let reconstruct = |m: &ModelConfig| testbed_ident::reconstruct::reconstruct(&data, m);
+    let (a, b) = (reconstruct(&nominal), reconstruct(&other));
+    let (a, b) = (a.expect("filter run"), b.expect("filter run"));
+    assert_eq!(a.q, b.q);
+    assert_eq!(a.rate, b.rate);
+}
+
 #[test]
 fn a_gyro_bias_drift_is_named_on_thruster_data() {
     // The drift of `causes.rs`' `gyro_bias_drift` in the momentum-dumping runs: the pulses'
