@@ -274,6 +274,33 @@ impl From<&Dataset> for Records {
 }
 
 impl Dataset {
+    /// The rows from `from_s` to `to_s` (inclusive), s from the record's start (the first gyro
+    /// row); `None`: from the start, to the end. The part of a record before or after a change
+    /// within it (see [`crate::identify::ChangeReport`]).
+    pub fn between(&self, from_s: Option<f64>, to_s: Option<f64>) -> Dataset {
+        let t0 = self.gyro.first().map_or(0.0, |r| r.t_s);
+        let (a, b) = (
+            t0 + from_s.unwrap_or(f64::NEG_INFINITY),
+            t0 + to_s.unwrap_or(f64::INFINITY),
+        );
+        fn keep<R: Copy>(rows: &[R], t: impl Fn(&R) -> f64, a: f64, b: f64) -> Vec<R> {
+            rows.iter()
+                .filter(|r| (a..=b).contains(&t(r)))
+                .copied()
+                .collect()
+        }
+        Dataset {
+            source: self.source.clone(),
+            origin: self.origin,
+            gyro: keep(&self.gyro, |r| r.t_s, a, b),
+            inclinometer: keep(&self.inclinometer, |r| r.t_s, a, b),
+            magnetometer: keep(&self.magnetometer, |r| r.t_s, a, b),
+            wheels: keep(&self.wheels, |r| r.t_s, a, b),
+            cmg: keep(&self.cmg, |r| r.t_s, a, b),
+            thrusters: keep(&self.thrusters, |r| r.t_s, a, b),
+        }
+    }
+
     /// Duration covered by the gyro, s.
     pub fn duration_s(&self) -> f64 {
         match (self.gyro.first(), self.gyro.last()) {

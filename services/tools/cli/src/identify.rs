@@ -43,6 +43,13 @@ pub struct IdentifyArgs {
     /// No search for unexplained effects: the named causes only.
     #[arg(long)]
     no_unexplained: bool,
+    /// Analyse the data from this time on, s from the record's start (the first gyro row): the
+    /// part after a change within the record that the report found.
+    #[arg(long)]
+    from_s: Option<f64>,
+    /// Analyse the data up to this time, s from the record's start.
+    #[arg(long)]
+    to_s: Option<f64>,
 }
 
 #[derive(Debug, clap::Args)]
@@ -98,10 +105,31 @@ fn load_data(path: &Path) -> Result<Dataset> {
     }
 }
 
+/// The part of `data` from `from_s` to `to_s` (s from the record's start), checked.
+fn window(data: Dataset, from_s: Option<f64>, to_s: Option<f64>) -> Result<Dataset> {
+    if from_s.is_none() && to_s.is_none() {
+        return Ok(data);
+    }
+    let duration = data.duration_s();
+    for (name, value) in [("--from-s", from_s), ("--to-s", to_s)] {
+        if let Some(v) = value
+            && !(v.is_finite() && (0.0..=duration).contains(&v))
+        {
+            bail!("{name} {v}: outside the record (0 to {duration:.1} s from its start)");
+        }
+    }
+    if let (Some(a), Some(b)) = (from_s, to_s)
+        && a >= b
+    {
+        bail!("--from-s {a} is not before --to-s {b}");
+    }
+    Ok(data.between(from_s, to_s))
+}
+
 pub fn run_identify(args: &IdentifyArgs) -> Result<()> {
     let model = ModelConfig::load(&args.model)
         .with_context(|| format!("loading the model {}", args.model.display()))?;
-    let data = load_data(&args.data)?;
+    let data = window(load_data(&args.data)?, args.from_s, args.to_s)?;
     let mut options = Options {
         folds: args.folds,
         ..Options::default()
@@ -586,6 +614,8 @@ mod tests {
             folds: 5,
             causes: Vec::new(),
             no_unexplained: false,
+            from_s: None,
+            to_s: None,
         })
         .unwrap();
         let extended = ModelConfig::load(&out.join("extended_model.toml")).unwrap();
@@ -666,9 +696,37 @@ mod tests {
             folds: 0,
             causes: Vec::new(),
             no_unexplained: false,
+            from_s: None,
+            to_s: None,
         })
         .unwrap_err();
         assert!(format!("{err:#}").contains("nothing"), "{err:#}");
         std::fs::remove_dir_all(&dir).ok();
+    }
+
+    #[test]
+    fn a_window_outside_the_record_or_backwards_is_refused_with_its_bounds() {
+        use testbed_ident::data::GyroRow;
+        let gyro = (0..=100)
+            .map(|i| GyroRow {
+                t_s: 50.0 + i as f64,
+                rate_rad_s: nalgebra::Vector3::zeros(),
+            })
+            .collect();
+        let data = Dataset {
+            gyro,
+            ..Dataset::default()
+        };
+        let err = window(data.clone(), Some(120.0), None).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "--from-s 120: outside the record (0 to 100.0 s from its start)"
+        );
+        let err = window(data.clone(), Some(60.0), Some(40.0)).unwrap_err();
+        assert_eq!(err.to_string(), "--from-s 60 is not before --to-s 40");
+        // Times are from the record's start: rows at 70..=80 s of the data's clock.
+        let part = window(data, Some(20.0), Some(30.0)).unwrap();
+        assert_eq!(part.gyro.len(), 11);
+        assert_eq!(part.gyro[0].t_s, 70.0);
     }
 }

@@ -51,6 +51,7 @@
 //! types and its tables of curves are in `report`; the residual series after a fit, what
 //! remains and what it correlates with in `residuals`.
 
+mod change;
 mod colour;
 mod equations;
 mod falsify;
@@ -66,6 +67,7 @@ mod torque;
 mod unexplained;
 mod wheel;
 
+pub use change::{CHANGE_ALPHA, Change, ChangeReport};
 pub use colour::{
     COLOUR_ALPHA, COLOUR_SEGMENT_S, ChannelWhiteness, INNOVATION_LAGS, InnovationWhiteness,
     WhitenessReport, torque_whiteness,
@@ -828,6 +830,8 @@ fn identify_pass(
     }
     // Whiteness of the torque channel under the extended model: a coloured disturbance.
     let whiteness = colour::whiteness(aligned, &current.state.recon, &extended);
+    // A level that changed within the record: no constant cause explains it.
+    let changes = change::changes(aligned, &current.state.recon, options.horizon_s);
     let unconfirmed = report::unconfirmed(&steps);
     let mut summary = report::summary(
         &causes,
@@ -843,6 +847,18 @@ fn identify_pass(
     );
     guard::annotate(&mut summary, &partly);
     summary.extend(whiteness.lines());
+    let structured: Vec<&str> = effects
+        .iter()
+        .map(|e| e.equation.as_str())
+        .chain(
+            whiteness
+                .innovations
+                .iter()
+                .filter(|w| w.coloured)
+                .map(|w| w.channel.as_str()),
+        )
+        .collect();
+    summary.extend(changes.lines(&structured));
     let report = Report {
         summary,
         data: DataSummary {
@@ -876,6 +892,7 @@ fn identify_pass(
         gain_by_group,
         sensor_correction,
         whiteness,
+        changes,
         filter_runs: filter_runs
             + problem.filter_runs()
             + folds.iter().map(Problem::filter_runs).sum::<usize>(),

@@ -177,6 +177,8 @@ pub struct Report {
     /// Whiteness of the torque channel's residual under the extended model per axis, and the
     /// coloured disturbances it finds (see `colour`).
     pub whiteness: super::WhitenessReport,
+    /// Residual series whose level changed within the record (see `change`).
+    pub changes: super::ChangeReport,
     /// Filter runs the analysis took (both passes).
     pub filter_runs: usize,
     /// Causes left out of the library because the selection chose them and the falsification
