@@ -24,7 +24,7 @@
 //! tilting, a gyro bias jump is followed as bias and shows only while the filter catches up).
 
 use crate::data::Aligned;
-use crate::reconstruct::{INNOVATION_LEN, Reconstruction};
+use crate::reconstruct::{INNOVATION_LEN, Innovation, Reconstruction};
 use nalgebra::{DMatrix, DVector};
 use rand::SeedableRng;
 use rand::seq::SliceRandom;
@@ -71,6 +71,9 @@ pub struct Change {
     /// The step's coefficient beside the state functions, whitened innovation (1 is the
     /// predicted standard deviation of one innovation).
     pub step: f64,
+    /// The same step in the field residual (corrected reading minus the one predicted from the
+    /// prior attitude), tesla, body axes; `None` for the tilt components.
+    pub step_t: Option<f64>,
     /// The largest t over the splits, and its permutation p value times the components tested,
     /// at most 1.
     pub t: f64,
@@ -108,8 +111,9 @@ impl ChangeReport {
             let steps = group
                 .iter()
                 .map(|c| {
+                    let tesla = c.step_t.map_or(String::new(), |s| format!("{s:+.2e} T, "));
                     format!(
-                        "{} {:+.2} (whitened; t = {:.1}, p = {:.1e})",
+                        "{} {tesla}{:+.2} whitened (t = {:.1}, p = {:.1e})",
                         c.channel, c.step, c.t, c.p
                     )
                 })
@@ -143,17 +147,8 @@ impl ChangeReport {
 pub(super) fn changes(data: &Aligned, recon: &Reconstruction, block_s: f64) -> ChangeReport {
     let tested: Vec<(usize, Vec<Sample>, Vec<Block>)> = (0..INNOVATION_LEN)
         .filter_map(|c| {
-            let samples: Vec<Sample> = recon
-                .innovations
-                .iter()
-                .filter(|i| i.mask & (1 << c) != 0)
-                .map(|i| Sample {
-                    t: data.t[i.tick],
-                    value: i.values[c],
-                    state: state_functions(&recon.q[i.tick], &recon.rate[i.tick]),
-                })
-                .collect();
-            let blocks = blocks(&samples, block_s);
+            let samples = component_samples(data, recon, c, |i| i.values[c]);
+            let blocks = blocks_of(&samples, block_s);
             (blocks.len() >= 2 * MIN_SIDE_BLOCKS + STATE_FUNCTIONS.len())
                 .then_some((c, samples, blocks))
         })
@@ -169,10 +164,16 @@ pub(super) fn changes(data: &Aligned, recon: &Reconstruction, block_s: f64) -> C
             }
             let p = test.permutation_p(split.t.abs(), CHANGE_ALPHA / count as f64);
             let p = (p * count as f64).min(1.0);
+            // The field's step in tesla: the same test on the raw residual, at the same split.
+            let step_t = || {
+                let raw = component_samples(data, recon, c, |i| i.field_residual_t[c - FIELD]);
+                StepTest::new(&blocks_of(&raw, block_s))?.step_at(split.at)
+            };
             (p < CHANGE_ALPHA).then(|| Change {
                 channel: super::innovation::INNOVATION_LABELS[c].to_string(),
                 time_s: refine(&samples, &blocks, &test, split.at),
                 step: split.step,
+                step_t: if c >= FIELD { step_t() } else { None },
                 t: split.t,
                 p,
                 blocks: blocks.len(),
@@ -186,6 +187,28 @@ pub(super) fn changes(data: &Aligned, recon: &Reconstruction, block_s: f64) -> C
         series: count,
         changes,
     }
+}
+
+/// First field component of the innovation (`[g_t1, g_t2, m_x, m_y, m_z]`).
+const FIELD: usize = 2;
+
+/// Component `c`'s innovations as samples, each valued by `value`.
+fn component_samples(
+    data: &Aligned,
+    recon: &Reconstruction,
+    c: usize,
+    value: impl Fn(&Innovation) -> f64,
+) -> Vec<Sample> {
+    recon
+        .innovations
+        .iter()
+        .filter(|i| i.mask & (1 << c) != 0)
+        .map(|i| Sample {
+            t: data.t[i.tick],
+            value: value(i),
+            state: state_functions(&recon.q[i.tick], &recon.rate[i.tick]),
+        })
+        .collect()
 }
 
 /// One innovation: time, value, state functions.
@@ -225,7 +248,7 @@ struct Block {
 
 /// The blocks of `block_s` of the time-ordered `samples`, leaving out blocks with fewer than
 /// half the median block's samples (the ends of the record, gaps).
-fn blocks(samples: &[Sample], block_s: f64) -> Vec<Block> {
+fn blocks_of(samples: &[Sample], block_s: f64) -> Vec<Block> {
     let mut blocks = Vec::new();
     let mut i = 0;
     while i < samples.len() {
@@ -360,6 +383,12 @@ impl StepTest {
         best
     }
 
+    /// The step's coefficient at split `k` on the null residuals (`None`: not a split).
+    fn step_at(&self, k: usize) -> Option<f64> {
+        let norm = *self.step_norm.get(k)?;
+        (norm > 0.0).then(|| self.null_residuals.rows_range(k..).sum() / norm)
+    }
+
     /// Whether the step beats a straight line in time beside the state functions.
     fn step_beats_trend(&self, split: Split) -> bool {
         let z = &self.null_residuals;
@@ -476,7 +505,7 @@ mod tests {
 
     fn test_of(values: &[f64]) -> (Vec<Sample>, Vec<Block>, StepTest) {
         let samples = samples(values);
-        let blocks = blocks(&samples, 10.0);
+        let blocks = blocks_of(&samples, 10.0);
         let test = StepTest::new(&blocks).expect("testable");
         (samples, blocks, test)
     }
