@@ -286,6 +286,8 @@ struct StepTest {
     q: DMatrix<f64>,
     /// Residuals of the block means on the state functions (the null model's).
     null_residuals: DVector<f64>,
+    /// The null model's coefficients of [`STATE_FUNCTIONS`].
+    coefficients: [f64; STATE_FUNCTIONS.len()],
     /// `hₖᵀ M hₖ` for every split `k` (index `k`; 0 where not a split or collinear).
     step_norm: Vec<f64>,
     /// Residual degrees of freedom beside a step.
@@ -310,14 +312,15 @@ impl StepTest {
         let p = STATE_FUNCTIONS.len();
         // Columns scaled to unit norm, so the rank tolerance is relative.
         let mut x = DMatrix::from_fn(n, p, |r, c| blocks[r].state[c]);
-        for mut col in x.column_iter_mut() {
-            let norm = col.norm();
-            if norm > 0.0 {
-                col /= norm;
+        let mut scale = [0.0; STATE_FUNCTIONS.len()];
+        for (mut col, s) in x.column_iter_mut().zip(scale.iter_mut()) {
+            *s = col.norm();
+            if *s > 0.0 {
+                col /= *s;
             }
         }
-        let svd = x.svd(true, false);
-        let u = svd.u?;
+        let svd = x.svd(true, true);
+        let (u, v_t) = (svd.u?, svd.v_t?);
         let largest = svd.singular_values.max();
         let keep: Vec<usize> = (0..svd.singular_values.len())
             .filter(|&i| svd.singular_values[i] > 1e-8 * largest)
@@ -330,6 +333,17 @@ impl StepTest {
         let y = DVector::from_iterator(n, blocks.iter().map(|b| b.mean));
         let project = |v: &DVector<f64>| v - &q * (q.transpose() * v);
         let null_residuals = project(&y);
+        // The null fit's coefficients of the state functions, `V Σ⁻¹ Uᵀ y` on the kept
+        // directions, back in the functions' own scale.
+        let mut coefficients = [0.0; STATE_FUNCTIONS.len()];
+        for &i in &keep {
+            let along = u.column(i).dot(&y) / svd.singular_values[i];
+            for (j, c) in coefficients.iter_mut().enumerate() {
+                if scale[j] > 0.0 {
+                    *c += v_t[(i, j)] * along / scale[j];
+                }
+            }
+        }
         let step_norm = (0..n)
             .map(|k| {
                 if k < MIN_SIDE_BLOCKS || k > n - MIN_SIDE_BLOCKS {
@@ -348,6 +362,7 @@ impl StepTest {
         Some(Self {
             q,
             null_residuals,
+            coefficients,
             step_norm,
             dof: (n - rank - 1) as f64,
         })
@@ -430,23 +445,14 @@ impl StepTest {
 /// that best separates the two levels of the values less their state functions' part (least
 /// squares over those samples, the levels the means of the blocks before and after).
 fn refine(samples: &[Sample], blocks: &[Block], test: &StepTest, at: usize) -> f64 {
-    // The state functions' part of a value, from the fit of the block means without a step.
-    let y = DVector::from_iterator(blocks.len(), blocks.iter().map(|b| b.mean));
-    let fitted = &y - &test.null_residuals;
-    let x = DMatrix::from_fn(blocks.len(), STATE_FUNCTIONS.len(), |r, c| {
-        blocks[r].state[c]
-    });
-    let gamma = x.svd(true, true).solve(&fitted, 1e-12).ok();
-    let adjust = |s: &Sample| match &gamma {
-        Some(g) => {
-            s.value
-                - s.state
-                    .iter()
-                    .zip(g.iter())
-                    .map(|(a, b)| a * b)
-                    .sum::<f64>()
-        }
-        None => s.value,
+    // A value less its state functions' part, from the fit of the block means without a step.
+    let adjust = |s: &Sample| {
+        s.value
+            - s.state
+                .iter()
+                .zip(&test.coefficients)
+                .map(|(a, b)| a * b)
+                .sum::<f64>()
     };
     let level = |range: &[Block]| {
         let (sum, n) = range.iter().fold((0.0, 0), |(s, n), b| {
